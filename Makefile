@@ -1,0 +1,29 @@
+# Two set-up commands for a fresh machine with Python 3.11 and pip: `make demo`, `make test`.
+VENV ?= .venv
+PY := $(VENV)/bin/python
+export OPENBLAS_NUM_THREADS ?= 1
+
+.PHONY: demo test bench lint clean
+
+$(PY):
+	python3 -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+
+demo: $(PY)
+	$(PY) -m pip install -q -e .
+	$(VENV)/bin/tooltransfer demo --out out/demo
+
+test: $(PY)
+	$(PY) -m pip install -q -e ".[test]"
+	$(PY) -m ruff check .
+	$(PY) -m pytest
+
+bench: $(PY)
+	$(PY) -m pip install -q -e ".[bench]"
+	$(PY) benchmarks/bench_dmp.py
+
+lint: $(PY)
+	$(PY) -m ruff check .
+
+clean:
+	rm -rf $(VENV) out build *.egg-info .pytest_cache .ruff_cache

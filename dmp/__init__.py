@@ -1,0 +1,30 @@
+"""DMP core of tooltransfer: discrete DMPs with exact affine rollout and constrained fitting.
+
+Notation used throughout (paper eqs. 1-5, DESIGN section 3): positions ``x`` [m], velocities
+``v = dx/dt`` [m/s], goal ``g``, start ``x0``, duration ``tau`` [s], phase ``s``, ``N`` basis
+functions ``psi_i(s)`` per dimension, weights ``W`` of shape (N, n), flattened row-major into ``w``.
+"""
+
+from dmp.affine import AffineRollout
+from dmp.errors import (
+    InfeasibleError,
+    InputError,
+    SkillFileError,
+    SolverError,
+    ToolTransferError,
+    UnknownSolverError,
+)
+from dmp.primitive import DMP
+from dmp.trajectory import Rollout
+
+__all__ = [
+    "DMP",
+    "AffineRollout",
+    "InfeasibleError",
+    "InputError",
+    "Rollout",
+    "SkillFileError",
+    "SolverError",
+    "ToolTransferError",
+    "UnknownSolverError",
+]

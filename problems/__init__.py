@@ -1,0 +1,1 @@
+"""Task specifications, their schema, and the project's named task files."""

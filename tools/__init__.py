@@ -1,0 +1,1 @@
+"""Tool and object geometry, the Phantom Omni arm, and the simulated platform."""
