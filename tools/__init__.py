@@ -1,1 +1,67 @@
-"""Tool and object geometry, the Phantom Omni arm, and the simulated platform."""
+"""Tool and object geometry and the Phantom Omni arm.
+
+* :mod:`tools.model`: a :class:`Tool` is a planar outline in the tool frame [m] with named
+  :class:`Face` s (push direction and cone half-angle ``theta_b`` [rad], contact range).
+* :mod:`tools.library`: tools as YAML files (``tools/library/*.yaml``); :func:`load_tool`.
+* :mod:`tools.decompose`: exact, checked convex decomposition of an outline.
+* :mod:`tools.objects`: the pushed object (disc of radius 17.5 mm by default) and obstacles.
+* :mod:`tools.contact`: tool poses putting a face in contact with the object.
+* :mod:`tools.clearance`: clearance and penetration depth, static and swept.
+* :mod:`tools.omni`: DH kinematics, inverse kinematics and reachable region of the Omni.
+
+Frames and units follow DESIGN section 2: SI units, world frame in the table plane with the
+origin under the Omni's first joint axis, x right, y forward, z up.
+"""
+
+from tools.clearance import (
+    clearance,
+    penetration_depth,
+    signed_distance,
+    swept_clearance,
+    swept_penetration_depth,
+    tool_polygon,
+)
+from tools.contact import Contact, PlatformContact, contact_on_platform, contact_pose
+from tools.decompose import convex_decomposition
+from tools.errors import ToolSpecError, UnknownFaceError, UnknownToolError
+from tools.library import (
+    dump_tool,
+    library_names,
+    load_library,
+    load_tool,
+    tool_from_dict,
+    tool_to_dict,
+)
+from tools.model import Face, Tool
+from tools.objects import OBJECT_RADIUS, Disc, DiscObject, PolygonObject
+from tools.pose import Pose2D
+
+__all__ = [
+    "OBJECT_RADIUS",
+    "Contact",
+    "Disc",
+    "DiscObject",
+    "Face",
+    "PlatformContact",
+    "PolygonObject",
+    "Pose2D",
+    "Tool",
+    "ToolSpecError",
+    "UnknownFaceError",
+    "UnknownToolError",
+    "clearance",
+    "contact_on_platform",
+    "contact_pose",
+    "convex_decomposition",
+    "dump_tool",
+    "library_names",
+    "load_library",
+    "load_tool",
+    "penetration_depth",
+    "signed_distance",
+    "swept_clearance",
+    "swept_penetration_depth",
+    "tool_from_dict",
+    "tool_polygon",
+    "tool_to_dict",
+]

@@ -1,0 +1,70 @@
+"""Planar rigid poses of a tool on the table: ``(x, y, yaw)`` [m, m, rad] in the world frame."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+import shapely.affinity
+from numpy.typing import ArrayLike, NDArray
+
+from dmp.errors import InputError
+
+
+def rotation(yaw: float) -> NDArray[np.float64]:
+    """2-D rotation matrix (2, 2) by ``yaw`` [rad]."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.array([[c, -s], [s, c]])
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    """Tool frame in the world: origin ``(x, y)`` [m] and heading ``yaw`` [rad]."""
+
+    x: float
+    y: float
+    yaw: float
+
+    def __post_init__(self) -> None:
+        for name in ("x", "y", "yaw"):
+            v = getattr(self, name)
+            if (
+                isinstance(v, bool)
+                or not isinstance(v, int | float | np.floating)
+                or not np.isfinite(v)
+            ):
+                raise InputError(name, "a finite real number", repr(v))
+            object.__setattr__(self, name, float(v))
+
+    @property
+    def position(self) -> NDArray[np.float64]:
+        """Origin (2,) [m]."""
+        return np.array([self.x, self.y])
+
+    def apply(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Map tool-frame points (..., 2) [m] to the world."""
+        p = np.asarray(points, dtype=np.float64)
+        return p @ rotation(self.yaw).T + self.position
+
+    def apply_inverse(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Map world points (..., 2) [m] to the tool frame."""
+        p = np.asarray(points, dtype=np.float64)
+        return (p - self.position) @ rotation(self.yaw)
+
+    def rotate(self, vectors: ArrayLike) -> NDArray[np.float64]:
+        """Rotate tool-frame vectors (..., 2) into the world (no translation)."""
+        return np.asarray(vectors, dtype=np.float64) @ rotation(self.yaw).T
+
+    def place(self, geom: shapely.Geometry) -> shapely.Geometry:
+        """A shapely geometry given in the tool frame, moved to this pose."""
+        c, s = np.cos(self.yaw), np.sin(self.yaw)
+        return shapely.affinity.affine_transform(geom, [c, -s, s, c, self.x, self.y])
+
+    def interpolate(self, other: Pose2D, t: float) -> Pose2D:
+        """Linear interpolation of position and yaw (no wrapping) at ``t`` in [0, 1]."""
+        return Pose2D(
+            self.x + t * (other.x - self.x),
+            self.y + t * (other.y - self.y),
+            self.yaw + t * (other.yaw - self.yaw),
+        )
