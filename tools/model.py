@@ -97,7 +97,8 @@ def _edge_normal(
         ok = True
         for x in (a, b):
             t = float((x - p) @ e) / n2
-            dist = abs(float(np.cross(e, x - p))) / np.sqrt(n2)
+            r = x - p
+            dist = abs(float(e[0] * r[1] - e[1] * r[0])) / np.sqrt(n2)
             if (
                 dist > ON_OUTLINE_TOL
                 or t < -ON_OUTLINE_TOL / np.sqrt(n2)
