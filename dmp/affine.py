@@ -23,6 +23,7 @@ class AffineRollout:
         x_free, v_free: unforced positions [m] and velocities [m/s], shape (T, n).
         Gx, Gv: basis responses, shape (T, N) (see :mod:`dmp.exact`).
         M: forcing-term scaling matrix, shape (n, n).
+        psi: basis values at the samples, shape (T, N).
     """
 
     t: NDArray[np.float64]
@@ -31,6 +32,7 @@ class AffineRollout:
     Gx: NDArray[np.float64]
     Gv: NDArray[np.float64]
     M: NDArray[np.float64]
+    psi: NDArray[np.float64]
 
     @property
     def n_dims(self) -> int:

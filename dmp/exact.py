@@ -49,11 +49,15 @@ class ResponseMatrices:
         t: times from the start of the motion, shape (T,) [s].
         Gx: position responses, shape (T, N) [m per unit weight].
         Gv: velocity responses ``dx/dt``, shape (T, N) [m/s per unit weight].
+        psi: basis values at the samples, shape (T, N).
+        E: ``exp(A t)`` at the samples, shape (T, 2, 2) (for the unforced motion).
     """
 
     t: NDArray[np.float64]
     Gx: NDArray[np.float64]
     Gv: NDArray[np.float64]
+    psi: NDArray[np.float64]
+    E: NDArray[np.float64]
 
 
 def system_expm(p: SystemParams, h: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -121,7 +125,9 @@ def compute_responses(
     forced = np.einsum("jq,jqa,jqn->jan", qw, e, psi)  # (J, 2, N)
     z = affine_scan(system_expm(p, steps), forced)
     z = np.concatenate([np.zeros((1, 2, p.n_basis)), z])[idx]
-    return ResponseMatrices(t=t, Gx=z[:, 0, :], Gv=z[:, 1, :] / p.tau)
+    return ResponseMatrices(
+        t=t, Gx=z[:, 0, :], Gv=z[:, 1, :] / p.tau, psi=basis(phase(t, p.tau, p.gamma), c, h), E=system_expm(p, t)
+    )
 
 
 class _ResponseCache:
@@ -158,13 +164,15 @@ RESPONSE_CACHE = _ResponseCache()
 
 def free_response(
     p: SystemParams,
-    t: NDArray[np.float64],
+    e: NDArray[np.float64],
     x0: NDArray[np.float64],
     g: NDArray[np.float64],
     v0: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Unforced motion from ``x0`` with velocity ``v0`` towards ``g``: positions and velocities (T, n)."""
-    e = system_expm(p, t)  # (T, 2, 2)
+    """Unforced motion from ``x0`` with velocity ``v0`` towards ``g``: positions and velocities (T, n).
+
+    ``e`` is ``exp(A t)`` at the samples, shape (T, 2, 2) (:attr:`ResponseMatrices.E`).
+    """
     z0 = np.stack([x0 - g, p.tau * v0])  # (2, n)
     z = e @ z0  # (T, 2, n)
     return g + z[:, 0, :], z[:, 1, :] / p.tau

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -212,8 +213,8 @@ class DMP:
     ) -> AffineRollout:
         p = self.params(tau)
         resp = RESPONSE_CACHE.get(p, t_rel, self.centres, self.widths)
-        xf, vf = free_response(p, t_rel, x0, g, v0)
-        return AffineRollout(t=t_rel, x_free=xf, v_free=vf, Gx=resp.Gx, Gv=resp.Gv, M=m)
+        xf, vf = free_response(p, resp.E, x0, g, v0)
+        return AffineRollout(t=t_rel, x_free=xf, v_free=vf, Gx=resp.Gx, Gv=resp.Gv, M=m, psi=resp.psi)
 
     def affine(
         self,
@@ -228,7 +229,7 @@ class DMP:
         tt = check_time(t, "t", min_len=2)
         x0a, ga, v0a, taua = self._resolve(x0, g, v0, tau)
         aff = self._affine(tt - tt[0], x0a, ga, v0a, taua, self.scaling_matrix(x0a, ga))
-        return AffineRollout(t=tt, x_free=aff.x_free, v_free=aff.v_free, Gx=aff.Gx, Gv=aff.Gv, M=aff.M)
+        return dataclasses.replace(aff, t=tt)
 
     def rollout(
         self,
@@ -259,10 +260,10 @@ class DMP:
         w = self.weights if weights is None else self._check_weights(weights)
         m = self.scaling_matrix(x0a, ga)
         t_rel = tt - tt[0]
-        f = self.basis(t_rel, taua) @ w @ m.T
         if method == "exact":
             aff = self._affine(t_rel, x0a, ga, v0a, taua, m)
             x, v = aff.positions(w), aff.velocities(w)
+            f = aff.psi @ w @ m.T
         elif method == "rk4":
             check_positive(rk4_step, "rk4_step")
 
@@ -270,6 +271,7 @@ class DMP:
                 return (self.basis(np.array([tr]), taua) @ w @ m.T)[0]
 
             x, v = rk4_rollout(tt, x0a, ga, v0a, taua, self.alpha_z, self.beta_z, forcing, rk4_step)
+            f = self.basis(t_rel, taua) @ w @ m.T
         else:
             raise InputError("method", "'exact' or 'rk4'", repr(method))
         a = (self.alpha_z * (self.beta_z * (ga - x) - taua * v) + f) / taua**2

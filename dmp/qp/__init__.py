@@ -1,0 +1,35 @@
+"""Constrained DMP fitting as a QP (DESIGN section 4): build with :func:`build_fit_qp`, solve with
+:func:`solve_fit`; constraints in :mod:`dmp.qp.constraints`, objectives in :mod:`dmp.qp.objectives`."""
+
+from dmp.qp.constraints import (
+    Constraint,
+    FixedEndPoint,
+    OutsideDisc,
+    PositionPolygon,
+    Rows,
+    VelocityCone,
+    ZeroEndVelocity,
+)
+from dmp.qp.objectives import MatchForcing, Objective, Ridge, TrackPath
+from dmp.qp.problem import FitProblem, FitQP, build_fit_qp
+from dmp.qp.result import FitResult
+from dmp.qp.solve import solve_fit
+
+__all__ = [
+    "Constraint",
+    "FitProblem",
+    "FitQP",
+    "FitResult",
+    "FixedEndPoint",
+    "MatchForcing",
+    "Objective",
+    "OutsideDisc",
+    "PositionPolygon",
+    "Ridge",
+    "Rows",
+    "TrackPath",
+    "VelocityCone",
+    "ZeroEndVelocity",
+    "build_fit_qp",
+    "solve_fit",
+]

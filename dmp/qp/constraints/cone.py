@@ -1,0 +1,41 @@
+"""Velocity inside a tool's push cone (paper Fig. 5: the yellow ranges)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dmp.errors import InputError
+from dmp.qp.constraints.base import Coefficients, Constraint
+
+
+class VelocityCone(Constraint):
+    """Planar velocity in the cone of half-angle ``theta_b`` around the push direction ``phi``.
+
+    ``{v : n1 . v >= 0, n2 . v >= 0}`` with ``n1``, ``n2`` the inward unit normals of the cone's
+    edges at ``phi +- theta_b``. Residuals are in m/s. Zero velocity is inside.
+
+    Args:
+        direction: push direction ``phi`` [rad] from +x, counter-clockwise.
+        theta_b: half-angle [rad], in (0, pi/2).
+        window: time interval [s] of the push.
+    """
+
+    def __init__(
+        self, direction: float, theta_b: float, *, family: str = "cone", window: tuple[float, float] | None = None
+    ) -> None:
+        super().__init__(family, window)
+        if not np.isfinite(direction):
+            raise InputError("direction", "a finite angle [rad]", repr(direction))
+        if not (0.0 < theta_b < np.pi / 2):
+            raise InputError("theta_b", "a half-angle in (0, pi/2) rad", repr(theta_b))
+        self.direction, self.theta_b = float(direction), float(theta_b)
+        hi, lo = direction + theta_b, direction - theta_b
+        n1 = np.array([np.sin(hi), -np.cos(hi)])
+        n2 = np.array([-np.sin(lo), np.cos(lo)])
+        self.rows_vel = -np.stack([n1, n2])  # -n . v <= 0
+
+    def _coefficients(self, k: NDArray[np.intp], t: NDArray[np.float64], x_lin: NDArray[np.float64]) -> Coefficients:
+        if x_lin.shape[1] != 2:
+            raise InputError("VelocityCone", "a planar (2-D) motion", f"{x_lin.shape[1]}-D")
+        return Coefficients(k, None, np.broadcast_to(self.rows_vel, (k.size, 2, 2)), np.zeros((k.size, 2)))
