@@ -42,7 +42,9 @@ class AffineRollout:
     def n_weights(self) -> int:
         return int(self.Gx.shape[1] * self.M.shape[0])
 
-    def _apply(self, base: NDArray[np.float64], resp: NDArray[np.float64], w: NDArray[np.float64]) -> NDArray[np.float64]:
+    def _apply(
+        self, base: NDArray[np.float64], resp: NDArray[np.float64], w: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
         wmat = np.asarray(w, dtype=np.float64).reshape(self.Gx.shape[1], self.n_dims)
         return base + resp @ wmat @ self.M.T
 

@@ -27,7 +27,9 @@ def rk4_rollout(
     and velocities ``dx/dt``, each (T, n), at the times ``t`` (T,) [s].
     """
 
-    def deriv(tr: float, y: NDArray[np.float64], v: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def deriv(
+        tr: float, y: NDArray[np.float64], v: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         return v / tau, (alpha_z * (beta_z * (g - y) - v) + forcing(tr)) / tau
 
     x = np.empty((t.size, x0.size))

@@ -145,7 +145,7 @@ class DMP:
         a_s = a / col  # whiten columns: the trajectory-space design is badly scaled
         lam = np.sqrt(self.ridge * np.mean(col**2))  # ridge relative to the normal matrix
         aug = np.vstack([a_s, lam * np.diag(1.0 / col)])
-        rhs = np.concatenate([b, np.zeros((a.shape[1],) + b.shape[1:])])
+        rhs = np.concatenate([b, np.zeros((a.shape[1], *b.shape[1:]))])
         sol = scipy.linalg.lstsq(aug, rhs, lapack_driver="gelsd")[0]
         return sol / (col if sol.ndim == 1 else col[:, None])
 

@@ -75,7 +75,9 @@ def dmp_from_dict(data: dict[str, Any], source: str = "<dict>") -> DMP:
         )
         w = np.asarray(data["weights"], dtype=np.float64)
         if w.shape != (d.n_basis, d.n_dims) or not np.all(np.isfinite(w)):
-            raise SkillFileError(source, f"'weights' must be finite with shape ({d.n_basis}, {d.n_dims}), got {w.shape}")
+            raise SkillFileError(
+                source, f"'weights' must be finite with shape ({d.n_basis}, {d.n_dims}), got {w.shape}"
+            )
         for key in ("centres", "widths"):
             stored = np.asarray(data[key], dtype=np.float64)
             expect = d.centres if key == "centres" else d.widths

@@ -95,7 +95,12 @@ def solve_qp(
         return sp.csc_matrix(m) if sparse else m
 
     problem = qpsolvers.Problem(
-        conv(P), q, conv(G), None if G is None or G.shape[0] == 0 else h, conv(A), None if A is None or A.shape[0] == 0 else b
+        conv(P),
+        q,
+        conv(G),
+        None if G is None or G.shape[0] == 0 else h,
+        conv(A),
+        None if A is None or A.shape[0] == 0 else b,
     )
     start = time.perf_counter()
     try:

@@ -112,8 +112,16 @@ class FitQP:
     def save(self, path: str | Path) -> None:
         """Save all matrices and row labels to an ``.npz`` file."""
         np.savez_compressed(
-            path, P=self.P, q=self.q, G=self.G, h=self.h, A=self.A, b=self.b,
-            row_family=self.row_family, eq_family=self.eq_family, x_lin=self.x_lin,
+            path,
+            P=self.P,
+            q=self.q,
+            G=self.G,
+            h=self.h,
+            A=self.A,
+            b=self.b,
+            row_family=self.row_family,
+            eq_family=self.eq_family,
+            x_lin=self.x_lin,
         )
 
 
@@ -124,7 +132,14 @@ def unconstrained_weights(p: NDArray[np.float64], q: NDArray[np.float64]) -> NDA
 
 def stack_rows(
     constraints: Sequence[Constraint], aff: AffineRollout, x_lin: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.str_], NDArray[np.float64], NDArray[np.float64], NDArray[np.str_]]:
+) -> tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.str_],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.str_],
+]:
     """All rows of ``constraints`` on the grid of ``aff``: ``G, h, families, A, b, families``."""
     nw = aff.n_weights
     gs, hs, fs, as_, bs, es = [np.zeros((0, nw))], [np.zeros(0)], [], [np.zeros((0, nw))], [np.zeros(0)], []
@@ -138,8 +153,14 @@ def stack_rows(
             gs.append(rows.G)
             hs.append(rows.h)
             fs += [c.family] * rows.h.size
-    return (np.vstack(gs), np.concatenate(hs), np.array(fs, dtype=str),
-            np.vstack(as_), np.concatenate(bs), np.array(es, dtype=str))
+    return (
+        np.vstack(gs),
+        np.concatenate(hs),
+        np.array(fs, dtype=str),
+        np.vstack(as_),
+        np.concatenate(bs),
+        np.array(es, dtype=str),
+    )
 
 
 def build_fit_qp(problem: FitProblem, x_lin: ArrayLike | None = None) -> FitQP:

@@ -48,7 +48,9 @@ class OutsideDisc(Constraint):
             raise InputError("side", "'left', 'right' or None", repr(side))
         self.side = side
 
-    def normals(self, x_lin: NDArray[np.float64], travel: NDArray[np.float64], side: Side | None) -> NDArray[np.float64]:
+    def normals(
+        self, x_lin: NDArray[np.float64], travel: NDArray[np.float64], side: Side | None
+    ) -> NDArray[np.float64]:
         """Unit normals (K, 2) from the centre towards the points ``x_lin`` (K, 2)."""
         d = x_lin - self.center
         norm = np.linalg.norm(travel)

@@ -53,4 +53,6 @@ class PositionPolygon(Constraint):
 
     def _coefficients(self, k: NDArray[np.intp], t: NDArray[np.float64], x_lin: NDArray[np.float64]) -> Coefficients:
         kk = k.size
-        return Coefficients(k, np.broadcast_to(self.A, (kk, *self.A.shape)), None, np.broadcast_to(self.b, (kk, self.b.size)))
+        return Coefficients(
+            k, np.broadcast_to(self.A, (kk, *self.A.shape)), None, np.broadcast_to(self.b, (kk, self.b.size))
+        )

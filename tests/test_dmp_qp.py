@@ -1,0 +1,101 @@
+"""Constrained fitting: promised constraints hold on the dense grid, backends agree, infeasibility."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dmp import InfeasibleError, UnknownSolverError
+from dmp.qp import (
+    FitProblem,
+    FixedEndPoint,
+    PositionPolygon,
+    TrackPath,
+    VelocityCone,
+    build_fit_qp,
+    solve_fit,
+)
+from dmp.qp.problem import stack_rows
+from problems.fit_cases import l_push_case
+
+
+def test_cutting_planes_hold_every_constraint_on_dense_grid() -> None:
+    case = l_push_case(30, 200)
+    r = solve_fit(case.problem)
+    assert r.status == "solved"
+    assert set(r.violations) == {"cone", "workspace", "endpoint", "end_velocity", "obstacle"}
+    assert r.max_violation <= 1e-8
+    assert np.linalg.norm(r.rollout.x[-1] - case.reference[-1]) < 1e-9  # terminal constraint
+    assert r.n_qp >= 1  # the OSQP backend was called
+
+
+def test_unconstrained_fit_violates_so_constraints_are_active() -> None:
+    case = l_push_case(30, 200)
+    free = FitProblem(case.problem.dmp, case.t, case.reference[0], case.reference[-1], [TrackPath(case.reference)])
+    r_free = solve_fit(free)
+    r = solve_fit(case.problem)
+    assert r.objective > r_free.objective + 1e-6
+
+
+def test_optimum_matches_second_backend_on_the_same_dense_rows() -> None:
+    quadprog = pytest.importorskip("quadprog")
+    del quadprog
+    case = l_push_case(20, 60, obstacle=False)
+    prob = case.problem
+    r = solve_fit(prob)
+    # the same QP with every dense row, solved in one call by quadprog
+    p, q = prob.quadratic()
+    aff = prob.affine("dense")
+    g, h, _, a, b, _ = stack_rows(prob.constraints, aff, r.rollout.x)
+    from dmp.qp.backends import solve_qp
+
+    out = solve_qp(p, q, g, h, a, b, "quadprog")
+    assert out.x is not None
+    obj_ref = 0.5 * out.x @ p @ out.x + q @ out.x
+    assert r.objective == pytest.approx(obj_ref, rel=1e-7, abs=1e-12)
+    np.testing.assert_allclose(r.weights.ravel(), out.x, atol=1e-5 * np.abs(out.x).max())
+
+
+def test_full_strategy_reports_its_true_dense_violation() -> None:
+    case = l_push_case(30, 200)
+    r = solve_fit(case.problem, strategy="full", max_scp=1)
+    # the plain condensed form constrains only the grid; the dense check must reveal the rest
+    assert r.violations["cone"] > 1e-7
+    assert r.status == "inaccurate"
+
+
+def test_infeasible_names_families() -> None:
+    case = l_push_case(20, 100, obstacle=False)
+    prob = case.problem
+    bad = FitProblem(
+        prob.dmp, prob.t, prob.x0, prob.g, prob.objectives,
+        [VelocityCone(-np.pi / 4, 0.3), FixedEndPoint(prob.g)],  # goal lies up-left, cone points down-right
+    )
+    r = solve_fit(bad)
+    assert r.status == "infeasible"
+    assert "cone" in r.families
+    with pytest.raises(InfeasibleError, match="cone"):
+        r.raise_if_infeasible()
+
+
+def test_build_is_separate_inspectable_and_saveable(tmp_path) -> None:
+    case = l_push_case(10, 50, obstacle=False)
+    qp = build_fit_qp(case.problem)
+    assert qp.G.shape == (50 * 8, 20)  # 2 cone + 6 polygon rows per sample
+    assert set(qp.row_family) == {"cone", "workspace"}
+    qp.save(tmp_path / "qp.npz")
+    assert np.load(tmp_path / "qp.npz")["P"].shape == (20, 20)
+    assert qp.to_qpsolvers().P.shape == (20, 20)
+
+
+def test_unknown_solver_lists_installed() -> None:
+    case = l_push_case(10, 50, obstacle=False)
+    with pytest.raises(UnknownSolverError, match="osqp"):
+        solve_fit(case.problem, solver="no_such_solver")
+
+
+def test_polygon_rejects_non_convex() -> None:
+    from dmp import InputError
+
+    with pytest.raises(InputError, match="convex"):
+        PositionPolygon.from_vertices([[0, 0], [1, 0], [0.2, 0.2], [0, 1]])
