@@ -27,6 +27,7 @@ from dmp.qp import (
 
 def minimum_jerk(p0: NDArray[np.float64], p1: NDArray[np.float64], n: int) -> NDArray[np.float64]:
     """Minimum-jerk segment from ``p0`` to ``p1`` with ``n`` samples, shape (n, d) [m]."""
+    p0, p1 = np.asarray(p0, dtype=np.float64), np.asarray(p1, dtype=np.float64)
     s = np.linspace(0.0, 1.0, n)[:, None]
     b = 10 * s**3 - 15 * s**4 + 6 * s**5
     return p0 + (p1 - p0) * b
