@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from dmp.errors import SolverError, UnknownSolverError
 
 DEFAULT_OPTIONS: dict[str, dict[str, Any]] = {
-    # OSQP: the exact finish (dmp.qp.finish) makes the answer exact, so moderate accuracy suffices.
+    # plain OSQP calls ("full" strategy); the cutting-plane seed overrides eps to 1e-4 (dmp.qp.solve)
     "osqp": {"eps_abs": 1e-7, "eps_rel": 1e-7, "max_iter": 20000, "polishing": True, "verbose": False},
     "clarabel": {"verbose": False},
 }
