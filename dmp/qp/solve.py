@@ -41,8 +41,8 @@ from dmp.trajectory import Rollout
 Strategy = Literal["cutting_planes", "full"]
 
 
-SEED_WITH_BACKEND = True
 COARSE_PER_BASIS = 2
+"""Default size of the seed's coarse grid: this many samples per basis function."""
 
 
 class _Infeasible(Exception):
@@ -79,9 +79,7 @@ def _normalise(g: NDArray[np.float64], h: NDArray[np.float64]) -> tuple[NDArray[
     return g / s[:, None], h / s
 
 
-def _diagnose(
-    families: list[str], solve_without: Any, problem_families: list[str]
-) -> _Infeasible:
+def _diagnose(families: list[str], solve_without: Any) -> _Infeasible:
     """Families whose removal alone restores feasibility (or all of them when none does)."""
     present = sorted(set(families))
     involved = tuple(f for f in present if solve_without(f))
@@ -114,12 +112,12 @@ def _seed(
 def _cutting_planes(
     pool_g: RowPool, pool_d: RowPool, tw: NDArray[np.float64], z_c: NDArray[np.float64],
     seed: list[Key] | None, solver: str, options: dict[str, Any] | None, tol: float, stride: int,
-    cnt: _Counter,
+    cnt: _Counter, seed_with_backend: bool,
 ) -> tuple[NDArray[np.float64], list[Key]]:
     """Exact optimum over every dense row; returns ``z`` and the active dense-pool keys."""
     eq_keys = pool_d.equality_keys()
     a_z, b_z = _rows_w(pool_d, eq_keys, tw)
-    if seed is None and SEED_WITH_BACKEND:
+    if seed is None and seed_with_backend:
         seed = pool_d.map_keys(_seed(pool_g, tw, z_c, a_z, b_z, stride, solver, options, cnt), pool_g)
     keys: list[Key] = list(dict.fromkeys(seed or []))
     known = set(keys)
@@ -170,7 +168,7 @@ def _full(
             return solve_qp(p, q, g[mi], h[mi], a[me], b[me], solver, options=options).found
 
         fams = [*fam.tolist(), *efam.tolist()]
-        raise _diagnose(fams, without, fams)
+        raise _diagnose(fams, without)
     if out.x is None:
         raise SolverError(solver, f"no solution ({out.status})")
     return out.x
@@ -186,6 +184,7 @@ def solve_fit(
     scp_tol: float = 1e-6,
     scp_rtol: float = 1e-6,
     coarse_samples: int | None = None,
+    seed_with_backend: bool = True,
     options: dict[str, Any] | None = None,
 ) -> FitResult:
     """Solve a :class:`FitProblem`.
@@ -198,7 +197,10 @@ def solve_fit(
             dense-grid violation is within it, ``"inaccurate"`` otherwise.
         max_scp: rounds of re-linearisation for non-convex constraints; stop when the path moves
             less than ``scp_tol`` [m] or the objective changes by less than ``scp_rtol`` (relative).
-        coarse_samples: about how many samples of the constraint grid seed the cutting planes.
+        coarse_samples: about how many samples of the constraint grid seed the cutting planes
+            (default ``COARSE_PER_BASIS * n_basis``).
+        seed_with_backend: seed the exact step with the backend's coarse solve (default); False
+            starts from the rows the unconstrained optimum violates.
         options: backend options passed through qpsolvers.
     """
     check_solver(solver)
@@ -228,7 +230,9 @@ def solve_fit(
                 pool_g = RowPool.build(problem.constraints, aff_g, x_lin[:: problem.dense_factor])
                 pool_d = RowPool.build(problem.constraints, aff_d, x_lin)
                 seed = ws_keys if scp > 1 else None  # re-linearised: warm start from the active rows
-                z, ws_keys = _cutting_planes(pool_g, pool_d, tw, z_c, seed, solver, options, tol, stride, cnt)
+                z, ws_keys = _cutting_planes(
+                    pool_g, pool_d, tw, z_c, seed, solver, options, tol, stride, cnt, seed_with_backend
+                )
                 w = tw @ z
             else:
                 w = _full(problem, p, q, x_lin, solver, options, cnt)
