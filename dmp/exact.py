@@ -126,7 +126,8 @@ def compute_responses(
     z = affine_scan(system_expm(p, steps), forced)
     z = np.concatenate([np.zeros((1, 2, p.n_basis)), z])[idx]
     return ResponseMatrices(
-        t=t, Gx=z[:, 0, :], Gv=z[:, 1, :] / p.tau, psi=basis(phase(t, p.tau, p.gamma), c, h), E=system_expm(p, t)
+        t=t, Gx=np.ascontiguousarray(z[:, 0, :]), Gv=z[:, 1, :] / p.tau,
+        psi=basis(phase(t, p.tau, p.gamma), c, h), E=system_expm(p, t),
     )
 
 

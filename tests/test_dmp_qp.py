@@ -26,7 +26,17 @@ def test_cutting_planes_hold_every_constraint_on_dense_grid() -> None:
     assert set(r.violations) == {"cone", "workspace", "endpoint", "end_velocity", "obstacle"}
     assert r.max_violation <= 1e-8
     assert np.linalg.norm(r.rollout.x[-1] - case.reference[-1]) < 1e-9  # terminal constraint
-    assert r.n_qp >= 1  # the OSQP backend was called
+    assert r.n_qp == 0  # the exact step alone: no backend call by default
+
+
+def test_backend_seed_reaches_the_same_exact_optimum() -> None:
+    case = l_push_case(30, 200)
+    plain = solve_fit(case.problem, max_scp=1)
+    seeded = solve_fit(case.problem, max_scp=1, seed_with_backend=True)
+    assert seeded.n_qp == 1  # OSQP solved the coarse seed
+    assert seeded.status == plain.status == "solved"
+    assert seeded.max_violation <= 1e-8
+    assert abs(seeded.objective - plain.objective) <= 1e-9 * abs(plain.objective)
 
 
 def test_unconstrained_fit_violates_so_constraints_are_active() -> None:

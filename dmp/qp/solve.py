@@ -1,19 +1,22 @@
 """Solving the constrained DMP fit (DESIGN section 4).
 
-Strategy ``"cutting_planes"`` (default), measured to be the fast and exact way for OSQP:
+Strategy ``"cutting_planes"`` (default), the fast and exact way:
 
 1. whiten: with ``P = L L'`` and ``w = L^{-T} z`` the objective becomes ``0.5 |z - z_c|^2``
    (the trajectory-space Hessian is badly conditioned; its whitened form is the identity);
-2. rows are normalised and taken lazily from the dense grid (``dense_factor`` times the
-   constraint grid); the backend (OSQP by default) solves the QP at moderate accuracy on a coarse
-   subset of rows (about ``coarse_samples`` samples), and the rows it finds nearly active become
-   the candidate set;
-3. the exact step (:mod:`dmp.qp.dual_active_set`) starts from those candidates and takes the
-   peaks of every violated stretch, first of the constraint grid, then of the dense grid, until
-   no dense row is violated: the result is the exact optimum over all dense rows, and a row the
-   method cannot take proves infeasibility and names the families involved;
-4. non-convex rows (discs) are re-linearised at the solution and steps 2-3 repeated (sequential
+2. rows are normalised and taken lazily: the exact step (:mod:`dmp.qp.dual_active_set`, a
+   Goldfarb-Idnani dual active-set method in C) starts from the unconstrained optimum and takes
+   the peaks of every violated stretch, first on the constraint grid, then on the dense samples
+   the grid residuals point at, then on every dense sample, until no dense row is violated: the
+   result is the exact optimum over all dense rows, and a row the method cannot take proves
+   infeasibility and names the families involved;
+3. non-convex rows (discs) are re-linearised at the solution and step 2 repeated (sequential
    convex programming) until the path moves less than ``scp_tol``.
+
+With ``seed_with_backend=True`` the backend (OSQP by default) first solves the QP at moderate
+accuracy on a coarse subset of rows and its nearly active rows become the first candidates.
+Measured on the L-push case (``benchmarks/bench_dmp.py``) the seed costs more than it saves (the
+exact step took as many add/drop steps with it as without), so it is off by default.
 
 Strategy ``"full"`` is the plain condensed formulation: every row on the constraint grid at
 once, weights as variables, one backend call per linearisation; kept as the reference peer.
@@ -112,7 +115,7 @@ def _seed(
 def _cutting_planes(
     pool_g: RowPool, pool_d: RowPool, tw: NDArray[np.float64], z_c: NDArray[np.float64],
     seed: list[Key] | None, solver: str, options: dict[str, Any] | None, tol: float, stride: int,
-    cnt: _Counter, seed_with_backend: bool,
+    cnt: _Counter, seed_with_backend: bool, dense_factor: int,
 ) -> tuple[NDArray[np.float64], list[Key]]:
     """Exact optimum over every dense row; returns ``z`` and the active dense-pool keys."""
     eq_keys = pool_d.equality_keys()
@@ -124,10 +127,15 @@ def _cutting_planes(
     state = DualActiveSet(z_c, *_rows_w(pool_d, keys, tw))
 
     def oracle(z: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        # the cheap grid first, then the dense samples the grid points at, then every dense sample
         w = tw @ z
-        for pool in (pool_g, pool_d):  # the cheap grid first, the dense grid to finish
-            peaks = pool.peaks(pool.residuals(w), tol, set())
-            new = [k for k in (pool_d.map_keys(peaks, pool) if pool is pool_g else peaks) if k not in known]
+        res_g = pool_g.residuals(w)
+        for peaks in (
+            lambda: pool_d.map_keys(pool_g.peaks(res_g, tol, set()), pool_g),
+            lambda: pool_d.peaks(pool_d.residuals(w, pool_d.suspects(pool_g, res_g, tol, dense_factor)), tol, set()),
+            lambda: pool_d.peaks(pool_d.residuals(w), tol, set()),
+        ):
+            new = [k for k in peaks() if k not in known]
             if new:
                 keys.extend(new)
                 known.update(new)
@@ -184,23 +192,25 @@ def solve_fit(
     scp_tol: float = 1e-6,
     scp_rtol: float = 1e-6,
     coarse_samples: int | None = None,
-    seed_with_backend: bool = True,
+    seed_with_backend: bool = False,
     options: dict[str, Any] | None = None,
 ) -> FitResult:
     """Solve a :class:`FitProblem`.
 
     Args:
         solver: any installed qpsolvers backend (``qpsolvers.available_solvers``); default OSQP.
-        strategy: ``"cutting_planes"`` (whitened, lazy dense rows, exact finish) or ``"full"``
-            (plain condensed form on the constraint grid).
+            It solves the whole problem in strategy ``"full"`` and the seed of the cutting planes
+            when ``seed_with_backend`` is set.
+        strategy: ``"cutting_planes"`` (whitened, lazy dense rows, exact dual active-set step) or
+            ``"full"`` (plain condensed form on the constraint grid, one backend call).
         tol: accepted true violation [m or m/s]; status is ``"solved"`` when every family's
             dense-grid violation is within it, ``"inaccurate"`` otherwise.
         max_scp: rounds of re-linearisation for non-convex constraints; stop when the path moves
             less than ``scp_tol`` [m] or the objective changes by less than ``scp_rtol`` (relative).
         coarse_samples: about how many samples of the constraint grid seed the cutting planes
             (default ``COARSE_PER_BASIS * n_basis``).
-        seed_with_backend: seed the exact step with the backend's coarse solve (default); False
-            starts from the rows the unconstrained optimum violates.
+        seed_with_backend: seed the exact step with the backend's coarse solve; off by default
+            (measured not to pay), so the exact step starts from the unconstrained optimum.
         options: backend options passed through qpsolvers.
     """
     check_solver(solver)
@@ -231,7 +241,8 @@ def solve_fit(
                 pool_d = RowPool.build(problem.constraints, aff_d, x_lin)
                 seed = ws_keys if scp > 1 else None  # re-linearised: warm start from the active rows
                 z, ws_keys = _cutting_planes(
-                    pool_g, pool_d, tw, z_c, seed, solver, options, tol, stride, cnt, seed_with_backend
+                    pool_g, pool_d, tw, z_c, seed, solver, options, tol, stride, cnt, seed_with_backend,
+                    problem.dense_factor,
                 )
                 w = tw @ z
             else:

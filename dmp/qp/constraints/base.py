@@ -55,6 +55,18 @@ class Coefficients:
             r += np.einsum("kmd,kd->km", self.a_vel, v[self.k])
         return r
 
+    def residuals_at(
+        self, sel: NDArray[np.intp], x: NDArray[np.float64], v: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """Residuals (len(sel), m) of the samples at positions ``sel`` of ``k``, given the positions and
+        velocities (len(sel), n) there."""
+        r = -self.bound[sel]
+        if self.a_pos is not None:
+            r += np.einsum("kmd,kd->km", self.a_pos[sel], x)
+        if self.a_vel is not None:
+            r += np.einsum("kmd,kd->km", self.a_vel[sel], v)
+        return r
+
     def rows(self, aff: AffineRollout, sel_k: NDArray[np.intp], sel_j: NDArray[np.intp]) -> Rows:
         """Rows ``G w <= h`` for the selected (sample position in ``k``, row) pairs."""
         kk = self.k[sel_k]

@@ -1,0 +1,189 @@
+/*
+ * Goldfarb-Idnani dual active-set steps for min 0.5 |z - z_c|^2 (identity Hessian, i.e. the
+ * whitened DMP fit), compiled so that one add/drop step costs O(n^2) flops and no interpreter
+ * overhead. Called through ctypes from dmp/qp/dual_active_set.py, which owns every array.
+ *
+ * Storage: Q (n x n) and R (n x n, upper triangular in its first q columns) column-major,
+ * Q[i + n*j]. The active normals N (n x q, GI convention n . z >= b) satisfy N = Q[:, :q] R[:q, :q].
+ * The first neq active rows are equalities (free multipliers), the rest inequalities (u >= 0).
+ *
+ * Reference: D. Goldfarb, A. Idnani, Math. Programming 27 (1983) 1-33.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <string.h>
+
+#define GI_OK 0
+#define GI_NEED_ROWS 0
+#define GI_INFEASIBLE (-1)
+#define GI_MAX_ITER (-2)
+
+/* Four partial sums: lets the compiler vectorise without -ffast-math (which would break the
+   INFINITY tests below). */
+static double dot(int n, const double *a, const double *b) {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    int i = 0;
+    for (; i + 4 <= n; i += 4) {
+        s0 += a[i] * b[i];
+        s1 += a[i + 1] * b[i + 1];
+        s2 += a[i + 2] * b[i + 2];
+        s3 += a[i + 3] * b[i + 3];
+    }
+    for (; i < n; ++i) s0 += a[i] * b[i];
+    return (s0 + s1) + (s2 + s3);
+}
+
+static void directions(int n, int q, const double *Q, const double *R, const double *np_,
+                       double *qt, double *d, double *r) {
+    for (int j = 0; j < n; ++j) qt[j] = dot(n, Q + (size_t)n * j, np_);
+    for (int i = 0; i < n; ++i) d[i] = 0.0;
+    for (int j = q; j < n; ++j) {
+        const double *col = Q + (size_t)n * j;
+        const double a = qt[j];
+        for (int i = 0; i < n; ++i) d[i] += col[i] * a;
+    }
+    for (int i = q - 1; i >= 0; --i) { /* back substitution R r = qt[:q] */
+        double s = qt[i];
+        for (int k = i + 1; k < q; ++k) s -= R[i + (size_t)n * k] * r[k];
+        r[i] = s / R[i + (size_t)n * i];
+    }
+}
+
+static void rotate_cols(int n, double *Q, int a, int b, double c, double s) {
+    double *qa = Q + (size_t)n * a, *qb = Q + (size_t)n * b;
+    for (int i = 0; i < n; ++i) {
+        const double x = qa[i], y = qb[i];
+        qa[i] = c * x + s * y;
+        qb[i] = -s * x + c * y;
+    }
+}
+
+/* Append the normal whose Q^T n is qt as column q of R, rotating Q so R stays triangular. */
+static void insert(int n, int *q, double *Q, double *R, double *qt) {
+    for (int j = n - 1; j > *q; --j) {
+        const double a = qt[j - 1], b = qt[j];
+        if (b == 0.0) continue;
+        const double h = hypot(a, b), c = a / h, s = b / h;
+        qt[j - 1] = h;
+        qt[j] = 0.0;
+        rotate_cols(n, Q, j - 1, j, c, s);
+    }
+    for (int i = 0; i <= *q; ++i) R[i + (size_t)n * (*q)] = qt[i];
+    for (int i = *q + 1; i < n; ++i) R[i + (size_t)n * (*q)] = 0.0;
+    *q += 1;
+}
+
+/* Remove active column k (0 <= k < q), restoring triangularity by rotations. */
+static void delete_col(int n, int *q, double *Q, double *R, int k) {
+    for (int j = k; j < *q - 1; ++j) memcpy(R + (size_t)n * j, R + (size_t)n * (j + 1), sizeof(double) * n);
+    for (int j = k; j < *q - 1; ++j) {
+        const double a = R[j + (size_t)n * j], b = R[j + 1 + (size_t)n * j];
+        if (b == 0.0) continue;
+        const double h = hypot(a, b), c = a / h, s = b / h;
+        for (int col = j; col < *q - 1; ++col) {
+            const double x = R[j + (size_t)n * col], y = R[j + 1 + (size_t)n * col];
+            R[j + (size_t)n * col] = c * x + s * y;
+            R[j + 1 + (size_t)n * col] = -s * x + c * y;
+        }
+        R[j + 1 + (size_t)n * j] = 0.0;
+        rotate_cols(n, Q, j, j + 1, c, s);
+    }
+    for (int i = 0; i < n; ++i) R[i + (size_t)n * (*q - 1)] = 0.0;
+    *q -= 1;
+}
+
+
+/*
+ * Take the equality e . z = f. Returns 0 when taken, 1 when dependent and consistent (skipped),
+ * -1 when dependent and inconsistent. work: 3n doubles.
+ */
+int gi_equality(int n, double *Q, double *R, double *u, int *q, double *z, const double *e, double f,
+                double *work) {
+    double *qt = work, *d = work + n, *r = work + 2 * n;
+    directions(n, *q, Q, R, e, qt, d, r);
+    const double s = dot(n, e, z) - f, dn = dot(n, d, e);
+    if (dn <= 1e-12 * dot(n, e, e)) return fabs(s) > 1e-9 ? -1 : 1;
+    const double t = -s / dn;
+    for (int i = 0; i < n; ++i) z[i] += t * d[i];
+    for (int i = 0; i < *q; ++i) u[i] -= t * r[i];
+    u[*q] = t;
+    insert(n, q, Q, R, qt);
+    return 0;
+}
+
+/*
+ * Add the most violated candidate row (G z <= h, row-major m x n) until none exceeds tol.
+ * Returns GI_NEED_ROWS (0) when every candidate holds, GI_INFEASIBLE with the involved candidate
+ * rows in info[0..*ninfo) and *eq_involved set, or GI_MAX_ITER. active[i] is the candidate index of
+ * active inequality i (i < q - neq). work: 4n doubles.
+ */
+int gi_solve(int n, int m, const double *G, const double *h, double *Q, double *R, double *u, int *active,
+             int *q, int neq, double *z, double tol, int max_iter, int *iters, int *info, int *ninfo,
+             int *eq_involved, double *work) {
+    double *qt = work, *d = work + n, *r = work + 2 * n, *np_ = work + 3 * n;
+    for (;;) {
+        int p = -1;
+        double worst = tol;
+        for (int i = 0; i < m; ++i) {
+            const double s = dot(n, G + (size_t)n * i, z) - h[i];
+            if (s > worst) {
+                worst = s;
+                p = i;
+            }
+        }
+        if (p < 0) return GI_NEED_ROWS;
+        for (int i = 0; i < n; ++i) np_[i] = -G[(size_t)n * p + i];
+        const double b_p = -h[p];
+        double u_p = 0.0;
+        for (;;) {
+            if (*iters >= max_iter) return GI_MAX_ITER;
+            *iters += 1;
+            directions(n, *q, Q, R, np_, qt, d, r);
+            const double s = dot(n, np_, z) - b_p;
+            double t1 = INFINITY;
+            int k = -1;
+            for (int i = neq; i < *q; ++i) {
+                if (r[i] > 1e-14) {
+                    const double ratio = u[i] / r[i];
+                    if (ratio < t1) {
+                        t1 = ratio;
+                        k = i;
+                    }
+                }
+            }
+            const double dn = dot(n, d, np_);
+            const double t2 = dn <= 1e-12 * dot(n, np_, np_) ? INFINITY : -s / dn;
+            if (!isfinite(t1) && !isfinite(t2)) {
+                int c = 0;
+                for (int i = neq; i < *q; ++i)
+                    if (r[i] < -1e-14) info[c++] = active[i - neq];
+                info[c++] = p;
+                *ninfo = c;
+                *eq_involved = 0;
+                for (int i = 0; i < neq; ++i)
+                    if (fabs(r[i]) > 1e-14) *eq_involved = 1;
+                return GI_INFEASIBLE;
+            }
+            const double t = t1 < t2 ? t1 : t2;
+            if (isfinite(t2))
+                for (int i = 0; i < n; ++i) z[i] += t * d[i];
+            for (int i = 0; i < *q; ++i) u[i] -= t * r[i];
+            u_p += t;
+            if (t2 <= t1) {
+                u[*q] = u_p;
+                active[*q - neq] = p;
+                insert(n, q, Q, R, qt);
+                break;
+            }
+            delete_col(n, q, Q, R, k); /* multiplier of active inequality k reached zero */
+            for (int i = k; i < *q; ++i) u[i] = u[i + 1];
+            for (int i = k - neq; i < *q - neq; ++i) active[i] = active[i + 1];
+        }
+    }
+}
+
+/* The module only carries the C functions above (loaded with ctypes); it has no Python API. */
+static struct PyModuleDef gi_module = {PyModuleDef_HEAD_INIT, "_gi_core", NULL, -1, NULL};
+
+PyMODINIT_FUNC PyInit__gi_core(void) { return PyModule_Create(&gi_module); }
