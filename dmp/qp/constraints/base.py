@@ -93,6 +93,10 @@ class Constraint(ABC):
     equality: bool = False
     linearised: bool = False
     """True when the rows depend on the linearisation path (non-convex constraint)."""
+    conservative: bool = True
+    """For linearised constraints: True when rows built on any path imply the true constraint
+    (tangent half-planes of a disc), so every iterate is feasible; False when they are exact only
+    on the linearisation path itself (the sequential loop then runs until the path settles)."""
 
     def __init__(self, family: str, window: tuple[float, float] | None = None) -> None:
         self.family = family

@@ -1,0 +1,263 @@
+"""The ``qp`` variant of OE condensing (this project, DESIGN section 5 step 5).
+
+For a new tool, the generalized universal object path is condensed into pushes the tool can make
+on the Omni. A candidate push sequence (faces in order, switch times) is scored by the constrained
+DMP fit of :mod:`dmp.qp`: track the universal path, with, during each push, the object's velocity in
+the active face's cone (turning with the tool heading, re-linearised until it settles) and the
+object where the Omni can push it from with that face (:func:`planner.oe.constraints.reach_constraints`),
+obstacles kept out with a margin, and the target reached with zero velocity. At a switch instant
+both faces' rows hold, so the object stops there when their cones do not overlap (the tool moves
+round it while it stands still). Cost: the fit's objective (half the mean squared deviation from
+the universal path [m^2]) plus ``switch_price`` per face change.
+
+Search (:func:`condense_qp`), bounded and pruned, not exhaustive:
+
+1. pre-checks: the start and the target must each be in reach of some face (else ``infeasible``);
+2. every face order of at most ``max_pushes`` pushes is ranked by a proxy
+   (:mod:`planner.oe.sequence_proxy`) with switch times on a grid of ``segments`` equal phases;
+3. the ``candidates`` best are scored by the QP (one sequential-convex solve each);
+4. the best feasible one has each switch moved by one segment either way, kept when it lowers
+   the cost (one pass).
+
+What it guarantees: the returned plan satisfies every constraint family on the dense grid (the
+measured violations are in its metrics), and it is the cheapest of the sequences scored; it does
+not guarantee the global optimum over all sequences and switch times. ``infeasible`` means the
+pre-checks failed or no scored candidate was feasible; the reason names which and why.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dmp import DMP
+from dmp.errors import InputError
+from dmp.qp import FitProblem, FitResult, FixedEndPoint, OutsideDisc, Ridge, TrackPath, ZeroEndVelocity, solve_fit
+from dmp.qp.constraints.base import Constraint
+from dmp.validation import check_array, check_positive
+from planner.oe.constraints import HeadingCone, reach_constraints
+from planner.oe.face_frame import FaceFrame
+from planner.oe.push_plan import Push, PushPlan
+from planner.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
+from tools.model import Tool
+from tools.objects import OBJECT_RADIUS, Disc
+from tools.omni.platform import OmniPlatform
+
+
+@dataclass(frozen=True)
+class QPOptions:
+    """Options of the ``qp`` variant.
+
+    Attributes:
+        n_samples: constraint-grid samples of the fit (violations are measured 10x denser).
+        n_basis: basis functions per dimension of the condensed DMP.
+        segments: switch times lie on this many equal phases of the motion.
+        max_pushes: longest push sequence considered.
+        candidates: push sequences scored by the QP before refinement.
+        switch_price: cost of one face change [m^2], in the units of the objective.
+        margin: safety margin delta kept from obstacles [m] (beyond the object's radius).
+        ridge: weight of a ridge on the weights [m^2 per weight^2]; 0 by default (tracking on more
+            samples than basis functions is already well posed; weights are O(100), so even 1e-10
+            outweighs a millimetre of deviation).
+        tol: violation [m, m/s] the fit aims at (rows violated by more are added);
+        accept: largest true violation [m, m/s] of a candidate still counted feasible (the heading
+            cone is exact only where it was linearised, so rounds stop a little short of ``tol``);
+        max_scp: sequential-convex rounds per candidate.
+    """
+
+    n_samples: int = 120
+    n_basis: int = 25
+    segments: int = 10
+    max_pushes: int = 4
+    candidates: int = 6
+    switch_price: float = 2e-6
+    margin: float = 0.005
+    ridge: float = 0.0
+    tol: float = 1e-8
+    accept: float = 1e-6
+    max_scp: int = 12
+
+    def __post_init__(self) -> None:
+        for name in ("n_samples", "n_basis", "segments", "max_pushes", "candidates", "max_scp"):
+            v = getattr(self, name)
+            if not isinstance(v, int) or v < 1:
+                raise InputError(f"oe.{name}", "a positive integer", repr(v))
+        if self.n_samples < 10:
+            raise InputError("oe.n_samples", "at least 10", repr(self.n_samples))
+        for name in ("switch_price", "margin", "ridge"):
+            v = getattr(self, name)
+            if not np.isfinite(v) or v < 0:
+                raise InputError(f"oe.{name}", "a finite number >= 0", repr(v))
+        check_positive(self.tol, "oe.tol")
+        check_positive(self.accept, "oe.accept")
+
+
+@dataclass(frozen=True)
+class _Scored:
+    faces: tuple[str, ...]
+    switches: tuple[float, ...]
+    result: FitResult
+
+    accept: float
+
+    @property
+    def feasible(self) -> bool:
+        r = self.result
+        return r.status == "solved" or (r.status == "inaccurate" and max(r.violations.values()) <= self.accept)
+
+
+class _Scene:
+    """Everything fixed while candidates are scored."""
+
+    def __init__(
+        self, t: NDArray[np.float64], universal: NDArray[np.float64], tool: Tool, platform: OmniPlatform,
+        target: NDArray[np.float64], obstacles: Sequence[Disc], opts: QPOptions,
+    ) -> None:
+        self.t, self.universal, self.target, self.opts = t, universal, target, opts
+        self.frames = {f: FaceFrame.build(tool, f, platform) for f in tool.face_names}
+        self.dmp = DMP(2, n_basis=opts.n_basis)
+        self.fixed: list[Constraint] = [FixedEndPoint(target), ZeroEndVelocity()]
+        self.fixed += [
+            OutsideDisc(o.centre, o.radius + OBJECT_RADIUS + opts.margin, family="obstacle") for o in obstacles
+        ]
+        self._const: float | None = None
+
+    def problem(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> FitProblem:
+        edges = (self.t[0], *switches, self.t[-1])
+        cons = list(self.fixed)
+        for face, lo, hi in zip(faces, edges[:-1], edges[1:], strict=True):
+            fr = self.frames[face]
+            cons.append(HeadingCone(fr, window=(lo, hi)))
+            cons += reach_constraints(fr, window=(lo, hi))
+        return FitProblem(
+            self.dmp, self.t, x0=self.universal[0], g=self.target,
+            objectives=[TrackPath(self.universal)] + ([Ridge(self.opts.ridge)] if self.opts.ridge > 0 else []),
+            constraints=cons,
+        )
+
+    def score(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> _Scored:
+        res = solve_fit(self.problem(faces, switches), tol=self.opts.tol, max_scp=self.opts.max_scp)
+        return _Scored(faces, switches, res, self.opts.accept)
+
+    def cost(self, s: _Scored) -> float:
+        if not s.feasible:
+            return np.inf
+        return s.result.objective + self._offset + self.opts.switch_price * (len(s.faces) - 1)
+
+    @property
+    def _offset(self) -> float:
+        """Constant the tracking objective drops (so costs read as half the mean squared deviation
+        [m^2]): ``0.5 mean |x_free - ref|^2`` on the grid, the same for every candidate."""
+        if self._const is None:
+            free = self.problem((next(iter(self.frames)),), ()).affine("grid").x_free
+            self._const = 0.5 * float(np.mean(np.sum((free - self.universal) ** 2, axis=1)))
+        return self._const
+
+
+def _precheck(scene: _Scene) -> str:
+    ends = np.vstack([scene.universal[0], scene.target])
+    reach = {f: reach_distance(fr, ends) for f, fr in scene.frames.items()}
+    for i, what in ((0, "start"), (1, "target")):
+        if all(r[i] > 0 for r in reach.values()):
+            gap = min(r[i] for r in reach.values())
+            return f"{what} outside the Omni's reach for every face (nearest face {gap * 1e3:.1f} mm away)"
+    return ""
+
+
+def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64],
+            v: NDArray[np.float64]) -> tuple[Push, ...]:
+    edges = (t[0], *best.switches, t[-1])
+    out = []
+    for face, lo, hi in zip(best.faces, edges[:-1], edges[1:], strict=True):
+        idx = np.flatnonzero((t >= lo - 1e-12) & (t <= hi + 1e-12))
+        vv = v[idx].sum(axis=0)
+        out.append(Push(face, float(lo), float(hi), float(np.arctan2(vv[1], vv[0])), idx,
+                        scene.frames[face].tool_pose(x[idx])))
+    return tuple(out)
+
+
+def condense_qp(
+    t: NDArray[np.float64],
+    universal: NDArray[np.float64],
+    tool: Tool,
+    platform: OmniPlatform,
+    target: NDArray[np.float64] | None = None,
+    obstacles: Sequence[Disc] = (),
+    options: QPOptions | None = None,
+) -> PushPlan:
+    """Condense the generalized universal path for ``tool`` on ``platform`` (the ``qp`` variant).
+
+    Args:
+        t: times (T,) [s] of the generalized universal path, increasing.
+        universal: the path (T, 2) [m]; it starts at the object's start.
+        tool: the new tool; platform: the Omni carrying it.
+        target: where the object must end [m] (default the path's end).
+        obstacles: discs the object keeps ``options.margin`` away from.
+    Returns:
+        a :class:`PushPlan` (``status == "infeasible"`` with the reason when no plan is found).
+    """
+    start_time = time.perf_counter()
+    opts = options or QPOptions()
+    t = check_array(t, "t", ndim=1)
+    universal = check_array(universal, "universal", shape=(t.size, 2))
+    target = universal[-1] if target is None else check_array(target, "target", shape=(2,))
+    grid = np.linspace(t[0], t[-1], opts.n_samples)
+    ref = np.column_stack([np.interp(grid, t, universal[:, j]) for j in range(2)])
+    scene = _Scene(grid, ref, tool, platform, target, obstacles, opts)
+
+    def infeasible(reason: str, n_qp: int = 0, cands: tuple = ()) -> PushPlan:
+        empty = np.zeros((0, 2))
+        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=reason, n_qp=n_qp,
+                        candidates=cands, metrics={"compute_time": time.perf_counter() - start_time})
+
+    why = _precheck(scene)
+    if why:
+        return infeasible(why)
+    v_ref = np.gradient(ref, grid, axis=0)
+    names = list(scene.frames)
+    frames = [scene.frames[n] for n in names]
+    costs = segment_costs(grid, ref, v_ref, frames, opts.segments)
+    bounds = np.linspace(grid[0], grid[-1], opts.segments + 1)
+    ranked = ranked_sequences(costs, names, opts.max_pushes, opts.switch_price)[: opts.candidates]
+    scored = [scene.score(faces, tuple(float(bounds[c]) for c in cuts)) for faces, cuts, _ in ranked]
+    feasible = [s for s in scored if s.feasible]
+    if feasible:
+        best = min(feasible, key=scene.cost)
+        cuts = [int(np.argmin(np.abs(bounds - s))) for s in best.switches]
+        for i in range(len(cuts)):
+            for step in (-1, 1):
+                trial = list(cuts)
+                trial[i] += step
+                lo = trial[i - 1] if i > 0 else 0
+                hi = trial[i + 1] if i + 1 < len(trial) else opts.segments
+                if not lo < trial[i] < hi:
+                    continue
+                s = scene.score(best.faces, tuple(float(bounds[c]) for c in trial))
+                scored.append(s)
+                if scene.cost(s) < scene.cost(best):
+                    best, cuts = s, trial
+    n_qp = sum(s.result.scp_iterations for s in scored)
+    cands = tuple((s.faces, s.switches, None if not s.feasible else scene.cost(s)) for s in scored)
+    if not feasible:
+        fams = sorted({f for s in scored for f in (s.result.families or tuple(
+            k for k, val in s.result.violations.items() if val > opts.tol))})
+        return infeasible(
+            f"none of the {len(scored)} push sequences scored is feasible "
+            f"(constraint families in conflict: {', '.join(fams) or 'unknown'})", n_qp, cands,
+        )
+    roll = best.result.rollout
+    assert roll is not None  # a feasible fit always has its rollout
+    dense_t, x, v = roll.t + grid[0], roll.x, roll.v
+    pushes = _pushes(scene, best, dense_t, x, v)
+    plan = PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, n_qp=n_qp, candidates=cands)
+    from planner.oe.metrics import plan_metrics  # local: metrics import the plan types
+
+    metrics = plan_metrics(plan, scene.frames, target, obstacles, margin=opts.margin)
+    metrics["compute_time"] = time.perf_counter() - start_time
+    metrics.update({f"violation_{k}": v for k, v in best.result.violations.items()})
+    return PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, metrics=metrics, n_qp=n_qp,
+                    candidates=cands)

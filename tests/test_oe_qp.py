@@ -1,0 +1,117 @@
+"""OE condensing, ``qp`` variant: face frames on the Omni, reach rows, heading cone, push search."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+import yaml
+
+from planner.oe import QPOptions, condense_qp
+from planner.oe.constraints import HeadingCone, reach_constraints
+from planner.oe.face_frame import FaceFrame
+from problems.fit_cases import minimum_jerk
+from tools import Disc, load_tool, tool_from_dict
+from tools.library import library_names
+from tools.omni.ik import inverse_kinematics
+from tools.omni.platform import OmniPlatform
+
+START, CORNER, TARGET = np.array([0.05, 0.12]), np.array([-0.02, 0.12]), np.array([-0.07, 0.18])
+
+
+def l_scene(n: int = 200) -> tuple[np.ndarray, np.ndarray]:
+    """A left-then-forward-left universal path inside the Omni's reach (6 s)."""
+    t = np.linspace(0.0, 6.0, n)
+    x = np.vstack([minimum_jerk(START, CORNER, n // 2), minimum_jerk(CORNER, TARGET, n - n // 2)])
+    return t, x
+
+
+@pytest.mark.parametrize("name", library_names())
+def test_face_frame_pose_matches_the_omni_heading(name: str) -> None:
+    tool = load_tool(name)
+    plat = OmniPlatform(a_t=tool.a_t)
+    rng = np.random.default_rng(1)
+    for face in tool.face_names:
+        fr = FaceFrame.build(tool, face, plat)
+        poly, disc = reach_constraints(fr)
+        pts = rng.uniform([-0.25, -0.05], [0.25, 0.25], (4000, 2))
+        inside = np.all(pts @ poly.A.T <= poly.b, axis=1) & (np.linalg.norm(pts - disc.center, axis=1) >= disc.radius)
+        assert inside.sum() > 200
+        for pose in fr.tool_pose(pts[inside][:60]):
+            ik = inverse_kinematics(plat, pose[:2])
+            assert ik.reachable  # the rows are an inner approximation of the reach
+            assert abs(ik.heading - pose[2]) < 1e-9  # the heading the Omni imposes there
+
+
+def test_reach_rows_cover_nearly_all_of_the_exact_region() -> None:
+    tool = load_tool("slope")
+    plat = OmniPlatform(a_t=tool.a_t)
+    fr = FaceFrame.build(tool, "inclined", plat)
+    poly, disc = reach_constraints(fr, tol=2e-4)
+    pts = np.random.default_rng(2).uniform([-0.25, -0.05], [0.25, 0.25], (20000, 2))
+    inside = np.all(pts @ poly.A.T <= poly.b, axis=1) & (np.linalg.norm(pts - disc.center, axis=1) >= disc.radius)
+    exact = np.array([
+        (ik := inverse_kinematics(plat, p[:2])).reachable and abs(ik.heading - p[2]) < 1e-9 for p in fr.tool_pose(pts)
+    ])
+    assert not np.any(inside & ~exact)
+    assert inside.sum() >= 0.99 * exact.sum()
+
+
+def test_heading_cone_rows_follow_the_heading() -> None:
+    tool = load_tool("slope")
+    fr = FaceFrame.build(tool, "left", OmniPlatform(a_t=tool.a_t))
+    x = np.array([[0.05, 0.15], [-0.06, 0.15]])
+    phi = fr.push_direction(x)
+    assert abs(phi[0] - phi[1]) > 0.3  # the cone turns with the waist
+    c = HeadingCone(fr)
+    co = c.coefficients(np.arange(2.0), x)
+    along = np.stack([np.cos(phi), np.sin(phi)], 1) * 0.01
+    assert np.all(co.residuals(x, along) <= 1e-15)
+    off = np.stack([np.cos(phi + fr.theta_b + 0.1), np.sin(phi + fr.theta_b + 0.1)], 1) * 0.01
+    assert np.all(co.residuals(x, off).max(axis=1) > 0)
+    assert c.angle_violation(x, off) == pytest.approx(0.1, abs=1e-12)
+
+
+def test_qp_variant_condenses_an_l_path_for_the_slope_tool() -> None:
+    tool = load_tool("slope")
+    t, x = l_scene()
+    obstacle = Disc(np.array([0.0, 0.16]), 0.01)
+    plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), obstacles=[obstacle])
+    assert plan.status == "solved", plan.reason
+    m = plan.metrics
+    assert plan.faces[0] == "left" and "inclined" in plan.faces
+    assert m["goal_error"] < 1e-3
+    assert m["reach_violation_max"] <= 1e-6
+    assert m["obstacle_clearance_min"] >= 0.005 - 1e-6  # the safety margin
+    assert all(v <= 1e-6 for k, v in m.items() if k.startswith("violation_"))
+    assert m["deviation_max"] < 0.01
+    # consecutive pushes share their switch instant; every push's tool pose is reachable
+    for a, b in itertools.pairwise(plan.pushes):
+        assert a.t_end == b.t_start
+    plat = OmniPlatform(a_t=tool.a_t)
+    for p in plan.pushes:
+        assert all(inverse_kinematics(plat, pose[:2]).reachable for pose in p.tool_pose[::25])
+    assert plan.n_qp >= len(plan.candidates)
+
+
+def test_target_out_of_reach_is_infeasible_with_reason() -> None:
+    tool = load_tool("slope")
+    t, x = l_scene()
+    x = x + np.linspace(0, 1, t.size)[:, None] * np.array([0.0, 0.3])  # ends 0.48 m from the base
+    plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t))
+    assert plan.status == "infeasible"
+    assert "target outside the Omni's reach for every face" in plan.reason
+    assert plan.n_qp == 0
+
+
+def test_a_tool_that_only_pushes_away_from_the_target_is_infeasible() -> None:
+    with open("tools/library/finger.yaml") as fh:
+        spec = yaml.safe_load(fh)
+    spec["faces"] = [f for f in spec["faces"] if f["name"] == "upper"]  # forward pushes only
+    tool = tool_from_dict(spec)
+    t = np.linspace(0.0, 4.0, 150)
+    x = minimum_jerk(np.array([0.0, 0.19]), np.array([0.0, 0.14]), t.size)  # towards the base
+    plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), options=QPOptions(candidates=2))
+    assert plan.status == "infeasible"
+    assert "cone" in plan.reason
