@@ -109,3 +109,21 @@ def test_polygon_rejects_non_convex() -> None:
 
     with pytest.raises(InputError, match="convex"):
         PositionPolygon.from_vertices([[0, 0], [1, 0], [0.2, 0.2], [0, 1]])
+
+
+def test_outside_polygon_holds_on_the_dense_grid() -> None:
+    import shapely
+
+    from dmp.qp import OutsidePolygon
+
+    case = l_push_case(30, 200, obstacle=False)
+    box = shapely.box(-0.004, 0.03, 0.01, 0.05)  # on the forward stretch of the L
+    problem = FitProblem(
+        case.problem.dmp, case.t, case.reference[0], case.reference[-1], [TrackPath(case.reference)],
+        constraints=[OutsidePolygon(np.asarray(box.exterior.coords)[:-1], 0.003)],
+    )
+    r = solve_fit(problem)
+    assert r.status == "solved"
+    gap = shapely.distance(box, shapely.points(r.rollout.x)).min()
+    assert gap >= 0.003 - 1e-9
+    assert r.violations["obstacle"] <= 1e-9

@@ -6,13 +6,14 @@ import itertools
 
 import numpy as np
 import pytest
+import shapely
 import yaml
 
 from planner.oe import QPOptions, condense_qp
 from planner.oe.constraints import HeadingCone, reach_constraints
 from planner.oe.face_frame import FaceFrame
 from problems.fit_cases import minimum_jerk
-from tools import Disc, load_tool, tool_from_dict
+from tools import OBJECT_RADIUS, Disc, load_tool, tool_from_dict
 from tools.library import library_names
 from tools.omni.ik import inverse_kinematics
 from tools.omni.platform import OmniPlatform
@@ -115,3 +116,14 @@ def test_a_tool_that_only_pushes_away_from_the_target_is_infeasible() -> None:
     plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), options=QPOptions(candidates=2))
     assert plan.status == "infeasible"
     assert "cone" in plan.reason
+
+
+def test_qp_variant_keeps_the_margin_from_a_polygon_obstacle() -> None:
+    tool = load_tool("slope")
+    t, x = l_scene()
+    box = shapely.box(0.0, 0.09, 0.02, 0.105)  # just below the leftward stretch: pass 6.5 mm higher
+    plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), obstacles=[box], options=QPOptions(margin=0.004))
+    assert plan.status == "solved", plan.reason
+    gap = shapely.distance(box, shapely.points(plan.object_xy)).min() - OBJECT_RADIUS
+    assert gap >= 0.004 - 1e-6
+    assert plan.metrics["obstacle_clearance_min"] == pytest.approx(gap, abs=1e-12)

@@ -5,13 +5,14 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 
 import numpy as np
+import shapely
 from numpy.typing import NDArray
 
 from planner.oe.constraints import HeadingCone
 from planner.oe.face_frame import FaceFrame
 from planner.oe.push_plan import PushPlan
 from planner.oe.sequence_proxy import reach_distance
-from tools.objects import OBJECT_RADIUS, Disc
+from tools.objects import OBJECT_RADIUS, Disc, Obstacle
 
 
 def _deviation(x: NDArray[np.float64], t: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -26,7 +27,7 @@ def plan_metrics(
     plan: PushPlan,
     frames: Mapping[str, FaceFrame],
     target: NDArray[np.float64],
-    obstacles: Sequence[Disc] = (),
+    obstacles: Sequence[Obstacle] = (),
     *,
     margin: float = 0.0,
     speed_tol: float = 1e-6,
@@ -49,7 +50,11 @@ def plan_metrics(
         reach = max(reach, float(reach_distance(fr, x[p.samples]).max(initial=0.0)))
     clear = np.inf
     for o in obstacles:
-        clear = min(clear, float((np.linalg.norm(x - o.centre, axis=1) - o.radius - OBJECT_RADIUS).min()))
+        if isinstance(o, Disc):
+            gap = np.linalg.norm(x - o.centre, axis=1) - o.radius
+        else:
+            gap = shapely.distance(o, shapely.points(x))
+        clear = min(clear, float(gap.min()) - OBJECT_RADIUS)
     dev = _deviation(x, t, plan.universal)
     return {
         "cone_violation_max": cone,

@@ -36,7 +36,17 @@ from numpy.typing import NDArray
 
 from dmp import DMP
 from dmp.errors import InputError
-from dmp.qp import FitProblem, FitResult, FixedEndPoint, OutsideDisc, Ridge, TrackPath, ZeroEndVelocity, solve_fit
+from dmp.qp import (
+    FitProblem,
+    FitResult,
+    FixedEndPoint,
+    OutsideDisc,
+    OutsidePolygon,
+    Ridge,
+    TrackPath,
+    ZeroEndVelocity,
+    solve_fit,
+)
 from dmp.qp.constraints.base import Constraint
 from dmp.validation import check_array, check_positive
 from planner.oe.constraints import HeadingCone, reach_constraints
@@ -44,7 +54,7 @@ from planner.oe.face_frame import FaceFrame
 from planner.oe.push_plan import Push, PushPlan
 from planner.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
 from tools.model import Tool
-from tools.objects import OBJECT_RADIUS, Disc
+from tools.objects import OBJECT_RADIUS, Disc, Obstacle
 from tools.omni.platform import OmniPlatform
 
 
@@ -115,15 +125,18 @@ class _Scene:
 
     def __init__(
         self, t: NDArray[np.float64], universal: NDArray[np.float64], tool: Tool, platform: OmniPlatform,
-        target: NDArray[np.float64], obstacles: Sequence[Disc], opts: QPOptions,
+        target: NDArray[np.float64], obstacles: Sequence[Obstacle], opts: QPOptions,
     ) -> None:
         self.t, self.universal, self.target, self.opts = t, universal, target, opts
         self.frames = {f: FaceFrame.build(tool, f, platform) for f in tool.face_names}
         self.dmp = DMP(2, n_basis=opts.n_basis)
         self.fixed: list[Constraint] = [FixedEndPoint(target), ZeroEndVelocity()]
-        self.fixed += [
-            OutsideDisc(o.centre, o.radius + OBJECT_RADIUS + opts.margin, family="obstacle") for o in obstacles
-        ]
+        for o in obstacles:
+            if isinstance(o, Disc):
+                self.fixed.append(OutsideDisc(o.centre, o.radius + OBJECT_RADIUS + opts.margin, family="obstacle"))
+            else:
+                ring = np.asarray(o.exterior.coords)[:-1]
+                self.fixed.append(OutsidePolygon(ring, OBJECT_RADIUS + opts.margin, family="obstacle"))
         self._const: float | None = None
 
     def problem(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> FitProblem:
@@ -186,7 +199,7 @@ def condense_qp(
     tool: Tool,
     platform: OmniPlatform,
     target: NDArray[np.float64] | None = None,
-    obstacles: Sequence[Disc] = (),
+    obstacles: Sequence[Obstacle] = (),
     options: QPOptions | None = None,
 ) -> PushPlan:
     """Condense the generalized universal path for ``tool`` on ``platform`` (the ``qp`` variant).
@@ -196,7 +209,7 @@ def condense_qp(
         universal: the path (T, 2) [m]; it starts at the object's start.
         tool: the new tool; platform: the Omni carrying it.
         target: where the object must end [m] (default the path's end).
-        obstacles: discs the object keeps ``options.margin`` away from.
+        obstacles: discs and convex polygons (shapely) the object keeps ``options.margin`` away from.
     Returns:
         a :class:`PushPlan` (``status == "infeasible"`` with the reason when no plan is found).
     """

@@ -4,6 +4,7 @@ from dmp.qp.constraints.base import Coefficients, Constraint, Rows
 from dmp.qp.constraints.cone import VelocityCone
 from dmp.qp.constraints.disc import OutsideDisc
 from dmp.qp.constraints.endpoint import FixedEndPoint, ZeroEndVelocity
+from dmp.qp.constraints.outside_polygon import OutsidePolygon
 from dmp.qp.constraints.polygon import PositionPolygon
 
 __all__ = [
@@ -11,6 +12,7 @@ __all__ = [
     "Constraint",
     "FixedEndPoint",
     "OutsideDisc",
+    "OutsidePolygon",
     "PositionPolygon",
     "Rows",
     "VelocityCone",
