@@ -182,3 +182,57 @@ def table_pose(platform: OmniPlatform, q: ArrayLike) -> tuple[float, float, floa
     T = tool_pose_world(platform, q)
     qv = np.asarray(q, dtype=np.float64)
     return float(T[0, 3]), float(T[1, 3]), float(platform.heading(qv[0]))
+
+
+@dataclass(frozen=True)
+class JointPath:
+    """Joints along a tool path, from :func:`joint_path`.
+
+    Attributes:
+        q: shape (T, 3) [rad]; NaN rows where no arm configuration reaches the point at all.
+        violation: shape (T,) [rad], how far the chosen branch is outside the joint limits (0 when
+            inside, inf where unreachable at any joint values).
+        heading: shape (T,) [rad], the tool yaw the waist imposes (NaN where unreachable).
+    """
+
+    q: NDArray[np.float64]
+    violation: NDArray[np.float64]
+    heading: NDArray[np.float64]
+
+
+def joint_path(platform: OmniPlatform, points: ArrayLike) -> JointPath:
+    """Vectorized inverse kinematics along a tool path ``points`` (T, 2) [m] on the pushing plane.
+
+    One branch for the whole path: the forward waist branch (``u > 0``) with the elbow branch that
+    stays inside the limits at the most samples (ties: elbow up, the first of
+    :func:`inverse_kinematics`), so joints vary continuously along a continuous path. Where that
+    branch leaves the limits the joints are kept and ``violation`` says by how much.
+    """
+    p = check_array(points, "points", shape=(None, 2))
+    b = platform.world_to_base(np.column_stack([p, np.zeros(len(p))]))
+    rho = np.hypot(b[:, 0], b[:, 1])
+    v = D1 - platform.table_height
+    u = np.sqrt(np.maximum(rho**2 - D_TOOL**2, 0.0))
+    q1 = np.arctan2(b[:, 1], b[:, 0]) - np.arctan2(D_TOOL, u)
+    q1 = (q1 + np.pi) % (2 * np.pi) - np.pi
+    le, delta = effective_link(platform.a_t)
+    c = (u * u + v * v - L1 * L1 - le * le) / (2.0 * L1 * le)
+    ok = (np.abs(c) <= 1.0 + 1e-12) & (rho >= D_TOOL)
+    c = np.clip(c, -1.0, 1.0)
+    lo, hi = np.asarray(platform.limits.lower), np.asarray(platform.limits.upper)
+    best: tuple[int, NDArray[np.float64], NDArray[np.float64]] | None = None
+    for sign in (1.0, -1.0):
+        q3p = sign * np.arccos(c)
+        q2 = np.arctan2(v, u) - np.arctan2(le * np.sin(q3p), L1 + le * np.cos(q3p))
+        q = np.column_stack([q1, (q2 + np.pi) % (2 * np.pi) - np.pi, (q3p - delta + np.pi) % (2 * np.pi) - np.pi])
+        excess = np.maximum(np.maximum(lo - q, q - hi), 0.0).max(axis=1)
+        excess[excess <= LIMIT_ATOL] = 0.0
+        score = int(np.sum(ok & (excess == 0.0)))
+        if best is None or score > best[0]:
+            best = (score, q, excess)
+    assert best is not None  # two elbow branches were tried
+    _, q, excess = best
+    q[~ok] = np.nan
+    excess[~ok] = np.inf
+    heading = np.where(ok, platform.heading(q[:, 0]), np.nan)
+    return JointPath(q, excess, heading)
