@@ -127,3 +127,22 @@ def test_qp_variant_keeps_the_margin_from_a_polygon_obstacle() -> None:
     gap = shapely.distance(box, shapely.points(plan.object_xy)).min() - OBJECT_RADIUS
     assert gap >= 0.004 - 1e-6
     assert plan.metrics["obstacle_clearance_min"] == pytest.approx(gap, abs=1e-12)
+
+
+def test_mapping_variant_runs_from_start_to_target_and_reports_what_it_violates() -> None:
+    from planner.oe.mapping_variant import MappingOptions, condense_mapping
+
+    tool = load_tool("slope")
+    t, x = l_scene()
+    obstacle = Disc(np.array([0.0, 0.16]), 0.01)
+    plan = condense_mapping(t, x, tool, OmniPlatform(a_t=tool.a_t), obstacles=[obstacle],
+                            options=MappingOptions(tube=0.015))
+    assert plan.status == "solved"
+    assert np.allclose(plan.object_xy[0], START) and np.allclose(plan.object_xy[-1], TARGET)
+    assert set(plan.faces) <= {"left", "inclined"} and len(plan.faces) >= 2
+    m = plan.metrics
+    assert m["goal_error"] < 1e-12
+    assert m["obstacle_clearance_min"] > 0.0  # pushed out of the obstacle by the outer map
+    assert m["cone_violation_max"] > 0.1  # no cone rows: the tube and the corners leave the cones
+    # consecutive pushes meet; every sample belongs to a push
+    assert plan.pushes[0].samples[0] == 0 and plan.pushes[-1].samples[-1] == plan.t.size - 1
