@@ -1,30 +1,81 @@
-"""The ``tooltransfer`` command line. Bad input exits with code 2 and a message, never a traceback."""
+"""The ``tooltransfer`` command line.
+
+Exit codes: 0 done (solved), 1 infeasible, 2 bad input (a message naming the field, never a
+traceback). Every command has ``--help`` with an example.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from dmp.errors import ToolTransferError
 
+EXIT_OK, EXIT_INFEASIBLE, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from planner.demo import run_demo
+
+    print(run_demo(args.out))
+    print(f"wrote {args.out / 'demo.png'} and {args.out / 'demo.txt'}")
+    return EXIT_OK
+
+
+def _cmd_schema(args: argparse.Namespace) -> int:
+    from problems.task import task_json_schema
+
+    text = task_json_schema()
+    if args.out:
+        args.out.write_text(text + "\n")
+        print(f"wrote {args.out}")
+    else:
+        print(text)
+    return EXIT_OK
+
+
+def _cmd_tools(args: argparse.Namespace) -> int:
+    from planner.plots.tool_library import plot_tool_library
+
+    print(f"wrote {plot_tool_library(args.out)}")
+    return EXIT_OK
+
+
+
+def _add(sub: argparse._SubParsersAction, name: str, helptext: str, example: str,
+         func: Callable[[argparse.Namespace], int]) -> argparse.ArgumentParser:
+    p = sub.add_parser(name, help=helptext, description=helptext, epilog=f"example:\n  {example}",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.set_defaults(func=func)
+    return p
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="tooltransfer", description="DMP skill transfer for multi-tool pushing on a Phantom Omni."
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    p = _add(sub, "demo", "fit a DMP to an L-shaped push with and without cone constraints",
+             "tooltransfer demo --out out/demo", _cmd_demo)
+    p.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
+    p = _add(sub, "schema", "print the JSON Schema of task files (for editors)",
+             "tooltransfer schema > task.schema.json", _cmd_schema)
+    p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")
+    p = _add(sub, "tools", "draw the tool library (faces, cones) and the Omni's reach",
+             "tooltransfer tools --out out/tools.png", _cmd_tools)
+    p.add_argument("--out", type=Path, default=Path("out/tools.png"), help="output PNG")
+    return parser
+
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="tooltransfer", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
-    demo = sub.add_parser("demo", help="fit a DMP to an L-shaped push with and without cone constraints")
-    demo.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
-    args = parser.parse_args(argv)
+    args = build_parser().parse_args(argv)
     try:
-        if args.command == "demo":
-            from planner.demo import run_demo
-
-            print(run_demo(args.out))
-            print(f"wrote {args.out / 'demo.png'} and {args.out / 'demo.txt'}")
+        return int(args.func(args))
     except ToolTransferError as exc:
         print(f"tooltransfer: error: {exc}", file=sys.stderr)
-        return 2
-    return 0
+        return EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

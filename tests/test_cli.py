@@ -10,3 +10,26 @@ def test_demo_writes_figure_and_table(tmp_path, capsys) -> None:
     assert (tmp_path / "demo.png").stat().st_size > 10_000
     text = (tmp_path / "demo.txt").read_text()
     assert "cone+workspace+obstacle" in text and "solved" in text
+
+
+def test_schema_command_prints_the_task_schema(capsys) -> None:
+    import json
+
+    assert main(["schema"]) == 0
+    schema = json.loads(capsys.readouterr().out)
+    assert schema["title"] == "Task" and "start" in schema["required"]
+
+
+def test_tools_command_writes_the_library_figure(tmp_path) -> None:
+    out = tmp_path / "tools.png"
+    assert main(["tools", "--out", str(out)]) == 0
+    assert out.stat().st_size > 50_000
+
+
+def test_bad_usage_exits_2(capsys) -> None:
+    import pytest
+
+    with pytest.raises(SystemExit) as exc:
+        main(["solve-everything"])
+    assert exc.value.code == 2
+    assert "invalid choice" in capsys.readouterr().err

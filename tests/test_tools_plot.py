@@ -1,19 +1,13 @@
-"""The tool-library figure script runs headless and writes a PNG."""
+"""The tool-library figure is written headless as a PNG."""
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from planner.plots.tool_library import plot_tool_library
 
 
 def test_plot_tools_writes_png(tmp_path: Path) -> None:
-    spec = importlib.util.spec_from_file_location("plot_tools", ROOT / "examples" / "plot_tools.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    out = tmp_path / "fig" / "tools.png"
-    module.main([str(out)])
+    out = plot_tool_library(tmp_path / "fig" / "tools.png")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert out.stat().st_size > 50_000

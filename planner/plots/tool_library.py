@@ -1,8 +1,6 @@
 """Draw the tool library (faces, push cones, contact ranges) and the Omni's reachable table region.
 
-Usage::
-
-    python examples/plot_tools.py out/tools.png
+Written by ``tooltransfer tools --out out/tools.png``.
 
 Top: every library tool in its tool frame [mm] with its convex pieces (thin lines), faces
 (thick, contact range in orange), and push cones (yellow wedges of half-angle theta_b about the
@@ -13,7 +11,6 @@ heading is the one the Omni imposes at that place.
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import matplotlib
@@ -128,11 +125,8 @@ def draw_reach(ax: plt.Axes, tools: dict[str, Tool]) -> None:
     ax.grid(alpha=0.3)
 
 
-def main(argv: list[str] | None = None) -> None:
-    """Write the figure to the PNG path given on the command line."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("out", type=Path, help="output PNG path")
-    args = parser.parse_args(argv)
+def plot_tool_library(out: str | Path) -> Path:
+    """Write the figure (PNG) to ``out``; returns the path."""
     tools = load_library()
     fig = plt.figure(figsize=(12, 12))
     grid = fig.add_gridspec(3, 3, height_ratios=[1, 1, 1.6])
@@ -140,10 +134,8 @@ def main(argv: list[str] | None = None) -> None:
         draw_tool(fig.add_subplot(grid[k // 3, k % 3]), tools[name])
     draw_reach(fig.add_subplot(grid[2, :]), tools)
     fig.tight_layout()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(args.out, dpi=110)
-    print(f"wrote {args.out}")
-
-
-if __name__ == "__main__":
-    main()
+    path = Path(out)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
