@@ -21,6 +21,7 @@ test: $(PY)
 bench: $(PY)
 	$(PY) -m pip install -q -e ".[bench]"
 	$(PY) benchmarks/bench_dmp.py
+	$(PY) benchmarks/bench_sim.py
 
 lint: $(PY)
 	$(PY) -m ruff check .
