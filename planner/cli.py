@@ -24,6 +24,32 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_demos(args: argparse.Namespace) -> int:
+    from tools.operator.generate import generate_demonstrations
+
+    out = generate_demonstrations(args.out, n=args.n, seed=args.seed, tool=args.tool)
+    print(f"wrote {args.n} demonstrations to {out}")
+    return EXIT_OK
+
+
+def _cmd_segment(args: argparse.Namespace) -> int:
+    from planner.plots.demonstrations import plot_demonstrations
+    from planner.segmentation import segment
+    from problems.dataset import load_dataset
+    from tools.library import load_tool
+
+    ds = load_dataset(args.dataset)
+    tool = load_tool(ds.meta.tool) if "/" not in ds.meta.tool else load_tool(ds.folder / ds.meta.tool)
+    segs = [segment(d, tool) for d in ds.demonstrations]
+    for d, s in zip(ds.demonstrations, segs, strict=True):
+        faces = "".join(p.face[0] for p in s.pushes)
+        print(f"{d.name}: {len(s.pushes)} pushes ({faces}), {len(s.switches)} switches, "
+              f"{len(s.fixed_points)} fixed points")
+    if args.figure:
+        print(f"wrote {plot_demonstrations(ds, segs, tool, args.figure)}")
+    return EXIT_OK
+
+
 def _cmd_schema(args: argparse.Namespace) -> int:
     from problems.task import task_json_schema
 
@@ -60,6 +86,16 @@ def build_parser() -> argparse.ArgumentParser:
     p = _add(sub, "demo", "fit a DMP to an L-shaped push with and without cone constraints",
              "tooltransfer demo --out out/demo", _cmd_demo)
     p.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
+    p = _add(sub, "demos", "generate demonstrations with the scripted operator on the simulated Omni",
+             "tooltransfer demos --tool finger --n 8 --seed 0 --out problems/data/finger_demos", _cmd_demos)
+    p.add_argument("--tool", default="finger", help="demonstration tool (tool 1)")
+    p.add_argument("--n", type=int, default=8, help="number of demonstrations")
+    p.add_argument("--seed", type=int, default=0, help="seed (generation is deterministic for it)")
+    p.add_argument("--out", type=Path, required=True, help="dataset folder to write")
+    p = _add(sub, "segment", "segment a dataset into pushes and switches (and draw it)",
+             "tooltransfer segment problems/data/finger_demos --figure out/demos.png", _cmd_segment)
+    p.add_argument("dataset", type=Path, help="dataset folder")
+    p.add_argument("--figure", type=Path, default=None, help="write the figure (Figs. 4b/8a style) here")
     p = _add(sub, "schema", "print the JSON Schema of task files (for editors)",
              "tooltransfer schema > task.schema.json", _cmd_schema)
     p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")

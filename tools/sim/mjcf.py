@@ -55,7 +55,7 @@ class SimParams:
     timestep: float = 0.001
     puck_mass: float = 0.02
     puck_friction: float = 0.3
-    tool_friction: float = 0.4
+    tool_friction: float = 0.8
     kp: float = 40.0
     kv: float = 0.8
     contact_timeconst: float = 0.005
