@@ -68,9 +68,9 @@ def test_round_trip_reproduces_the_demonstration() -> None:
     back = condense_recovered(rec, pushes, tool, k=0.5)
     truth = np.vstack([pushes[0].object_xy] + [p.object_xy[1:] for p in pushes[1:]])
     rmse = float(np.sqrt(np.mean(np.sum((back - truth) ** 2, axis=1))))
-    # not the identity: pinning turns each recovered stretch onto its fixed points, and condensing
-    # compresses the turned directions (measured 0.51 mm on this 19 cm staircase)
-    assert rmse < 1e-3
+    # not the identity: pinning spreads each recovered stretch's end mismatch along it, and condensing
+    # compresses the shifted directions (measured 1.5 mm on this 19 cm staircase)
+    assert rmse < 2e-3
 
 
 @pytest.mark.parametrize("n_demos", [1, 6])

@@ -12,8 +12,8 @@ Recovery into the universal space (the paper's Fig. 8b), push by push:
    step length. A universal angle is a direction, so ``|theta_g|`` stops at pi: condensed angles
    closer to the cone's edge than ``theta_b exp(-k pi / theta_b)`` are clipped (motions along or
    outside the cone's edge come back as pushing straight backwards at most);
-3. the universal steps are integrated from the push's first fixed point, and the result is turned
-   and scaled about it so that it ends on the push's last fixed point (fixed points: the corners
+3. the universal steps are integrated from one fixed point to the next, and the mismatch at the
+   next one is spread along the stretch in proportion to arc length (fixed points: the corners
    where the active face changes, plus the start and the end; they stay pinned).
 
 One DMP is then fitted on every recovered demonstration (one phase, eq. 4 over all of them).
@@ -92,15 +92,12 @@ def _smooth(t: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[np.float6
 
 
 def _similarity(path: NDArray[np.float64], end: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Turn and scale ``path`` (K, 2) about its first point so that it ends at ``end`` (2,)."""
-    a, b = path[-1] - path[0], end - path[0]
-    na = float(np.hypot(*a))
-    if na < 1e-12:  # a push that goes nowhere: keep it, shifted to end right
-        return path + np.linspace(0.0, 1.0, len(path))[:, None] * (end - path[-1])
-    za, zb = complex(*a), complex(*b)
-    z = (path[:, 0] - path[0, 0]) + 1j * (path[:, 1] - path[0, 1])
-    w = z * (zb / za)
-    return np.column_stack([w.real, w.imag]) + path[0]
+    """Pin ``path`` (K, 2) to end at ``end`` (2,): the mismatch is spread along the path in proportion
+    to arc length (a turn-and-scale about the start was tried first and blew short stretches up)."""
+    seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
+    total = float(seg.sum())
+    frac = np.concatenate([[0.0], np.cumsum(seg)]) / total if total > 0 else np.linspace(0.0, 1.0, len(path))
+    return path + frac[:, None] * (end - path[-1])
 
 
 def _mid_direction(p: DemoPush, push_angle: float) -> NDArray[np.float64]:
@@ -137,7 +134,7 @@ def recover(pushes: Sequence[DemoPush], tool: Tool, k: float, fixed: Sequence[in
         fixed: indices of the corners kept as fixed points (corner ``i`` is where push ``i`` ends,
             ``0 <= i < P - 1``); default every corner (DESIGN section 5). The start and the end are
             always fixed. Between two fixed points the universal steps of the pushes in between are
-            integrated and the stretch is turned and scaled onto its end. With every corner fixed
+            integrated and the stretch is pinned onto its end. With every corner fixed
             a straight push comes back as itself (only the curvature within a push opens up); with
             fewer fixed points a staircase of pushes opens up into the universal motion.
     """

@@ -1,0 +1,61 @@
+"""The paper's cases built from the committed demonstrations (DESIGN section 5, Figs. 8 and 10).
+
+:func:`default_oe_skill` learns the universal OE skill from ``problems/data/finger_demos`` (tool 1):
+segmentation, recovery with the face-change corners as fixed points, one DMP. :func:`transfer_case`
+generalizes it to the demonstration task's start and target for tool 2 (``slope``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from planner.oe.generalize import generalize
+from planner.oe.learn import OESkill, learn_oe_skill
+from planner.segmentation import segment
+from problems.dataset import load_dataset
+from tools.library import load_tool
+from tools.model import Tool
+from tools.objects import Disc
+from tools.omni.platform import OmniPlatform
+from tools.operator.scene import DEMO_SCENE
+
+DEFAULT_DATASET = Path(__file__).resolve().parent / "data" / "finger_demos"
+
+
+@cache
+def default_oe_skill(k: float = 0.5, n_basis: int = 30) -> OESkill:
+    """The universal OE skill learned from the default dataset."""
+    ds = load_dataset(DEFAULT_DATASET)
+    tool = load_tool(ds.meta.tool)
+    demos, fixed = [], []
+    for d in ds.demonstrations:
+        pushes = segment(d, tool).demo_pushes(d)
+        demos.append(pushes)
+        fixed.append([i for i in range(len(pushes) - 1) if pushes[i].face != pushes[i + 1].face])
+    return learn_oe_skill(demos, tool, k=k, n_basis=n_basis, fixed=fixed)
+
+
+@dataclass(frozen=True)
+class TransferCase:
+    """The transfer to tool 2 on the demonstration task: generalized universal path ``t`` (T,) [s],
+    ``x`` (T, 2) [m], the tool, the Omni carrying it, the target [m] and the obstacle."""
+
+    t: NDArray[np.float64]
+    x: NDArray[np.float64]
+    tool: Tool
+    platform: OmniPlatform
+    target: NDArray[np.float64]
+    obstacles: tuple[Disc, ...]
+
+
+def transfer_case(tool: str = "slope") -> TransferCase:
+    """The paper's transfer case (Fig. 10): the default skill generalized for ``tool``."""
+    skill = default_oe_skill()
+    t, x, _ = generalize(skill.dmp, DEMO_SCENE.start, DEMO_SCENE.target)
+    tl = load_tool(tool)
+    return TransferCase(t, x, tl, OmniPlatform(a_t=tl.a_t), DEMO_SCENE.target.copy(), (DEMO_SCENE.obstacle,))
