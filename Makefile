@@ -22,6 +22,7 @@ bench: $(PY)
 	$(PY) -m pip install -q -e ".[bench]"
 	$(PY) benchmarks/bench_dmp.py
 	$(PY) benchmarks/bench_sim.py
+	$(PY) benchmarks/bench_oe.py
 
 lint: $(PY)
 	$(PY) -m ruff check .

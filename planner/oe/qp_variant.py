@@ -84,7 +84,7 @@ class QPOptions:
     n_basis: int = 25
     segments: int = 10
     max_pushes: int = 4
-    candidates: int = 6
+    candidates: int = 4
     switch_price: float = 5e-7
     margin: float = 0.005
     ridge: float = 0.0
@@ -273,5 +273,7 @@ def condense_qp(
     metrics = plan_metrics(plan, scene.frames, target, obstacles, margin=opts.margin)
     metrics["compute_time"] = time.perf_counter() - start_time
     metrics.update({f"violation_{k}": v for k, v in best.result.violations.items()})
+    per_qp = [sc.result.solve_time / max(sc.result.scp_iterations, 1) for sc in scored]
+    metrics.update({"n_qp": float(n_qp), "qp_time_median": float(np.median(per_qp)), "qp_time_max": max(per_qp)})
     return PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, metrics=metrics, n_qp=n_qp,
                     candidates=cands)
