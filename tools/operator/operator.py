@@ -18,18 +18,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import shapely
 from numpy.typing import NDArray
 
 from dmp.errors import InputError
+from tools.arch import NoArch, arch_path
 from tools.contact import contact_on_platform
 from tools.library import load_tool
 from tools.model import Tool
-from tools.objects import OBJECT_RADIUS
-from tools.omni.ik import joint_path
 from tools.omni.platform import OmniPlatform
 from tools.operator.scene import DEMO_SCENE, DemoScene
-from tools.pose import Pose2D, rotation
+from tools.pose import Pose2D
 from tools.sim import Execution, Rates, SimPlatform
 
 BACK_OFF = 0.012
@@ -100,28 +98,11 @@ class ScriptedOperator:
         pc = contact_on_platform(self.tool, face, obj, aim, self.platform)
         return pc.contact.pose, aim
 
-    def _clearance(self, xy: NDArray[np.float64], obj: NDArray[np.float64]) -> float:
-        yaw = joint_path(self.platform, xy).heading
-        puck = shapely.Point(obj).buffer(OBJECT_RADIUS, quad_segs=32)
-        outline = np.asarray(self.tool.outline.exterior.coords)
-        polys = [shapely.Polygon(outline @ rotation(a).T + p) for p, a in zip(xy, yaw, strict=True)]
-        return float(shapely.distance(shapely.GeometryCollection(polys), puck))
-
     def _arch(self, a: NDArray[np.float64], b: NDArray[np.float64], obj: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Tool path (K, 2) from ``a`` to ``b`` round the puck at ``obj``, bulging out until the tool
-        keeps ``CLEARANCE`` from the puck all along (checked with shapely)."""
-        da, db = a - obj, b - obj
-        ta, tb = np.arctan2(da[1], da[0]), np.arctan2(db[1], db[0])
-        dth = (tb - ta + np.pi) % (2 * np.pi) - np.pi
-        s = np.linspace(0.0, 1.0, 60)
-        for bulge in np.arange(0.0, 0.06, 0.004):
-            for way in (dth, dth - np.copysign(2 * np.pi, dth)):  # the short way round first
-                r = (1 - s) * np.hypot(*da) + s * np.hypot(*db) + bulge * np.sin(np.pi * s)
-                th = ta + s * way
-                path = obj + r[:, None] * np.column_stack([np.cos(th), np.sin(th)])
-                if np.all(joint_path(self.platform, path).violation == 0.0) and self._clearance(path, obj) >= CLEARANCE:
-                    return path
-        raise DemonstrationFailed(f"no way round the puck at {np.round(obj, 4).tolist()} within reach")
+        try:
+            return arch_path(self.tool, self.platform, a, b, obj, CLEARANCE)
+        except NoArch as exc:
+            raise DemonstrationFailed(str(exc)) from None
 
     # ------------------------------------------------------------------ moves
     def _run(self, sim: SimPlatform, log: _Log, t: NDArray[np.float64], xy: NDArray[np.float64],
