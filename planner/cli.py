@@ -50,6 +50,53 @@ def _cmd_segment(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_solve(args: argparse.Namespace) -> int:
+    import json
+
+    from planner.solve import solve
+    from problems.task import load_task
+
+    task = load_task(args.task)
+    if args.oe or args.ss:
+        variants = task.variants.model_copy(update={k: v for k, v in (("oe", args.oe), ("ss", args.ss)) if v})
+        task = task.model_copy(update={"variants": variants})
+    plan = solve(task, args.task)
+    if args.out:
+        plan.write(args.out)
+    m = plan.metrics
+    summary = {"status": plan.status, "reason": plan.reason, "variant": plan.variant,
+               "pushes": [p.faces[0] for p in plan.pushes], "plan": str(args.out) if args.out else None,
+               **{k: m[k] for k in ("goal_error", "cone_violation_max", "reach_violation_max",
+                                    "switch_clearance_min", "joint_limit_violation_max", "duration") if k in m}}
+    if args.simulate and plan.status == "solved":
+        from planner.simulate import simulate_plan
+
+        rep = simulate_plan(plan)
+        summary.update({"simulated_final_error": rep.final_error, "simulated_tool_deviation": rep.tool_deviation,
+                        "simulation_wall_time": rep.wall_time})
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        for k, v in summary.items():
+            print(f"{k:>26}: {v:.6g}" if isinstance(v, float) else f"{k:>26}: {v}")
+    return EXIT_OK if plan.status == "solved" else EXIT_INFEASIBLE
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    from planner.plan import read_plan
+    from planner.simulate import simulate_plan
+
+    plan = read_plan(args.plan)
+    if plan.status != "solved":
+        print(f"plan {args.plan} is {plan.status}: {plan.reason}")
+        return EXIT_INFEASIBLE
+    rep = simulate_plan(plan)
+    print(f"final object error {1e3 * rep.final_error:.1f} mm, largest tool deviation "
+          f"{1e3 * rep.tool_deviation:.1f} mm, joint tracking error {rep.tracking_error:.3g} rad, "
+          f"{plan.t[-1] / rep.wall_time:.0f}x real time")
+    return EXIT_OK
+
+
 def _cmd_schema(args: argparse.Namespace) -> int:
     from problems.task import task_json_schema
 
@@ -96,6 +143,17 @@ def build_parser() -> argparse.ArgumentParser:
              "tooltransfer segment problems/data/finger_demos --figure out/demos.png", _cmd_segment)
     p.add_argument("dataset", type=Path, help="dataset folder")
     p.add_argument("--figure", type=Path, default=None, help="write the figure (Figs. 4b/8a style) here")
+    p = _add(sub, "solve", "plan a task file: pushes, switches, approach, timing, joints",
+             "tooltransfer solve problems/paper/transfer_tool2.yaml -o out/plan.json", _cmd_solve)
+    p.add_argument("task", type=Path, help="task file (YAML)")
+    p.add_argument("-o", "--out", type=Path, default=None, help="write the plan (JSON) here")
+    p.add_argument("--oe", choices=("qp", "mapping"), default=None, help="override the task's OE variant")
+    p.add_argument("--ss", choices=("arch", "dmp", "opt"), default=None, help="override the task's switch variant")
+    p.add_argument("--simulate", action="store_true", help="execute the plan on the simulated platform")
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p = _add(sub, "simulate", "execute a plan file on the simulated platform (open loop)",
+             "tooltransfer simulate out/plan.json", _cmd_simulate)
+    p.add_argument("plan", type=Path, help="plan file (JSON)")
     p = _add(sub, "schema", "print the JSON Schema of task files (for editors)",
              "tooltransfer schema > task.schema.json", _cmd_schema)
     p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")

@@ -131,7 +131,9 @@ class SkillsSpec(_Model):
 
 class Variants(_Model):
     oe: Literal["mapping", "qp"] = Field("qp", description="OE condensing: the paper's mapping or the QP search")
-    ss: Literal["dmp", "opt"] = Field("opt", description="switch paths: DMP recombination or the CasADi NLP")
+    ss: Literal["arch", "dmp", "opt"] = Field(
+        "arch", description="switch paths: the geometric arch (reference), DMP recombination or the CasADi NLP"
+    )
 
 
 class OEOptions(_Model):

@@ -1,0 +1,56 @@
+"""The planner end to end on the paper's transfer task and the hard cases, through the CLI."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from planner.cli import main
+from planner.plan import read_plan
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPER, HARD = ROOT / "problems" / "paper", ROOT / "problems" / "hard"
+
+
+def test_solve_transfer_task_writes_a_checkable_plan(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "plan.json"
+    assert main(["solve", str(PAPER / "transfer_tool2.yaml"), "-o", str(out), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["status"] == "solved" and sorted(summary["pushes"]) == ["inclined", "inclined", "left", "left"]
+    plan = read_plan(out)
+    doc = json.loads(out.read_text())
+    assert doc["format"] == "tooltransfer.plan/1"
+    assert {"platform", "object", "tool", "obstacles", "samples", "pushes", "switches", "metrics"} <= set(doc)
+    assert len(plan.t) == len(plan.joints) == len(plan.phase) == len(plan.face) > 100
+    assert set(plan.phase) == {"approach", "push", "switch", "retreat"}
+    assert plan.metrics["joint_limit_violation_max"] == 0.0
+    assert plan.metrics["switch_clearance_min"] > 0.003
+    assert plan.metrics["goal_error"] <= 1e-3
+    # the object stands still outside the pushes
+    between = (plan.t > plan.pushes[0].t_end) & (plan.t < plan.pushes[1].t_start)
+    assert np.ptp(plan.object_xy[between], axis=0).max() < 1e-12
+    # time respects the tool's speed limit (0.05 m/s by default) away from the pushes' own timing
+    v = np.linalg.norm(np.diff(plan.tool_pose[:, :2], axis=0), axis=1) / np.diff(plan.t)
+    assert v.max() <= 0.05 * 1.05
+
+
+def test_hard_cases_are_infeasible_with_a_reason(capsys) -> None:
+    assert main(["solve", str(HARD / "only_face_pushes_away.yaml"), "--json"]) == 1
+    assert "cone" in json.loads(capsys.readouterr().out)["reason"]
+    assert main(["solve", str(HARD / "target_out_of_reach.yaml"), "--json"]) == 1
+    assert "outside the Omni's reach" in json.loads(capsys.readouterr().out)["reason"]
+
+
+def test_bad_task_file_exits_2_naming_the_field(tmp_path: Path, capsys) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text((PAPER / "transfer_tool2.yaml").read_text().replace("safety_margin: 0.005", "safety_margin: -1"))
+    assert main(["solve", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "safety_margin" in err and "Traceback" not in err
+
+
+def test_unavailable_switch_variant_is_a_clear_error(capsys) -> None:
+    assert main(["solve", str(PAPER / "transfer_tool2.yaml"), "--ss", "opt"]) == 2
+    assert "variants.ss" in capsys.readouterr().err
