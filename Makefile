@@ -11,7 +11,7 @@ $(PY):
 
 demo: $(PY)
 	$(PY) -m pip install -q -e .
-	$(VENV)/bin/tooltransfer demo --out out/demo
+	$(VENV)/bin/tooltransfer demo --out out
 
 test: $(PY)
 	$(PY) -m pip install -q -e ".[test]"

@@ -20,8 +20,18 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from planner.demo import run_demo
 
     print(run_demo(args.out))
-    print(f"wrote {args.out / 'demo.png'} and {args.out / 'demo.txt'}")
+    print(f"wrote the figures, plan files and report.txt to {args.out}/")
     return EXIT_OK
+
+
+def _cmd_compare(args: argparse.Namespace) -> int:
+    from planner.demo import compare
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    table, plans = compare(args.task, args.out)
+    print(table)
+    print(f"wrote the plans and fig10_condensed_paths.png to {args.out}/")
+    return EXIT_OK if all(p.status == "solved" for p in plans.values()) else EXIT_INFEASIBLE
 
 
 def _cmd_demos(args: argparse.Namespace) -> int:
@@ -130,9 +140,13 @@ def build_parser() -> argparse.ArgumentParser:
         prog="tooltransfer", description="DMP skill transfer for multi-tool pushing on a Phantom Omni."
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    p = _add(sub, "demo", "fit a DMP to an L-shaped push with and without cone constraints",
-             "tooltransfer demo --out out/demo", _cmd_demo)
-    p.add_argument("--out", type=Path, default=Path("out/demo"), help="output folder")
+    p = _add(sub, "demo", "the main job: learn from the committed demos, compare the variants on the transfer "
+             "to tool 2, simulate the qp plan", "tooltransfer demo --out out", _cmd_demo)
+    p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
+    p = _add(sub, "compare", "solve a task with every OE variant: a metrics table and one figure",
+             "tooltransfer compare problems/paper/transfer_tool2.yaml --out out", _cmd_compare)
+    p.add_argument("task", type=Path, help="task file (YAML)")
+    p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     p = _add(sub, "demos", "generate demonstrations with the scripted operator on the simulated Omni",
              "tooltransfer demos --tool finger --n 8 --seed 0 --out problems/data/finger_demos", _cmd_demos)
     p.add_argument("--tool", default="finger", help="demonstration tool (tool 1)")

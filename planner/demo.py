@@ -1,51 +1,109 @@
-"""The main job until the planner exists: fit a DMP to an L-shaped push, with and without cone
-constraints, and write a figure and a table of fit error and solve time."""
+"""The main job (``make demo``): the paper's transfer scenario end to end.
+
+Learns the skills from the committed demonstrations (``problems/data/finger_demos``), compares the
+OE variants (the paper's mapping and this project's QP search) on the transfer to tool 2
+(``problems/paper/transfer_tool2.yaml``), executes the ``qp`` plan on the simulated platform, and
+writes the figures and plan files to the output folder.
+"""
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
 
-from dmp.qp import FitProblem, TrackPath, solve_fit
-from problems.fit_cases import l_push_case
+from planner.plan import Plan
+from problems.task import load_task
+
+ROOT = Path(__file__).resolve().parents[1]
+TRANSFER = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
+
+
+def compare(task_path: Path, out: Path) -> tuple[str, dict[str, Plan]]:
+    """Solve a task with every OE variant; write the plans and a figure like Fig. 10; return the
+    metrics table (text) and the plans."""
+    from planner.plots.push_plans import plot_push_plans
+    from planner.solve import solve
+    from problems.task import task_obstacles, task_tool
+
+    task = load_task(task_path)
+    plans, push_plans = {}, {}
+    for oe in ("mapping", "qp"):
+        t = task.model_copy(update={"variants": task.variants.model_copy(update={"oe": oe})})
+        plans[oe] = solve(t, task_path)
+        plans[oe].write(out / f"plan_{task.name}_{oe}.json")
+    keys = [("status", "", 1), ("n_pushes", "", 1), ("goal_error", "mm", 1e3), ("cone_violation_max", "rad", 1),
+            ("reach_violation_max", "mm", 1e3), ("obstacle_clearance_min", "mm", 1e3),
+            ("deviation_mean", "mm", 1e3), ("switch_clearance_min", "mm", 1e3), ("time_oe", "ms", 1e3)]
+    lines = [f"{'metric':<24}" + "".join(f"{oe:>14}" for oe in plans)]
+    for k, unit, scale in keys:
+        row = f"{k + (f' [{unit}]' if unit else ''):<24}"
+        for p in plans.values():
+            v = p.status if k == "status" else p.metrics.get(k, float("nan"))
+            row += f"{v:>14}" if isinstance(v, str) else f"{scale * v:>14.4g}"
+        lines.append(row)
+    from planner.oe.generalize import generalize
+    from planner.oe.mapping_variant import condense_mapping
+    from planner.oe.qp_variant import condense_qp
+    from planner.solve import oe_skill_from_dataset
+    from problems.task import resolve, task_platform
+
+    tool = task_tool(task)
+    platform, obstacles = task_platform(task, tool), task_obstacles(task)
+    skill = oe_skill_from_dataset(resolve(task_path, task.skills.dataset), task.oe.k)
+    tt, x, _ = generalize(skill.dmp, np.array(task.start), np.array(task.target))
+    push_plans["mapping"] = condense_mapping(tt, x, tool, platform, np.array(task.target), obstacles)
+    push_plans["qp"] = condense_qp(tt, x, tool, platform, np.array(task.target), obstacles)
+    plot_push_plans(push_plans, tool, out / "fig10_condensed_paths.png", obstacles=obstacles,
+                    margin=task.safety_margin, target=np.array(task.target), title=task.name)
+    return "\n".join(lines), plans
 
 
 def run_demo(out: Path) -> str:
-    """Run the demo, write ``out/demo.png`` and ``out/demo.txt``; return the table text."""
+    """Run the main job; returns the report text (also written to ``out/report.txt``)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out.mkdir(parents=True, exist_ok=True)
-    case = l_push_case(30, 200)
-    free = FitProblem(case.problem.dmp, case.t, case.reference[0], case.reference[-1], [TrackPath(case.reference)])
-    rows = []
-    results = {}
-    for name, prob in (("unconstrained", free), ("cone+workspace+obstacle", case.problem)):
-        start = time.perf_counter()
-        r = solve_fit(prob)
-        wall = time.perf_counter() - start
-        ref = np.interp(r.rollout.t, case.t, case.reference[:, 0]), np.interp(r.rollout.t, case.t, case.reference[:, 1])
-        rmse = float(np.sqrt(np.mean((r.rollout.x[:, 0] - ref[0]) ** 2 + (r.rollout.x[:, 1] - ref[1]) ** 2)))
-        results[name] = r
-        rows.append(f"{name:<26} {r.status:<9} {1e3 * rmse:9.3f} {1e3 * wall:10.1f} {r.max_violation:12.2e}")
-    table = "\n".join([f"{'fit':<26} {'status':<9} {'RMSE[mm]':>9} {'time[ms]':>10} {'max viol':>12}", *rows])
-    fig, ax = plt.subplots(figsize=(6, 6))
-    ax.plot(case.reference[:, 0], case.reference[:, 1], "k--", label="demonstrated L push")
-    for name, r in results.items():
-        ax.plot(r.rollout.x[:, 0], r.rollout.x[:, 1], label=name)
-    from problems.fit_cases import HEXAGON
+    from planner.plots.demonstrations import plot_demonstrations
+    from planner.plots.safety_margin import plot_safety_margin
+    from planner.segmentation import segment
+    from planner.simulate import simulate_plan
+    from problems.dataset import load_dataset
+    from problems.paper_cases import DEFAULT_DATASET, default_oe_skill, transfer_case
+    from tools.library import load_tool
 
-    hexa = np.vstack([HEXAGON, HEXAGON[:1]])
-    ax.plot(hexa[:, 0], hexa[:, 1], "g-", lw=0.8, label="workspace")
-    ax.add_patch(plt.Circle((0.006, 0.045), 0.012, color="r", alpha=0.3, label="obstacle"))
+    out.mkdir(parents=True, exist_ok=True)
+    ds = load_dataset(DEFAULT_DATASET)
+    tool1 = load_tool(ds.meta.tool)
+    plot_demonstrations(ds, [segment(d, tool1) for d in ds.demonstrations], tool1, out / "fig8a_demonstrations.png")
+    skill = default_oe_skill()
+    case = transfer_case()
+    fig, ax = plt.subplots(figsize=(6, 5))
+    for r in skill.recovered:
+        ax.plot(*r.x.T, color="0.65", lw=0.8)
+    ax.plot(*case.x.T, "r-", lw=2, label="universal OE skill")
     ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    ax.set_title("recovered demonstrations (grey) and the learned skill (Fig. 8b)", fontsize=9)
     ax.legend(fontsize=8)
-    fig.savefig(out / "demo.png", dpi=120)
-    (out / "demo.txt").write_text(table + "\n")
-    return table
+    fig.savefig(out / "fig8b_universal_skill.png", dpi=110)
+    plt.close(fig)
+    table, plans = compare(TRANSFER, out)
+    from planner.oe.mapping_variant import condense_mapping
+    from planner.oe.qp_variant import condense_qp
+
+    args = (case.t, case.x, case.tool, case.platform, case.target, case.obstacles)
+    plot_safety_margin(case.x, case.obstacles[0], {"mapping": condense_mapping(*args), "qp": condense_qp(*args)},
+                       out / "fig14_safety_margin.png")
+    report = ["transfer of tool 1's skills to tool 2 (problems/paper/transfer_tool2.yaml)", table]
+    qp = plans["qp"]
+    if qp.status == "solved":
+        sim = simulate_plan(qp)
+        report.append(
+            f"simulated qp plan (open loop): final object error {1e3 * sim.final_error:.1f} mm, largest tool "
+            f"deviation {1e3 * sim.tool_deviation:.1f} mm, {qp.t[-1]:.1f} s plan in {sim.wall_time:.2f} s"
+        )
+    text = "\n".join(report)
+    (out / "report.txt").write_text(text + "\n")
+    return text

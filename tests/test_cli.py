@@ -5,11 +5,13 @@ from __future__ import annotations
 from planner.cli import main
 
 
-def test_demo_writes_figure_and_table(tmp_path, capsys) -> None:
+def test_demo_runs_the_transfer_job(tmp_path, capsys) -> None:
     assert main(["demo", "--out", str(tmp_path)]) == 0
-    assert (tmp_path / "demo.png").stat().st_size > 10_000
-    text = (tmp_path / "demo.txt").read_text()
-    assert "cone+workspace+obstacle" in text and "solved" in text
+    for name in ("fig8a_demonstrations.png", "fig8b_universal_skill.png", "fig10_condensed_paths.png",
+                 "fig14_safety_margin.png", "plan_transfer_tool2_qp.json", "plan_transfer_tool2_mapping.json"):
+        assert (tmp_path / name).stat().st_size > 1_000, name
+    text = (tmp_path / "report.txt").read_text()
+    assert "simulated qp plan" in text and "solved" in text
 
 
 def test_schema_command_prints_the_task_schema(capsys) -> None:
