@@ -88,3 +88,22 @@ def test_skill_fitted_on_all_recovered_demonstrations(n_demos: int) -> None:
     length = np.sum(np.linalg.norm(np.diff(skill.recovered[0].x, axis=0), axis=1))
     limit = 0.01 if n_demos == 1 else 0.05  # one demo: a fit; six varied demos: their common shape
     assert max(errs) < limit * length
+
+
+def test_skill_file_round_trip_and_refusals(tmp_path) -> None:
+    from dmp.errors import SkillFileError
+    from planner.oe.learn import OESkill
+
+    skill = learn_oe_skill([demo(np.random.default_rng(5))], load_tool("finger"), k=0.5, n_basis=20)
+    path = skill.save(tmp_path / "oe.json")
+    back = OESkill.load(path)
+    t = np.linspace(0, skill.dmp.tau, 50)
+    assert np.allclose(back.dmp.rollout(t, x0=START, g=START + 0.1).x, skill.dmp.rollout(t, x0=START, g=START + 0.1).x)
+    assert back.k == 0.5 and back.tool == "finger" and np.array_equal(back.recovered[0].x, skill.recovered[0].x)
+    bad = tmp_path / "bad.json"
+    bad.write_text(path.read_text().replace("tooltransfer.oe/1", "tooltransfer.oe/9"))
+    with pytest.raises(SkillFileError, match=r"tooltransfer\.oe/1"):
+        OESkill.load(bad)
+    bad.write_text(path.read_text()[:100])
+    with pytest.raises(SkillFileError, match="unreadable"):
+        OESkill.load(bad)

@@ -21,8 +21,10 @@ One DMP is then fitted on every recovered demonstration (one phase, eq. 4 over a
 
 from __future__ import annotations
 
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,6 +34,8 @@ from dmp.errors import InputError
 from dmp.mappings import angle_inverse, wrap_angle
 from dmp.validation import check_array
 from tools.model import Tool
+
+OE_FORMAT = "tooltransfer.oe/1"
 
 
 @dataclass(frozen=True)
@@ -182,6 +186,42 @@ class OESkill:
     k: float
     tool: str
     recovered: list[Recovered]
+
+    def save(self, path: str | Path) -> Path:
+        """Write the skill as JSON, format ``tooltransfer.oe/1``: the DMP (``tooltransfer.dmp/1``),
+        the recovery's ``k``, the demonstration tool and the recovered demonstrations."""
+        from dmp.skill_file import dmp_to_dict
+
+        doc = {
+            "format": OE_FORMAT, "k": self.k, "tool": self.tool, "dmp": dmp_to_dict(self.dmp),
+            "recovered": [{"t": r.t.tolist(), "x": r.x.tolist(), "fixed": r.fixed.tolist(),
+                           "starts": r.starts.tolist()} for r in self.recovered],
+        }
+        p = Path(path)
+        p.write_text(json.dumps(doc))
+        return p
+
+    @classmethod
+    def load(cls, path: str | Path) -> OESkill:
+        """Read a skill written by :meth:`save`; another format or a damaged file raises
+        :class:`~dmp.errors.SkillFileError`."""
+        from dmp.errors import SkillFileError
+        from dmp.skill_file import dmp_from_dict
+
+        p = Path(path)
+        try:
+            doc = json.loads(p.read_text())
+        except (OSError, json.JSONDecodeError) as exc:
+            raise SkillFileError(str(p), f"unreadable OE skill file ({exc})") from None
+        if not isinstance(doc, dict) or doc.get("format") != OE_FORMAT:
+            got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
+            raise SkillFileError(str(p), f"expected format {OE_FORMAT!r}, got {got!r}")
+        try:
+            rec = [Recovered(np.asarray(r["t"], float), np.asarray(r["x"], float), np.asarray(r["fixed"], float),
+                             np.asarray(r["starts"], np.intp)) for r in doc["recovered"]]
+            return cls(dmp_from_dict(doc["dmp"], str(p)), float(doc["k"]), str(doc["tool"]), rec)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise SkillFileError(str(p), f"damaged OE skill file ({exc})") from None
 
 
 def learn_oe_skill(
