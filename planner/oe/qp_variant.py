@@ -15,9 +15,12 @@ Search (:func:`condense_qp`), bounded and pruned, not exhaustive:
 1. pre-checks: the start and the target must each be in reach of some face (else ``infeasible``);
 2. every face order of at most ``max_pushes`` pushes is ranked by a proxy
    (:mod:`planner.oe.sequence_proxy`) with switch times on a grid of ``segments`` equal phases;
-3. the ``candidates`` best are scored by the QP (one sequential-convex solve each);
+3. the ``candidates`` best are scored by the QP (one sequential-convex solve each) on a coarser
+   screening grid;
 4. the best feasible one has each switch moved by one segment either way, kept when it lowers
-   the cost (one pass).
+   the cost (one pass);
+5. the cheapest screened candidates are solved again on the full grid; the first feasible one
+   is the plan.
 
 What it guarantees: the returned plan satisfies every constraint family on the dense grid (the
 measured violations are in its metrics), and it is the cheapest of the sequences scored; it does
@@ -63,7 +66,9 @@ class QPOptions:
     """Options of the ``qp`` variant.
 
     Attributes:
-        n_samples: constraint-grid samples of the fit (violations are measured 10x denser).
+        n_samples: constraint-grid samples of the final fit (violations are measured 10x denser).
+        screen_samples: constraint-grid samples while candidates are ranked (a coarser grid; the
+            best candidates are then solved again on the full grid, the first feasible one wins).
         n_basis: basis functions per dimension of the condensed DMP.
         segments: switch times lie on this many equal phases of the motion.
         max_pushes: longest push sequence considered.
@@ -81,6 +86,7 @@ class QPOptions:
     """
 
     n_samples: int = 120
+    screen_samples: int = 60
     n_basis: int = 25
     segments: int = 10
     max_pushes: int = 4
@@ -93,7 +99,7 @@ class QPOptions:
     max_scp: int = 12
 
     def __post_init__(self) -> None:
-        for name in ("n_samples", "n_basis", "segments", "max_pushes", "candidates", "max_scp"):
+        for name in ("n_samples", "screen_samples", "n_basis", "segments", "max_pushes", "candidates", "max_scp"):
             v = getattr(self, name)
             if not isinstance(v, int) or v < 1:
                 raise InputError(f"oe.{name}", "a positive integer", repr(v))
@@ -219,9 +225,13 @@ def condense_qp(
     t = check_array(t, "t", ndim=1)
     universal = check_array(universal, "universal", shape=(t.size, 2))
     target = universal[-1] if target is None else check_array(target, "target", shape=(2,))
-    grid = np.linspace(t[0], t[-1], opts.n_samples)
-    ref = np.column_stack([np.interp(grid, t, universal[:, j]) for j in range(2)])
-    scene = _Scene(grid, ref, tool, platform, target, obstacles, opts)
+    def resample(n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        g = np.linspace(t[0], t[-1], n)
+        return g, np.column_stack([np.interp(g, t, universal[:, j]) for j in range(2)])
+
+    grid, ref = resample(opts.n_samples)
+    fine = _Scene(grid, ref, tool, platform, target, obstacles, opts)
+    scene = _Scene(*resample(min(opts.screen_samples, opts.n_samples)), tool, platform, target, obstacles, opts)
 
     def infeasible(reason: str, n_qp: int = 0, cands: tuple = ()) -> PushPlan:
         empty = np.zeros((0, 2))
@@ -231,10 +241,10 @@ def condense_qp(
     why = _precheck(scene)
     if why:
         return infeasible(why)
-    v_ref = np.gradient(ref, grid, axis=0)
+    v_ref = np.gradient(scene.universal, scene.t, axis=0)
     names = list(scene.frames)
     frames = [scene.frames[n] for n in names]
-    costs = segment_costs(grid, ref, v_ref, frames, opts.segments)
+    costs = segment_costs(scene.t, scene.universal, v_ref, frames, opts.segments)
     bounds = np.linspace(grid[0], grid[-1], opts.segments + 1)
     ranked = ranked_sequences(costs, names, opts.max_pushes, opts.switch_price)[: opts.candidates]
     scored = [scene.score(faces, tuple(float(bounds[c]) for c in cuts)) for faces, cuts, _ in ranked]
@@ -254,6 +264,16 @@ def condense_qp(
                 scored.append(s)
                 if scene.cost(s) < scene.cost(best):
                     best, cuts = s, trial
+    # the screening grid ranked the candidates: the best ones are solved again on the full grid
+    final = None
+    if feasible:
+        order = sorted({(s.faces, s.switches): s for s in scored if s.feasible}.values(), key=scene.cost)
+        for s in order[:3]:
+            final = fine.score(s.faces, s.switches)
+            scored.append(final)
+            if final.feasible:
+                break
+        feasible = [final] if final is not None and final.feasible else []
     n_qp = sum(s.result.scp_iterations for s in scored)
     cands = tuple((s.faces, s.switches, None if not s.feasible else scene.cost(s)) for s in scored)
     if not feasible:
@@ -263,6 +283,7 @@ def condense_qp(
             f"none of the {len(scored)} push sequences scored is feasible "
             f"(constraint families in conflict: {', '.join(fams) or 'unknown'})", n_qp, cands,
         )
+    best = feasible[0]
     roll = best.result.rollout
     assert roll is not None  # a feasible fit always has its rollout
     dense_t, x, v = roll.t + grid[0], roll.x, roll.v
