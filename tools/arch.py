@@ -40,7 +40,10 @@ def arch_path(
 ) -> NDArray[np.float64]:
     """Tool centre point path (n, 2) [m] from ``a`` to ``b`` round the object at ``obj``: polar
     interpolation about the object, the short way round first, bulging out by up to ``max_bulge``
-    until every point is reachable and the tool keeps ``clearance`` [m]. Raises :class:`NoArch`."""
+    until every point is reachable and the tool keeps ``clearance`` [m] (or 90% of the clearance
+    at the ends, when an end is closer). Raises :class:`NoArch`."""
+    ends = swept_clearance(tool, platform, np.vstack([a, b]), obj)
+    clearance = min(clearance, 0.9 * ends)  # an end closer than that cannot be left or reached otherwise
     da, db = a - obj, b - obj
     ta, tb = np.arctan2(da[1], da[0]), np.arctan2(db[1], db[0])
     dth = (tb - ta + np.pi) % (2 * np.pi) - np.pi
