@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from planner.oe.push_plan import PushPlan
+from planner.plots.save import save_figure
 from tools.model import Tool
 from tools.objects import OBJECT_RADIUS, Disc, Obstacle
 from tools.pose import rotation
@@ -68,9 +69,4 @@ def plot_push_plans(
         ax.set_ylabel("y [m]")
     if title:
         fig.suptitle(title)
-    fig.tight_layout()
-    path = Path(out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, out)

@@ -15,6 +15,7 @@ import numpy as np
 
 from planner.oe.mapping_variant import avoid_obstacles
 from planner.oe.push_plan import PushPlan
+from planner.plots.save import save_figure
 from tools.objects import OBJECT_RADIUS, Disc
 
 
@@ -57,9 +58,4 @@ def plot_safety_margin(
         ax1.plot(*plan.object_xy.T, lw=1.6, label=f"{name}: clearance {1e3 * clear:.1f} mm")
     ax1.set_title("condensed object paths (clearance = object edge to obstacle edge)", fontsize=9)
     ax1.legend(fontsize=7)
-    fig.tight_layout()
-    path = Path(out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, out)

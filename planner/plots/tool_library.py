@@ -20,6 +20,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Circle, Polygon, Wedge
 
+from planner.plots.save import save_figure
 from tools import OBJECT_RADIUS, Tool, contact_on_platform, load_library, tool_polygon
 from tools.omni import OmniPlatform, reach_sector, reachable_polygon
 
@@ -133,9 +134,4 @@ def plot_tool_library(out: str | Path) -> Path:
     for k, name in enumerate(sorted(tools)):
         draw_tool(fig.add_subplot(grid[k // 3, k % 3]), tools[name])
     draw_reach(fig.add_subplot(grid[2, :]), tools)
-    fig.tight_layout()
-    path = Path(out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, out, dpi=110)
