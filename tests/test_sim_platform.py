@@ -88,3 +88,24 @@ def test_execution_is_deterministic() -> None:
     a = _forward_push(sim, np.array([0.0, 0.15]), 0.03, dur=2.0)
     b = _forward_push(sim, np.array([0.0, 0.15]), 0.03, dur=2.0)
     assert np.array_equal(a.object_xy, b.object_xy) and np.array_equal(a.tool_pose, b.tool_pose)
+
+
+def test_many_executions_in_a_process_pool_equal_the_sequential_ones() -> None:
+    from tools.omni.ik import joint_path
+    from tools.sim import Job, execute_many
+
+    tool = load_tool("finger")
+    plat = OmniPlatform(a_t=tool.a_t)
+    jobs = []
+    for dx in (-0.01, 0.0, 0.01):
+        obj = np.array([dx, 0.15])
+        pose = contact_on_platform(tool, "upper", obj, np.pi / 2, plat).contact.pose
+        t = np.linspace(0, 1.5, 150)
+        xy = np.array([pose.x, pose.y - 0.005]) + (t / 1.5)[:, None] * np.array([0.0, 0.02])
+        q = joint_path(plat, xy).q
+        jobs.append(Job(obj, q[0], t, q))
+    seq = execute_many(tool, jobs, workers=1)
+    par = execute_many(tool, jobs, workers=2)
+    for a, b in zip(seq, par, strict=True):
+        assert np.array_equal(a.object_xy, b.object_xy) and np.array_equal(a.joints, b.joints)
+    assert seq[1].object_xy[-1, 1] > 0.155  # the puck was pushed
