@@ -23,6 +23,7 @@ bench: $(PY)
 	$(PY) benchmarks/bench_dmp.py
 	$(PY) benchmarks/bench_sim.py
 	$(PY) benchmarks/bench_oe.py
+	$(PY) benchmarks/bench_solve.py
 
 lint: $(PY)
 	$(PY) -m ruff check .

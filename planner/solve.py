@@ -14,6 +14,7 @@ Switch variants: ``arch`` (the geometric reference of :mod:`tools.arch`) is avai
 from __future__ import annotations
 
 import hashlib
+import os
 import time
 from pathlib import Path
 from typing import Any
@@ -28,8 +29,6 @@ from planner.oe.learn import OESkill, learn_oe_skill
 from planner.oe.mapping_variant import MappingOptions, condense_mapping
 from planner.oe.qp_variant import QPOptions, condense_qp
 from planner.plan import Plan, Segment
-from planner.segmentation import segment
-from problems.dataset import load_dataset
 from problems.task import Task, resolve, task_obstacles, task_platform, task_tool
 from tools.arch import NoArch, swept_clearance, switch_path
 from tools.library import load_tool
@@ -48,10 +47,27 @@ def dataset_hash(folder: Path) -> str:
     return h.hexdigest()
 
 
+def cache_dir() -> Path:
+    """Where learned skills are kept between runs: ``$TOOLTRANSFER_CACHE`` or ``~/.cache/tooltransfer``."""
+    return Path(os.environ.get("TOOLTRANSFER_CACHE", Path.home() / ".cache" / "tooltransfer"))
+
+
 def oe_skill_from_dataset(folder: Path, k: float) -> OESkill:
-    """The universal OE skill learned from a dataset (cached by content hash and ``k``)."""
+    """The universal OE skill learned from a dataset, cached by the dataset's content hash and ``k``
+    in memory and as a skill file in :func:`cache_dir` (a damaged cache file is relearned)."""
+    from dmp.errors import SkillFileError
+
     key = f"{dataset_hash(folder)}:{k}"
+    cached = cache_dir() / f"oe-{key.replace(':', '-k')}.json"
+    if key not in _SKILLS and cached.is_file():
+        try:
+            _SKILLS[key] = OESkill.load(cached)
+        except SkillFileError:
+            cached.unlink(missing_ok=True)
     if key not in _SKILLS:
+        from planner.segmentation import segment  # scipy.signal: half a second of imports, only to learn
+        from problems.dataset import load_dataset
+
         ds = load_dataset(folder)
         tool = load_tool(ds.meta.tool) if not (folder / ds.meta.tool).is_file() else load_tool(folder / ds.meta.tool)
         demos, fixed = [], []
@@ -60,6 +76,11 @@ def oe_skill_from_dataset(folder: Path, k: float) -> OESkill:
             demos.append(pushes)
             fixed.append([i for i in range(len(pushes) - 1) if pushes[i].face != pushes[i + 1].face])
         _SKILLS[key] = learn_oe_skill(demos, tool, k=k, fixed=fixed)
+        try:
+            cached.parent.mkdir(parents=True, exist_ok=True)
+            _SKILLS[key].save(cached)
+        except OSError:
+            pass  # a read-only home: the skill is relearned next time
     return _SKILLS[key]
 
 
