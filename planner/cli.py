@@ -35,27 +35,46 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _cmd_demos(args: argparse.Namespace) -> int:
+    import time
+
     from tools.operator.generate import generate_demonstrations
 
+    t0 = time.perf_counter()
     out = generate_demonstrations(args.out, n=args.n, seed=args.seed, tool=args.tool)
-    print(f"wrote {args.n} demonstrations to {out}")
+    print(f"wrote {args.n} demonstrations to {out} in {time.perf_counter() - t0:.1f} s")
     return EXIT_OK
 
 
 def _cmd_segment(args: argparse.Namespace) -> int:
-    from planner.plots.demonstrations import plot_demonstrations
+    import json
+
+    import numpy as np
+
+    from dmp.errors import InputError
     from planner.segmentation import segment
     from problems.dataset import load_dataset
-    from tools.library import load_tool
 
     ds = load_dataset(args.dataset)
-    tool = load_tool(ds.meta.tool) if "/" not in ds.meta.tool else load_tool(ds.folder / ds.meta.tool)
-    segs = [segment(d, tool) for d in ds.demonstrations]
+    tool = ds.tool()
+    fixed: dict[str, list] = {}
+    if args.fixed_points is not None:
+        try:
+            fixed = json.loads(args.fixed_points.read_text())
+        except (OSError, ValueError) as exc:
+            raise InputError("--fixed-points", "a JSON file {demo name: [[x, y], ...]} [m]", str(exc)) from None
+        if not isinstance(fixed, dict):
+            raise InputError("--fixed-points", "a JSON object {demo name: [[x, y], ...]} [m]", type(fixed).__name__)
+    segs = [segment(d, tool, fixed_points=fixed.get(d.name)) for d in ds.demonstrations]
     for d, s in zip(ds.demonstrations, segs, strict=True):
-        faces = "".join(p.face[0] for p in s.pushes)
-        print(f"{d.name}: {len(s.pushes)} pushes ({faces}), {len(s.switches)} switches, "
-              f"{len(s.fixed_points)} fixed points")
+        faces = " ".join(f"{p.face}[{p.t_start:.2f}-{p.t_end:.2f}]" for p in s.pushes)
+        corners = ", ".join(f"({x:.4f}, {y:.4f})" for x, y in np.asarray(s.fixed_points))
+        print(f"{d.name}: {len(s.pushes)} pushes, {len(s.switches)} switches "
+              f"({', '.join(f'{w.face_from}->{w.face_to}' for w in s.switches)}), fixed points [m]: {corners}")
+        if args.verbose:
+            print(f"    {faces}")
     if args.figure:
+        from planner.plots.demonstrations import plot_demonstrations
+
         print(f"wrote {plot_demonstrations(ds, segs, tool, args.figure)}")
     return EXIT_OK
 
@@ -155,8 +174,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, required=True, help="dataset folder to write")
     p = _add(sub, "segment", "segment a dataset into pushes and switches (and draw it)",
              "tooltransfer segment problems/data/finger_demos --figure out/demos.png", _cmd_segment)
-    p.add_argument("dataset", type=Path, help="dataset folder")
+    p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs, see the README)")
     p.add_argument("--figure", type=Path, default=None, help="write the figure (Figs. 4b/8a style) here")
+    p.add_argument("--fixed-points", type=Path, default=None,
+                   help="JSON file {demo name: [[x, y], ...]} [m] overriding the automatic corners")
+    p.add_argument("-v", "--verbose", action="store_true", help="list every push with its interval [s]")
     p = _add(sub, "solve", "plan a task file: pushes, switches, approach, timing, joints",
              "tooltransfer solve problems/paper/transfer_tool2.yaml -o out/plan.json", _cmd_solve)
     p.add_argument("task", type=Path, help="task file (YAML)")
