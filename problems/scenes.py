@@ -3,11 +3,18 @@
 The paper prints no start, target or obstacle coordinates (DESIGN section 9). :data:`DEMO_SCENE`
 is this project's choice for the demonstration task of Figs. 2, 4 and 8, keeping the figures'
 qualitative layout inside the default Omni's reach with tool 1 (``finger``): the puck starts in
-front of the arm to the right, is pushed forward with the upper face, leftward with the left face
-above a disc obstacle that sits inside that first corner, forward again, and leftward into a
-target square up and to the left. Every corner is inside the Omni's reach sector, and every tool
-path the scripted operator executes there is checked with the inverse kinematics (the simulator
-refuses unreachable points) - see ``tests/test_operator.py``.
+front of the arm to the right, is pushed forward with the upper face, leftward with the left face,
+forward again and leftward into a target square up and to the left. The disc obstacle sits inside
+the first corner, on the straight (and the diagonal) way from the start to the target, so a tool
+that can push diagonally must go round it. Where it can be is narrow: tool 1's body reaches 30 mm
+behind its head towards the Omni, so the obstacle must stay clear of the body while the left face
+pushes along the second leg and while the tool goes round the puck at the second and third corners
+(a layout with the obstacle at (15, 130) mm, radius 7 mm, and the second corner at x = -5 mm made
+the arm catch on it), and 7 mm clear of the start (the planner's safety margin is 5 mm).
+
+Every corner is inside the Omni's reach sector, and every tool path the scripted operator executes
+is checked by the inverse kinematics (the simulator refuses unreachable points); see
+``tests/test_operator.py``.
 """
 
 from __future__ import annotations

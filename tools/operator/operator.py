@@ -247,7 +247,7 @@ class ScriptedOperator:
         t, xy = _min_jerk(tool_pose[:2], away, 0.8)
         self._run(sim, log, t, xy, rng)
         ex = Execution.concat(log.parts)
-        return ex, Truth(tuple(self._merge(log.pushes, ex)), tuple(log.switches), tuple(log.corners))
+        return ex, Truth(tuple(self._merge(log.pushes)), tuple(log.switches), tuple(log.corners))
 
     def _switch(self, sim: SimPlatform, log: _Log, face_a: str, face_b: str, obj: NDArray[np.float64],
                 goal: NDArray[np.float64], rng: np.random.Generator) -> None:
@@ -302,7 +302,7 @@ class ScriptedOperator:
                 log.pushes.append((face, max(t0, a), b))
 
     @staticmethod
-    def _merge(pushes: list[tuple[str, float, float]], ex: Execution, gap: float = MERGE_GAP) -> list:
+    def _merge(pushes: list[tuple[str, float, float]], gap: float = MERGE_GAP) -> list[tuple[str, float, float]]:
         """Consecutive push chunks of one face with contact gaps under ``gap`` [s] become one push."""
         out: list[tuple[str, float, float]] = []
         for face, a, b in pushes:
