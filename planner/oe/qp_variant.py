@@ -74,7 +74,8 @@ class QPOptions:
         max_pushes: longest push sequence considered.
         candidates: push sequences scored by the QP before refinement.
         switch_price: cost of one face change [m^2], in the units of the objective (half the mean
-            squared deviation): 5e-7 weighs a face change like 1 mm of RMS deviation.
+            squared deviation): 2e-7 weighs a face change like 0.63 mm of RMS deviation. On the
+            transfer case the push count turns on it: 4 pushes up to 2e-7, 3 at 5e-7 (near tie).
         margin: safety margin delta kept from obstacles [m] (beyond the object's radius).
         ridge: weight of a ridge on the weights [m^2 per weight^2]; 0 by default (tracking on more
             samples than basis functions is already well posed; weights are O(100), so even 1e-10
@@ -91,7 +92,7 @@ class QPOptions:
     segments: int = 10
     max_pushes: int = 4
     candidates: int = 4
-    switch_price: float = 5e-7
+    switch_price: float = 2e-7
     margin: float = 0.005
     ridge: float = 0.0
     tol: float = 1e-8
