@@ -143,7 +143,7 @@ class OEOptions(_Model):
     n_basis: int = Field(25, ge=1)
     segments: int = Field(10, ge=1)
     max_pushes: int = Field(4, ge=1)
-    candidates: int = Field(4, ge=1)
+    candidates: int = Field(3, ge=1)
     switch_price: NonNegative = Field(2e-7, description="cost per face change [m^2]")
     k: float = Field(0.5, gt=0, lt=1, description="adjusting factor of the mappings (6)-(7)")
     tube: Positive = Field(0.01, description="tube radius around the universal path, mapping variant [m]")

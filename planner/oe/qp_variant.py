@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -91,7 +91,7 @@ class QPOptions:
     n_basis: int = 25
     segments: int = 10
     max_pushes: int = 4
-    candidates: int = 4
+    candidates: int = 3
     switch_price: float = 2e-7
     margin: float = 0.005
     ridge: float = 0.0
@@ -232,7 +232,10 @@ def condense_qp(
 
     grid, ref = resample(opts.n_samples)
     fine = _Scene(grid, ref, tool, platform, target, obstacles, opts)
-    scene = _Scene(*resample(min(opts.screen_samples, opts.n_samples)), tool, platform, target, obstacles, opts)
+    # ranking needs no 1e-8 accuracy: the screening fits stop at 1e-6 (the final one at ``tol``)
+    screen_opts = replace(opts, tol=max(opts.tol, 1e-6), accept=max(opts.accept, 1e-5))
+    scene = _Scene(*resample(min(opts.screen_samples, opts.n_samples)), tool, platform, target, obstacles,
+                   screen_opts)
 
     def infeasible(reason: str, n_qp: int = 0, cands: tuple = ()) -> PushPlan:
         empty = np.zeros((0, 2))
