@@ -1,78 +1,94 @@
-"""The simulated platform's MuJoCo model, written as MJCF from the DH table, the tool and the scene.
+"""The simulated platform's MuJoCo model, written as MJCF text from the DH table, the tool and the scene.
 
-Kinematics. Each DH row ``Rz(theta) Tz(d) Tx(a) Rx(alpha)`` becomes a body whose hinge turns
-about its local z (the joint), with the next body at ``(a, 0, d)`` turned by ``Rx(alpha)``; the
-tool centre point is the origin of the tool-row body, exactly as :mod:`tools.omni.dh`.
+Kinematics. Each DH row ``Rz(theta) Tz(d) Tx(a) Rx(alpha)`` of :mod:`tools.omni.dh` becomes a body
+whose hinge turns about its local z (the joint), with the next body at ``(a, 0, d)`` turned by
+``Rx(alpha)``; the tool centre point is the origin of the tool-row body, exactly as in
+:func:`tools.omni.dh.forward_kinematics`. The Omni base sits at the platform's ``base_xy`` and
+``base_yaw``, ``table_height`` below its frame (:class:`tools.omni.platform.OmniPlatform`); the
+joints have the platform's limits as mechanical stops.
 
 The tool. The Omni's last three joints are fixed, so the tool turns in the table plane with q1
 only (DESIGN section 7): a planar tool stays flat on the table while the shoulder and the elbow
-move. The tool body hangs from the tool centre point on two hinges about the arm-plane normal
-held by joint equalities at ``-q2`` and ``-q3`` (a parallelogram, as the real holder keeps the tool
-level), so its orientation is ``Rz(base_yaw + q1 - pi/2)`` whatever the arm's pitch. Its outline's
-convex pieces are extruded into prisms from 1 to 11 mm above the table (the puck is 10 mm high);
-it never touches the table.
+move. The tool body hangs from the tool centre point on two hinges about the arm-plane normal held
+by joint equalities at ``-q2`` and ``-q3`` (a parallelogram, as the real holder keeps the tool
+level), so its orientation is ``Rz(base_yaw + q1 - pi/2)`` (:meth:`OmniPlatform.heading`) whatever
+the arm's pitch. Its outline's convex pieces (:attr:`tools.model.Tool.convex_pieces`) become prisms
+from ``tool_gap`` to ``tool_gap + tool_thickness`` above the table, so the tool meets the puck's side
+and never the table.
 
-Contact settings measured to matter with MuJoCo 4.0 on exactly this push (the issue's figures):
-``multiccd`` disabled (on, edge contacts got a wrong normal: 22 mm final error and 5 mm
-penetration), elliptic friction cones (pyramidal let the puck slide off the tool: 103 mm error),
-contact damping ratio 1 with a 5 ms time constant (0.3 gave 30 mm error), a 1 ms step,
-``implicitfast`` integration, the Newton solver, and ``priority`` on the table and tool geoms so
-their friction is the one used against the puck.
+Collisions. Only tool-puck, puck-table and puck-obstacle contacts exist (contype/conaffinity
+bits): the links are visual only, and the tool passes through obstacles (the planner keeps it
+clear of them geometrically). Non-convex obstacle polygons are split into convex pieces.
 
-The arm: gravity compensation on every moving body, and a position plus a velocity actuator per
-joint (PD tracking of a joint reference, as the real device after dynamics compensation).
+Contact settings measured to matter with MuJoCo 4.0 on exactly this push (a forward push of the
+puck with tool 1's upper face):
+
+* ``<flag multiccd="disable"/>``: with it on, contacts on the prism's edges got a wrong normal
+  (22 mm final error and 5 mm penetration).
+* ``cone="elliptic"``: pyramidal cones let the puck slide off the tool (103 mm error).
+* contact ``solref="0.005 1"``: damping ratio 1 (0.3 gave 30 mm error) with a 5 ms time constant.
+* ``timestep`` 1 ms (1-2 ms give the same push), ``integrator="implicitfast"`` (stable with the
+  velocity actuators' damping), ``solver="Newton"``.
+* ``priority`` on the table, obstacle and tool geoms, so their friction is the one used against
+  the puck (not the maximum of the two geoms').
+
+The arm: gravity compensation on every moving body (``gravcomp="1"``), and a position plus a
+velocity actuator per joint: ``tau = kp (q_ref - q) + kv (qd_ref - qd)``, PD tracking of a joint
+reference as the real device after dynamics compensation.
+
+Recording: sensors for the joints, the tool centre point and heading, the puck's pose, and per
+tool piece the signed distance to the puck and the nearest points (``distance`` and ``fromto``)
+and the deepest of its contacts with the puck (``contact``: the penetration the solver acts on;
+the distance sensor's own estimate of a penetration is smaller, 12 against 33 um), so a whole
+execution runs in :func:`mujoco.rollout.rollout` and is read from its sensor data. Contact is
+judged from the distance, not from MuJoCo's contact list: pushed against the table's friction
+(0.06 N), the puck separates from the face and touches it again every few steps by micrometres
+(14 um at most in the forward push), which a contact list shows as chatter.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from tools.decompose import convex_decomposition
 from tools.model import Tool
 from tools.objects import OBJECT_RADIUS, Disc, Obstacle
 from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
 from tools.omni.platform import OmniPlatform
+from tools.sim.config import SimConfig
 
-TOOL_BOTTOM, TOOL_TOP = 0.001, 0.011
-"""Height [m] of the tool's prisms above the table."""
-PUCK_HALF_HEIGHT = 0.005
+#: Names of the model's joints driven by the PD actuators, in DH order.
+ARM_JOINTS = ("q1", "q2", "q3")
+#: Names of the two hinges keeping the tool level (held at -q2 and -q3 by joint equalities).
+LEVEL_JOINTS = ("level2", "level3")
+#: Body whose origin is the tool centre point (the DH tool frame's origin).
+TCP_BODY = "tcp_row"
+#: Body carrying the tool's prisms; its frame is the planar tool frame of :mod:`tools.model`.
+TOOL_BODY = "tool_plane"
+PUCK = "puck"
+#: Tool-puck distances [m] beyond this are reported as this by the distance sensors.
+SENSOR_CUTOFF = 0.01
+
+# contype / conaffinity bits: the puck collides with everything that has bit 1; the others with it only
+_PUCK_BITS = 'contype="1" conaffinity="1"'
+_STATIC_BITS = 'contype="1" conaffinity="0"'
+_VISUAL_BITS = 'contype="0" conaffinity="0"'
 
 
-@dataclass(frozen=True)
-class SimParams:
-    """Physical parameters of the simulated platform (SI units).
-
-    Attributes:
-        timestep: physics step [s]; puck_mass [kg]; puck_friction: sliding friction of the puck on
-        the table; tool_friction: between tool and puck; kp [N m/rad], kv [N m s/rad]: joint PD
-        gains; contact_timeconst [s].
-    """
-
-    timestep: float = 0.001
-    puck_mass: float = 0.02
-    puck_friction: float = 0.3
-    tool_friction: float = 0.8
-    kp: float = 40.0
-    kv: float = 0.8
-    contact_timeconst: float = 0.005
+def _num(v: float) -> str:
+    return f"{float(v):.17g}"
 
 
 def _quat_x(angle: float) -> str:
-    return f"{np.cos(angle / 2):.17g} {np.sin(angle / 2):.17g} 0 0"
+    return f"{_num(np.cos(angle / 2))} {_num(np.sin(angle / 2))} 0 0"
 
 
-def _mat_to_quat(m: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (3, 3)."""
-    w = np.sqrt(max(0.0, 1.0 + m[0, 0] + m[1, 1] + m[2, 2])) / 2
-    x = np.copysign(np.sqrt(max(0.0, 1.0 + m[0, 0] - m[1, 1] - m[2, 2])) / 2, m[2, 1] - m[1, 2])
-    y = np.copysign(np.sqrt(max(0.0, 1.0 - m[0, 0] + m[1, 1] - m[2, 2])) / 2, m[0, 2] - m[2, 0])
-    z = np.copysign(np.sqrt(max(0.0, 1.0 - m[0, 0] - m[1, 1] + m[2, 2])) / 2, m[1, 0] - m[0, 1])
-    q = np.array([w, x, y, z])
-    return q / np.linalg.norm(q)
+def _quat_z(angle: float) -> str:
+    return f"{_num(np.cos(angle / 2))} 0 0 {_num(np.sin(angle / 2))}"
 
 
 def _rz(a: float) -> NDArray[np.float64]:
@@ -85,94 +101,137 @@ def _rx(a: float) -> NDArray[np.float64]:
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
-def _prism(name: str, ring: NDArray[np.float64]) -> str:
-    pts = [(x, y, z) for z in (TOOL_BOTTOM, TOOL_TOP) for x, y in ring]
-    return f'<mesh name="{name}" vertex="{" ".join(f"{v:.9g}" for p in pts for v in p)}"/>'
+def _mat_to_quat(m: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Unit quaternion (w, x, y, z) of a rotation matrix (3, 3)."""
+    w = np.sqrt(max(0.0, 1.0 + m[0, 0] + m[1, 1] + m[2, 2])) / 2
+    x = np.copysign(np.sqrt(max(0.0, 1.0 + m[0, 0] - m[1, 1] - m[2, 2])) / 2, m[2, 1] - m[1, 2])
+    y = np.copysign(np.sqrt(max(0.0, 1.0 - m[0, 0] + m[1, 1] - m[2, 2])) / 2, m[0, 2] - m[2, 0])
+    z = np.copysign(np.sqrt(max(0.0, 1.0 - m[0, 0] - m[1, 1] + m[2, 2])) / 2, m[1, 0] - m[0, 1])
+    q = np.array([w, x, y, z])
+    return q / np.linalg.norm(q)
+
+
+def _prism_mesh(name: str, piece: shapely.Polygon, z0: float, z1: float) -> str:
+    """A convex mesh asset: the polygon's vertices at heights ``z0`` and ``z1`` [m]."""
+    ring = np.asarray(shapely.geometry.polygon.orient(piece, 1.0).exterior.coords)[:-1]
+    verts = " ".join(_num(v) for z in (z0, z1) for x, y in ring for v in (x, y, z))
+    return f'<mesh name="{name}" vertex="{verts}"/>'
+
+
+def tool_piece_names(tool: Tool) -> tuple[str, ...]:
+    """Geom names of the tool's convex pieces, in the order of :attr:`Tool.convex_pieces`."""
+    return tuple(f"tool_piece{i}" for i in range(len(tool.convex_pieces)))
+
+
+def _obstacles(obstacles: Sequence[Obstacle], height: float, friction: str) -> tuple[list[str], list[str]]:
+    assets, geoms = [], []
+    look = f'rgba="0.8 0.3 0.3 1" priority="1" friction="{friction}" {_STATIC_BITS}'
+    for i, o in enumerate(obstacles):
+        if isinstance(o, Disc):
+            geoms.append(
+                f'<geom name="obstacle{i}" type="cylinder" size="{_num(o.radius)} {_num(height / 2)}" '
+                f'pos="{_num(o.centre[0])} {_num(o.centre[1])} {_num(height / 2)}" {look}/>'
+            )
+        else:
+            for j, piece in enumerate(convex_decomposition(o)):
+                assets.append(_prism_mesh(f"obstacle{i}_{j}", piece, 0.0, height))
+                geoms.append(f'<geom name="obstacle{i}_{j}" type="mesh" mesh="obstacle{i}_{j}" {look}/>')
+    return assets, geoms
 
 
 def build_mjcf(
-    tool: Tool, platform: OmniPlatform, obstacles: Sequence[Obstacle] = (), params: SimParams | None = None
+    tool: Tool, platform: OmniPlatform, obstacles: Sequence[Obstacle] = (), config: SimConfig | None = None
 ) -> str:
-    """The MJCF text of the platform carrying ``tool`` with the puck and ``obstacles``."""
-    p = params or SimParams()
+    """The MJCF text of the Omni carrying ``tool``, with the puck and ``obstacles`` on the table.
+
+    Args:
+        tool: the tool (its convex pieces become the colliding prisms).
+        platform: the Omni's placement, joint limits and ``a_t`` (the tool-row length used).
+        obstacles: discs and polygons on the table (world frame [m]), static, twice the puck's height.
+        config: physical settings (default :class:`SimConfig`).
+
+    Returns:
+        The MJCF document (compile it with ``mujoco.MjModel.from_xml_string``). The puck starts at
+        the origin; :class:`tools.sim.platform.SimPlatform` places it.
+    """
+    c = config or SimConfig()
     # the planar tool frame in the tool-row body once the two level-keeping hinges have acted:
     # base-frame orientation Rz(q1) Rx(-pi/2) Rz(theta_t) G must equal Rz(q1 - pi/2)
     g = (_rx(-np.pi / 2) @ _rz(THETA_TOOL)).T @ _rz(-np.pi / 2)
-    gq = " ".join(f"{v:.17g}" for v in _mat_to_quat(g))
-    pieces = [np.asarray(pc.exterior.coords)[:-1] for pc in tool.convex_pieces]
-    assets = [_prism(f"tool_piece{i}", r) for i, r in enumerate(pieces)]
+    gq = " ".join(_num(v) for v in _mat_to_quat(g))
+    z0, z1 = c.tool_gap, c.tool_gap + c.tool_thickness
+    pieces = tool.convex_pieces
+    names = tool_piece_names(tool)
+    assets = [_prism_mesh(n, p, z0, z1) for n, p in zip(names, pieces, strict=True)]
+    tool_fric = f"{_num(c.tool_friction)} 0.005 0.0001"
     tool_geoms = "\n".join(
-        f'<geom name="tool_piece{i}" type="mesh" mesh="tool_piece{i}" priority="1" '
-        f'friction="{p.tool_friction} 0.005 0.0001" rgba="0.3 0.5 0.8 1" mass="0.002"/>'
-        for i in range(len(pieces))
+        f'<geom name="{n}" type="mesh" mesh="{n}" priority="1" friction="{tool_fric}" '
+        f'rgba="0.3 0.5 0.8 1" mass="0.002" {_STATIC_BITS}/>'
+        for n in names
     )
-    obstacle_geoms = []
-    for i, o in enumerate(obstacles):
-        if isinstance(o, Disc):
-            obstacle_geoms.append(
-                f'<geom name="obstacle{i}" type="cylinder" size="{o.radius} {PUCK_HALF_HEIGHT * 2}" '
-                f'pos="{o.centre[0]} {o.centre[1]} {PUCK_HALF_HEIGHT * 2}" rgba="0.8 0.3 0.3 1" priority="1"/>'
-            )
-        else:
-            ring = np.asarray(shapely.geometry.polygon.orient(o, 1.0).exterior.coords)[:-1]
-            pts = [(x, y, z) for z in (0.0, 4 * PUCK_HALF_HEIGHT) for x, y in ring]
-            assets.append(f'<mesh name="obstacle{i}" vertex="{" ".join(f"{v:.9g}" for q in pts for v in q)}"/>')
-            obstacle_geoms.append(f'<geom name="obstacle{i}" type="mesh" mesh="obstacle{i}" rgba="0.8 0.3 0.3 1" '
-                                  'priority="1"/>')
+    table_fric = f"{_num(c.table_friction)} 0.005 0.0001"
+    obstacle_assets, obstacle_geoms = _obstacles(obstacles, 2.0 * c.puck_height, table_fric)
+    assets += obstacle_assets
+    contact_sensors = "\n".join(
+        f'<distance name="gap_{n}" geom1="{n}" geom2="{PUCK}" cutoff="{_num(SENSOR_CUTOFF)}"/>'
+        f'<fromto name="near_{n}" geom1="{n}" geom2="{PUCK}" cutoff="{_num(SENSOR_CUTOFF)}"/>'
+        f'<contact name="touch_{n}" geom1="{n}" geom2="{PUCK}" num="1" data="found dist" reduce="mindist"/>'
+        for n in names
+    )
+    lo, hi = platform.limits.lower, platform.limits.upper
     bx, by = platform.base_xy
-    base_quat = f"{np.cos(platform.base_yaw / 2)} 0 0 {np.sin(platform.base_yaw / 2)}"
-    link = 'contype="0" conaffinity="0" rgba="0.6 0.6 0.6 0.5"'
+    link = f'{_VISUAL_BITS} rgba="0.6 0.6 0.6 0.5"'
     inertia = 'mass="0.08" diaginertia="2e-4 2e-4 2e-4"'
-    return f"""
-<mujoco model="omni_{tool.name}">
+    small = 'pos="0 0 0" mass="0.005" diaginertia="1e-6 1e-6 1e-6"'
+    nl = "\n"
+    return f"""<mujoco model="omni_{tool.name}">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{p.timestep}" integrator="implicitfast" solver="Newton" cone="elliptic" gravity="0 0 -9.81">
+  <option timestep="{_num(c.timestep)}" integrator="implicitfast" solver="Newton" cone="elliptic"
+          gravity="0 0 -9.81">
     <flag multiccd="disable"/>
   </option>
   <default>
-    <geom solref="{p.contact_timeconst} 1" solimp="0.95 0.99 0.001"/>
+    <geom solref="{_num(c.contact_timeconst)} {_num(c.contact_dampratio)}" solimp="0.95 0.99 0.001"/>
     <joint armature="0.001" damping="0.01"/>
   </default>
   <asset>
-    {chr(10).join(assets)}
+    {nl.join(assets)}
   </asset>
   <worldbody>
-    <geom name="table" type="plane" size="1 1 0.01" priority="1" friction="{p.puck_friction} 0.005 0.0001"
-          rgba="0.9 0.9 0.85 1"/>
-    {chr(10).join(obstacle_geoms)}
-    <body name="puck" pos="0 0 {PUCK_HALF_HEIGHT + 1e-4}">
-      <freejoint name="puck"/>
-      <geom name="puck" type="cylinder" size="{OBJECT_RADIUS} {PUCK_HALF_HEIGHT}" mass="{p.puck_mass}"
-            friction="{p.puck_friction} 0.005 0.0001" rgba="0.2 0.2 0.2 1"/>
+    <geom name="table" type="plane" size="1 1 0.01" priority="1" friction="{table_fric}"
+          rgba="0.9 0.9 0.85 1" {_STATIC_BITS}/>
+    {nl.join(obstacle_geoms)}
+    <body name="{PUCK}" pos="0 0 {_num(c.puck_height / 2)}">
+      <freejoint name="{PUCK}"/>
+      <geom name="{PUCK}" type="cylinder" size="{_num(OBJECT_RADIUS)} {_num(c.puck_height / 2)}"
+            mass="{_num(c.puck_mass)}" friction="{table_fric}" rgba="0.2 0.2 0.2 1" {_PUCK_BITS}/>
     </body>
-    <body name="base" pos="{bx} {by} {-platform.table_height}" quat="{base_quat}">
+    <body name="base" pos="{_num(bx)} {_num(by)} {_num(-platform.table_height)}" quat="{_quat_z(platform.base_yaw)}">
       <body name="link1" gravcomp="1">
-        <joint name="q1" axis="0 0 1" range="{platform.limits.lower[0]} {platform.limits.upper[0]}"/>
+        <joint name="q1" axis="0 0 1" range="{_num(lo[0])} {_num(hi[0])}"/>
         <inertial pos="0 0 0.05" {inertia}/>
-        <geom type="capsule" fromto="0 0 0 0 0 {D1}" size="0.012" {link}/>
-        <body name="link2" pos="0 0 {D1}" quat="{_quat_x(-np.pi / 2)}" gravcomp="1">
-          <joint name="q2" axis="0 0 1"/>
-          <inertial pos="{L1 / 2} 0 0" {inertia}/>
-          <geom type="capsule" fromto="0 0 0 {L1} 0 0" size="0.008" {link}/>
-          <body name="link3" pos="{L1} 0 0" gravcomp="1">
-            <joint name="q3" axis="0 0 1"/>
-            <inertial pos="{L2 / 2} 0 0" {inertia}/>
-            <geom type="capsule" fromto="0 0 0 {L2} 0 0" size="0.006" {link}/>
-            <body name="wrist" pos="{L2} 0 0" gravcomp="1">
-              <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
-              <body name="tcp" quat="{np.cos(THETA_TOOL / 2)} 0 0 {np.sin(THETA_TOOL / 2)}" gravcomp="1">
-                <inertial pos="0 0 0" mass="0.005" diaginertia="1e-6 1e-6 1e-6"/>
-                <body name="tcp_row" pos="{platform.a_t} 0 {D_TOOL}" gravcomp="1">
-                  <inertial pos="0 0 0" mass="0.005" diaginertia="1e-6 1e-6 1e-6"/>
-                  <body name="level2" gravcomp="1">
-                    <joint name="level2" axis="0 0 1"/>
-                    <inertial pos="0 0 0" mass="0.005" diaginertia="1e-6 1e-6 1e-6"/>
-                    <body name="tool" gravcomp="1">
-                      <joint name="level3" axis="0 0 1"/>
-                      <inertial pos="0 0 0" mass="0.01" diaginertia="1e-6 1e-6 1e-6"/>
-                      <body name="tool_plane" quat="{gq}" gravcomp="1">
-                        {tool_geoms}
-                      </body>
+        <geom type="capsule" fromto="0 0 0 0 0 {_num(D1)}" size="0.012" {link}/>
+        <body name="link2" pos="0 0 {_num(D1)}" quat="{_quat_x(-np.pi / 2)}" gravcomp="1">
+          <joint name="q2" axis="0 0 1" range="{_num(lo[1])} {_num(hi[1])}"/>
+          <inertial pos="{_num(L1 / 2)} 0 0" {inertia}/>
+          <geom type="capsule" fromto="0 0 0 {_num(L1)} 0 0" size="0.008" {link}/>
+          <body name="link3" pos="{_num(L1)} 0 0" gravcomp="1">
+            <joint name="q3" axis="0 0 1" range="{_num(lo[2])} {_num(hi[2])}"/>
+            <inertial pos="{_num(L2 / 2)} 0 0" {inertia}/>
+            <geom type="capsule" fromto="0 0 0 {_num(L2)} 0 0" size="0.006" {link}/>
+            <body name="tcp" pos="{_num(L2)} 0 0" quat="{_quat_z(THETA_TOOL)}" gravcomp="1">
+              <inertial {small}/>
+              <geom type="capsule" fromto="0 0 0 {_num(platform.a_t)} 0 {_num(D_TOOL)}" size="0.003" {link}/>
+              <body name="{TCP_BODY}" pos="{_num(platform.a_t)} 0 {_num(D_TOOL)}" gravcomp="1">
+                <inertial {small}/>
+                <body name="level2" gravcomp="1">
+                  <joint name="level2" axis="0 0 1"/>
+                  <inertial {small}/>
+                  <body name="tool" gravcomp="1">
+                    <joint name="level3" axis="0 0 1"/>
+                    <inertial {small}/>
+                    <body name="{TOOL_BODY}" quat="{gq}" gravcomp="1">
+                      {tool_geoms}
                     </body>
                   </body>
                 </body>
@@ -188,12 +247,23 @@ def build_mjcf(
     <joint joint1="level3" joint2="q3" polycoef="0 -1 0 0 0" solref="0.002 1"/>
   </equality>
   <actuator>
-    <position name="p1" joint="q1" kp="{p.kp}"/>
-    <position name="p2" joint="q2" kp="{p.kp}"/>
-    <position name="p3" joint="q3" kp="{p.kp}"/>
-    <velocity name="v1" joint="q1" kv="{p.kv}"/>
-    <velocity name="v2" joint="q2" kv="{p.kv}"/>
-    <velocity name="v3" joint="q3" kv="{p.kv}"/>
+    <position name="p1" joint="q1" kp="{_num(c.kp)}"/>
+    <position name="p2" joint="q2" kp="{_num(c.kp)}"/>
+    <position name="p3" joint="q3" kp="{_num(c.kp)}"/>
+    <velocity name="v1" joint="q1" kv="{_num(c.kv)}"/>
+    <velocity name="v2" joint="q2" kv="{_num(c.kv)}"/>
+    <velocity name="v3" joint="q3" kv="{_num(c.kv)}"/>
   </actuator>
+  <sensor>
+    <jointpos name="q1" joint="q1"/>
+    <jointpos name="q2" joint="q2"/>
+    <jointpos name="q3" joint="q3"/>
+    <framepos name="tcp" objtype="xbody" objname="{TCP_BODY}"/>
+    <framexaxis name="tool_x" objtype="xbody" objname="{TOOL_BODY}"/>
+    <framezaxis name="tool_z" objtype="xbody" objname="{TOOL_BODY}"/>
+    <framepos name="puck_pos" objtype="xbody" objname="{PUCK}"/>
+    <framequat name="puck_quat" objtype="xbody" objname="{PUCK}"/>
+    {contact_sensors}
+  </sensor>
 </mujoco>
 """

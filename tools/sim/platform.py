@@ -1,214 +1,186 @@
 """The simulated Omni platform: run joint or tool paths with PD tracking and record what happens.
 
 :class:`SimPlatform` is stateful, so an operator can execute in chunks, look at the puck
-(:meth:`SimPlatform.observe`) and correct. Recordings (:class:`Execution`) come at requested rates:
-the object centre as a camera sees it, the tool pose and joints as the encoders give them, plus
-the tool-object contact events.
+(:meth:`SimPlatform.observe`) and correct; executing a path in chunks gives the recording of
+executing it at once (up to the rounding of step times, when the chunks share the velocity
+reference at the cut: pass ``qd``, as finite differences differ there). Recordings
+(:class:`tools.sim.execution.Execution`) come at requested rates: the object centre as a camera
+sees it, the tool pose and joints as the encoders give them, plus the tool-object contact events.
+
+Example::
+
+    sim = SimPlatform(load_tool("finger"))
+    sim.reset(object_xy=[0.0, 0.15], tool_xy=[0.0, 0.12])
+    ex = sim.execute_tool_path(t, tool_xy)          # t (T,) [s], tool_xy (T, 2) [m]
+    obj, tool_pose = sim.observe()
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from dmp.errors import InputError
-from dmp.validation import check_array, check_time
+from dmp.validation import check_array
 from tools.model import Tool
 from tools.objects import Obstacle
-from tools.omni.ik import joint_path
 from tools.omni.platform import OmniPlatform
-from tools.sim.mjcf import PUCK_HALF_HEIGHT, SimParams, build_mjcf
+from tools.sim.config import SimConfig
+from tools.sim.execution import Execution, Rates
+from tools.sim.mjcf import PUCK, tool_piece_names
+from tools.sim.model import STATE_SPEC, SimModel
+from tools.sim.recorder import record
+from tools.sim.reference import joint_reference, tool_path_joints
 
-CONTACT_GAP = 0.02
-"""Contact breaks shorter than this [s] (the puck chattering on the face) stay one event."""
-
-
-@dataclass(frozen=True)
-class Rates:
-    """Recording rates [Hz]: ``object_hz`` (camera), ``tool_hz`` (encoders)."""
-
-    object_hz: float = 30.0
-    tool_hz: float = 200.0
-
-
-@dataclass(frozen=True)
-class ContactEvent:
-    """A stretch of tool-object contact: ``t_start``, ``t_end`` [s], the tool piece touching most,
-    and the largest penetration [m]."""
-
-    t_start: float
-    t_end: float
-    piece: int
-    max_penetration: float
+#: Largest jump [rad] allowed between the arm's joints and the first reference sample of an
+#: execution (a larger one would be a step input to the PD loop, not a path to track).
+MAX_JUMP = 0.05
+#: Largest overlap [m] of the puck with the tool or an obstacle accepted at :meth:`SimPlatform.reset`.
+RESET_OVERLAP = 1e-4
 
 
-@dataclass(frozen=True)
-class Execution:
-    """What an execution recorded (times on the platform's clock [s]).
-
-    Attributes:
-        t_object (M,), object_xy (M, 2) [m], object_yaw (M,) [rad];
-        t_tool (N,), tool_pose (N, 3) (x, y [m], yaw [rad]), joints (N, 3) [rad],
-        joints_ref (N, 3) [rad], contact (N,) bool; contacts: the contact events.
-    """
-
-    t_object: NDArray[np.float64]
-    object_xy: NDArray[np.float64]
-    object_yaw: NDArray[np.float64]
-    t_tool: NDArray[np.float64]
-    tool_pose: NDArray[np.float64]
-    joints: NDArray[np.float64]
-    joints_ref: NDArray[np.float64]
-    contact: NDArray[np.bool_]
-    contacts: tuple[ContactEvent, ...] = field(default=())
-
-    @staticmethod
-    def concat(parts: Sequence[Execution]) -> Execution:
-        """One recording of consecutive executions."""
-        cat = np.concatenate
-        return Execution(
-            cat([p.t_object for p in parts]), cat([p.object_xy for p in parts]), cat([p.object_yaw for p in parts]),
-            cat([p.t_tool for p in parts]), cat([p.tool_pose for p in parts]), cat([p.joints for p in parts]),
-            cat([p.joints_ref for p in parts]), cat([p.contact for p in parts]),
-            tuple(e for p in parts for e in p.contacts),
-        )
-
-    @property
-    def tracking_error(self) -> float:
-        """Largest joint tracking error [rad]."""
-        return float(np.abs(self.joints - self.joints_ref).max()) if self.joints.size else 0.0
+def check_obstacles(obstacles: object) -> tuple[Obstacle, ...]:
+    """The obstacles as a tuple, or :class:`InputError` when it is not a sequence of them."""
+    if isinstance(obstacles, SimConfig):
+        raise InputError("obstacles", "a sequence of discs and polygons (pass the SimConfig as config=)",
+                         "a SimConfig")
+    if not isinstance(obstacles, Sequence):
+        raise InputError("obstacles", "a sequence of discs and polygons", type(obstacles).__name__)
+    return tuple(obstacles)
 
 
 class SimPlatform:
     """The Omni carrying ``tool`` with the puck (and ``obstacles``) in MuJoCo.
 
     Args:
-        tool: the tool; platform: the Omni (default: :class:`OmniPlatform` with the tool's a_t);
-        obstacles: discs and convex polygons on the table; params: physical parameters.
+        tool: the tool.
+        platform: the Omni (default: :class:`OmniPlatform` with the tool's ``a_t``).
+        obstacles: discs (:class:`tools.objects.Disc`) and polygons on the table (world frame [m]).
+        config: physical settings (default :class:`SimConfig`).
+
+    Attributes:
+        time: the platform's clock [s] (0 at :meth:`reset`).
+        sim: the compiled model and its addresses; model, data: MuJoCo's model and state.
     """
 
     def __init__(
         self, tool: Tool, platform: OmniPlatform | None = None, obstacles: Sequence[Obstacle] = (),
-        params: SimParams | None = None,
+        config: SimConfig | None = None,
     ) -> None:
+        if not isinstance(tool, Tool):
+            raise InputError("tool", "a Tool (see tools.load_tool)", type(tool).__name__)
+        if platform is not None and not isinstance(platform, OmniPlatform):
+            raise InputError("platform", "an OmniPlatform or None", type(platform).__name__)
+        if config is not None and not isinstance(config, SimConfig):
+            raise InputError("config", "a SimConfig or None", type(config).__name__)
         self.tool = tool
         self.platform = platform or OmniPlatform(a_t=tool.a_t)
-        self.params = params or SimParams()
-        self.xml = build_mjcf(tool, self.platform, obstacles, self.params)
-        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        self.sim = SimModel.build(tool, self.platform, check_obstacles(obstacles), config)
+        self.config = self.sim.config
+        self.model = self.sim.model
         self.data = mujoco.MjData(self.model)
-        m = self.model
-        self._q = np.array([m.joint(n).qposadr[0] for n in ("q1", "q2", "q3")])
-        self._qd = np.array([m.joint(n).dofadr[0] for n in ("q1", "q2", "q3")])
-        self._lvl = np.array([m.joint(n).qposadr[0] for n in ("level2", "level3")])
-        self._puck = m.joint("puck").qposadr[0]
-        self._puck_geom = m.geom("puck").id
-        self._tool_geoms = {m.geom(f"tool_piece{i}").id: i for i in range(len(tool.convex_pieces))}
-        self._tcp, self._plane = m.body("tcp_row").id, m.body("tool_plane").id
-        self.time = 0.0
+        self._step = 0
+        self._pieces = {self.model.geom(n).id for n in tool_piece_names(tool)}
+        self._puck = self.model.geom(PUCK).id
+        self.reset(np.array([0.0, 0.3]), q0=np.zeros(3))
+
+    @property
+    def time(self) -> float:
+        """The platform's clock [s]: physics steps since :meth:`reset` times the step."""
+        return self._step * self.sim.timestep
+
+    @property
+    def xml(self) -> str:
+        """The MJCF text of the model."""
+        return self.sim.xml
 
     # ------------------------------------------------------------------ state
     def reset(self, object_xy: ArrayLike, q0: ArrayLike | None = None, tool_xy: ArrayLike | None = None) -> None:
-        """Put the puck at ``object_xy`` (2,) [m] at rest and the arm at ``q0`` (3,) [rad] (or where
-        its tool centre point is at ``tool_xy`` (2,) [m]); the clock restarts at 0."""
+        """Put the puck at rest at ``object_xy`` (2,) [m] and the arm at rest at ``q0`` (3,) [rad], or
+        where its tool centre point is at ``tool_xy`` (2,) [m]; the clock restarts at 0.
+
+        Raises:
+            InputError: no start given, the start is outside the joint limits or unreachable, or the
+                puck overlaps the tool or an obstacle.
+        """
         xy = check_array(object_xy, "object_xy", shape=(2,))
         if q0 is None:
             if tool_xy is None:
-                raise InputError("q0", "joint angles or a tool_xy to start from")
-            jp = joint_path(self.platform, check_array(tool_xy, "tool_xy", shape=(2,))[None])
-            if not np.isfinite(jp.violation[0]) or jp.violation[0] > 0:
-                raise InputError("tool_xy", "a point the Omni reaches within its joint limits", list(xy))
-            q0 = jp.q[0]
-        q = check_array(q0, "q0", shape=(3,))
-        d = self.data
-        mujoco.mj_resetData(self.model, d)
-        d.qpos[self._puck : self._puck + 7] = [xy[0], xy[1], PUCK_HALF_HEIGHT + 1e-4, 1, 0, 0, 0]
-        d.qpos[self._q] = q
-        d.qpos[self._lvl] = -q[1:]
-        d.ctrl[:3], d.ctrl[3:] = q, 0.0
-        mujoco.mj_forward(self.model, d)
-        self.time = 0.0
+                raise InputError("q0", "joint angles, or a tool_xy to start from")
+            txy = check_array(tool_xy, "tool_xy", shape=(2,))
+            q = tool_path_joints(self.platform, np.vstack([txy, txy]), np.array([0.0, 1.0]))[0]
+        else:
+            q = check_array(q0, "q0", shape=(3,))
+            bad = self.platform.limits.violated(q, 1e-6)
+            if bad:
+                raise InputError("q0", "joints within the platform's limits", f"{q.tolist()} (joint(s) "
+                                 f"{[j + 1 for j in bad]} outside)")
+        m, d = self.model, self.data
+        self.sim.set_configuration(d, xy, q)
+        mujoco.mj_fwdPosition(m, d)
+        for c in d.contact[: d.ncon]:
+            g1, g2 = int(c.geom[0]), int(c.geom[1])
+            if self._puck in (g1, g2) and -c.dist > RESET_OVERLAP:
+                other = m.geom(g2 if g1 == self._puck else g1).name
+                if other != "table":
+                    raise InputError("object_xy", f"a puck position clear of {other}",
+                                     f"{xy.tolist()} overlapping by {1e3 * -c.dist:.2f} mm")
+        self.sim.set_configuration(d, xy, q)
+        self._step = 0
 
     def observe(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Current object centre (2,) [m] and tool pose (3,) (x, y [m], yaw [rad])."""
-        return self.data.qpos[self._puck : self._puck + 2].copy(), self._tool_pose()
+        """The current object centre (2,) [m] and tool pose (3,) (x, y [m], yaw [rad]), world frame."""
+        return self.sim.current_pose(self.data)
 
-    def _tool_pose(self) -> NDArray[np.float64]:
-        d = self.data
-        xm = d.xmat[self._plane].reshape(3, 3)
-        return np.array([d.xpos[self._tcp, 0], d.xpos[self._tcp, 1], np.arctan2(xm[1, 0], xm[0, 0])])
-
-    def _touch(self) -> tuple[int, float]:
-        """Tool piece in contact with the puck (-1 if none) and the deepest penetration [m]."""
-        d = self.data
-        piece, depth = -1, 0.0
-        for i in range(d.ncon):
-            c = d.contact[i]
-            other = c.geom2 if c.geom1 == self._puck_geom else c.geom1 if c.geom2 == self._puck_geom else -1
-            if other in self._tool_geoms and -c.dist >= depth:
-                piece, depth = self._tool_geoms[other], max(depth, -c.dist)
-        return piece, depth
+    @property
+    def joints(self) -> NDArray[np.float64]:
+        """The arm's current joints (3,) [rad]."""
+        return self.data.qpos[[self.model.joint(n).qposadr[0] for n in ("q1", "q2", "q3")]].copy()
 
     # ------------------------------------------------------------------ running
     def execute(self, t: ArrayLike, q: ArrayLike, qd: ArrayLike | None = None, rates: Rates | None = None) -> Execution:
-        """Track the joint path ``q`` (T, 3) [rad] over times ``t`` (T,) [s] (relative; linear
-        interpolation between samples, velocities by differences unless ``qd`` is given) with the
-        PD actuators, continuing from the current state; returns the recording."""
-        tt = check_time(t, "t", min_len=2)
-        qq = check_array(q, "q", shape=(tt.size, 3))
-        qv = np.gradient(qq, tt, axis=0) if qd is None else check_array(qd, "qd", shape=(tt.size, 3))
+        """Track a joint path with the PD actuators, continuing from the current state.
+
+        Args:
+            t: shape (T,), increasing times [s] (relative: only differences matter; the path runs
+                from the current clock for ``t[-1] - t[0]``, rounded to physics steps).
+            q: shape (T, 3), joints [rad] within the limits, linearly interpolated to the steps; ``q[0]``
+                within :data:`MAX_JUMP` of the arm's current joints.
+            qd: shape (T, 3), joint velocities [rad/s]; default: finite differences of ``q``.
+            rates: recording rates (default :class:`Rates`).
+
+        Returns:
+            The recording of the steps from the current clock to the end (excluded; the state at the
+            end is what :meth:`observe` gives).
+        """
         r = rates or Rates()
-        dt = self.model.opt.timestep
-        n = round((tt[-1] - tt[0]) / dt)
-        ts = tt[0] + dt * np.arange(1, n + 1)
-        q_ref = np.column_stack([np.interp(ts, tt, qq[:, j]) for j in range(3)])
-        qd_ref = np.column_stack([np.interp(ts, tt, qv[:, j]) for j in range(3)])
-        obj_every = max(1, round(1.0 / (r.object_hz * dt)))
-        tool_every = max(1, round(1.0 / (r.tool_hz * dt)))
-        rec_o: list[tuple[float, float, float, float]] = []
-        rec_t: list[NDArray[np.float64]] = []
-        events: list[ContactEvent] = []
-        open_ev: list[float] | None = None
-        m, d = self.model, self.data
-        for i in range(n):
-            d.ctrl[:3] = q_ref[i]
-            d.ctrl[3:] = qd_ref[i]
-            mujoco.mj_step(m, d)
-            now = self.time + (i + 1) * dt
-            piece, depth = self._touch()
-            if piece >= 0:
-                if open_ev is None:
-                    open_ev = [now, now, piece, depth]
-                open_ev[1], open_ev[3] = now, max(open_ev[3], depth)
-            elif open_ev is not None and now - open_ev[1] > CONTACT_GAP:
-                events.append(ContactEvent(open_ev[0], open_ev[1], int(open_ev[2]), open_ev[3]))
-                open_ev = None
-            if (i + 1) % obj_every == 0:
-                w, z = d.qpos[self._puck + 3], d.qpos[self._puck + 6]
-                rec_o.append((now, d.qpos[self._puck], d.qpos[self._puck + 1], 2.0 * np.arctan2(z, w)))
-            if (i + 1) % tool_every == 0:
-                rec_t.append(np.concatenate([[now], self._tool_pose(), d.qpos[self._q], q_ref[i], [piece >= 0]]))
-        if open_ev is not None:
-            events.append(ContactEvent(open_ev[0], open_ev[1], int(open_ev[2]), open_ev[3]))
-        self.time += n * dt
-        o = np.array(rec_o).reshape(-1, 4)
-        k = np.array(rec_t).reshape(-1, 11)
-        return Execution(o[:, 0], o[:, 1:3], o[:, 3], k[:, 0], k[:, 1:4], k[:, 4:7], k[:, 7:10], k[:, 10] > 0.5,
-                         tuple(events))
+        if not isinstance(r, Rates):
+            raise InputError("rates", "a Rates", type(r).__name__)
+        dt = self.sim.timestep
+        ref = joint_reference(t, q, qd, dt, self.platform)
+        jump = np.abs(ref.q[0] - self.joints)
+        if jump.max() > MAX_JUMP:
+            raise InputError("q[0]", f"a start within {MAX_JUMP} rad of the arm's joints {self.joints.tolist()}",
+                             f"{ref.q[0].tolist()}")
+        d = self.data
+        start = self.sim.state(d)[None]
+        final, sens = self.sim.run(d, start, d.qacc_warmstart.copy()[None], self.sim.controls(ref.q, ref.qd)[None])
+        # the rollout stepped ``d`` itself (warm start included); set the final state explicitly anyway
+        mujoco.mj_setState(self.model, d, final[0], STATE_SPEC)
+        mujoco.mj_kinematics(self.model, d)
+        ex = record(self.tool, self.sim.sensor_rows(sens[0]), self._step, dt, ref.q, r)
+        self._step += len(ref.q)
+        return ex
 
     def execute_tool_path(self, t: ArrayLike, tool_xy: ArrayLike, rates: Rates | None = None) -> Execution:
-        """Track a tool centre point path ``tool_xy`` (T, 2) [m] over ``t`` (T,) [s] through the
-        Omni's inverse kinematics (the heading follows q1)."""
-        tt = check_time(t, "t", min_len=2)
-        xy = check_array(tool_xy, "tool_xy", shape=(tt.size, 2))
-        jp = joint_path(self.platform, xy)
-        bad = np.flatnonzero(~(jp.violation == 0.0))
-        if bad.size:
-            i = int(bad[0])
-            raise InputError(f"tool_xy[{i}]", "a point the Omni reaches within its joint limits",
-                             f"{xy[i].tolist()} (limit violation {jp.violation[i]:.3g} rad)")
-        return self.execute(tt, jp.q, rates=rates)
+        """Track a tool centre point path ``tool_xy`` (T, 2) [m] (world, table plane) over times
+        ``t`` (T,) [s] through the Omni's inverse kinematics; the tool's heading is not free, it
+        follows q1 (so it turns as the tool sweeps sideways). See :meth:`execute`.
+
+        Raises:
+            InputError: naming the first sample the Omni cannot reach within its joint limits.
+        """
+        return self.execute(t, tool_path_joints(self.platform, tool_xy, t), rates=rates)
