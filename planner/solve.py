@@ -32,6 +32,7 @@ from planner.plan import Plan, Segment
 from problems.task import Task, resolve, task_obstacles, task_platform, task_tool
 from tools.arch import NoArch, swept_clearance, switch_path
 from tools.library import load_tool
+from tools.objects import Disc
 from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
 
 _SKILLS: dict[str, OESkill] = {}
@@ -154,16 +155,20 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
         return Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base)
     frames = {f: FaceFrame.build(tool, f, platform) for f in tool.face_names}
     clear = task.ss.clearance
+    # the arch avoids disc obstacles; a polygon is taken as its enclosing disc (centroid, farthest vertex)
+    discs = [o if isinstance(o, Disc) else _enclosing_disc(o) for o in obstacles]
 
     def arch(obj: np.ndarray, face_a: str, pose_a: np.ndarray, face_b: str, pose_b: np.ndarray) -> SwitchPath:
         da = pose_a[2] + tool.face(face_a).push_angle
         db = pose_b[2] + tool.face(face_b).push_angle
         try:
-            xy = switch_path(tool, platform, obj, pose_a, da, pose_b, db, clearance=clear)
+            xy = switch_path(tool, platform, obj, pose_a, da, pose_b, db, clearance=clear, obstacles=discs)
         except NoArch as exc:
             return SwitchPath(np.zeros((0, 2)), "infeasible", str(exc))
         dense = _densify(xy, 0.0005)
-        return SwitchPath(xy, min_clearance=swept_clearance(tool, platform, dense[8:-8], obj, task.object.radius))
+        near = min((swept_clearance(tool, platform, dense, o.centre, o.radius) for o in discs), default=np.inf)
+        return SwitchPath(xy, min_clearance=swept_clearance(tool, platform, dense[8:-8], obj, task.object.radius),
+                          info={"obstacle_clearance": float(near)})
 
     try:
         motion = assemble(push_plan, frames, platform, arch, v_max=task.timing.max_tool_speed,
@@ -173,6 +178,8 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     lap("switches_and_timing")
     metrics = {**push_plan.metrics, **stages}
     metrics["switch_clearance_min"] = min((sw.min_clearance for *_, sw in motion.switches), default=float("inf"))
+    metrics["switch_obstacle_clearance_min"] = min(
+        (sw.info.get("obstacle_clearance", np.inf) for *_, sw in motion.switches), default=float("inf"))
     metrics["joint_limit_violation_max"] = float(motion.joint_violation.max())
     metrics["duration"] = float(motion.t[-1])
     metrics["stretch"] = motion.stretch
@@ -187,6 +194,14 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     return Plan(status="solved", t=motion.t, object_xy=motion.object_xy, tool_pose=motion.tool_pose,
                 joints=motion.joints, phase=motion.phase, face=motion.face, pushes=pushes, switches=switches,
                 metrics=metrics, **base)
+
+
+def _enclosing_disc(poly: Any) -> Any:
+    from tools.objects import Disc
+
+    ring = np.asarray(poly.exterior.coords)[:-1]
+    c = ring.mean(axis=0)
+    return Disc(c, float(np.linalg.norm(ring - c, axis=1).max()))
 
 
 def _densify(xy: np.ndarray, step: float) -> np.ndarray:

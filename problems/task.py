@@ -154,7 +154,9 @@ class SSOptions(_Model):
 
     virtual_motion: Literal["arch", "line"] = "arch"
     n_knots: int = Field(40, ge=4)
-    clearance: NonNegative = Field(0.002, description="tool-object clearance kept during switches [m]")
+    clearance: NonNegative = Field(
+        0.002, description="tool-object and tool-obstacle clearance kept during switches [m]"
+    )
 
 
 class Timing(_Model):
