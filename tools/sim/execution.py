@@ -80,8 +80,10 @@ class Execution:
         tool_pose: shape (N, 3), tool frame ``(x, y, yaw)`` [m, m, rad] in the world.
         joints: shape (N, 3), measured joints ``(q1, q2, q3)`` [rad].
         joints_ref: shape (N, 3), the PD reference at the same times [rad].
-        contact: shape (N,), whether the tool touches the object at each tool sample.
-        penetration: shape (N,), tool-object penetration depth at each tool sample [m] (0 apart).
+        contact: shape (N,), whether each tool sample lies in a contact event (the tool touching
+            the object, breaks under :data:`CONTACT_GAP` bridged; see :mod:`tools.sim.recorder`).
+        penetration: shape (N,), tool-object penetration depth at each tool sample [m] (0 when the
+            collision detection finds no contact at that step).
         contacts: the contact events (every physics step, not only the samples).
     """
 

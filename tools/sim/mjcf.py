@@ -37,13 +37,9 @@ velocity actuator per joint: ``tau = kp (q_ref - q) + kv (qd_ref - qd)``, PD tra
 reference as the real device after dynamics compensation.
 
 Recording: sensors for the joints, the tool centre point and heading, the puck's pose, and per
-tool piece the signed distance to the puck and the nearest points (``distance`` and ``fromto``)
-and the deepest of its contacts with the puck (``contact``: the penetration the solver acts on;
-the distance sensor's own estimate of a penetration is smaller, 12 against 33 um), so a whole
-execution runs in :func:`mujoco.rollout.rollout` and is read from its sensor data. Contact is
-judged from the distance, not from MuJoCo's contact list: pushed against the table's friction
-(0.06 N), the puck separates from the face and touches it again every few steps by micrometres
-(14 um at most in the forward push), which a contact list shows as chatter.
+tool piece its deepest contact with the puck (``contact`` sensor: count, signed distance,
+position), so a whole execution runs in :func:`mujoco.rollout.rollout` and is read from its
+sensor data.
 """
 
 from __future__ import annotations
@@ -70,8 +66,6 @@ TCP_BODY = "tcp_row"
 #: Body carrying the tool's prisms; its frame is the planar tool frame of :mod:`tools.model`.
 TOOL_BODY = "tool_plane"
 PUCK = "puck"
-#: Tool-puck distances [m] beyond this are reported as this by the distance sensors.
-SENSOR_CUTOFF = 0.01
 
 # contype / conaffinity bits: the puck collides with everything that has bit 1; the others with it only
 _PUCK_BITS = 'contype="1" conaffinity="1"'
@@ -173,9 +167,7 @@ def build_mjcf(
     obstacle_assets, obstacle_geoms = _obstacles(obstacles, 2.0 * c.puck_height, table_fric)
     assets += obstacle_assets
     contact_sensors = "\n".join(
-        f'<distance name="gap_{n}" geom1="{n}" geom2="{PUCK}" cutoff="{_num(SENSOR_CUTOFF)}"/>'
-        f'<fromto name="near_{n}" geom1="{n}" geom2="{PUCK}" cutoff="{_num(SENSOR_CUTOFF)}"/>'
-        f'<contact name="touch_{n}" geom1="{n}" geom2="{PUCK}" num="1" data="found dist" reduce="mindist"/>'
+        f'<contact name="touch_{n}" geom1="{n}" geom2="{PUCK}" num="1" data="found dist pos" reduce="mindist"/>'
         for n in names
     )
     lo, hi = platform.limits.lower, platform.limits.upper

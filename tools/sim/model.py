@@ -33,10 +33,9 @@ class SensorRows(NamedTuple):
     Attributes:
         joints (n, 3) [rad]; tcp (n, 3) tool centre point [m]; tool_x (n, 3), tool_z (n, 3) unit
         axes of the planar tool frame; puck_pos (n, 3) [m]; puck_quat (n, 4) (w, x, y, z);
-        gap (n, P) signed distance of each tool piece from the puck [m] (negative: penetration;
-        at most :data:`tools.sim.mjcf.SENSOR_CUTOFF`); near (n, P, 3) the point of each piece
-        nearest the puck [m]; depth (n, P) penetration of its deepest contact with the puck [m]
-        (0 without contact).
+        touch_found (n, P) number of contacts of each tool piece with the puck; touch_dist (n, P)
+        signed distance of its deepest one [m] (negative: penetration; 0 without contact);
+        touch_pos (n, P, 3) the position of that contact [m].
     """
 
     joints: NDArray[np.float64]
@@ -45,9 +44,9 @@ class SensorRows(NamedTuple):
     tool_z: NDArray[np.float64]
     puck_pos: NDArray[np.float64]
     puck_quat: NDArray[np.float64]
-    gap: NDArray[np.float64]
-    near: NDArray[np.float64]
-    depth: NDArray[np.float64]
+    touch_found: NDArray[np.float64]
+    touch_dist: NDArray[np.float64]
+    touch_pos: NDArray[np.float64]
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,6 +113,7 @@ class SimModel:
             return sensordata[:, s.adr[0] : s.adr[0] + s.dim[0]]
 
         pieces = tool_piece_names(self.tool)
+        touch = np.stack([col(f"touch_{n}") for n in pieces], axis=1)  # (n, P, 5): found, dist, pos
         return SensorRows(
             joints=np.hstack([col(n) for n in ARM_JOINTS]),
             tcp=col("tcp"),
@@ -121,10 +121,9 @@ class SimModel:
             tool_z=col("tool_z"),
             puck_pos=col("puck_pos"),
             puck_quat=col("puck_quat"),
-            gap=np.hstack([col(f"gap_{n}") for n in pieces]),
-            near=np.stack([col(f"near_{n}")[:, :3] for n in pieces], axis=1),
-            depth=np.column_stack([np.where(c[:, 0] > 0, np.maximum(-c[:, 1], 0.0), 0.0)
-                                   for c in (col(f"touch_{n}") for n in pieces)]),
+            touch_found=touch[:, :, 0],
+            touch_dist=touch[:, :, 1],
+            touch_pos=touch[:, :, 2:5],
         )
 
     def current_pose(self, data: mujoco.MjData) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

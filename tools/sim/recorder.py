@@ -1,6 +1,14 @@
 """Turn the sensor rows of an execution's physics steps into an :class:`Execution`: sample the
 streams at their rates, attribute each tool-object contact to a tool face, group contacts into
-events."""
+events.
+
+Contact is MuJoCo's: a tool piece and the puck touch at a step when the collision detection
+finds them penetrating (the only state in which they exchange force). Pushed against the table's
+friction (0.06 N), the puck separates from the face and touches it again every few steps, by
+micrometres (14 um at most in the straight push of the tests), so the contacts of a push come in
+bursts; breaks shorter than :data:`CONTACT_GAP` are bridged into one event, and a tool sample is
+in contact when it lies inside an event.
+"""
 
 from __future__ import annotations
 
@@ -14,9 +22,6 @@ from tools.sim.model import SensorRows
 
 #: A contact point within this distance [m] of a face's segment (tool frame) is on that face.
 FACE_TOL = 0.001
-#: The tool touches the object when a piece is closer to it than this [m]: pushed, the puck
-#: separates from the face by micrometres between steps (14 um at most in a forward push).
-CONTACT_DIST = 1e-4
 
 
 def sample_steps(step0: int, n: int, dt: float, rate: float) -> NDArray[np.intp]:
@@ -53,20 +58,23 @@ def face_labels(tool: Tool, points: NDArray[np.float64], pose: NDArray[np.float6
 
 
 def _events(tool: Tool, t: NDArray[np.float64], touching: NDArray[np.bool_], piece: NDArray[np.intp],
-            face: NDArray[np.intp], depth: NDArray[np.float64]) -> tuple[ContactEvent, ...]:
+            face: NDArray[np.intp], depth: NDArray[np.float64]) -> tuple[tuple[ContactEvent, ...], NDArray[np.bool_]]:
+    """The contact events of the steps at times ``t`` (n,) [s] and whether each step lies in one."""
+    inside = np.zeros(len(t), dtype=bool)
     idx = np.flatnonzero(touching)
     if not idx.size:
-        return ()
+        return (), inside
     groups = np.split(idx, np.flatnonzero(np.diff(t[idx]) > CONTACT_GAP) + 1)
     out = []
     for g in groups:
+        inside[g[0] : g[-1] + 1] = True
         faces = np.bincount(face[g] + 1, minlength=len(tool.faces) + 1)  # slot 0: off every face
         f = int(np.argmax(faces)) - 1
         out.append(ContactEvent(
             float(t[g[0]]), float(t[g[-1]]), int(np.argmax(np.bincount(piece[g]))), float(depth[g].max()),
             tool.faces[f].name if f >= 0 else None,
         ))
-    return tuple(out)
+    return tuple(out), inside
 
 
 def record(tool: Tool, rows: SensorRows, step0: int, dt: float, q_ref: NDArray[np.float64], rates: Rates) -> Execution:
@@ -82,14 +90,16 @@ def record(tool: Tool, rows: SensorRows, step0: int, dt: float, q_ref: NDArray[n
     n = len(rows.joints)
     t = (step0 + np.arange(n)) * dt
     tool_pose = np.column_stack([rows.tcp[:, :2], np.arctan2(rows.tool_x[:, 1], rows.tool_x[:, 0])])
-    piece = np.argmin(rows.gap, axis=1)
-    gap = rows.gap[np.arange(n), piece]
-    touching = gap < CONTACT_DIST
-    depth = np.maximum(rows.depth.max(axis=1), np.maximum(-gap, 0.0))
+    found = rows.touch_found > 0
+    touching = found.any(axis=1)
+    dist = np.where(found, rows.touch_dist, np.inf)
+    piece = np.argmin(dist, axis=1)
+    depth = np.where(touching, np.maximum(-dist[np.arange(n), piece], 0.0), 0.0)
     face = np.full(n, -1, dtype=np.intp)
     if touching.any():
-        at = rows.near[np.arange(n), piece, :2]
+        at = rows.touch_pos[np.arange(n), piece, :2]
         face[touching] = face_labels(tool, at[touching], tool_pose[touching])
+    events, inside = _events(tool, t, touching, piece, face, depth)
     io = sample_steps(step0, n, dt, rates.object_hz)
     it = sample_steps(step0, n, dt, rates.tool_hz)
     w, z = rows.puck_quat[io, 0], rows.puck_quat[io, 3]
@@ -101,7 +111,7 @@ def record(tool: Tool, rows: SensorRows, step0: int, dt: float, q_ref: NDArray[n
         tool_pose=tool_pose[it],
         joints=rows.joints[it].copy(),
         joints_ref=q_ref[it].copy(),
-        contact=touching[it],
+        contact=inside[it],
         penetration=depth[it],
-        contacts=_events(tool, t, touching, piece, face, depth),
+        contacts=events,
     )
