@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test bench lint clean
+.PHONY: demo test bench bench-sim lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -24,6 +24,10 @@ bench: $(PY)
 	$(PY) benchmarks/bench_sim.py
 	$(PY) benchmarks/bench_oe.py
 	$(PY) benchmarks/bench_solve.py
+
+bench-sim: $(PY)
+	$(PY) -m pip install -q -e .
+	$(PY) benchmarks/bench_sim.py
 
 lint: $(PY)
 	$(PY) -m ruff check .

@@ -8,6 +8,7 @@
 * :mod:`tools.contact`: tool poses putting a face in contact with the object.
 * :mod:`tools.clearance`: clearance and penetration depth, static and swept.
 * :mod:`tools.omni`: DH kinematics, inverse kinematics and reachable region of the Omni.
+* :mod:`tools.sim`: the Omni with a tool, the puck and obstacles in MuJoCo (imported on demand).
 
 Frames and units follow DESIGN section 2: SI units, world frame in the table plane with the
 origin under the Omni's first joint axis, x right, y forward, z up.
