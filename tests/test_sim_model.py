@@ -105,6 +105,9 @@ def test_the_measured_contact_settings_are_in_force() -> None:
     assert m.geom(tool_piece_names(tool)[0]).priority[0] > m.geom("puck").priority[0]
     assert m.geom(tool_piece_names(tool)[0]).friction[0] == cfg.tool_friction
     assert all(m.body_gravcomp[m.body(b).id] == 1.0 for b in ("link1", "link2", "link3", TCP_BODY, TOOL_BODY))
+    for j in ARM_JOINTS:  # the PD torque saturates as the Omni's motors do
+        assert m.jnt_actfrclimited[m.joint(j).id] and tuple(m.jnt_actfrcrange[m.joint(j).id]) == (
+            -cfg.torque_limit, cfg.torque_limit)
     assert m.nu == 6 and set(ARM_JOINTS) <= {m.joint(i).name for i in range(m.njnt)}
     assert set(LEVEL_JOINTS) <= {m.joint(i).name for i in range(m.njnt)}
 

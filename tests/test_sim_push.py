@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from dmp.errors import InputError
 from tools import load_tool
 from tools.pose import Pose2D
 from tools.sim import Rates, SimPlatform
@@ -86,3 +87,25 @@ def test_the_heading_turns_with_the_waist_and_the_puck_drifts_along_the_face(sim
     assert len(ex.contacts) == 1 and ex.contacts[0].t_end == pytest.approx(3.49, abs=0.06)
     assert ex.contacts[0].face is None  # mostly on the head's corners, rolling round
     assert ex.max_penetration < 1e-3
+
+
+def test_a_wall_stops_the_puck_and_holds_the_arm() -> None:
+    """A 60 mm wide wall 22.5 mm ahead of the puck's edge, then a 45 mm stroke: the puck stops at
+    the wall and the arm is held, its motors saturated (tracking error 0.096 rad; the operator
+    counts a held arm as a failure). Squeezed with the Omni's peak force, the puck goes 0.39 mm
+    into the wall and the tool 0.42 mm into the puck."""
+    import shapely
+
+    from tools import OBJECT_RADIUS
+
+    wall = shapely.Polygon([(-0.03, 0.19), (0.03, 0.19), (0.03, 0.21), (-0.03, 0.21)])
+    sim = SimPlatform(load_tool("finger"), obstacles=[wall])
+    push = forward_push(sim, (0.0, 0.15), distance=0.04, gap=0.005, duration=3.0)
+    ex = push.execution
+    clearance = np.array([wall.distance(shapely.Point(p)) for p in ex.object_xy]) - OBJECT_RADIUS
+    assert clearance.min() > -5e-4  # [m] the puck hardly goes into the wall (measured 0.39 mm)
+    assert clearance.min() < 1e-3 and push.object_motion[1] > 0.015  # it reached the wall
+    assert ex.tracking_error > 0.02  # [rad] the arm is held
+    assert ex.max_penetration < 1e-3  # measured 0.42 mm
+    with pytest.raises(InputError, match="clear of obstacle0_0"):
+        sim.reset([0.0, 0.18], tool_xy=[0.0, 0.12])  # the puck would be inside the wall

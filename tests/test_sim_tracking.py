@@ -128,3 +128,23 @@ def test_an_unreachable_tool_path_is_refused_naming_the_sample(sim: SimPlatform)
 def test_a_puck_placed_inside_the_tool_is_refused(sim: SimPlatform) -> None:
     with pytest.raises(InputError, match="clear of tool_piece"):
         sim.reset([0.0, 0.15], tool_xy=[0.0, 0.15])
+
+
+def _recording(t0: float, n: int, events: tuple) -> Execution:
+    t = t0 + 0.001 * np.arange(n)
+    z = np.zeros((n, 3))
+    return Execution(t, z[:, :2], z[:, 0], t, z, z, z, np.zeros(n, dtype=bool), z[:, 0], events)
+
+
+def test_concat_joins_a_contact_event_cut_by_a_chunk_boundary() -> None:
+    from tools.sim import ContactEvent
+
+    a = _recording(0.0, 100, (ContactEvent(0.01, 0.02, 0, 1e-5, "left"), ContactEvent(0.09, 0.099, 0, 2e-5, "upper")))
+    b = _recording(0.1, 100, (ContactEvent(0.105, 0.15, 1, 3e-5, "upper"),))
+    both = Execution.concat([a, b])
+    assert both.contacts == (ContactEvent(0.01, 0.02, 0, 1e-5, "left"), ContactEvent(0.09, 0.15, 0, 3e-5, "upper"))
+    assert len(both.t_tool) == 200 and both.max_penetration == 3e-5
+    with pytest.raises(InputError):
+        Execution.concat([b, a])  # out of order
+    with pytest.raises(InputError):
+        Execution.concat([])

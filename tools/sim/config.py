@@ -30,6 +30,9 @@ class SimConfig:
             ``[tool_gap, tool_gap + tool_thickness]`` and so meets the puck's side.
         kp: joint position gain [N m/rad] of the PD tracking.
         kv: joint velocity gain [N m s/rad] of the PD tracking.
+        torque_limit: largest PD torque on each joint [N m]: the Omni's peak force of 3.3 N
+            (datasheet, at the nominal position) at its reach of about 0.27 m; in free motion and
+            pushing the puck the PD torques stay below 0.02 N m.
     """
 
     timestep: float = 0.001
@@ -43,6 +46,7 @@ class SimConfig:
     tool_thickness: float = 0.010
     kp: float = 40.0
     kv: float = 0.8
+    torque_limit: float = 0.9
 
     def __post_init__(self) -> None:
         for f in fields(self):

@@ -8,6 +8,7 @@ as named arrays.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -25,6 +26,11 @@ from tools.sim.mjcf import ARM_JOINTS, LEVEL_JOINTS, PUCK, TCP_BODY, TOOL_BODY, 
 
 #: State components a simulation is saved and restored with (time, qpos, qvel, activations...).
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
+#: Oldest MuJoCo with what the model needs (contact sensors; the solver's warm start saved by
+#: ``mj_step``, so rollouts chain); the contact settings were measured with MuJoCo 4.0.0.
+MIN_MUJOCO = (3, 3, 6)
+if tuple(int(p) for p in re.findall(r"\d+", mujoco.__version__)[:3]) < MIN_MUJOCO:  # pragma: no cover
+    raise ImportError(f"tools.sim needs mujoco >= {'.'.join(map(str, MIN_MUJOCO))}, found {mujoco.__version__}")
 
 
 class SensorRows(NamedTuple):
