@@ -10,6 +10,8 @@
 * :mod:`tools.sim.recorder`: sensor rows to an :class:`Execution` (sampling, faces, events).
 * :mod:`tools.sim.platform`: :class:`SimPlatform`, stateful: reset, execute in chunks, observe.
 * :mod:`tools.sim.batch`: :func:`execute_many`, many executions on a thread pool.
+* :mod:`tools.sim.scenarios`: scripted pushes (a straight push, the sideways sweep that shows the
+  heading drift) used by the tests, the benchmark and ``planner/plots/heading_drift.py``.
 
 SI units and the world frame of DESIGN section 2 throughout.
 """

@@ -1,4 +1,4 @@
-"""The heading drift on the simulated Omni, drawn: ``python examples/sim_heading_drift.py OUT.png``.
+"""The heading drift on the simulated Omni, drawn: ``python -m planner.plots.heading_drift OUT.png``.
 
 The Omni's last joints are fixed, so the tool's heading follows the waist angle q1 (DESIGN
 section 7): it cannot be held while the tool moves sideways. Tool 1's left face starts 5 mm right
