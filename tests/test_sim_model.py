@@ -135,3 +135,6 @@ def test_bad_constructor_arguments_are_refused() -> None:
         SimPlatform(tool, None, SimConfig())  # type: ignore[arg-type]
     with pytest.raises(InputError, match="tool"):
         SimPlatform("finger")  # type: ignore[arg-type]
+    with pytest.raises(InputError) as err:
+        SimPlatform(tool, obstacles=[Disc(np.array([0.1, 0.1]), 0.02), (0.1, 0.2)])  # type: ignore[list-item]
+    assert err.value.field == "obstacles[1]"

@@ -21,12 +21,13 @@ from collections.abc import Sequence
 
 import mujoco
 import numpy as np
+import shapely
 from numpy.typing import ArrayLike, NDArray
 
 from dmp.errors import InputError
 from dmp.validation import check_array
 from tools.model import Tool
-from tools.objects import Obstacle
+from tools.objects import Disc, Obstacle
 from tools.omni.platform import OmniPlatform
 from tools.sim.config import SimConfig
 from tools.sim.execution import Execution, Rates
@@ -49,6 +50,9 @@ def check_obstacles(obstacles: object) -> tuple[Obstacle, ...]:
                          "a SimConfig")
     if not isinstance(obstacles, Sequence):
         raise InputError("obstacles", "a sequence of discs and polygons", type(obstacles).__name__)
+    for i, o in enumerate(obstacles):
+        if not isinstance(o, Disc | shapely.Polygon) or (isinstance(o, shapely.Polygon) and not o.is_valid):
+            raise InputError(f"obstacles[{i}]", "a tools.objects.Disc or a valid shapely Polygon", repr(o)[:60])
     return tuple(obstacles)
 
 
