@@ -1,0 +1,67 @@
+"""The tool heading the Omni imposes at a tool position (DESIGN section 7), in numpy and CasADi.
+
+The tool centre point at world position ``x`` (2,) is reached with the waist angle (forward branch)
+``a = phi(x - b) - atan2(d_t, u)``, ``u = sqrt(|x - b|^2 - d_t^2)``, where ``b`` is the joint-1 axis,
+``phi`` the polar angle and ``d_t`` the DH tool row's offset; ``a = base_yaw + q1`` and the tool yaw
+is ``a - pi/2`` (see :mod:`planner.oe.face_frame`). This is smooth wherever ``|x - b| > d_t``, which
+the reach rows of the switch NLP guarantee (the inner reach radius is larger than ``d_t``), so the
+switch NLP can use the heading as a function of position.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from tools.omni.dh import D_TOOL
+from tools.omni.platform import OmniPlatform
+
+
+def heading(platform: OmniPlatform, xy: ArrayLike) -> NDArray[np.float64]:
+    """Tool yaw [rad] (K,) at tool centre points ``xy`` (K, 2) [m] (forward waist branch)."""
+    p = np.atleast_2d(np.asarray(xy, dtype=np.float64)) - np.asarray(platform.base_xy)
+    r2 = np.einsum("ij,ij->i", p, p)
+    u = np.sqrt(np.maximum(r2 - D_TOOL**2, 1e-18))
+    return np.arctan2(p[:, 1], p[:, 0]) - np.arctan2(D_TOOL, u) - np.pi / 2
+
+
+def heading_casadi(platform: OmniPlatform, x: Any, y: Any) -> Any:
+    """Tool yaw [rad] at the tool centre point ``(x, y)`` [m] as a CasADi expression (same maths)."""
+    import casadi as ca
+
+    dx, dy = x - platform.base_xy[0], y - platform.base_xy[1]
+    u = ca.sqrt(dx * dx + dy * dy - D_TOOL**2)
+    return ca.atan2(dy, dx) - ca.atan2(D_TOOL, u) - np.pi / 2
+
+
+def rot(yaw: ArrayLike) -> NDArray[np.float64]:
+    """Rotation matrices (..., 2, 2) for yaws (...) [rad]."""
+    a = np.asarray(yaw, dtype=np.float64)
+    c, s = np.cos(a), np.sin(a)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def point_path(platform: OmniPlatform, xy: ArrayLike, p: ArrayLike) -> NDArray[np.float64]:
+    """World path (K, 2) [m] of the tool-frame point ``p`` (2,) when the tool centre point follows
+    ``xy`` (K, 2) with the Omni's heading."""
+    xy = np.atleast_2d(np.asarray(xy, dtype=np.float64))
+    return xy + np.einsum("kij,j->ki", rot(heading(platform, xy)), np.asarray(p, dtype=np.float64))
+
+
+def centre_path(
+    platform: OmniPlatform, x: ArrayLike, p: ArrayLike, iters: int = 30, tol: float = 1e-13
+) -> NDArray[np.float64]:
+    """Inverse of :func:`point_path`: tool centre points (K, 2) [m] whose tool-frame point ``p`` (2,)
+    is at ``x`` (K, 2), by fixed-point iteration on the heading (a contraction: the heading varies by
+    ``|p| / |x - b|`` per metre, here well below 1)."""
+    x = np.atleast_2d(np.asarray(x, dtype=np.float64))
+    pv = np.asarray(p, dtype=np.float64)
+    c = x - pv
+    for _ in range(iters):
+        new = x - np.einsum("kij,j->ki", rot(heading(platform, c)), pv)
+        if np.max(np.abs(new - c)) < tol:
+            return new
+        c = new
+    return c

@@ -1,0 +1,319 @@
+"""The switch NLP (the ``opt`` variant's solver problem), built once per structure and reused.
+
+Decision variables (millimetres, :data:`planner.ss.bodies.UNIT`): the tool centre points ``X_k``
+(N, 2) at N knots, and per interior knot, convex piece of the tool and body (object or obstacle
+piece), a separating direction ``n`` (2,) (plus an offset ``beta`` for a polygonal body).
+
+Heading: **a function of position through the Omni's waist** (:func:`planner.ss.heading.heading_casadi`,
+smooth inside the reach annulus), not fixed over the move: the tool's yaw at knot k is
+``yaw(X_k)``, exactly the heading the arm will have there, so the vertices ``w = X_k + R(yaw(X_k)) v``
+the constraints see are the ones the arm will place.
+
+Rows (all smooth and analytic; no shapely inside the solver):
+
+* non-penetration, piece-vs-disc: ``n . (w_i - c) >= R + m_k`` for every vertex ``w_i`` of the piece
+  and ``|n|^2 <= 1``: the piece lies beyond the line at distance ``R + m_k`` from the centre, so its
+  distance to the disc is at least ``m_k`` (exact for a convex piece: such ``n`` exists iff it is);
+* piece-vs-convex polygon: ``n . w_i - beta >= m_k``, ``n . o_l <= beta``, ``|n|^2 <= 1`` (a separating
+  line with a gap of at least ``m_k``);
+* with the ``capsule`` model (a tool that is a segment grown by a radius ``r``) the clamped
+  point-to-segment distance ``|c - a - t (b - a)| >= R + r + m_k``, ``t = clip(., 0, 1)``, and no
+  extra variables (disc bodies only);
+* the margin ``m_k`` is a parameter per knot, ramped down to 0 at the two contact knots (a constant
+  margin is infeasible there: the tool touches the object); the end knots carry no rows (they are
+  fixed at the contact poses by their bounds);
+* Omni reach at the interior knots: ``r_in^2 <= |X - b|^2 <= r_out^2`` (the annulus) and the two
+  half-planes of the waist range (exact, :func:`tools.omni.reach.wedge_rows`), each tightened by
+  ``reach_margin``.
+
+Objective: ``sum_k |X_k - Xd_k|^2 / N + smooth * sum_k |X_{k+1} - 2 X_k + X_{k-1}|^2``, with ``Xd``
+the ``dmp`` path (a parameter).
+
+Solvers (:data:`SOLVERS`): ``"ipopt"`` (interior point; warm start with primal and dual values and
+``warm_start_init_point``) and ``"sqp"`` (CasADi's ``sqpmethod`` with the ``qrqp`` active-set QP,
+fast on the small capsule model; ``qpOASES`` is not used: it keeps state between calls).
+Building costs milliseconds, so :func:`get_nlp` caches one per structure (tool, model, N, platform,
+body kinds, solver) and solves change only parameters, bounds and the initial guess.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dmp.errors import InputError
+from planner.ss.bodies import UNIT, Body
+from planner.ss.heading import heading_casadi
+from tools.model import Tool
+from tools.omni.platform import OmniPlatform
+from tools.omni.reach import reach_sector, wedge_rows
+
+
+@dataclass(frozen=True)
+class Capsule:
+    """A capsule tool model in the tool frame: segment ``a``-``b`` (2,) [m] grown by ``radius`` [m]."""
+
+    a: NDArray[np.float64]
+    b: NDArray[np.float64]
+    radius: float
+
+    @staticmethod
+    def enclosing(tool: Tool) -> Capsule:
+        """The capsule about the tool's axis (its longest extent through the outline's centroid, along
+        the tool frame's y axis) whose radius covers every outline vertex."""
+        v = np.asarray(tool.outline.exterior.coords, dtype=np.float64)[:-1]
+        x0 = 0.5 * (v[:, 0].min() + v[:, 0].max())
+        half = 0.5 * (v[:, 0].max() - v[:, 0].min())
+        a, b = np.array([x0, v[:, 1].min() + half]), np.array([x0, v[:, 1].max() - half])
+        ab = b - a
+        t = np.clip(((v - a) @ ab) / max(float(ab @ ab), 1e-18), 0.0, 1.0)
+        r = float(np.max(np.hypot(*(v - a - t[:, None] * ab).T)))
+        return Capsule(a, b, r)
+
+
+def _ipopt(nlp: dict[str, Any], max_iter: int) -> Any:
+    import casadi as ca
+
+    return ca.nlpsol("ss_ipopt", "ipopt", nlp, {
+        "print_time": False, "error_on_fail": False,
+        "ipopt": {"print_level": 0, "sb": "yes", "max_iter": max_iter, "tol": 1e-6, "acceptable_tol": 1e-4,
+                  "warm_start_init_point": "yes", "warm_start_bound_push": 1e-3, "warm_start_mult_bound_push": 1e-3,
+                  "warm_start_slack_bound_push": 1e-3, "mu_init": 1e-2, "linear_solver": "mumps"},
+    })
+
+
+def _sqp(nlp: dict[str, Any], max_iter: int) -> Any:
+    import casadi as ca
+
+    return ca.nlpsol("ss_sqp", "sqpmethod", nlp, {
+        "print_time": False, "print_header": False, "print_iteration": False, "print_status": False,
+        "error_on_fail": False, "max_iter": max_iter, "qpsol": "qrqp",
+        "qpsol_options": {"print_iter": False, "print_header": False, "print_info": False, "error_on_fail": False},
+    })
+
+
+#: Registered NLP backends: name -> builder(nlp dict, max_iter) -> casadi Function.
+SOLVERS: dict[str, Callable[[dict[str, Any], int], Any]] = {"ipopt": _ipopt, "sqp": _sqp}
+MODELS: tuple[str, ...] = ("pieces", "capsule")
+
+
+@dataclass
+class SwitchNLP:
+    """A built switch NLP and what is needed to call it (module docstring).
+
+    Attributes:
+        key: the cache key; solver: the CasADi function; n_knots: N; model, solver_name.
+        n_sep: separating variables per interior knot; sep_layout: ``(piece, body, offset, has_beta)``.
+        families: ``(name, start, stop)`` row ranges of the constraint families.
+        lbg, ubg: row bounds; reach_rows: ``(G, h)`` [mm] of the wedge (for the initial guess check).
+        pieces: tool-frame vertices [mm] of each piece; capsule: the capsule model [mm] or None.
+        build_time: [s]; rows: CasADi function (z, p) -> constraint rows (for the reasons);
+        last_duals: ``(lam_x, lam_g)`` of the last successful solve (warm start).
+    """
+
+    key: tuple
+    solver: Any
+    n_knots: int
+    model: str
+    solver_name: str
+    n_sep: int
+    sep_layout: list[tuple[int, int, int, bool]]
+    families: list[tuple[str, int, int]]
+    lbg: NDArray[np.float64]
+    ubg: NDArray[np.float64]
+    pieces: list[NDArray[np.float64]]
+    capsule: Capsule | None
+    build_time: float
+    n_params: int
+    rows: Any = None
+    last_duals: tuple[NDArray[np.float64], NDArray[np.float64]] | None = field(default=None)
+
+    @property
+    def n_vars(self) -> int:
+        return 2 * self.n_knots + (self.n_knots - 2) * self.n_sep
+
+
+def _tool_key(tool: Tool) -> tuple[str, bytes]:
+    return (tool.name, tool.outline.wkb)
+
+
+def build_nlp(
+    tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
+    solver: str = "ipopt", smooth: float = 10.0, reach_margin: float = 1e-4, max_iter: int = 150,
+    reach: bool = True,
+) -> SwitchNLP:
+    """Build the NLP (module docstring) for ``tool`` at ``n_knots`` knots against bodies of the kinds
+    of ``bodies`` (their values are parameters of each solve)."""
+    import casadi as ca
+
+    t0 = time.perf_counter()
+    if solver not in SOLVERS:
+        raise InputError("solver", f"one of {', '.join(SOLVERS)}", repr(solver))
+    if model not in MODELS:
+        raise InputError("model", f"one of {', '.join(MODELS)}", repr(model))
+    if not isinstance(n_knots, int) or n_knots < 5:
+        raise InputError("n_knots", "an integer >= 5", repr(n_knots))
+    if model == "capsule" and any(b.kind != "disc" for b in bodies):
+        raise InputError("model", "'pieces' when the object or an obstacle is a polygon", "'capsule'")
+    N = n_knots
+    pieces = [np.asarray(p.exterior.coords, dtype=np.float64)[:-1] / UNIT for p in tool.convex_pieces]
+    capsule = None
+    if model == "capsule":
+        c = Capsule.enclosing(tool)
+        capsule = Capsule(c.a / UNIT, c.b / UNIT, c.radius / UNIT)
+    sep_layout: list[tuple[int, int, int, bool]] = []
+    n_sep = 0
+    if model == "pieces":
+        for j in range(len(pieces)):
+            for bi, b in enumerate(bodies):
+                poly = b.kind == "poly"
+                sep_layout.append((j, bi, n_sep, poly))
+                n_sep += 3 if poly else 2
+    X = ca.SX.sym("X", 2, N)
+    S = ca.SX.sym("S", n_sep, N - 2) if n_sep else None
+    Xd = ca.SX.sym("Xd", 2, N)
+    m_obj = ca.SX.sym("m_obj", N)
+    m_obs = ca.SX.sym("m_obs", N)
+    bpar = [ca.SX.sym(f"body{i}", b.data.size) for i, b in enumerate(bodies)]
+    # heading and rotation at each interior knot
+    yaw = [heading_casadi(platform, X[0, k] * UNIT, X[1, k] * UNIT) for k in range(N)]
+    rot = [(ca.cos(a), ca.sin(a)) for a in yaw]
+
+    def world(k: int, v: NDArray[np.float64]) -> tuple[Any, Any]:
+        c, s = rot[k]
+        return X[0, k] + c * v[0] - s * v[1], X[1, k] + s * v[0] + c * v[1]
+
+    rows: list[Any] = []
+    families: list[tuple[str, int, int]] = []
+    count = 0
+    for bi, b in enumerate(bodies):
+        start = count
+        p = bpar[bi]
+        for k in range(1, N - 1):
+            m = m_obj[k] if b.family == "object" else m_obs[k]
+            if model == "capsule":
+                assert capsule is not None
+                ax, ay = world(k, capsule.a)
+                bx, by = world(k, capsule.b)
+                ex, ey = bx - ax, by - ay
+                t = ca.fmin(1, ca.fmax(0, ((p[0] - ax) * ex + (p[1] - ay) * ey) / (ex * ex + ey * ey)))
+                dx, dy = p[0] - ax - t * ex, p[1] - ay - t * ey
+                rows.append(ca.sqrt(dx * dx + dy * dy) - (p[2] + capsule.radius + m))
+                count += 1
+                continue
+            for j, verts in enumerate(pieces):
+                off = next(o for (jj, bb, o, _) in sep_layout if jj == j and bb == bi)
+                n0, n1 = S[off, k - 1], S[off + 1, k - 1]
+                for v in verts:
+                    wx, wy = world(k, v)
+                    if b.kind == "disc":
+                        rows.append(n0 * (wx - p[0]) + n1 * (wy - p[1]) - (p[2] + m))
+                    else:
+                        rows.append(n0 * wx + n1 * wy - S[off + 2, k - 1] - m)
+                    count += 1
+                if b.kind == "poly":
+                    nv = b.data.size // 2
+                    for vi in range(nv):
+                        rows.append(S[off + 2, k - 1] - (n0 * p[2 * vi] + n1 * p[2 * vi + 1]))
+                        count += 1
+                rows.append(1 - n0 * n0 - n1 * n1)
+                count += 1
+        families.append((b.family, start, count))
+    sec = reach_sector(platform)
+    wr = wedge_rows(platform)
+    bx0, by0 = sec.centre / UNIT
+    r_in, r_out = (sec.r_in + reach_margin) / UNIT, (sec.r_out - reach_margin) / UNIT
+    start = count
+    for k in range(1, N - 1 if reach else 1):
+        r2 = (X[0, k] - bx0) ** 2 + (X[1, k] - by0) ** 2
+        rows += [(r2 - r_in**2) / r_in, (r_out**2 - r2) / r_out]
+        for gi in range(2):
+            rows.append(wr.h[gi] / UNIT - reach_margin / UNIT - (wr.G[gi, 0] * X[0, k] + wr.G[gi, 1] * X[1, k]))
+        count += 4
+    families.append(("reach", start, count))
+    track = ca.sumsqr(X - Xd) / N
+    acc = ca.sumsqr(X[:, 2:] - 2 * X[:, 1:-1] + X[:, :-2])
+    z = ca.vertcat(ca.vec(X), ca.vec(S)) if S is not None else ca.vec(X)
+    pv = ca.vertcat(ca.vec(Xd), m_obj, m_obs, *bpar)
+    nlp = {"x": z, "p": pv, "f": track + smooth * acc, "g": ca.vertcat(*rows)}
+    fn = SOLVERS[solver](nlp, max_iter)
+    g_fn = ca.Function("ss_rows", [z, pv], [nlp["g"]])
+    lbg = np.zeros(count)
+    ubg = np.full(count, np.inf)
+    return SwitchNLP(
+        key=(), solver=fn, n_knots=N, model=model, solver_name=solver, n_sep=n_sep, sep_layout=sep_layout,
+        families=families, lbg=lbg, ubg=ubg, pieces=pieces, capsule=capsule,
+        build_time=time.perf_counter() - t0, n_params=int(pv.numel()), rows=g_fn,
+    )
+
+
+_CACHE: dict[tuple, SwitchNLP] = {}
+
+
+def get_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
+            solver: str = "ipopt", smooth: float = 10.0, reach: bool = True) -> tuple[SwitchNLP, bool]:
+    """The cached NLP for this structure (built on first use); returns ``(nlp, built_now)``."""
+    key = (_tool_key(tool), model, n_knots, platform, tuple(b.signature for b in bodies),
+           tuple(b.family == "object" for b in bodies), solver, smooth, reach)
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit, False
+    nlp = build_nlp(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth, reach=reach)
+    nlp.key = key
+    _CACHE[key] = nlp
+    return nlp, True
+
+
+def clear_cache() -> None:
+    """Forget every built NLP."""
+    _CACHE.clear()
+
+
+def initial_separators(nlp: SwitchNLP, xy_mm: NDArray[np.float64], yaw: NDArray[np.float64],
+                       bodies: Sequence[Body]) -> NDArray[np.float64]:
+    """Initial separating variables (n_sep, N - 2) for the path ``xy_mm`` (N, 2) [mm] / ``yaw`` (N,):
+    for a disc, the unit direction from its centre to the nearest point of the piece; for a polygon,
+    the direction between the centres with ``beta`` half way between the two shapes' projections."""
+    N = nlp.n_knots
+    out = np.zeros((nlp.n_sep, N - 2))
+    if nlp.n_sep == 0:
+        return out
+    c, s = np.cos(yaw[1:-1]), np.sin(yaw[1:-1])
+    R = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (K, 2, 2)
+    for j, bi, off, poly in nlp.sep_layout:
+        w = np.einsum("kij,vj->kvi", R, nlp.pieces[j]) + xy_mm[1:-1, None, :]  # (K, V, 2)
+        b = bodies[bi]
+        if not poly:
+            cen = b.data[:2]
+            a, e = w, np.roll(w, -1, axis=1) - w
+            t = np.clip(np.einsum("kvi,kvi->kv", cen - a, e) / np.maximum(np.einsum("kvi,kvi->kv", e, e), 1e-12), 0, 1)
+            near = a + t[..., None] * e
+            d = near - cen
+            dist = np.hypot(d[..., 0], d[..., 1])
+            best = d[np.arange(d.shape[0]), dist.argmin(axis=1)]
+            # a centre inside the piece: point away from the piece's centroid
+            inside = _inside_convex(w, cen)
+            best[inside] = cen - w[inside].mean(axis=1)
+            n = best / np.maximum(np.hypot(best[:, 0], best[:, 1]), 1e-12)[:, None]
+            out[off:off + 2] = n.T
+        else:
+            ov = b.data.reshape(-1, 2)
+            d = w.mean(axis=1) - ov.mean(axis=0)
+            n = d / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-12)[:, None]
+            lo = np.einsum("kvi,ki->kv", w, n).min(axis=1)
+            hi = (ov @ n.T).max(axis=0)
+            out[off:off + 2] = n.T
+            out[off + 2] = 0.5 * (lo + hi)
+    return out
+
+
+def _inside_convex(w: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Whether ``p`` (2,) lies inside each convex polygon ``w`` (K, V, 2) (either orientation)."""
+    e = np.roll(w, -1, axis=1) - w
+    cr = e[..., 0] * (p[1] - w[..., 1]) - e[..., 1] * (p[0] - w[..., 0])
+    return np.all(cr >= 0, axis=1) | np.all(cr <= 0, axis=1)

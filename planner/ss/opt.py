@@ -1,0 +1,207 @@
+"""The ``opt`` variant: a smooth, non-penetrating switch path near the ``dmp`` one, solved with CasADi
+and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`planner.ss.nlp`).
+
+1. The ``dmp`` path (:func:`planner.ss.generalize.recombine`) at the N knots' times: the reference
+   and the primal initial guess (separating directions from its geometry); dual values from the
+   cached solver's last successful solve, with IPOPT's ``warm_start_init_point``.
+2. Contact poses that already overlap the object (another part of the tool than the face) or an
+   obstacle make the switch infeasible before any solve, as do unreachable ones.
+3. The margin to the object is ``margin`` over the middle of the path, ramped linearly to 0 at the
+   two contact knots over ``ramp_share`` of the knots at each end; to the obstacles it ramps from
+   ``min(margin, half the contact poses' clearance)`` to ``margin``.
+   The reach rows are left out when the ``dmp`` path stays ``reach_band`` inside the reach region.
+4. After the solve, the swept outline between knots is measured exactly with shapely
+   (:mod:`planner.ss.verify`) and the reach on a path 4 times denser (:func:`tools.omni.ik.joint_path`).
+   A penetration deeper than ``touch_tol`` (the two contacts touch, so a few micrometres of swept
+   hull at the contact steps is contact, not penetration) or a reach violation triggers a refinement:
+   1.5 times the knots and 1.5 times the margin plus the depth found, up to ``max_refine`` times; if
+   it still fails the result is ``failed`` with the numbers, never a silent path.
+5. A solver that ends without a feasible point gives ``infeasible`` with the constraint family of
+   the largest violation (the NLP is local: the reason says so).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import NDArray
+
+from dmp.errors import InputError
+from planner.ss.bodies import UNIT, all_bodies
+from planner.ss.generalize import measure, recombine
+from planner.ss.heading import heading
+from planner.ss.learn import SwitchSkill
+from planner.ss.nlp import MODELS, SOLVERS, SwitchNLP, get_nlp, initial_separators
+from planner.ss.result import SwitchPath
+from planner.ss.task import SwitchTask
+from planner.ss.virtual import Way
+from tools.clearance import clearance, penetration_depth
+from tools.contact import Contact
+from tools.omni.ik import joint_path
+from tools.omni.platform import OmniPlatform
+from tools.omni.reach import reach_sector, wedge_rows
+
+
+def _contact_checks(task: SwitchTask, contacts: tuple[Contact, Contact], touch_tol: float) -> str | None:
+    """Why the contact poses make the switch impossible, or None."""
+    for label, c in zip(("start", "end"), contacts, strict=True):
+        d = penetration_depth(task.tool, c.pose, task.shape)
+        if d > touch_tol:
+            return (f"the {label} contact pose ({c.face!r}) overlaps the object by {1e3 * d:.3f} mm "
+                    "(another part of the tool reaches into it)")
+        for i, o in enumerate(task.obstacles):
+            d = penetration_depth(task.tool, c.pose, o)
+            if d > 0.0:
+                return f"the {label} contact pose ({c.face!r}) overlaps obstacle {i} by {1e3 * d:.3f} mm"
+    return None
+
+
+def reach_slack(platform: OmniPlatform, xy: NDArray[np.float64]) -> float:
+    """Smallest distance [m] of the points ``xy`` (K, 2) from the boundary of the reach sector
+    (annulus radii and waist half-planes; negative outside)."""
+    sec = reach_sector(platform)
+    wr = wedge_rows(platform)
+    r = np.hypot(*(xy - sec.centre).T)
+    return float(min(np.min(r - sec.r_in), np.min(sec.r_out - r), np.min(wr.h - xy @ wr.G.T)))
+
+
+def ramp(n_knots: int, share: float) -> NDArray[np.float64]:
+    """Margin ramp (N,): 0 at the two end knots, 1 from ``share`` of the knots inwards, linear between."""
+    k = np.arange(n_knots)
+    width = max(1, math.ceil(share * (n_knots - 1)))
+    return np.minimum(1.0, np.minimum(k, n_knots - 1 - k) / width)
+
+
+def _violations(nlp: SwitchNLP, z: NDArray[np.float64], p: NDArray[np.float64]) -> tuple[str, float]:
+    g = np.asarray(nlp.rows(z, p)).ravel()
+    worst, fam = 0.0, "none"
+    for name, a, b in nlp.families:
+        if b > a:
+            v = float(np.max(np.maximum(0.0, nlp.lbg[a:b] - g[a:b])))
+            if v > worst:
+                worst, fam = v, name
+    return fam, worst * UNIT
+
+
+def optimize(
+    skill: SwitchSkill,
+    task: SwitchTask,
+    *,
+    n_knots: int = 40,
+    margin: float = 1e-3,
+    model: str = "pieces",
+    solver: str = "ipopt",
+    touch_tol: float = 5e-6,
+    ramp_share: float = 0.15,
+    max_refine: int = 2,
+    smooth: float = 10.0,
+    warm_duals: bool = True,
+    way: Way | float = "short",
+    reach_band: float | None = 0.03,
+) -> SwitchPath:
+    """The ``opt`` switch path of ``task`` (module docstring).
+
+    Args:
+        skill: the learned SS skill (gives the ``dmp`` reference path).
+        task: the switch.
+        n_knots: N, knots of the NLP (first try).
+        margin: clearance [m] demanded over the middle of the path (first try).
+        model: ``"pieces"`` (the tool's convex pieces with separating directions) or ``"capsule"``
+            (the capsule enclosing the tool, disc bodies only).
+        solver: a name in :data:`planner.ss.nlp.SOLVERS` (``"ipopt"``, ``"sqp"``).
+        touch_tol: penetration depth [m] accepted as touching at the two contacts.
+        ramp_share: share of the knots over which the margin ramps up at each end.
+        max_refine: refinements after a failed exact check.
+        smooth: weight of the squared second differences against the squared distance to the
+            ``dmp`` path (both in mm^2).
+        warm_duals: pass the cached solver's last dual values (primal: the ``dmp`` path always).
+        way: which way round the object the virtual motion goes.
+        reach_band: the reach rows are left out of the NLP when the ``dmp`` path keeps this distance
+            [m] from the reach region's boundary (a smaller NLP); the exact check still tests reach,
+            and a violation puts the rows back for the refinement. None: always in.
+    """
+    t_start = time.perf_counter()
+    if solver not in SOLVERS:
+        raise InputError("solver", f"one of {', '.join(SOLVERS)}", repr(solver))
+    if model not in MODELS:
+        raise InputError("model", f"one of {', '.join(MODELS)}", repr(model))
+    if not (np.isfinite(margin) and margin > 0):
+        raise InputError("margin", "a positive length [m]", repr(margin))
+    if not (np.isfinite(touch_tol) and touch_tol >= 0):
+        raise InputError("touch_tol", "a length >= 0 [m]", repr(touch_tol))
+    ref = recombine(skill, task, n_samples=n_knots, way=way, measured=False)
+    if not ref.ok:
+        return replace(ref, variant="opt")
+    assert ref.start is not None and ref.end is not None
+    why = _contact_checks(task, (ref.start, ref.end), touch_tol)
+    if why is not None:
+        return SwitchPath("opt", "infeasible", why, start=ref.start, end=ref.end)
+    bodies = all_bodies(task.shape, task.obstacles)
+    ends = [ref.start.pose, ref.end.pose]
+    obs_gap = min((clearance(task.tool, e, o) for e in ends for o in task.obstacles), default=np.inf)
+    info: dict[str, object] = {"attempts": [], "k1": ref.info["k1"], "model": model, "solver": solver}
+    N, m = n_knots, margin
+    use_reach = reach_band is None or reach_slack(task.omni, ref.xy) < reach_band
+    for attempt in range(max_refine + 1):
+        if attempt:
+            ref = recombine(skill, task, n_samples=N, way=way, measured=False)
+        nlp, built = get_nlp(task.tool, N, task.omni, bodies, model=model, solver=solver, smooth=smooth,
+                             reach=use_reach)
+        r = ramp(N, ramp_share)
+        m_obj = m * r
+        m_obs = r * m + (1 - r) * min(m, 0.5 * obs_gap)
+        p = np.concatenate([ref.xy.ravel() / UNIT, m_obj / UNIT, m_obs / UNIT, *[b.data for b in bodies]])
+        xy_mm = ref.xy / UNIT
+        z0 = np.concatenate([xy_mm.ravel(), initial_separators(nlp, xy_mm, ref.yaw, bodies).ravel(order="F")])
+        lbx = np.full(nlp.n_vars, -np.inf)
+        ubx = np.full(nlp.n_vars, np.inf)
+        for k in (0, N - 1):
+            lbx[2 * k:2 * k + 2] = ubx[2 * k:2 * k + 2] = xy_mm[k]
+        args = {"x0": z0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": nlp.lbg, "ubg": nlp.ubg}
+        if warm_duals and nlp.last_duals is not None:
+            args["lam_x0"], args["lam_g0"] = nlp.last_duals
+        t0 = time.perf_counter()
+        sol = nlp.solver(**args)
+        t_solve = time.perf_counter() - t0
+        st = nlp.solver.stats()
+        z = np.asarray(sol["x"]).ravel()
+        rec = {"n_knots": N, "margin": m, "built": built, "reach_rows": use_reach,
+               "build_time": nlp.build_time if built else 0.0, "solve_time": t_solve,
+               "status": st.get("return_status", ""), "iterations": int(st.get("iter_count", -1))}
+        info["attempts"].append(rec)  # type: ignore[union-attr]
+        if not st.get("success", False):
+            fam, viol = _violations(nlp, z, p)
+            status = "infeasible" if viol > 1e-7 else "failed"
+            why = (f"the NLP ({solver}, local) ended with {rec['status']!r}: no feasible switch path found"
+                   f"; largest violation {1e3 * viol:.3f} mm in family {fam!r}" if status == "infeasible"
+                   else f"the NLP ({solver}) ended with {rec['status']!r} at a feasible point")
+            return SwitchPath("opt", status, why, start=ref.start, end=ref.end,
+                              info={**info, "time": time.perf_counter() - t_start})
+        nlp.last_duals = (np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel())
+        xy = z[:2 * N].reshape(N, 2) * UNIT
+        xy[0], xy[-1] = ref.start.pose.position, ref.end.pose.position
+        yaw = heading(task.omni, xy)
+        t0 = time.perf_counter()
+        path = measure(SwitchPath("opt", "solved", "", ref.t, xy, yaw, ref.start, ref.end), task)
+        dense = np.vstack([xy[:-1] + f * (xy[1:] - xy[:-1]) for f in (0.0, 0.25, 0.5, 0.75)] + [xy[-1:]])
+        reach = float(np.max(joint_path(task.omni, dense).violation))
+        rec["verify_time"] = time.perf_counter() - t0
+        rec["penetration"] = path.max_penetration
+        rec["reach_violation"] = reach
+        if path.max_penetration <= touch_tol and reach == 0.0:
+            info.update(iterations=sum(a["iterations"] for a in info["attempts"]),  # type: ignore[union-attr]
+                        refinements=attempt, n_knots=N, margin=m, time=time.perf_counter() - t_start)
+            return replace(path, info=info)
+        if reach > 0.0:
+            use_reach = True
+        N, m = math.ceil(1.5 * N), 1.5 * m + path.max_penetration
+    last = info["attempts"][-1]  # type: ignore[index]
+    return SwitchPath(
+        "opt", "failed",
+        f"the exact check failed after {max_refine} refinements: penetration {1e3 * last['penetration']:.4f} mm, "
+        f"reach violation {last['reach_violation']:.3g} rad",
+        start=ref.start, end=ref.end, info={**info, "time": time.perf_counter() - t_start},
+    )

@@ -1,0 +1,113 @@
+"""A switch to plan (the domain problem): tool, the two contacts, the object and its pose, obstacles,
+the Omni; and its contact poses (paper section III.B step 5: "confirm the starting contact
+positions and select the potential contact points on the object and the tool").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+
+from dmp.errors import InfeasibleError, InputError
+from dmp.validation import check_array, check_positive
+from planner.ss.heading import heading, rot
+from tools.contact import Contact, contact_pose
+from tools.model import Tool
+from tools.objects import Disc, DiscObject, ObjectModel, Obstacle, PolygonObject
+from tools.omni.ik import inverse_kinematics
+from tools.omni.platform import OmniPlatform
+
+
+@dataclass(frozen=True)
+class SwitchTask:
+    """A switch from ``face_from`` to ``face_to`` of ``tool`` round the resting object.
+
+    Attributes:
+        tool: the tool.
+        face_from, face_to: face names (may be equal: a switch of the contact point along one face).
+        centre: shape (2,), the object's centre (reference point) in the world [m].
+        s_from, s_to: fractions along the faces of the tool contact points (None: middle of the
+            contact range).
+        obj: the object model (default the paper's 17.5 mm disc; a convex :class:`PolygonObject`).
+        obstacles: discs or shapely polygons (world) the tool must keep clear of.
+        platform: the Omni (default: at the origin, carrying ``tool``'s ``a_t``).
+        duration: switch duration [s] (None: the skill's demonstrated duration).
+    """
+
+    tool: Tool
+    face_from: str
+    face_to: str
+    centre: NDArray[np.float64]
+    s_from: float | None = None
+    s_to: float | None = None
+    obj: ObjectModel = field(default_factory=DiscObject)
+    obstacles: tuple[Obstacle, ...] = ()
+    platform: OmniPlatform | None = None
+    duration: float | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.tool, Tool):
+            raise InputError("tool", "a tools.model.Tool", type(self.tool).__name__)
+        for f in (self.face_from, self.face_to):
+            self.tool.face(f)  # UnknownFaceError lists the faces
+        object.__setattr__(self, "centre", check_array(self.centre, "centre", shape=(2,)))
+        if not isinstance(self.obj, DiscObject | PolygonObject):
+            raise InputError("obj", "a DiscObject or PolygonObject", type(self.obj).__name__)
+        obs = tuple(self.obstacles)
+        for i, o in enumerate(obs):
+            if not isinstance(o, Disc | shapely.Polygon):
+                raise InputError(f"obstacles[{i}]", "a Disc or a shapely Polygon", type(o).__name__)
+        object.__setattr__(self, "obstacles", obs)
+        if self.platform is None:
+            object.__setattr__(self, "platform", OmniPlatform(a_t=self.tool.a_t))
+        elif not isinstance(self.platform, OmniPlatform):
+            raise InputError("platform", "an OmniPlatform", type(self.platform).__name__)
+        if self.duration is not None:
+            object.__setattr__(self, "duration", check_positive(self.duration, "duration"))
+        if self.face_from == self.face_to and self.s_from == self.s_to:
+            raise InputError("s_to", "a different contact point when the face stays the same", repr(self.s_to))
+
+    @property
+    def omni(self) -> OmniPlatform:
+        """The platform (never None after construction)."""
+        assert self.platform is not None  # set in __post_init__
+        return self.platform
+
+    @property
+    def shape(self) -> Disc | shapely.Polygon:
+        """The placed object (world)."""
+        if isinstance(self.obj, DiscObject):
+            return Disc(self.centre, self.obj.radius)
+        return self.obj.at(self.centre)
+
+    def contact(self, which: str) -> Contact:
+        """The contact pose ``"from"`` or ``"to"`` with the Omni's heading.
+
+        Raises:
+            InfeasibleError: the Omni cannot reach it (family ``reach``; the reason names the pose).
+        """
+        face, s = (self.face_from, self.s_from) if which == "from" else (self.face_to, self.s_to)
+        f = self.tool.face(face)
+        # the heading fixed point yaw = heading(x(yaw)) of tools.contact.contact_on_platform, with the
+        # closed-form heading (a contraction: |p| / |x - b| << 1), then the exact contact and the IK
+        s0, s1 = f.contact_range
+        p = f.point(0.5 * (s0 + s1) if s is None else float(s))
+        yaw = float(heading(self.omni, self.centre)[0])
+        for _ in range(60):
+            n = rot(yaw) @ f.normal
+            x = self.centre + self.obj.support(-n) - rot(yaw) @ p
+            new = float(heading(self.omni, x)[0])
+            done = abs(new - yaw) < 1e-14
+            yaw = new
+            if done:
+                break
+        con = contact_pose(self.tool, face, self.centre, yaw + f.push_angle, s=s, yaw=yaw, obj=self.obj)
+        ik = inverse_kinematics(self.omni, con.pose.position)
+        if not ik.reachable:
+            label = "start" if which == "from" else "end"
+            raise InfeasibleError("switch", ["reach"], f"{label} contact pose ({face!r} on the object at "
+                                  f"{np.round(self.centre, 4).tolist()}) unreachable: {ik.reason}: {ik.detail}")
+        return con
