@@ -75,15 +75,16 @@ def ramp(n_knots: int, share: float) -> NDArray[np.float64]:
     return np.minimum(1.0, np.minimum(k, n_knots - 1 - k) / width)
 
 
-def _violations(nlp: SwitchNLP, z: NDArray[np.float64], p: NDArray[np.float64]) -> tuple[str, float]:
+def _violations(nlp: SwitchNLP, z: NDArray[np.float64], p: NDArray[np.float64]) -> list[tuple[str, float]]:
+    """Constraint families violated at ``z`` with their largest violation [m], worst first."""
     g = np.asarray(nlp.rows(z, p)).ravel()
-    worst, fam = 0.0, "none"
+    worst: dict[str, float] = {}
     for name, a, b in nlp.families:
         if b > a:
-            v = float(np.max(np.maximum(0.0, nlp.lbg[a:b] - g[a:b])))
-            if v > worst:
-                worst, fam = v, name
-    return fam, worst * UNIT
+            v = float(np.max(np.maximum(0.0, nlp.lbg[a:b] - g[a:b]))) * UNIT
+            if v > 1e-10:
+                worst[name] = max(v, worst.get(name, 0.0))
+    return sorted(worst.items(), key=lambda kv: -kv[1])
 
 
 def optimize(
@@ -173,10 +174,11 @@ def optimize(
                "status": st.get("return_status", ""), "iterations": int(st.get("iter_count", -1))}
         info["attempts"].append(rec)  # type: ignore[union-attr]
         if not st.get("success", False):
-            fam, viol = _violations(nlp, z, p)
-            status = "infeasible" if viol > 1e-7 else "failed"
-            why = (f"the NLP ({solver}, local) ended with {rec['status']!r}: no feasible switch path found"
-                   f"; largest violation {1e3 * viol:.3f} mm in family {fam!r}" if status == "infeasible"
+            viol = _violations(nlp, z, p)
+            status = "infeasible" if viol and viol[0][1] > 1e-7 else "failed"
+            listed = ", ".join(f"{name} by {1e3 * v:.3f} mm" for name, v in viol)
+            why = (f"the NLP ({solver}, local) ended with {rec['status']!r}: no feasible switch path found; "
+                   f"violated at its last iterate: {listed}" if status == "infeasible"
                    else f"the NLP ({solver}) ended with {rec['status']!r} at a feasible point")
             return SwitchPath("opt", status, why, start=ref.start, end=ref.end,
                               info={**info, "time": time.perf_counter() - t_start})

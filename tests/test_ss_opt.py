@@ -1,0 +1,104 @@
+"""SS skill, the opt variant: never a penetrating path, Fig. 11 cases, impossible switches, the cache."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from planner.ss import SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
+from planner.ss.cases import fig11_task, random_task
+from planner.ss.synthetic import synthetic_switches
+from tools.clearance import swept_penetration_depth
+from tools.library import load_tool
+from tools.model import Face, Tool
+from tools.omni.ik import joint_path
+from tools.pose import Pose2D
+
+
+@pytest.fixture(scope="module")
+def skill() -> SwitchSkill:
+    return learn_switch_skill(synthetic_switches(5, seed=1), virtual="arch", tool="finger")
+
+
+def exact_penetration(task: SwitchTask, xy: np.ndarray, yaw: np.ndarray) -> float:
+    """Largest penetration into the object and obstacles over the steps, from tools.clearance."""
+    poses = [Pose2D(*p, a) for p, a in zip(xy, yaw, strict=True)]
+    return max(swept_penetration_depth(task.tool, a, b, s)
+               for a, b in itertools.pairwise(poses) for s in (task.shape, *task.obstacles))
+
+
+def check_solved(task: SwitchTask, path, tol: float) -> None:
+    assert path.ok, path.reason
+    a, b = task.contact("from"), task.contact("to")
+    np.testing.assert_allclose(path.xy[[0, -1]], [a.pose.position, b.pose.position], atol=1e-12)
+    assert exact_penetration(task, path.xy, path.yaw) <= tol
+    assert np.all(joint_path(task.omni, path.xy).violation == 0.0)
+
+
+@pytest.mark.parametrize("name", ["fig11a", "fig11a_stem", "fig11b"])
+def test_fig11_opt_paths_do_not_penetrate(skill: SwitchSkill, name: str) -> None:
+    task = fig11_task(name)
+    path = optimize(skill, task)
+    check_solved(task, path, 1e-4)  # the issue's 0.1 mm
+    dmp = recombine(skill, task, n_samples=40)
+    print(f"{name}: opt penetration {1e3 * path.object_penetration:.4f} mm, clearance "
+          f"{1e3 * path.object_clearance:.2f} mm; dmp penetration {1e3 * dmp.object_penetration:.2f} mm")
+
+
+@settings(max_examples=12, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**31 - 1), obstacle=st.booleans())
+def test_opt_never_returns_a_penetrating_path(skill: SwitchSkill, seed: int, obstacle: bool) -> None:
+    task = random_task(np.random.default_rng(seed), obstacle_prob=1.0 if obstacle else 0.0)
+    path = optimize(skill, task)
+    if path.ok:
+        check_solved(task, path, 5e-6)
+    else:
+        assert path.status in ("infeasible", "failed") and path.reason
+
+
+def test_end_contact_out_of_reach_is_infeasible(skill: SwitchSkill) -> None:
+    path = optimize(skill, SwitchTask(load_tool("finger"), "upper", "left", np.array([0.0, 0.22])))
+    assert path.status == "infeasible" and "end contact pose" in path.reason and "unreachable" in path.reason
+
+
+def square_tool() -> Tool:
+    h = 0.005
+    return Tool("square", shapely.box(-h, -h, h, h), (
+        Face("left", np.array([-h, h]), np.array([-h, -h]), np.pi, np.pi / 6),
+        Face("right", np.array([h, -h]), np.array([h, h]), 0.0, np.pi / 6),
+    ), a_t=0.026)
+
+
+def test_a_tool_that_cannot_get_round_the_walls_is_infeasible(skill: SwitchSkill) -> None:
+    # walls 1 mm above and below the puck, reaching beyond the Omni's reach on both sides: the
+    # 10 mm square cannot pass from the puck's left to its right
+    c = np.array([0.0, 0.16])
+    walls = (shapely.box(-0.2, c[1] + 0.0185, 0.2, c[1] + 0.021), shapely.box(-0.2, c[1] - 0.021, 0.2, c[1] - 0.0185))
+    task = SwitchTask(square_tool(), "right", "left", c, obstacles=walls)
+    path = optimize(skill, task)
+    assert path.status == "infeasible", path.reason
+    assert "no feasible switch path" in path.reason and "violated at its last iterate" in path.reason
+    # without the walls the same switch is solved
+    check_solved(SwitchTask(square_tool(), "right", "left", c), optimize(skill, SwitchTask(
+        square_tool(), "right", "left", c)), 5e-6)
+
+
+def test_contact_pose_inside_an_obstacle_is_infeasible(skill: SwitchSkill) -> None:
+    c = np.array([0.0, 0.16])
+    task = SwitchTask(load_tool("finger"), "upper", "left", c, obstacles=(shapely.box(0.02, -0.01 + c[1], 0.03, c[1]),))
+    path = optimize(skill, task)
+    assert path.status == "infeasible" and "overlaps obstacle 0" in path.reason
+
+
+def test_solver_is_reused_and_capsule_model_solves(skill: SwitchSkill) -> None:
+    task = SwitchTask(load_tool("finger"), "upper", "left", np.array([0.01, 0.15]))
+    optimize(skill, task)
+    again = optimize(skill, SwitchTask(load_tool("finger"), "upper", "left", np.array([-0.02, 0.17])))
+    assert again.ok and not again.info["attempts"][0]["built"]
+    cap = optimize(skill, task, model="capsule", solver="sqp")
+    check_solved(task, cap, 5e-6)
