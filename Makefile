@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test bench bench-sim lint clean
+.PHONY: demo test bench bench-sim bench-ss lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -28,6 +28,10 @@ bench: $(PY)
 bench-sim: $(PY)
 	$(PY) -m pip install -q -e .
 	$(PY) benchmarks/bench_sim.py
+
+bench-ss: $(PY)
+	$(PY) -m pip install -q -e .
+	$(PY) benchmarks/bench_ss.py
 
 lint: $(PY)
 	$(PY) -m ruff check .

@@ -63,17 +63,26 @@ class Capsule:
     radius: float
 
     @staticmethod
-    def enclosing(tool: Tool) -> Capsule:
-        """The capsule about the tool's axis (its longest extent through the outline's centroid, along
-        the tool frame's y axis) whose radius covers every outline vertex."""
+    def enclosing(tool: Tool, n_grid: int = 13) -> Capsule:
+        """The capsule of least area covering every outline vertex among those whose segment lies on the
+        tool frame's vertical line through the middle of the outline's width, with each end inset from
+        the outline's extent by a fraction of its half width (a grid of ``n_grid`` insets per end)."""
         v = np.asarray(tool.outline.exterior.coords, dtype=np.float64)[:-1]
         x0 = 0.5 * (v[:, 0].min() + v[:, 0].max())
         half = 0.5 * (v[:, 0].max() - v[:, 0].min())
-        a, b = np.array([x0, v[:, 1].min() + half]), np.array([x0, v[:, 1].max() - half])
-        ab = b - a
-        t = np.clip(((v - a) @ ab) / max(float(ab @ ab), 1e-18), 0.0, 1.0)
-        r = float(np.max(np.hypot(*(v - a - t[:, None] * ab).T)))
-        return Capsule(a, b, r)
+        best: Capsule | None = None
+        best_area = np.inf
+        for lo in np.linspace(0.0, half, n_grid):
+            for hi in np.linspace(0.0, half, n_grid):
+                a, b = np.array([x0, v[:, 1].min() + lo]), np.array([x0, v[:, 1].max() - hi])
+                ab = b - a
+                t = np.clip(((v - a) @ ab) / max(float(ab @ ab), 1e-18), 0.0, 1.0)
+                r = float(np.max(np.hypot(*(v - a - t[:, None] * ab).T)))
+                area = 2.0 * r * float(np.hypot(*ab)) + np.pi * r * r
+                if area < best_area:
+                    best, best_area = Capsule(a, b, r), area
+        assert best is not None
+        return best
 
 
 def _ipopt(nlp: dict[str, Any], max_iter: int) -> Any:
