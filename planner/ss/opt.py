@@ -2,8 +2,9 @@
 and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`planner.ss.nlp`).
 
 1. The ``dmp`` path (:func:`planner.ss.generalize.recombine`) at the N knots' times: the reference
-   and the primal initial guess (separating directions from its geometry); dual values from the
-   cached solver's last successful solve, with IPOPT's ``warm_start_init_point``.
+   and the primal initial guess (separating directions from its geometry); optionally the dual
+   values of the cached solver's last successful solve (``warm_duals``, off by default: measured
+   slower), with IPOPT's ``warm_start_init_point``.
 2. Contact poses that already overlap the object (another part of the tool than the face) or an
    obstacle make the switch infeasible before any solve, as do unreachable ones.
 3. The margin to the object is ``margin`` over the middle of the path, ramped linearly to 0 at the
