@@ -100,13 +100,17 @@ def save_dmp(d: DMP, path: str | Path) -> None:
     Path(path).write_text(json.dumps(dmp_to_dict(d), indent=1))
 
 
-def load_dmp(path: str | Path) -> DMP:
-    """Read a DMP written by :func:`save_dmp`."""
+def read_json(path: str | Path) -> Any:
+    """Parsed JSON of a skill file; a missing file or invalid JSON raises :class:`SkillFileError`."""
     p = Path(path)
     try:
-        data = json.loads(p.read_text())
+        return json.loads(p.read_text())
     except FileNotFoundError as exc:
         raise SkillFileError(str(p), "file not found") from exc
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise SkillFileError(str(p), f"not valid JSON ({exc})") from exc
-    return dmp_from_dict(data, str(p))
+
+
+def load_dmp(path: str | Path) -> DMP:
+    """Read a DMP written by :func:`save_dmp`."""
+    return dmp_from_dict(read_json(path), str(path))

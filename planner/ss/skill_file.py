@@ -95,11 +95,6 @@ def save_switch_skill(skill: SwitchSkill, path: str | Path) -> None:
 
 def load_switch_skill(path: str | Path) -> SwitchSkill:
     """Read a skill written by :func:`save_switch_skill`."""
-    p = Path(path)
-    try:
-        data = json.loads(p.read_text())
-    except FileNotFoundError as exc:
-        raise SkillFileError(str(p), "file not found") from exc
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise SkillFileError(str(p), f"not valid JSON ({exc})") from exc
-    return switch_skill_from_dict(data, str(p))
+    from dmp.skill_file import read_json
+
+    return switch_skill_from_dict(read_json(path), str(path))
