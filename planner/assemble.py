@@ -36,7 +36,7 @@ class SwitchPath:
     Attributes:
         xy: tool centre point path (K, 2) [m] from the first face's contact pose to the second's.
         status: ``"solved"`` or ``"infeasible"``; reason: why not.
-        min_clearance: least tool-object distance along the swept path [m] (negative: penetration).
+        min_clearance: least tool-object distance [m] over the middle of the switch (away from the contacts).
         info: solver figures (time [s], iterations...).
     """
 

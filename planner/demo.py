@@ -45,7 +45,7 @@ def compare(task_path: Path, out: Path) -> tuple[str, dict[str, Plan]]:
     from planner.oe.generalize import generalize
     from planner.oe.mapping_variant import condense_mapping
     from planner.oe.qp_variant import condense_qp
-    from planner.solve import oe_skill_from_dataset
+    from planner.skills import oe_skill_from_dataset
     from problems.task import resolve, task_platform
 
     tool = task_tool(task)

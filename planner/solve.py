@@ -7,14 +7,13 @@ acceleration limits, inverse kinematics of the whole tool path (joint limits che
 checks: the shared OE metrics on the dense object path, the switches' clearances, the joint-limit
 violation.
 
-Switch variants: ``arch`` (the geometric reference of :mod:`tools.arch`) is available; ``dmp`` and
-``opt`` (the SS skill) are not yet and are refused with a clear error.
+Switch variants (:mod:`planner.switches`): ``arch`` (the geometric reference of :mod:`tools.arch`),
+``dmp`` (the SS skill recombined, eq. 18; its penetration is reported, not avoided) and ``opt`` (the
+CasADi NLP, non-penetrating, checked with shapely).
 """
 
 from __future__ import annotations
 
-import hashlib
-import os
 import time
 from pathlib import Path
 from typing import Any
@@ -22,67 +21,16 @@ from typing import Any
 import numpy as np
 
 from dmp.errors import InputError
-from planner.assemble import SwitchFailed, SwitchPath, assemble
+from planner.assemble import SwitchFailed, assemble
 from planner.oe.face_frame import FaceFrame
 from planner.oe.generalize import generalize
-from planner.oe.learn import OESkill, learn_oe_skill
 from planner.oe.mapping_variant import MappingOptions, condense_mapping
 from planner.oe.qp_variant import QPOptions, condense_qp
 from planner.plan import Plan, Segment
+from planner.skills import Skills, learn_skills, load_skills_file
+from planner.switches import arch_planner, skill_planner
 from problems.task import Task, resolve, task_obstacles, task_platform, task_tool
-from tools.arch import NoArch, swept_clearance, switch_path
-from tools.library import load_tool
-from tools.objects import Disc
 from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
-
-_SKILLS: dict[str, OESkill] = {}
-
-
-def dataset_hash(folder: Path) -> str:
-    """Content hash of a dataset folder (every file's name and bytes)."""
-    h = hashlib.sha256()
-    for p in sorted(folder.iterdir()):
-        if p.is_file():
-            h.update(p.name.encode())
-            h.update(p.read_bytes())
-    return h.hexdigest()
-
-
-def cache_dir() -> Path:
-    """Where learned skills are kept between runs: ``$TOOLTRANSFER_CACHE`` or ``~/.cache/tooltransfer``."""
-    return Path(os.environ.get("TOOLTRANSFER_CACHE", Path.home() / ".cache" / "tooltransfer"))
-
-
-def oe_skill_from_dataset(folder: Path, k: float) -> OESkill:
-    """The universal OE skill learned from a dataset, cached by the dataset's content hash and ``k``
-    in memory and as a skill file in :func:`cache_dir` (a damaged cache file is relearned)."""
-    from dmp.errors import SkillFileError
-
-    key = f"{dataset_hash(folder)}:{k}"
-    cached = cache_dir() / f"oe-{key.replace(':', '-k')}.json"
-    if key not in _SKILLS and cached.is_file():
-        try:
-            _SKILLS[key] = OESkill.load(cached)
-        except SkillFileError:
-            cached.unlink(missing_ok=True)
-    if key not in _SKILLS:
-        from planner.segmentation import segment  # scipy.signal: half a second of imports, only to learn
-        from problems.dataset import load_dataset
-
-        ds = load_dataset(folder)
-        tool = load_tool(ds.meta.tool) if not (folder / ds.meta.tool).is_file() else load_tool(folder / ds.meta.tool)
-        demos, fixed = [], []
-        for d in ds.demonstrations:
-            pushes = segment(d, tool).demo_pushes(d)
-            demos.append(pushes)
-            fixed.append([i for i in range(len(pushes) - 1) if pushes[i].face != pushes[i + 1].face])
-        _SKILLS[key] = learn_oe_skill(demos, tool, k=k, fixed=fixed)
-        try:
-            cached.parent.mkdir(parents=True, exist_ok=True)
-            _SKILLS[key].save(cached)
-        except OSError:
-            pass  # a read-only home: the skill is relearned next time
-    return _SKILLS[key]
 
 
 def _describe(task: Task, tool: Any, platform: Any, obstacles: list) -> dict[str, Any]:
@@ -113,6 +61,23 @@ def _describe(task: Task, tool: Any, platform: Any, obstacles: list) -> dict[str
     }
 
 
+def task_skills(task: Task, task_path: str | Path = ".", *, need_ss: bool = True) -> Skills:
+    """The skills ``task`` names: learned from its dataset (cached; the SS skill only if ``need_ss``)
+    or read from its skills file.
+
+    Raises:
+        InputError: a missing dataset or skills file, or a skills file learned with another ``k``
+            than the task's ``oe.k``.
+    """
+    if task.skills.file is not None:
+        skills = load_skills_file(resolve(task_path, task.skills.file))
+        if "k" in task.oe.model_fields_set and task.oe.k != skills.oe.k:
+            raise InputError("oe.k", f"the skills file's k = {skills.oe.k} (or learn the skills again)", task.oe.k)
+        return skills
+    folder = resolve(task_path, task.skills.dataset or "")
+    return learn_skills(folder, task.oe.k, task.ss.virtual_motion, with_ss=need_ss)
+
+
 def solve(task: Task, task_path: str | Path = ".") -> Plan:
     """Plan ``task`` (relative paths in it are relative to ``task_path``'s folder)."""
     stages: dict[str, float] = {}
@@ -124,23 +89,15 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
         stages[f"time_{name}"] = now - clock
         clock = now
 
-    if task.variants.ss != "arch":
-        raise InputError("variants.ss", "'arch' (the SS skill variants 'dmp' and 'opt' are not available yet)",
-                         task.variants.ss)
     tool = task_tool(task)
     platform = task_platform(task, tool)
     obstacles = task_obstacles(task)
     desc = _describe(task, tool, platform, obstacles)
     base = {"variant": {"oe": task.variants.oe, "ss": task.variants.ss}, "task": task.model_dump(mode="json"),
             **desc}
-    if task.skills.dataset is None:
-        raise InputError("skills.file", "a dataset (saved skills files are not supported yet)", task.skills.file)
-    folder = resolve(task_path, task.skills.dataset)
-    if not folder.is_dir():
-        raise InputError("skills.dataset", "a dataset folder", str(folder))
-    skill = oe_skill_from_dataset(folder, task.oe.k)
+    skills = task_skills(task, task_path, need_ss=task.variants.ss != "arch")
     lap("skills")
-    t, x, _ = generalize(skill.dmp, np.array(task.start), np.array(task.target))
+    t, x, _ = generalize(skills.oe.dmp, np.array(task.start), np.array(task.target))
     target = np.array(task.target)
     if task.variants.oe == "qp":
         o = task.oe
@@ -154,32 +111,28 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     if push_plan.status != "solved":
         return Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base)
     frames = {f: FaceFrame.build(tool, f, platform) for f in tool.face_names}
-    clear = task.ss.clearance
-    # the arch avoids disc obstacles; a polygon is taken as its enclosing disc (centroid, farthest vertex)
-    discs = [o if isinstance(o, Disc) else _enclosing_disc(o) for o in obstacles]
-
-    def arch(obj: np.ndarray, face_a: str, pose_a: np.ndarray, face_b: str, pose_b: np.ndarray) -> SwitchPath:
-        da = pose_a[2] + tool.face(face_a).push_angle
-        db = pose_b[2] + tool.face(face_b).push_angle
-        try:
-            xy = switch_path(tool, platform, obj, pose_a, da, pose_b, db, clearance=clear, obstacles=discs)
-        except NoArch as exc:
-            return SwitchPath(np.zeros((0, 2)), "infeasible", str(exc))
-        dense = _densify(xy, 0.0005)
-        near = min((swept_clearance(tool, platform, dense, o.centre, o.radius) for o in discs), default=np.inf)
-        return SwitchPath(xy, min_clearance=swept_clearance(tool, platform, dense[8:-8], obj, task.object.radius),
-                          info={"obstacle_clearance": float(near)})
-
+    radius = task.object.radius
+    if task.variants.ss == "arch":
+        switch = arch_planner(tool, platform, radius, obstacles, task.ss.clearance)
+    else:
+        if skills.ss is None:
+            raise InputError("skills", "an SS skill for the switch variant " + repr(task.variants.ss), "none")
+        switch = skill_planner(task.variants.ss, skills.ss, tool, platform, radius, obstacles, task.ss.clearance,
+                               task.ss.n_knots)
     try:
-        motion = assemble(push_plan, frames, platform, arch, v_max=task.timing.max_tool_speed,
+        motion = assemble(push_plan, frames, platform, switch, v_max=task.timing.max_tool_speed,
                           a_max=task.timing.max_tool_accel, approach_distance=task.timing.approach_distance)
     except SwitchFailed as exc:
         return Plan(status="infeasible", reason=str(exc), metrics={**push_plan.metrics, **stages}, **base)
     lap("switches_and_timing")
     metrics = {**push_plan.metrics, **stages}
-    metrics["switch_clearance_min"] = min((sw.min_clearance for *_, sw in motion.switches), default=float("inf"))
+    sws = [sw for *_, sw in motion.switches]
+    metrics["switch_clearance_min"] = min((sw.min_clearance for sw in sws), default=float("inf"))
     metrics["switch_obstacle_clearance_min"] = min(
-        (sw.info.get("obstacle_clearance", np.inf) for *_, sw in motion.switches), default=float("inf"))
+        (sw.info.get("obstacle_clearance", np.inf) for sw in sws), default=float("inf"))
+    metrics["switch_penetration_max"] = max(
+        (max(sw.info.get("object_penetration", 0.0), sw.info.get("obstacle_penetration", 0.0)) for sw in sws),
+        default=0.0)
     metrics["joint_limit_violation_max"] = float(motion.joint_violation.max())
     metrics["duration"] = float(motion.t[-1])
     metrics["stretch"] = motion.stretch
@@ -189,24 +142,9 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
                     reason=f"joint limits: the tool path leaves the Omni's limits at t = {motion.t[bad]:.2f} s "
                            f"by {motion.joint_violation[bad]:.3g} rad")
     pushes = tuple(Segment("push", a, b, (f,), {"direction": d}) for f, a, b, d in motion.pushes)
-    switches = tuple(Segment("switch", a, b, (fa, fb), {"min_clearance": sw.min_clearance})
+    switches = tuple(Segment("switch", a, b, (fa, fb), {"min_clearance": sw.min_clearance,
+                                                         "penetration": sw.info.get("object_penetration", 0.0)})
                      for fa, fb, a, b, sw in motion.switches)
     return Plan(status="solved", t=motion.t, object_xy=motion.object_xy, tool_pose=motion.tool_pose,
                 joints=motion.joints, phase=motion.phase, face=motion.face, pushes=pushes, switches=switches,
                 metrics=metrics, **base)
-
-
-def _enclosing_disc(poly: Any) -> Any:
-    from tools.objects import Disc
-
-    ring = np.asarray(poly.exterior.coords)[:-1]
-    c = ring.mean(axis=0)
-    return Disc(c, float(np.linalg.norm(ring - c, axis=1).max()))
-
-
-def _densify(xy: np.ndarray, step: float) -> np.ndarray:
-    seg = np.linalg.norm(np.diff(xy, axis=0), axis=1)
-    s = np.concatenate([[0.0], np.cumsum(seg)])
-    n = max(2, int(np.ceil(s[-1] / step)) + 1)
-    u = np.linspace(0.0, s[-1], n)
-    return np.column_stack([np.interp(u, s, xy[:, j]) for j in range(2)])

@@ -105,5 +105,5 @@ def test_skill_file_round_trip_and_refusals(tmp_path) -> None:
     with pytest.raises(SkillFileError, match=r"tooltransfer\.oe/1"):
         OESkill.load(bad)
     bad.write_text(path.read_text()[:100])
-    with pytest.raises(SkillFileError, match="unreadable"):
+    with pytest.raises(SkillFileError, match="not valid JSON"):
         OESkill.load(bad)

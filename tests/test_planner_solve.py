@@ -51,11 +51,6 @@ def test_bad_task_file_exits_2_naming_the_field(tmp_path: Path, capsys) -> None:
     assert "safety_margin" in err and "Traceback" not in err
 
 
-def test_unavailable_switch_variant_is_a_clear_error(capsys) -> None:
-    assert main(["solve", str(PAPER / "transfer_tool2.yaml"), "--ss", "opt"]) == 2
-    assert "variants.ss" in capsys.readouterr().err
-
-
 def test_switches_keep_clear_of_the_obstacles(tmp_path: Path) -> None:
     from planner.solve import solve
     from problems.task import load_task

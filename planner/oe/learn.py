@@ -25,6 +25,7 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -187,41 +188,50 @@ class OESkill:
     tool: str
     recovered: list[Recovered]
 
-    def save(self, path: str | Path) -> Path:
-        """Write the skill as JSON, format ``tooltransfer.oe/1``: the DMP (``tooltransfer.dmp/1``),
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data description, format ``tooltransfer.oe/1``: the DMP (``tooltransfer.dmp/1``),
         the recovery's ``k``, the demonstration tool and the recovered demonstrations."""
         from dmp.skill_file import dmp_to_dict
 
-        doc = {
+        return {
             "format": OE_FORMAT, "k": self.k, "tool": self.tool, "dmp": dmp_to_dict(self.dmp),
             "recovered": [{"t": r.t.tolist(), "x": r.x.tolist(), "fixed": r.fixed.tolist(),
                            "starts": r.starts.tolist()} for r in self.recovered],
         }
+
+    @classmethod
+    def from_dict(cls, doc: Any, source: str = "<dict>") -> OESkill:
+        """Rebuild a skill from :meth:`to_dict` output; another format or damaged data raises
+        :class:`~dmp.errors.SkillFileError`."""
+        from dmp.errors import SkillFileError
+        from dmp.skill_file import dmp_from_dict
+
+        if not isinstance(doc, dict) or doc.get("format") != OE_FORMAT:
+            got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
+            raise SkillFileError(source, f"expected format {OE_FORMAT!r}, got {got!r}")
+        try:
+            rec = [Recovered(np.asarray(r["t"], float), np.asarray(r["x"], float), np.asarray(r["fixed"], float),
+                             np.asarray(r["starts"], np.intp)) for r in doc["recovered"]]
+            k = float(doc["k"])
+            if not 0.0 < k < 1.0:
+                raise ValueError(f"k = {k} is not in (0, 1)")
+            return cls(dmp_from_dict(doc["dmp"], source), k, str(doc["tool"]), rec)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise SkillFileError(source, f"damaged OE skill ({exc})") from None
+
+    def save(self, path: str | Path) -> Path:
+        """Write the skill as JSON (:meth:`to_dict`)."""
         p = Path(path)
-        p.write_text(json.dumps(doc))
+        p.write_text(json.dumps(self.to_dict()))
         return p
 
     @classmethod
     def load(cls, path: str | Path) -> OESkill:
         """Read a skill written by :meth:`save`; another format or a damaged file raises
         :class:`~dmp.errors.SkillFileError`."""
-        from dmp.errors import SkillFileError
-        from dmp.skill_file import dmp_from_dict
+        from dmp.skill_file import read_json
 
-        p = Path(path)
-        try:
-            doc = json.loads(p.read_text())
-        except (OSError, json.JSONDecodeError) as exc:
-            raise SkillFileError(str(p), f"unreadable OE skill file ({exc})") from None
-        if not isinstance(doc, dict) or doc.get("format") != OE_FORMAT:
-            got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
-            raise SkillFileError(str(p), f"expected format {OE_FORMAT!r}, got {got!r}")
-        try:
-            rec = [Recovered(np.asarray(r["t"], float), np.asarray(r["x"], float), np.asarray(r["fixed"], float),
-                             np.asarray(r["starts"], np.intp)) for r in doc["recovered"]]
-            return cls(dmp_from_dict(doc["dmp"], str(p)), float(doc["k"]), str(doc["tool"]), rec)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise SkillFileError(str(p), f"damaged OE skill file ({exc})") from None
+        return cls.from_dict(read_json(path), str(path))
 
 
 def learn_oe_skill(

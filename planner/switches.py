@@ -1,0 +1,101 @@
+"""Switch planners for :func:`planner.assemble.assemble`: the tool path between two pushes while the
+object rests, by variant.
+
+* ``arch``: the geometric reference (:mod:`tools.arch`): back off, arch round the object (and
+  disc obstacles; a polygon obstacle is taken as its enclosing disc), approach;
+* ``dmp``: the SS skill generalized by recombination (paper section III.B, eq. 18;
+  :func:`planner.ss.recombine`); it may penetrate the object or an obstacle: the penetration is
+  measured exactly (shapely) and reported, as the paper's method would produce it;
+* ``opt``: the CasADi NLP near the ``dmp`` path with non-penetration and reach
+  (:func:`planner.ss.optimize`), checked exactly with shapely; never returns a penetrating path.
+
+Each planner is ``planner(object_xy (2,), face_a, pose_a (3,), face_b, pose_b (3,)) -> SwitchPath``
+(:data:`planner.assemble.SwitchPlanner`); ``min_clearance`` is the least tool-object distance [m]
+over the middle of the switch (away from the two contacts, where the tool must touch), and
+``info["object_penetration"]``, ``info["obstacle_penetration"]`` the largest penetration depths [m]
+over the whole switch, measured exactly on the swept outline.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+
+from planner.assemble import SwitchPath, SwitchPlanner
+from planner.ss import SwitchSkill, SwitchTask, optimize, recombine
+from tools.arch import NoArch, swept_clearance, switch_path
+from tools.model import Tool
+from tools.objects import Disc, DiscObject
+from tools.omni.platform import OmniPlatform
+
+Obstacle = Disc | shapely.Polygon
+
+
+def enclosing_disc(poly: shapely.Polygon) -> Disc:
+    """The disc about the vertices' mean that holds every vertex of ``poly``."""
+    ring = np.asarray(poly.exterior.coords)[:-1]
+    c = ring.mean(axis=0)
+    return Disc(c, float(np.linalg.norm(ring - c, axis=1).max()))
+
+
+def densify(xy: NDArray[np.float64], step: float) -> NDArray[np.float64]:
+    """The polyline ``xy`` (K, 2) [m] resampled at most ``step`` [m] apart along its length."""
+    seg = np.linalg.norm(np.diff(xy, axis=0), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(seg)])
+    n = max(2, int(np.ceil(s[-1] / step)) + 1)
+    u = np.linspace(0.0, s[-1], n)
+    return np.column_stack([np.interp(u, s, xy[:, j]) for j in range(2)])
+
+
+def arch_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: Sequence[Obstacle],
+                 clearance: float) -> SwitchPlanner:
+    """The ``arch`` switch planner (``clearance`` [m] from the object and the obstacles)."""
+    discs = [o if isinstance(o, Disc) else enclosing_disc(o) for o in obstacles]
+
+    def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
+             pose_b: NDArray[np.float64]) -> SwitchPath:
+        da = pose_a[2] + tool.face(face_a).push_angle
+        db = pose_b[2] + tool.face(face_b).push_angle
+        try:
+            xy = switch_path(tool, platform, obj, pose_a, da, pose_b, db, clearance=clearance, obstacles=discs)
+        except NoArch as exc:
+            return SwitchPath(np.zeros((0, 2)), "infeasible", str(exc))
+        dense = densify(xy, 0.0005)
+        near = min((swept_clearance(tool, platform, dense, o.centre, o.radius) for o in discs), default=np.inf)
+        return SwitchPath(xy, min_clearance=swept_clearance(tool, platform, dense[8:-8], obj, radius),
+                          info={"obstacle_clearance": float(near), "obstacle_penetration": 0.0,
+                                "object_penetration": 0.0})
+
+    return plan
+
+
+def skill_planner(variant: str, skill: SwitchSkill, tool: Tool, platform: OmniPlatform, radius: float,
+                  obstacles: Sequence[Obstacle], clearance: float, n_knots: int) -> SwitchPlanner:
+    """The ``dmp`` or ``opt`` switch planner of the SS skill (``clearance`` [m]: the NLP's margin
+    over the middle of the switch; ``n_knots``: its knots)."""
+    obs = tuple(obstacles)
+
+    def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
+             pose_b: NDArray[np.float64]) -> SwitchPath:
+        task = SwitchTask(tool, face_a, face_b, np.asarray(obj, float), obj=DiscObject(radius), obstacles=obs,
+                          platform=platform)
+        if variant == "dmp":
+            res = recombine(skill, task)
+        else:
+            # the NLP needs a positive margin; 1 um stands for "touching allowed" (clearance 0)
+            res = optimize(skill, task, n_knots=n_knots, margin=max(clearance, 1e-6))
+        info = {"object_penetration": float(res.object_penetration),
+                "obstacle_penetration": float(res.obstacle_penetration),
+                "obstacle_clearance": float(res.obstacle_clearance) if obs else float("inf"),
+                "time": float(res.info.get("time", np.nan))}  # type: ignore[arg-type]
+        if not res.ok:
+            return SwitchPath(np.zeros((0, 2)), "infeasible", f"{variant} switch: {res.reason}", info=info)
+        # the skill's path starts and ends at the exact contact poses the push plan uses
+        gap = max(float(np.hypot(*(res.xy[0] - pose_a[:2]))), float(np.hypot(*(res.xy[-1] - pose_b[:2]))))
+        info["contact_gap"] = gap
+        return SwitchPath(res.xy, min_clearance=float(res.object_clearance), info=info)
+
+    return plan
