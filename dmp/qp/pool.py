@@ -1,4 +1,11 @@
-"""Candidate constraint rows on the dense grid, built lazily (for the cutting-plane solver)."""
+"""Candidate constraint rows on the dense grid, addressed by integer ids (for the cutting-plane solver).
+
+Every inequality row of every constraint at every dense sample has a flat id: constraint ``c``
+owns ids ``offset[c] .. offset[c] + m_c * K_c``, row ``j`` of its sample position ``p`` (in the
+constraint's samples ``k``) is ``offset[c] + j * K_c + p``, so each row's time series is
+contiguous. Rows are only materialised for the ids asked for; residuals come from a rollout of a
+subset of samples (a :class:`Level`): the constraint grid, the samples it points at, or all.
+"""
 
 from __future__ import annotations
 
@@ -11,161 +18,192 @@ from numpy.typing import NDArray
 from dmp.affine import AffineRollout
 from dmp.qp.constraints.base import Coefficients, Constraint
 
-Key = tuple[int, int, int]
-"""(constraint index, sample position within its coefficients, row index)."""
+Ids = NDArray[np.intp]
+
+
+@dataclass(frozen=True)
+class Level:
+    """Rollout data on the dense samples ``s`` (S,), and where each constraint's samples fall in ``s``.
+
+    ``pos[c]`` are positions in the constraint's samples ``k`` that lie in ``s``, ``loc[c]`` their
+    index in ``s``.
+    """
+
+    s: NDArray[np.intp]
+    x_free: NDArray[np.float64]
+    v_free: NDArray[np.float64]
+    gx: NDArray[np.float64]
+    gv: NDArray[np.float64]
+    pos: list[NDArray[np.intp]]
+    loc: list[NDArray[np.intp]]
+
+    @classmethod
+    def of(cls, aff: AffineRollout, ks: Sequence[NDArray[np.intp]], s: NDArray[np.intp] | None) -> Level:
+        """Level on samples ``s`` (sorted; None for every sample) for constraints sampled at ``ks``."""
+        if s is None:
+            s = np.arange(aff.t.size)
+            return cls(s, aff.x_free, aff.v_free, aff.Gx, aff.Gv, [np.arange(k.size) for k in ks], list(ks))
+        mask = np.zeros(aff.t.size, dtype=bool)
+        mask[s] = True
+        where = np.cumsum(mask) - 1
+        pos = [np.flatnonzero(mask[k]) for k in ks]
+        loc = [where[k[p]] for k, p in zip(ks, pos, strict=True)]
+        return cls(s, aff.x_free[s], aff.v_free[s], np.ascontiguousarray(aff.Gx[s]),
+                   np.ascontiguousarray(aff.Gv[s]), pos, loc)
+
+
+def _const(a: NDArray[np.float64]) -> bool:
+    """Whether ``a`` (K, ...) repeats one value along its first axis without copies (a broadcast)."""
+    return a.shape[0] > 0 and a.strides[0] == 0
 
 
 @dataclass
 class RowPool:
-    """Every row of every constraint at every dense sample, for one linearisation path.
-
-    Rows are only materialised for the keys asked for; residuals of all of them come from one
-    rollout of the dense grid.
-    """
+    """Every inequality row of every constraint at every dense sample, for one linearisation path."""
 
     constraints: Sequence[Constraint]
     coeffs: list[Coefficients]
     aff: AffineRollout
+    offset: NDArray[np.intp]
+    """(C + 1,) first id of each constraint; equality constraints own no ids."""
 
     @classmethod
     def build(cls, constraints: Sequence[Constraint], aff: AffineRollout, x_lin: NDArray[np.float64]) -> RowPool:
-        return cls(constraints, [c.coefficients(aff.t, x_lin) for c in constraints], aff)
+        coeffs = [c.coefficients(aff.t, x_lin) for c in constraints]
+        sizes = [0 if c.equality else co.bound.size for c, co in zip(constraints, coeffs, strict=True)]
+        return cls(constraints, coeffs, aff, np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp))
 
-    def residuals(
-        self, w: NDArray[np.float64], samples: NDArray[np.bool_] | None = None
-    ) -> list[NDArray[np.float64]]:
-        """Residuals (K_c, m_c) of every inequality constraint for flat weights ``w`` (<= 0 is satisfied).
+    @property
+    def size(self) -> int:
+        return int(self.offset[-1])
 
-        With a mask ``samples`` (T,) only those samples are evaluated (the rest read ``-inf``).
-        Equality constraints, which the exact step holds as equalities, are not evaluated (``-inf``).
-        """
-        if samples is None:
-            x, v = self.aff.positions(w), self.aff.velocities(w)
-            return [
-                np.full(co.bound.shape, -np.inf) if c.equality else co.residuals(x, v)
-                for c, co in zip(self.constraints, self.coeffs, strict=True)
-            ]
-        idx = np.flatnonzero(samples)
+    @property
+    def ks(self) -> list[NDArray[np.intp]]:
+        return [co.k for co in self.coeffs]
+
+    def _inequalities(self) -> list[int]:
+        return [i for i, (c, co) in enumerate(zip(self.constraints, self.coeffs, strict=True))
+                if not c.equality and co.k.size]
+
+    def residuals(self, w: NDArray[np.float64], level: Level) -> list[tuple[int, NDArray[np.float64]]]:
+        """Residuals ``(c, R)`` of every inequality constraint ``c`` on the level's samples, ``R`` of
+        shape (m_c, len(level.pos[c])) (<= 0 is satisfied), for flat weights ``w``."""
         wm = np.asarray(w).reshape(-1, self.aff.n_dims) @ self.aff.M.T
-        xs = self.aff.x_free[idx] + self.aff.Gx[idx] @ wm
-        vs = self.aff.v_free[idx] + self.aff.Gv[idx] @ wm
-        where = np.cumsum(samples) - 1  # row of each masked sample in xs, vs
+        x = level.x_free + level.gx @ wm
+        v = level.v_free + level.gv @ wm
         out = []
-        for c, co in zip(self.constraints, self.coeffs, strict=True):
-            r = np.full(co.bound.shape, -np.inf)
-            sel = np.flatnonzero(samples[co.k]) if not c.equality else np.zeros(0, dtype=np.intp)
-            if sel.size:
-                r[sel] = co.residuals_at(sel, xs[where[co.k[sel]]], vs[where[co.k[sel]]])
-            out.append(r)
+        for ci in self._inequalities():
+            co, pos, loc = self.coeffs[ci], level.pos[ci], level.loc[ci]
+            if pos.size == 0:
+                continue
+            r = -(co.bound[:1].T if _const(co.bound) else co.bound[pos].T)
+            for a, xv in ((co.a_pos, x), (co.a_vel, v)):
+                if a is None:
+                    continue
+                r = r + (a[0] @ xv[loc].T if _const(a) else np.einsum("kmd,kd->mk", a[pos], xv[loc]))
+            out.append((ci, np.broadcast_to(r, (co.bound.shape[1], pos.size))))
         return out
 
-    def suspects(self, coarse: RowPool, res: list[NDArray[np.float64]], tol: float, factor: int) -> NDArray[np.bool_]:
-        """Samples of this (dense) pool that may violate a row, judged from the residuals ``res`` of
-        the same rows on ``coarse``, whose sample i is this pool's sample ``factor * i``.
+    def ids(self, ci: int, j: NDArray[np.intp], p: NDArray[np.intp]) -> Ids:
+        """Ids of rows ``j`` at sample positions ``p`` of constraint ``ci``."""
+        return self.offset[ci] + j * self.coeffs[ci].k.size + p
 
-        A stretch between two coarse samples is suspect when its larger end residual plus half the
+    def peaks(
+        self, res: list[tuple[int, NDArray[np.float64]]], level: Level, threshold: float, neighbours: int = 0
+    ) -> Ids:
+        """Ids of the local maxima in time (over the level's samples) of rows violated by more than
+        ``threshold``; with ``neighbours`` > 0 also the rows that many dense samples either side."""
+        out = []
+        for ci, r in res:
+            peak = r > threshold
+            if not peak.any():
+                continue
+            peak[:, 1:] &= r[:, 1:] >= r[:, :-1]
+            peak[:, :-1] &= r[:, :-1] >= r[:, 1:]
+            j, p = np.nonzero(peak)
+            p = level.pos[ci][p]
+            if neighbours:
+                kk = self.coeffs[ci].k.size
+                p = (p[:, None] + np.arange(-neighbours, neighbours + 1)).ravel()
+                j = np.repeat(j, 2 * neighbours + 1)
+                ok = (p >= 0) & (p < kk)
+                j, p = j[ok], p[ok]
+            out.append(self.ids(ci, j, p))
+        return np.concatenate(out) if out else np.zeros(0, dtype=np.intp)
+
+    def suspects(self, res: list[tuple[int, NDArray[np.float64]]], grid: Level, tol: float) -> NDArray[np.intp]:
+        """Dense samples that may violate a row, judged from the residuals ``res`` on the ``grid``
+        level (every ``factor``-th dense sample).
+
+        A stretch between two grid samples is suspect when its larger end residual plus half the
         second differences there (four times the interpolation-error estimate of a smooth residual)
-        exceeds ``tol``; samples outside the coarse ones of a constraint are always suspects. Only a
-        filter: the caller confirms with a full pass.
+        exceeds ``tol``; dense samples of a constraint outside its grid samples are always suspects.
+        Only a filter: the caller confirms with a full pass.
         """
         mask = np.zeros(self.aff.t.size, dtype=bool)
-        for c, co_c, co_d, r in zip(self.constraints, coarse.coeffs, self.coeffs, res, strict=True):
-            if c.equality or co_d.k.size == 0:
-                continue
-            if co_c.k.size < 2:
-                mask[co_d.k] = True
+        cover = np.zeros(mask.size + 1, dtype=np.int64)
+        seen = set()
+        for ci, r in res:
+            seen.add(ci)
+            k = self.coeffs[ci].k
+            kg = k[grid.pos[ci]]
+            if kg.size < 2:
+                mask[k] = True
                 continue
             d2 = np.zeros_like(r)
-            d2[1:-1] = np.abs(r[:-2] - 2.0 * r[1:-1] + r[2:])
-            top = (r + 0.5 * d2).max(axis=1)
+            d2[:, 1:-1] = np.abs(r[:, :-2] - 2.0 * r[:, 1:-1] + r[:, 2:])
+            top = (r + 0.5 * d2).max(axis=0)
             bad = np.flatnonzero(np.maximum(top[:-1], top[1:]) > tol)
-            lo, hi = factor * co_c.k[bad], factor * co_c.k[bad + 1]
-            cover = np.zeros(mask.size + 1, dtype=np.int64)
-            np.add.at(cover, lo, 1)
-            np.add.at(cover, hi + 1, -1)
-            mask |= np.cumsum(cover[:-1]) > 0
-            edge = (co_d.k < factor * co_c.k[0]) | (co_d.k > factor * co_c.k[-1])
-            mask[co_d.k[edge]] = True
-        return mask
+            np.add.at(cover, kg[bad], 1)
+            np.add.at(cover, kg[bad + 1] + 1, -1)
+            mask[k[(k < kg[0]) | (k > kg[-1])]] = True
+        for ci in self._inequalities():
+            if ci not in seen:  # no sample on the grid at all
+                mask[self.coeffs[ci].k] = True
+        mask |= np.cumsum(cover[:-1]) > 0
+        return np.flatnonzero(mask)
 
-    def equality_keys(self) -> list[Key]:
-        keys: list[Key] = []
-        for ci, (c, co) in enumerate(zip(self.constraints, self.coeffs, strict=True)):
-            if c.equality:
-                keys += [(ci, k, j) for k in range(co.k.size) for j in range(co.bound.shape[1])]
-        return keys
+    def decode(self, ids: Ids) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+        """Constraint, row and sample position of each id."""
+        ci = np.searchsorted(self.offset, ids, side="right") - 1
+        kk = np.array([co.k.size for co in self.coeffs], dtype=np.intp)[ci]
+        local = ids - self.offset[ci]
+        return ci, local // kk, local % kk
 
-    def map_keys(self, keys: list[Key], other: RowPool) -> list[Key]:
-        """The same (constraint, time, row) triples as ``keys`` of pool ``other``, in this pool."""
-        if not keys:
-            return []
-        arr = np.asarray(keys)
-        out: list[Key] = []
-        for ci in np.unique(arr[:, 0]).tolist():
-            sel = arr[arr[:, 0] == ci]
-            t = other.aff.t[other.coeffs[ci].k[sel[:, 1]]]
-            tk = self.aff.t[self.coeffs[ci].k]
-            pos = np.clip(np.searchsorted(tk, t), 0, tk.size - 1)
-            hit = np.abs(tk[pos] - t) <= 1e-12 * np.maximum(1.0, np.abs(t))
-            out += [(ci, p, j) for p, j in zip(pos[hit].tolist(), sel[hit, 2].tolist(), strict=True)]
-        return out
-
-    def coarse_keys(self, stride: int) -> list[Key]:
-        """Every inequality row at every ``stride``-th applicable sample (and the last one)."""
-        keys: list[Key] = []
-        for ci, (c, co) in enumerate(zip(self.constraints, self.coeffs, strict=True)):
-            if c.equality or co.k.size == 0:
-                continue
-            pos = np.unique(np.append(np.arange(0, co.k.size, stride), co.k.size - 1))
-            keys += [(ci, int(k), j) for k in pos for j in range(co.bound.shape[1])]
-        return keys
-
-    def rows(self, keys: Sequence[Key]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``G`` (len(keys), N*n) and ``h`` for the given keys, in key order."""
+    def rows(self, ids: Ids) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``G`` (len(ids), N*n) and ``h`` for the given ids, in order."""
         nw = self.aff.n_weights
-        if not keys:
-            return np.zeros((0, nw)), np.zeros(0)
-        arr = np.asarray(keys)
-        g, h = np.zeros((arr.shape[0], nw)), np.zeros(arr.shape[0])
-        for ci in np.unique(arr[:, 0]):
-            sel = np.flatnonzero(arr[:, 0] == ci)
-            rows = self.coeffs[ci].rows(self.aff, arr[sel, 1], arr[sel, 2])
+        g, h = np.zeros((ids.size, nw)), np.zeros(ids.size)
+        if ids.size == 0:
+            return g, h
+        ci, j, p = self.decode(ids)
+        for c in np.unique(ci).tolist():
+            sel = np.flatnonzero(ci == c)
+            rows = self.coeffs[c].rows(self.aff, p[sel], j[sel])
             g[sel], h[sel] = rows.G, rows.h
         return g, h
 
-    def family(self, key: Key) -> str:
-        return self.constraints[key[0]].family
+    def equality_rows(self) -> tuple[NDArray[np.float64], NDArray[np.float64], list[str]]:
+        """Every equality row ``A w = b`` and its family."""
+        gs, hs, fams = [np.zeros((0, self.aff.n_weights))], [np.zeros(0)], []
+        for c, co in zip(self.constraints, self.coeffs, strict=True):
+            if c.equality and co.k.size:
+                rows = co.all_rows(self.aff)
+                gs.append(rows.G)
+                hs.append(rows.h)
+                fams += [c.family] * rows.h.size
+        return np.vstack(gs), np.concatenate(hs), fams
 
-    def peaks(self, res: list[NDArray[np.float64]], threshold: float, exclude: set[Key], limit: int = 64) -> list[Key]:
-        """Keys of local maxima in time of violated inequality rows (> ``threshold``), not in ``exclude``.
+    def families(self, ids: Ids) -> set[str]:
+        if ids.size == 0:
+            return set()
+        return {self.constraints[c].family for c in np.unique(self.decode(ids)[0]).tolist()}
 
-        One row per violated stretch keeps the working set small and its rows well separated; at
-        most ``limit`` per (constraint, row), the worst first.
-        """
-        out: list[Key] = []
-        for ci, (c, r) in enumerate(zip(self.constraints, res, strict=True)):
-            if c.equality or r.size == 0:
-                continue
-            peak = r > threshold
-            peak[1:] &= r[1:] >= r[:-1]
-            peak[:-1] &= r[:-1] >= r[1:]
-            kk, jj = np.nonzero(peak)
-            if kk.size > limit:  # keep the worst ``limit`` of each row j
-                order = np.lexsort((-r[kk, jj], jj))
-                kk, jj = kk[order], jj[order]
-                rank = np.arange(kk.size) - np.searchsorted(jj, jj)
-                kk, jj = kk[rank < limit], jj[rank < limit]
-            out += [key for key in zip([ci] * kk.size, kk.tolist(), jj.tolist(), strict=True) if key not in exclude]
-        return out
-
-    def most_violated(self, res: list[NDArray[np.float64]]) -> tuple[Key | None, float]:
-        """The inequality row with the largest residual, and that residual."""
-        best: Key | None = None
-        val = -np.inf
-        for ci, (c, r) in enumerate(zip(self.constraints, res, strict=True)):
-            if c.equality or r.size == 0:
-                continue
-            k, j = np.unravel_index(int(np.argmax(r)), r.shape)
-            if r[k, j] > val:
-                best, val = (ci, int(k), int(j)), float(r[k, j])
-        return best, val
+    def coarse_ids(self, stride: int) -> Ids:
+        """Every inequality row at every ``stride``-th dense sample of each constraint (and its last)."""
+        out = []
+        for ci in self._inequalities():
+            kk, m = self.coeffs[ci].k.size, self.coeffs[ci].bound.shape[1]
+            p = np.unique(np.append(np.arange(0, kk, stride), kk - 1))
+            out.append(self.ids(ci, np.repeat(np.arange(m), p.size), np.tile(p, m)))
+        return np.concatenate(out) if out else np.zeros(0, dtype=np.intp)

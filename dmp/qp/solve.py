@@ -27,6 +27,7 @@ Either way the true violation of every family is measured afterwards on the dens
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
@@ -37,7 +38,7 @@ from dmp.affine import AffineRollout
 from dmp.errors import InputError, SolverError
 from dmp.qp.backends import QPOutcome, check_solver, solve_qp
 from dmp.qp.dual_active_set import DualActiveSet, DualInfeasible
-from dmp.qp.pool import Key, RowPool
+from dmp.qp.pool import Level, RowPool
 from dmp.qp.problem import FitProblem, stack_rows, unconstrained_weights
 from dmp.qp.result import FitResult
 from dmp.trajectory import Rollout
@@ -92,65 +93,80 @@ def _diagnose(families: list[str], solve_without: Any) -> _Infeasible:
     return _Infeasible(fams, f"the constraints of families {', '.join(fams)} cannot hold together ({how})")
 
 
-def _rows_w(pool: RowPool, keys: list[Key], tw: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Rows of ``keys`` in whitened coordinates, normalised to unit length."""
-    g, h = pool.rows(keys)
+def _rows_w(
+    pool: RowPool, ids: NDArray[np.intp], tw: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Rows of ``ids`` in whitened coordinates, normalised to unit length."""
+    g, h = pool.rows(ids)
     return _normalise(g @ tw, h)
 
 
 def _seed(
     pool: RowPool, tw: NDArray[np.float64], z_c: NDArray[np.float64], a_z: NDArray[np.float64],
     b_z: NDArray[np.float64], stride: int, solver: str, options: dict[str, Any] | None, cnt: _Counter,
-) -> list[Key]:
+) -> NDArray[np.intp]:
     """Candidate rows: those the backend finds nearly active at moderate accuracy on a coarse subset."""
-    keys = pool.coarse_keys(stride)
-    g, h = _rows_w(pool, keys, tw)
+    ids = pool.coarse_ids(stride)
+    g, h = _rows_w(pool, ids, tw)
     opts = {"eps_abs": 1e-4, "eps_rel": 1e-4, "polishing": False} if solver == "osqp" else {}
     out = solve_qp(np.eye(z_c.size), -z_c, g, h, a_z, b_z, solver, options={**opts, **(options or {})})
     cnt.add(out)
     if out.x is None:
-        return keys  # infeasible or failed: the exact method decides, and explains
-    return [k for k, s in zip(keys, g @ out.x - h, strict=True) if s > -1e-3]
+        return ids  # infeasible or failed: the exact method decides, and explains
+    return ids[g @ out.x - h > -1e-3]
+
+
+@dataclass
+class _Levels:
+    """The sample subsets the oracle looks at: the constraint grid, then all dense samples."""
+
+    grid: Level
+    full: Level
+    factor: int
 
 
 def _cutting_planes(
-    pool_g: RowPool, pool_d: RowPool, tw: NDArray[np.float64], z_c: NDArray[np.float64],
-    seed: list[Key] | None, solver: str, options: dict[str, Any] | None, tol: float, stride: int,
-    cnt: _Counter, seed_with_backend: bool, dense_factor: int,
-) -> tuple[NDArray[np.float64], list[Key]]:
-    """Exact optimum over every dense row; returns ``z`` and the active dense-pool keys."""
-    eq_keys = pool_d.equality_keys()
-    a_z, b_z = _rows_w(pool_d, eq_keys, tw)
+    pool: RowPool, levels: _Levels, tw: NDArray[np.float64], z_c: NDArray[np.float64],
+    seed: NDArray[np.intp] | None, solver: str, options: dict[str, Any] | None, tol: float, stride: int,
+    cnt: _Counter, seed_with_backend: bool,
+) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """Exact optimum over every dense row; returns ``z`` and the ids of the active rows."""
+    a, b, eq_fams = pool.equality_rows()
+    a_z, b_z = _normalise(a @ tw, b)
     if seed is None and seed_with_backend:
-        seed = pool_d.map_keys(_seed(pool_g, tw, z_c, a_z, b_z, stride, solver, options, cnt), pool_g)
-    keys: list[Key] = list(dict.fromkeys(seed or []))
-    known = set(keys)
-    state = DualActiveSet(z_c, *_rows_w(pool_d, keys, tw))
+        seed = _seed(pool, tw, z_c, a_z, b_z, stride * levels.factor, solver, options, cnt)
+    cand = np.unique(seed) if seed is not None else np.zeros(0, dtype=np.intp)
+    known = np.zeros(pool.size, dtype=bool)
+    known[cand] = True
+    chunks = [cand]
+    state = DualActiveSet(z_c, *_rows_w(pool, cand, tw))
+
+    def take(ids: NDArray[np.intp]) -> NDArray[np.intp]:
+        ids = np.unique(ids)
+        return ids[~known[ids]]
 
     def oracle(z: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         # the cheap grid first, then the dense samples the grid points at, then every dense sample
         w = tw @ z
-        res_g = pool_g.residuals(w)
-        for peaks in (
-            lambda: pool_d.map_keys(pool_g.peaks(res_g, tol, set()), pool_g),
-            lambda: pool_d.peaks(pool_d.residuals(w, pool_d.suspects(pool_g, res_g, tol, dense_factor)), tol, set()),
-            lambda: pool_d.peaks(pool_d.residuals(w), tol, set()),
-        ):
-            new = [k for k in peaks() if k not in known]
-            if new:
-                keys.extend(new)
-                known.update(new)
-                return _rows_w(pool_d, new, tw)
-        return np.zeros((0, z.size)), np.zeros(0)
+        res_g = pool.residuals(w, levels.grid)
+        new = take(pool.peaks(res_g, levels.grid, tol))
+        if not new.size:
+            sus = Level.of(pool.aff, pool.ks, pool.suspects(res_g, levels.grid, tol))
+            new = take(pool.peaks(pool.residuals(w, sus), sus, tol))
+        if not new.size:
+            new = take(pool.peaks(pool.residuals(w, levels.full), levels.full, tol))
+        known[new] = True
+        chunks.append(new)
+        return _rows_w(pool, new, tw)
 
     try:
         state.add_equalities(a_z, b_z)
         z = state.solve(oracle)
     except DualInfeasible as inf:
-        rows = [keys[i] for i in inf.rows]
-        fams = {pool_d.family(k) for k in rows}
-        if inf.equalities or not rows:
-            fams |= {pool_d.family(k) for k in eq_keys}
+        ids = np.concatenate(chunks)
+        fams = pool.families(ids[np.asarray(inf.rows, dtype=np.intp)])
+        if inf.equalities or not inf.rows:
+            fams |= set(eq_fams)
         names = tuple(sorted(fams))
         raise _Infeasible(
             names, f"rows of families {', '.join(names)} admit no common solution "
@@ -159,7 +175,7 @@ def _cutting_planes(
     finally:
         cnt.n_exact += state.iterations
     cnt.finish = True
-    return z, [keys[i] for i in state.active]
+    return z, np.concatenate(chunks)[np.asarray(state.active, dtype=np.intp)]
 
 
 def _full(
@@ -226,7 +242,6 @@ def solve_fit(
         raise InputError("strategy", "'cutting_planes' or 'full'", repr(strategy))
     start = time.perf_counter()
     aff_d = problem.affine("dense")
-    aff_g = problem.affine("grid")
     p, q = problem.quadratic()
     build_time = time.perf_counter() - start
     start = time.perf_counter()
@@ -235,7 +250,8 @@ def solve_fit(
     cnt = _Counter()
     nonconvex = any(c.linearised for c in problem.constraints)
     x_lin = aff_d.positions(w)
-    ws_keys: list[Key] = []
+    ws_keys = np.zeros(0, dtype=np.intp)
+    levels: _Levels | None = None
     obj_prev = np.inf
     n_coarse = coarse_samples if coarse_samples else COARSE_PER_BASIS * problem.dmp.n_basis
     stride = max(1, round(np.asarray(problem.t).size / n_coarse))
@@ -244,13 +260,14 @@ def solve_fit(
         for scp in range(1, max_scp + 1):
             if tw is not None:
                 z_c = -tw.T @ q
-                # cutting planes on the constraint grid first (cheap checks), then on the dense grid
-                pool_g = RowPool.build(problem.constraints, aff_g, x_lin[:: problem.dense_factor])
-                pool_d = RowPool.build(problem.constraints, aff_d, x_lin)
+                pool = RowPool.build(problem.constraints, aff_d, x_lin)
+                if levels is None:
+                    grid = np.arange(0, aff_d.t.size, problem.dense_factor)
+                    levels = _Levels(Level.of(aff_d, pool.ks, grid), Level.of(aff_d, pool.ks, None),
+                                     problem.dense_factor)
                 seed = ws_keys if scp > 1 else None  # re-linearised: warm start from the active rows
                 z, ws_keys = _cutting_planes(
-                    pool_g, pool_d, tw, z_c, seed, solver, options, tol, stride, cnt, seed_with_backend,
-                    problem.dense_factor,
+                    pool, levels, tw, z_c, seed, solver, options, tol, stride, cnt, seed_with_backend,
                 )
                 w = tw @ z
             else:
@@ -286,7 +303,7 @@ def solve_fit(
     violations: dict[str, float] = {}
     for c in problem.constraints:
         violations[c.family] = max(violations.get(c.family, 0.0), c.violation(aff_d.t, x, v))
-    n_rows = len(ws_keys) if tw is not None else sum(
+    n_rows = ws_keys.size if tw is not None else sum(
         c.coefficients(problem.affine("grid").t, x_lin[:: problem.dense_factor]).bound.size
         for c in problem.constraints if not c.equality
     )
