@@ -196,6 +196,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = _add(sub, "tools", "draw the tool library (faces, cones) and the Omni's reach",
              "tooltransfer tools --out out/tools.png", _cmd_tools)
     p.add_argument("--out", type=Path, default=Path("out/tools.png"), help="output PNG")
+    from planner.batch.cli import add_batch_parser
+
+    add_batch_parser(sub, _add)
     return parser
 
 

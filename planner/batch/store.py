@@ -1,0 +1,124 @@
+"""The results of a batch in SQLite: one row per (task, variant), written as each one finishes.
+
+Tables: ``meta`` (batch name, digest, batch file as JSON), ``tasks`` (one row per generated task
+with its difficulty measures and task JSON) and ``results`` (OMPL-like: task id, tool, variant,
+status ``solved|infeasible|error|timeout``, reason, per-stage planning times [s], number of QPs,
+violation maxima, clearances [m], goal error [m], path length [m], pushes, switches, simulated final
+error [m] and success, worker, start and finish times (Unix seconds); every plan metric is kept in
+``metrics_json``). The journal is WAL; each row is committed on its own, so a process killed at
+any point loses at most the rows not yet written, and ``(task_id, variant)`` is the primary key:
+a row can never be stored twice.
+"""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+from dmp.errors import InputError
+
+SCHEMA_VERSION = "1"
+
+#: Columns of ``results`` and their SQL types.
+RESULT_COLUMNS: dict[str, str] = {
+    "task_id": "TEXT NOT NULL", "variant": "TEXT NOT NULL", "oe": "TEXT", "ss": "TEXT", "tool": "TEXT",
+    "status": "TEXT NOT NULL", "reason": "TEXT",
+    "time_total": "REAL", "cpu_time": "REAL", "time_skills": "REAL", "time_oe": "REAL",
+    "time_switches_and_timing": "REAL", "n_qp": "REAL",
+    "cone_violation_max": "REAL", "reach_violation_max": "REAL", "penetration_max": "REAL",
+    "joint_limit_violation_max": "REAL", "obstacle_clearance_min": "REAL", "switch_clearance_min": "REAL",
+    "switch_obstacle_clearance_min": "REAL", "goal_error": "REAL", "path_length": "REAL", "n_pushes": "REAL",
+    "n_switches": "INTEGER", "duration": "REAL",
+    "sim_final_error": "REAL", "sim_tool_deviation": "REAL", "sim_wall_time": "REAL", "sim_success": "INTEGER",
+    "wall_time": "REAL", "worker": "TEXT", "started_at": "REAL", "finished_at": "REAL",
+    "metrics_json": "TEXT", "detail": "TEXT",
+}
+
+TASK_COLUMNS: dict[str, str] = {
+    "task_id": "TEXT PRIMARY KEY", "idx": "INTEGER", "tool": "TEXT", "n_obstacles": "INTEGER",
+    "start_reach": "REAL", "target_reach": "REAL", "reach_margin": "REAL", "distance": "REAL", "task_json": "TEXT",
+}
+
+
+class ResultStore:
+    """A batch's SQLite file (created if missing).
+
+    Args:
+        path: the database file.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.db = sqlite3.connect(self.path, timeout=30.0)
+            self.db.execute("PRAGMA journal_mode=WAL")
+            self.db.execute("PRAGMA synchronous=NORMAL")  # WAL + NORMAL: durable against a killed process
+            cols = ", ".join(f"{k} {v}" for k, v in RESULT_COLUMNS.items())
+            tcols = ", ".join(f"{k} {v}" for k, v in TASK_COLUMNS.items())
+            with self.db:
+                self.db.execute("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT)")
+                self.db.execute(f"CREATE TABLE IF NOT EXISTS tasks ({tcols})")
+                self.db.execute(f"CREATE TABLE IF NOT EXISTS results ({cols}, PRIMARY KEY (task_id, variant))")
+        except sqlite3.DatabaseError as exc:
+            raise InputError("--db", "an SQLite results file (or a new path)", f"{self.path}: {exc}") from None
+        version = self.meta().get("schema")
+        if version is None:
+            self.set_meta(schema=SCHEMA_VERSION)
+        elif version != SCHEMA_VERSION:
+            raise InputError("--db", f"a results file of schema {SCHEMA_VERSION}", f"schema {version}")
+
+    def close(self) -> None:
+        self.db.close()
+
+    def __enter__(self) -> ResultStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def meta(self) -> dict[str, str]:
+        return dict(self.db.execute("SELECT key, value FROM meta").fetchall())
+
+    def set_meta(self, **values: str) -> None:
+        with self.db:
+            self.db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", values.items())
+
+    def add_tasks(self, tasks: Iterable[dict[str, Any]]) -> None:
+        """Record tasks (already recorded ids are kept as they are)."""
+        keys = list(TASK_COLUMNS)
+        sql = f"INSERT OR IGNORE INTO tasks ({', '.join(keys)}) VALUES ({', '.join('?' * len(keys))})"
+        with self.db:
+            self.db.executemany(sql, ([t.get(k) for k in keys] for t in tasks))
+
+    def done(self) -> set[tuple[str, str]]:
+        """The (task id, variant) pairs already stored."""
+        return set(self.db.execute("SELECT task_id, variant FROM results").fetchall())
+
+    def put(self, row: dict[str, Any]) -> None:
+        """Store one result row and commit it (raises ``sqlite3.IntegrityError`` for a stored key)."""
+        keys = [k for k in RESULT_COLUMNS if k in row]
+        vals = [json.dumps(row[k]) if isinstance(row[k], dict | list) else row[k] for k in keys]
+        with self.db:
+            self.db.execute(f"INSERT INTO results ({', '.join(keys)}) VALUES ({', '.join('?' * len(keys))})", vals)
+
+    def forget(self, statuses: Sequence[str]) -> int:
+        """Delete the rows of these statuses (to run them again); how many were deleted."""
+        with self.db:
+            cur = self.db.execute(f"DELETE FROM results WHERE status IN ({', '.join('?' * len(statuses))})",
+                                  list(statuses))
+        return cur.rowcount
+
+    def rows(self) -> list[dict[str, Any]]:
+        """Every result joined with its task's difficulty measures, in task and variant order."""
+        cur = self.db.execute(
+            "SELECT r.*, t.n_obstacles, t.start_reach, t.target_reach, t.reach_margin, t.distance, t.idx "
+            "FROM results r LEFT JOIN tasks t USING (task_id) ORDER BY t.idx, r.task_id, r.variant")
+        names = [d[0] for d in cur.description]
+        return [dict(zip(names, r, strict=True)) for r in cur.fetchall()]
+
+    def count(self) -> int:
+        return int(self.db.execute("SELECT COUNT(*) FROM results").fetchone()[0])
