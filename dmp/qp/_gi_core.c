@@ -14,28 +14,47 @@
 #include <math.h>
 #include <string.h>
 
+/* x86-64 builds carry an AVX2/FMA clone of the two entry points next to the baseline one, picked
+   at load time (GCC function multiversioning); the helpers below are inlined into each clone. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define GI_CLONES __attribute__((target_clones("avx2", "fma", "default")))
+#else
+#define GI_CLONES
+#endif
+#define GI_INLINE static inline __attribute__((always_inline))
+
 #define GI_OK 0
 #define GI_NEED_ROWS 0
 #define GI_INFEASIBLE (-1)
 #define GI_MAX_ITER (-2)
 
-/* Four partial sums: lets the compiler vectorise without -ffast-math (which would break the
-   INFINITY tests below). */
-static double dot(int n, const double *a, const double *b) {
-    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-    int i = 0;
-    for (; i + 4 <= n; i += 4) {
-        s0 += a[i] * b[i];
-        s1 += a[i + 1] * b[i + 1];
-        s2 += a[i + 2] * b[i + 2];
-        s3 += a[i + 3] * b[i + 3];
-    }
-    for (; i < n; ++i) s0 += a[i] * b[i];
-    return (s0 + s1) + (s2 + s3);
+/* Four-wide vectors (GCC/Clang vector extensions: two SSE2 registers in the baseline build, one
+   AVX register in the AVX2 clone) with two accumulators; no -ffast-math, which would break the
+   INFINITY tests below. */
+typedef double v4d __attribute__((vector_size(32)));
+
+GI_INLINE v4d load4(const double *p) {
+    v4d v;
+    memcpy(&v, p, sizeof v);
+    return v;
 }
 
-static void directions(int n, int q, const double *Q, const double *R, const double *np_,
-                       double *qt, double *d, double *r) {
+GI_INLINE double dot(int n, const double *a, const double *b) {
+    v4d s0 = {0.0, 0.0, 0.0, 0.0}, s1 = {0.0, 0.0, 0.0, 0.0};
+    int i = 0;
+    for (; i + 8 <= n; i += 8) {
+        s0 += load4(a + i) * load4(b + i);
+        s1 += load4(a + i + 4) * load4(b + i + 4);
+    }
+    for (; i + 4 <= n; i += 4) s0 += load4(a + i) * load4(b + i);
+    s0 += s1;
+    double s = (s0[0] + s0[1]) + (s0[2] + s0[3]);
+    for (; i < n; ++i) s += a[i] * b[i];
+    return s;
+}
+
+GI_INLINE void directions(int n, int q, const double *Q, const double *R, const double *np_,
+                          double *qt, double *d, double *r) {
     for (int j = 0; j < n; ++j) qt[j] = dot(n, Q + (size_t)n * j, np_);
     for (int i = 0; i < n; ++i) d[i] = 0.0;
     for (int j = q; j < n; ++j) {
@@ -43,14 +62,17 @@ static void directions(int n, int q, const double *Q, const double *R, const dou
         const double a = qt[j];
         for (int i = 0; i < n; ++i) d[i] += col[i] * a;
     }
-    for (int i = q - 1; i >= 0; --i) { /* back substitution R r = qt[:q] */
-        double s = qt[i];
-        for (int k = i + 1; k < q; ++k) s -= R[i + (size_t)n * k] * r[k];
-        r[i] = s / R[i + (size_t)n * i];
+    /* back substitution R r = qt[:q], column by column (R is column-major: contiguous columns) */
+    for (int i = 0; i < q; ++i) r[i] = qt[i];
+    for (int i = q - 1; i >= 0; --i) {
+        const double *col = R + (size_t)n * i;
+        const double a = r[i] / col[i];
+        r[i] = a;
+        for (int k = 0; k < i; ++k) r[k] -= col[k] * a;
     }
 }
 
-static void rotate_cols(int n, double *Q, int a, int b, double c, double s) {
+GI_INLINE void rotate_cols(int n, double *Q, int a, int b, double c, double s) {
     double *qa = Q + (size_t)n * a, *qb = Q + (size_t)n * b;
     for (int i = 0; i < n; ++i) {
         const double x = qa[i], y = qb[i];
@@ -60,11 +82,13 @@ static void rotate_cols(int n, double *Q, int a, int b, double c, double s) {
 }
 
 /* Append the normal whose Q^T n is qt as column q of R, rotating Q so R stays triangular. */
-static void insert(int n, int *q, double *Q, double *R, double *qt) {
+GI_INLINE void insert(int n, int *q, double *Q, double *R, double *qt) {
     for (int j = n - 1; j > *q; --j) {
         const double a = qt[j - 1], b = qt[j];
         if (b == 0.0) continue;
-        const double h = hypot(a, b), c = a / h, s = b / h;
+        const double h = sqrt(a * a + b * b); /* entries are O(1): no need for hypot's care */
+        if (h == 0.0) continue;
+        const double c = a / h, s = b / h;
         qt[j - 1] = h;
         qt[j] = 0.0;
         rotate_cols(n, Q, j - 1, j, c, s);
@@ -75,12 +99,14 @@ static void insert(int n, int *q, double *Q, double *R, double *qt) {
 }
 
 /* Remove active column k (0 <= k < q), restoring triangularity by rotations. */
-static void delete_col(int n, int *q, double *Q, double *R, int k) {
+GI_INLINE void delete_col(int n, int *q, double *Q, double *R, int k) {
     for (int j = k; j < *q - 1; ++j) memcpy(R + (size_t)n * j, R + (size_t)n * (j + 1), sizeof(double) * n);
     for (int j = k; j < *q - 1; ++j) {
         const double a = R[j + (size_t)n * j], b = R[j + 1 + (size_t)n * j];
         if (b == 0.0) continue;
-        const double h = hypot(a, b), c = a / h, s = b / h;
+        const double h = sqrt(a * a + b * b);
+        if (h == 0.0) continue;
+        const double c = a / h, s = b / h;
         for (int col = j; col < *q - 1; ++col) {
             const double x = R[j + (size_t)n * col], y = R[j + 1 + (size_t)n * col];
             R[j + (size_t)n * col] = c * x + s * y;
@@ -98,7 +124,7 @@ static void delete_col(int n, int *q, double *Q, double *R, int k) {
  * Take the equality e . z = f. Returns 0 when taken, 1 when dependent and consistent (skipped),
  * -1 when dependent and inconsistent. work: 3n doubles.
  */
-int gi_equality(int n, double *Q, double *R, double *u, int *q, double *z, const double *e, double f,
+GI_CLONES int gi_equality(int n, double *Q, double *R, double *u, int *q, double *z, const double *e, double f,
                 double *work) {
     double *qt = work, *d = work + n, *r = work + 2 * n;
     directions(n, *q, Q, R, e, qt, d, r);
@@ -118,7 +144,7 @@ int gi_equality(int n, double *Q, double *R, double *u, int *q, double *z, const
  * rows in info[0..*ninfo) and *eq_involved set, or GI_MAX_ITER. active[i] is the candidate index of
  * active inequality i (i < q - neq). work: 4n doubles.
  */
-int gi_solve(int n, int m, const double *G, const double *h, double *Q, double *R, double *u, int *active,
+GI_CLONES int gi_solve(int n, int m, const double *G, const double *h, double *Q, double *R, double *u, int *active,
              int *q, int neq, double *z, double tol, int max_iter, int *iters, int *info, int *ninfo,
              int *eq_involved, double *work) {
     double *qt = work, *d = work + n, *r = work + 2 * n, *np_ = work + 3 * n;

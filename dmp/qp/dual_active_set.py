@@ -24,6 +24,7 @@ import ctypes
 import importlib.util
 from collections.abc import Callable
 from functools import cache
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,9 +33,7 @@ RowSource = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[n
 """``oracle(z) -> (G_new, h_new)``: rows violated at ``z`` that the candidates lack (empty if none)."""
 
 _NEED_ROWS, _INFEASIBLE, _MAX_ITER = 0, -1, -2
-_dbl = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
-_dblf = np.ctypeslib.ndpointer(np.float64, flags="F_CONTIGUOUS")
-_int = np.ctypeslib.ndpointer(np.int32, flags="C_CONTIGUOUS")
+_ptr = ctypes.c_void_p  # arrays go in as raw addresses: ndpointer checks cost ~7 us per argument and call
 _pint = ctypes.POINTER(ctypes.c_int)
 
 
@@ -47,14 +46,22 @@ def _core() -> ctypes.CDLL:
         )
     lib = ctypes.CDLL(spec.origin)
     c_int, c_dbl = ctypes.c_int, ctypes.c_double
-    lib.gi_equality.argtypes = [c_int, _dblf, _dblf, _dbl, _pint, _dbl, _dbl, c_dbl, _dbl]
+    lib.gi_equality.argtypes = [c_int, _ptr, _ptr, _ptr, _pint, _ptr, _ptr, c_dbl, _ptr]
     lib.gi_equality.restype = c_int
     lib.gi_solve.argtypes = [
-        c_int, c_int, _dbl, _dbl, _dblf, _dblf, _dbl, _int, _pint, c_int, _dbl, c_dbl, c_int,
-        _pint, _int, _pint, _pint, _dbl,
+        c_int, c_int, _ptr, _ptr, _ptr, _ptr, _ptr, _ptr, _pint, c_int, _ptr, c_dbl, c_int,
+        _pint, _ptr, _pint, _pint, _ptr,
     ]
     lib.gi_solve.restype = c_int
     return lib
+
+
+def _addr(a: NDArray[Any], dtype: type, fortran: bool = False) -> int:
+    """Address of ``a``'s data after checking the layout the C core assumes."""
+    ok = a.flags.f_contiguous if fortran else a.flags.c_contiguous
+    if a.dtype != dtype or not ok:
+        raise TypeError("dual active set: array of unexpected dtype or layout")
+    return int(a.ctypes.data)
 
 
 class DualInfeasible(Exception):
@@ -90,6 +97,13 @@ class DualActiveSet:
         self.n_eq = 0
         self._iters = ctypes.c_int(0)
         self._work = np.zeros(4 * n)
+        self._info = np.zeros(n + 2, dtype=np.int32)
+        self._p = {
+            "Q": _addr(self._Q, np.float64, True), "R": _addr(self._R, np.float64, True),
+            "u": _addr(self._u, np.float64), "active": _addr(self._active, np.int32),
+            "z": _addr(self.z, np.float64), "work": _addr(self._work, np.float64),
+            "info": _addr(self._info, np.int32),
+        }
 
     @property
     def iterations(self) -> int:
@@ -102,11 +116,12 @@ class DualActiveSet:
     def add_equalities(self, e: NDArray[np.float64], f: NDArray[np.float64]) -> None:
         """Take the equality rows ``e z = f`` (before any inequality); dependent consistent rows
         are skipped, dependent inconsistent ones raise :class:`DualInfeasible`."""
-        lib = _core()
+        lib, p = _core(), self._p
+        e = np.ascontiguousarray(e, dtype=np.float64).reshape(-1, self.n)
         for i in range(f.size):
-            row = np.ascontiguousarray(e[i], dtype=np.float64)
             code = lib.gi_equality(
-                self.n, self._Q, self._R, self._u, ctypes.byref(self._q), self.z, row, float(f[i]), self._work
+                self.n, p["Q"], p["R"], p["u"], ctypes.byref(self._q), p["z"], _addr(e[i], np.float64),
+                float(f[i]), p["work"],
             )
             if code < 0:
                 raise DualInfeasible([], equalities=True)
@@ -120,14 +135,13 @@ class DualActiveSet:
 
     def solve(self, oracle: RowSource, max_iter: int = 10_000) -> NDArray[np.float64]:
         """Iterate until no candidate and no oracle row is violated; returns ``z``."""
-        lib = _core()
-        info = np.zeros(self.n + 2, dtype=np.int32)
+        lib, p, info = _core(), self._p, self._info
         ninfo, eq_involved = ctypes.c_int(0), ctypes.c_int(0)
         while True:
             code = lib.gi_solve(
-                self.n, self.h.size, self.G, self.h, self._Q, self._R, self._u, self._active,
-                ctypes.byref(self._q), self.n_eq, self.z, self.tol, max_iter, ctypes.byref(self._iters),
-                info, ctypes.byref(ninfo), ctypes.byref(eq_involved), self._work,
+                self.n, self.h.size, _addr(self.G, np.float64), _addr(self.h, np.float64), p["Q"], p["R"], p["u"],
+                p["active"], ctypes.byref(self._q), self.n_eq, p["z"], self.tol, max_iter,
+                ctypes.byref(self._iters), p["info"], ctypes.byref(ninfo), ctypes.byref(eq_involved), p["work"],
             )
             if code == _INFEASIBLE:
                 raise DualInfeasible(info[: ninfo.value].tolist(), equalities=bool(eq_involved.value))

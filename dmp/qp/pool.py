@@ -10,7 +10,7 @@ subset of samples (a :class:`Level`): the constraint grid, the samples it points
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,7 +26,7 @@ class Level:
     """Rollout data on the dense samples ``s`` (S,), and where each constraint's samples fall in ``s``.
 
     ``pos[c]`` are positions in the constraint's samples ``k`` that lie in ``s``, ``loc[c]`` their
-    index in ``s``.
+    index in ``s`` (a slice where contiguous, so gathers become views).
     """
 
     s: NDArray[np.intp]
@@ -35,21 +35,51 @@ class Level:
     gx: NDArray[np.float64]
     gv: NDArray[np.float64]
     pos: list[NDArray[np.intp]]
-    loc: list[NDArray[np.intp]]
+    loc: list[NDArray[np.intp] | slice]
 
     @classmethod
     def of(cls, aff: AffineRollout, ks: Sequence[NDArray[np.intp]], s: NDArray[np.intp] | None) -> Level:
         """Level on samples ``s`` (sorted; None for every sample) for constraints sampled at ``ks``."""
         if s is None:
             s = np.arange(aff.t.size)
-            return cls(s, aff.x_free, aff.v_free, aff.Gx, aff.Gv, [np.arange(k.size) for k in ks], list(ks))
+            return cls(s, aff.x_free, aff.v_free, aff.Gx, aff.Gv, [np.arange(k.size) for k in ks],
+                       [_as_slice(k) for k in ks])
         mask = np.zeros(aff.t.size, dtype=bool)
         mask[s] = True
         where = np.cumsum(mask) - 1
         pos = [np.flatnonzero(mask[k]) for k in ks]
-        loc = [where[k[p]] for k, p in zip(ks, pos, strict=True)]
+        loc = [_as_slice(where[k[p]]) for k, p in zip(ks, pos, strict=True)]
         return cls(s, aff.x_free[s], aff.v_free[s], np.ascontiguousarray(aff.Gx[s]),
                    np.ascontiguousarray(aff.Gv[s]), pos, loc)
+
+
+def _as_slice(idx: NDArray[np.intp]) -> NDArray[np.intp] | slice:
+    """``idx`` (increasing) as a slice when it is a contiguous run."""
+    if idx.size and int(idx[-1]) - int(idx[0]) == idx.size - 1:
+        return slice(int(idx[0]), int(idx[-1]) + 1)
+    return idx
+
+
+@dataclass(frozen=True)
+class _Terms:
+    """One constraint's coefficients on a level, laid out for residuals without gathers:
+    ``neg_bound`` (m, P) or (m, 1) and, per dimension d, ``pos[d]`` / ``vel[d]`` (m, P) or (m, 1)."""
+
+    neg_bound: NDArray[np.float64]
+    pos: list[NDArray[np.float64]] | None
+    vel: list[NDArray[np.float64]] | None
+
+    @classmethod
+    def of(cls, co: Coefficients, pos: NDArray[np.intp]) -> _Terms:
+        def per_dim(a: NDArray[np.float64] | None) -> list[NDArray[np.float64]] | None:
+            if a is None:
+                return None
+            if _const(a):
+                return [np.ascontiguousarray(a[0, :, d, None]) for d in range(a.shape[2])]
+            return [np.ascontiguousarray(a[pos, :, d].T) for d in range(a.shape[2])]
+
+        nb = -(co.bound[:1].T if _const(co.bound) else co.bound[pos].T)
+        return cls(np.ascontiguousarray(nb), per_dim(co.a_pos), per_dim(co.a_vel))
 
 
 def _const(a: NDArray[np.float64]) -> bool:
@@ -66,6 +96,7 @@ class RowPool:
     aff: AffineRollout
     offset: NDArray[np.intp]
     """(C + 1,) first id of each constraint; equality constraints own no ids."""
+    _prep: dict[int, tuple[Level, list[tuple[int, _Terms]]]] = field(default_factory=dict, repr=False)
 
     @classmethod
     def build(cls, constraints: Sequence[Constraint], aff: AffineRollout, x_lin: NDArray[np.float64]) -> RowPool:
@@ -85,23 +116,34 @@ class RowPool:
         return [i for i, (c, co) in enumerate(zip(self.constraints, self.coeffs, strict=True))
                 if not c.equality and co.k.size]
 
-    def residuals(self, w: NDArray[np.float64], level: Level) -> list[tuple[int, NDArray[np.float64]]]:
+    def _terms(self, level: Level, cache: bool) -> list[tuple[int, _Terms]]:
+        key = id(level)
+        if key in self._prep and self._prep[key][0] is level:
+            return self._prep[key][1]
+        terms = [(ci, _Terms.of(self.coeffs[ci], level.pos[ci])) for ci in self._inequalities()
+                 if level.pos[ci].size]
+        if cache:
+            self._prep[key] = (level, terms)
+        return terms
+
+    def residuals(
+        self, w: NDArray[np.float64], level: Level, cache: bool = True
+    ) -> list[tuple[int, NDArray[np.float64]]]:
         """Residuals ``(c, R)`` of every inequality constraint ``c`` on the level's samples, ``R`` of
-        shape (m_c, len(level.pos[c])) (<= 0 is satisfied), for flat weights ``w``."""
+        shape (m_c, len(level.pos[c])) (<= 0 is satisfied), for flat weights ``w``. The level's
+        coefficient layout is kept for the next call when ``cache``."""
         wm = np.asarray(w).reshape(-1, self.aff.n_dims) @ self.aff.M.T
         x = level.x_free + level.gx @ wm
         v = level.v_free + level.gv @ wm
         out = []
-        for ci in self._inequalities():
-            co, pos, loc = self.coeffs[ci], level.pos[ci], level.loc[ci]
-            if pos.size == 0:
-                continue
-            r = -(co.bound[:1].T if _const(co.bound) else co.bound[pos].T)
-            for a, xv in ((co.a_pos, x), (co.a_vel, v)):
-                if a is None:
-                    continue
-                r = r + (a[0] @ xv[loc].T if _const(a) else np.einsum("kmd,kd->mk", a[pos], xv[loc]))
-            out.append((ci, np.broadcast_to(r, (co.bound.shape[1], pos.size))))
+        for ci, t in self._terms(level, cache):
+            loc = level.loc[ci]
+            r = t.neg_bound
+            for coef, xv in ((t.pos, x), (t.vel, v)):
+                if coef is not None:
+                    for d, c in enumerate(coef):
+                        r = r + c * xv[loc, d]
+            out.append((ci, np.broadcast_to(r, (r.shape[0], level.pos[ci].size))))
         return out
 
     def ids(self, ci: int, j: NDArray[np.intp], p: NDArray[np.intp]) -> Ids:

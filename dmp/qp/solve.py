@@ -152,7 +152,7 @@ def _cutting_planes(
         new = take(pool.peaks(res_g, levels.grid, tol))
         if not new.size:
             sus = Level.of(pool.aff, pool.ks, pool.suspects(res_g, levels.grid, tol))
-            new = take(pool.peaks(pool.residuals(w, sus), sus, tol))
+            new = take(pool.peaks(pool.residuals(w, sus, cache=False), sus, tol))
         if not new.size:
             new = take(pool.peaks(pool.residuals(w, levels.full), levels.full, tol))
         known[new] = True
@@ -245,8 +245,8 @@ def solve_fit(
     p, q = problem.quadratic()
     build_time = time.perf_counter() - start
     start = time.perf_counter()
-    w = unconstrained_weights(p, q)
     tw = _whitening(p) if strategy == "cutting_planes" else None
+    w = unconstrained_weights(p, q) if tw is None else tw @ (-tw.T @ q)
     cnt = _Counter()
     nonconvex = any(c.linearised for c in problem.constraints)
     x_lin = aff_d.positions(w)
@@ -296,7 +296,7 @@ def solve_fit(
     solve_time = time.perf_counter() - start
     dmp = problem.dmp
     wmat = w.reshape(dmp.n_basis, dmp.n_dims)
-    x, v = aff_d.positions(w), aff_d.velocities(w)
+    x, v = x_lin, aff_d.velocities(w)  # x_lin: the positions of the final w
     f = aff_d.psi @ wmat @ aff_d.M.T
     tau = float(problem.tau)  # type: ignore[arg-type]
     acc = (dmp.alpha_z * (dmp.beta_z * (problem.g - x) - tau * v) + f) / tau**2
