@@ -14,21 +14,21 @@ Scripts that call :func:`run_batch` must guard their entry point with ``if __nam
 "__main__":`` (the process pool spawns its workers, which import the main module).
 """
 
-from planner.batch.generate import GeneratedTask, generate_tasks, write_tasks
-from planner.batch.report import summarize, write_report
-from planner.batch.runner import RunSummary, run_batch
-from planner.batch.spec import BatchSpec, load_batch
-from planner.batch.store import ResultStore
+from __future__ import annotations
 
-__all__ = [
-    "BatchSpec",
-    "GeneratedTask",
-    "ResultStore",
-    "RunSummary",
-    "generate_tasks",
-    "load_batch",
-    "run_batch",
-    "summarize",
-    "write_report",
-    "write_tasks",
-]
+from importlib import import_module
+from typing import Any
+
+_EXPORTS = {
+    "BatchSpec": "spec", "load_batch": "spec", "GeneratedTask": "generate", "generate_tasks": "generate",
+    "write_tasks": "generate", "ResultStore": "store", "RunSummary": "runner", "run_batch": "runner",
+    "summarize": "report", "write_report": "report",
+}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    # lazy: the sandbox child imports planner.batch.sandbox without numpy, pydantic, rich or scipy
+    if name in _EXPORTS:
+        return getattr(import_module(f"planner.batch.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module 'planner.batch' has no attribute {name!r}")

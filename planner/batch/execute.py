@@ -44,10 +44,13 @@ def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, simulate: b
     for k in METRIC_COLUMNS:
         row[k] = _finite(m.get(k))
     row["n_switches"] = len(plan.switches) if plan.status == "solved" else None
-    # penetration: how far a switch's or the object's clearance goes below zero [m]
-    clear = [v for v in (m.get("switch_clearance_min"), m.get("switch_obstacle_clearance_min"),
-                         m.get("obstacle_clearance_min")) if _finite(v) is not None]
-    row["penetration_max"] = max(0.0, -min(clear)) if clear else None
+    # penetration [m]: the switches' own report (the dmp switch variant may penetrate), or how far a
+    # clearance goes below zero
+    depth = [-float(v) for v in (m.get("switch_clearance_min"), m.get("switch_obstacle_clearance_min"),
+                                 m.get("obstacle_clearance_min")) if _finite(v) is not None]
+    if _finite(m.get("switch_penetration_max")) is not None:
+        depth.append(float(m["switch_penetration_max"]))
+    row["penetration_max"] = max(0.0, *depth) if depth else None
     row["metrics_json"] = json.dumps({k: (v if _finite(v) is not None else str(v)) for k, v in m.items()})
     if simulate and plan.status == "solved":
         from planner.simulate import simulate_plan

@@ -85,6 +85,12 @@ class Sandbox:
         os.close(c_tx)
         self._tx, self._rx = Connection(p_tx, readable=False), Connection(p_rx, writable=False)
         self.starts += 1
+        try:  # the child says it is ready: its start-up is not part of any call's timeout
+            if not self._rx.poll(STARTUP_TIMEOUT) or self._rx.recv() != "ready":
+                raise EOFError
+        except (EOFError, OSError):
+            self.kill()
+            return
         warmup, deadline = self.warmup, time.monotonic() + STARTUP_TIMEOUT
         for entry, args in warmup:
             out = self._call(entry, args, max(1.0, deadline - time.monotonic()))
@@ -126,6 +132,8 @@ class Sandbox:
             self._start()
             if not self.alive:
                 self._start()  # the warm-up killed it: start once more, without warm-up
+            if not self.alive:
+                return Outcome("crash", message="the sandbox process did not start", detail=self._tail())
         return self._call(entry, args, timeout)
 
     def kill(self) -> None:
@@ -165,6 +173,7 @@ def _child_main() -> None:  # pragma: no cover - runs in the child process
     sys.stdout = sys.stderr
     rx, tx = Connection(0, writable=False), Connection(out_fd, readable=False)
     threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True).start()
+    tx.send("ready")
     while True:
         try:
             entry, args = rx.recv()
