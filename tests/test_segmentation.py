@@ -13,9 +13,11 @@ import pytest
 from dmp.errors import InputError
 from planner.cli import main
 from planner.segmentation import Segmentation, segment
+from planner.segmentation.rest import camera_noise, still_tail
 from problems.dataset import Dataset, Demonstration, load_dataset
 from tools import load_tool
 from tools.objects import OBJECT_RADIUS
+from tools.operator.generate import generate_demonstrations
 
 DATA = Path(__file__).resolve().parents[1] / "problems" / "data" / "finger_demos"
 TIMING = 0.05
@@ -67,11 +69,50 @@ def test_every_push_found_and_none_spurious(ds: Dataset, segs: list[Segmentation
     assert np.mean(e.max(axis=1) <= TIMING) >= 0.99
 
 
-@pytest.mark.xfail(strict=True, reason="not met since the platform's contact truth changed (d7782c2, 03bc530): "
-                   "1 of 121 pushes starts 77 ms off (median 1.5 ms start, 7 ms end)")
 def test_every_push_within_50_ms(ds: Dataset, segs: list[Segmentation]) -> None:
+    """Measured: starts within 30 ms, ends within 18 ms (medians 1.3 ms and 2.8 ms)."""
     e = _all_errors(ds, segs)
     assert e.max() <= TIMING, f"largest timing error {e.max():.3f} s"
+
+
+@pytest.fixture(scope="module")
+def fresh(tmp_path_factory: pytest.TempPathFactory) -> Dataset:
+    """Four demonstrations of another seed (about 1 s each to generate)."""
+    return load_dataset(generate_demonstrations(tmp_path_factory.mktemp("seed1") / "demos", n=4, seed=1))
+
+
+def test_a_dataset_of_another_seed(fresh: Dataset) -> None:
+    """Not tuned to the committed dataset: every push and switch of fresh demonstrations found,
+    none spurious, every push boundary within 50 ms (one push of these lingers 66 ms at its
+    farthest advance, the contact ending at the end of that stall)."""
+    tool = fresh.tool()
+    for d in fresh.demonstrations:
+        s = segment(d, tool)
+        truth = fresh.truth[d.name]
+        errs, missed, spurious = _match(s.pushes, truth["pushes"])
+        assert missed == 0 and spurious == 0, (d.name, missed, spurious)
+        assert np.abs(errs).max() <= TIMING, (d.name, np.abs(errs).max())
+        assert [(w.face_from, w.face_to) for w in s.switches] == [(w["from"], w["to"]) for w in truth["switches"]]
+
+
+def test_a_still_object_is_not_cut_and_a_move_is_found() -> None:
+    """The rest's change-point test: 300 still stretches of 150 camera samples (1.5 mm noise) are
+    never cut (at most 1e-4 each), and a 3 mm move after 100 of them is always found, mostly at
+    the move and at worst 8 samples (0.27 s) off."""
+    rng = np.random.default_rng(3)
+    idx = np.arange(150)
+    for _ in range(300):
+        xy = rng.normal(0.0, 0.0015, (150, 2))
+        kept, whole = still_tail(xy, idx, camera_noise(xy))
+        assert whole and kept.size == 150
+    cuts = []
+    for _ in range(50):
+        xy = rng.normal(0.0, 0.0015, (150, 2))
+        xy[100:] += [0.003, 0.0]
+        kept, whole = still_tail(xy, idx, camera_noise(xy))
+        assert not whole
+        cuts.append(kept[0])
+    assert np.median(cuts) == 100 and np.abs(np.array(cuts) - 100).max() <= 8
 
 
 def test_every_switch_found_in_order_and_none_spurious(ds: Dataset, segs: list[Segmentation]) -> None:

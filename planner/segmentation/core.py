@@ -20,8 +20,14 @@ of a second), so timing comes from the encoders, and the camera only says where 
    the first encoder sample where the outline reaches that rest position (interpolated); the
    outline point touching must lie on the stroke's face (``face_tol``), else another part of the
    tool touches and it is not this face's push.
-3. **Contact end (encoders).** The face's farthest advance (where its normal velocity turns
-   negative): there the face stops pushing and starts to back off, leaving the object at rest.
+3. **Contact end (encoders).** At the face's farthest advance (where its normal velocity turns
+   negative) the face stops pushing and starts to back off, leaving the object at rest (touching
+   the tool as it is there). But a hand can linger there, the face within a few hundredths of a
+   millimetre of its farthest advance for tens of milliseconds (two submovements cancelling, or
+   sliding along the object), and when the contact ends inside that stall the encoders cannot
+   tell (their resolution is about 0.055 mm): the end is the middle of the stall, from the
+   farthest advance to where the face has fallen back by ``r_back`` (where its stroke ends), so
+   the error is at most half the stall's length whichever end is the true one.
 4. **Spans and motion.** Contacts shorter than ``min_contact`` are touches; contacts of one face
    less than ``merge_gap`` apart are one push (tremor can break a contact for a moment); a push
    must move the object by ``min_move`` between the rests around it. The simulated operator's
@@ -31,13 +37,23 @@ of a second), so timing comes from the encoders, and the camera only says where 
    leaves and where the second arrives. The object's rest position during each switch is a fixed
    point (a corner where the active face changes) unless the caller gives the fixed points.
 
-The rest estimates use only the still tail of the camera samples (a change of the object's mean
-position ends the rest), so a push that is not found does not spoil the ones after it.
+The rest estimates use only the camera samples after the last change of the object's mean
+position (:func:`planner.segmentation.rest.still_tail`, a change-point test whose false alarms are
+bounded), so a push that is not found does not spoil the ones after it.
 
-Measured on the committed default dataset and on seeds 1 and 2 (8 demonstrations each, 121-122
-pushes per set): every push and switch found, none spurious, contact starts and ends within 35 ms
-of the simulator's contacts (median 1 ms and 7 ms); with the camera noise raised from 1.5 mm to
-3.8 mm, still all found and within 46 ms.
+The precision of a contact start is that of the rest position along the face's normal divided
+by the speed at which the face approaches it: ``sigma / sqrt(n) / v`` for ``n`` camera samples of
+noise ``sigma`` where no earlier contact pins that position (the first push of a demonstration;
+after a switch, the new face's normal runs along the old face, where the last contact does not
+pin it). For a slow first approach (7 mm/s, 90 samples of 1.5 mm) that is about 20 ms (one
+standard deviation); a push that follows one of the same face is pinned by where that one ended.
+
+Measured on the committed default dataset and on seeds 1, 2 and 3 (8 demonstrations each, 121-123
+pushes per set): every push and switch found, none spurious; contact starts within 30, 24, 29 and
+47 ms of the simulator's contacts, ends within 18, 22, 19 and 43 ms (medians 1.3 ms and 2.8 ms);
+with 2 mm camera noise instead of 1.5 mm (two noise draws on the committed dataset and on seed 1),
+still all found, but starts after a slow approach off by up to 67 ms (about 2 standard deviations
+of the precision above).
 """
 
 from __future__ import annotations
@@ -53,6 +69,7 @@ from scipy.signal import savgol_filter
 from dmp.errors import InputError
 from planner.oe.learn import DemoPush
 from planner.segmentation.geometry import ToolGeometry, nearest_on_segments, to_tool_frame, to_world
+from planner.segmentation.rest import camera_noise, still_tail
 from problems.dataset import Demonstration
 from tools.model import Tool
 from tools.objects import OBJECT_RADIUS
@@ -160,29 +177,6 @@ def _strokes(v: NDArray[np.float64], near: NDArray[np.bool_], dt: float, v_on: f
     return out
 
 
-def _camera_noise(xy: NDArray[np.float64]) -> float:
-    """Robust standard deviation [m] of the camera noise per axis, from successive differences."""
-    d = np.abs(np.diff(xy, axis=0))
-    return float(np.median(d) / (0.6745 * np.sqrt(2.0))) if d.size else 0.0
-
-
-def _still_tail(xy: NDArray[np.float64], idx: NDArray[np.intp], sigma: float, block: int = 6,
-                k: float = 4.0) -> tuple[NDArray[np.intp], bool]:
-    """The samples ``idx`` (time order) from the last change of the object's position: blocks of
-    ``block`` samples are added backwards while their mean stays within ``k`` standard errors of the
-    mean so far (camera noise ``sigma`` [m]). Returns those indices and whether all were kept."""
-    n = idx.size
-    start = max(0, n - block)
-    mean, cnt = xy[idx[start:]].mean(axis=0), n - start
-    while start > 0:
-        b0 = max(0, start - block)
-        bm, bc = xy[idx[b0:start]].mean(axis=0), start - b0
-        if np.hypot(*(bm - mean)) > k * sigma * np.sqrt(1.0 / bc + 1.0 / cnt):
-            break
-        mean, cnt, start = (mean * cnt + bm * bc) / (cnt + bc), cnt + bc, b0
-    return idx[start:], start == 0
-
-
 def _crossing(t: NDArray[np.float64], g: NDArray[np.float64]) -> float | None:
     """First time the gap ``g`` (K,) falls from above 0 to 0 or below, interpolated linearly."""
     hit = np.flatnonzero((g[1:] <= 0.0) & (g[:-1] > 0.0))
@@ -211,6 +205,16 @@ def _zero_down(t: NDArray[np.float64], v: NDArray[np.float64], k: int) -> float:
     if k + 1 >= v.size or v[k] <= v[k + 1]:
         return float(t[k])
     return float(t[k] + (t[k + 1] - t[k]) * v[k] / (v[k] - v[k + 1]))
+
+
+def _fall_back(t: NDArray[np.float64], x: NDArray[np.float64], k: int, tol: float) -> float:
+    """First time [s] after sample ``k`` where the position ``x`` (N,) [m] has fallen ``tol`` [m]
+    below ``x[k]`` (interpolated; the last sample if it never does)."""
+    below = np.flatnonzero(x[k + 1 :] < x[k] - tol)
+    if below.size == 0:
+        return float(t[-1])
+    i = k + 1 + int(below[0])
+    return float(t[i - 1] + (t[i] - t[i - 1]) * (x[i - 1] - (x[k] - tol)) / (x[i - 1] - x[i]))
 
 
 def _pose_at(t: NDArray[np.float64], pose: NDArray[np.float64], when: float) -> NDArray[np.float64]:
@@ -245,7 +249,8 @@ def segment(
             is a candidate push.
         v_on, min_advance: a stroke reaches at least ``v_on`` [m/s] along the face's normal and
             advances at least ``min_advance`` [m]; it ends where the face is farthest forward
-            before falling back by ``r_back`` [m].
+            before falling back by ``r_back`` [m] (about the encoders' resolution); the contact
+            ends midway between that farthest advance and that fall back.
         min_contact, merge_gap: contacts shorter than ``min_contact`` [s] are touches, not pushes;
             contacts of one face less than ``merge_gap`` [s] apart are one push.
         face_tol: a contact belongs to a stroke's face only if the outline point nearest the
@@ -284,11 +289,11 @@ def segment(
         """Rest position (2,) from the camera samples in [t0, t1], projected onto the curve one
         radius off the outline at pose ``after`` (1, 3) when the rest follows a contact. With
         fewer than 3 samples: None, or with a ``fallback`` pose the smoothed track at ``t0``
-        projected onto the outline at that pose. Only the still tail of the samples counts
-        (:func:`_still_tail`), so a push that was not found does not spoil the next rest."""
+        projected onto the outline at that pose. Only the samples after the object's last move count
+        (:func:`planner.segmentation.rest.still_tail`), so a push not found does not spoil the next rest."""
         idx = np.flatnonzero((t_o >= t0) & (t_o <= t1))
         if idx.size >= 3:
-            idx, whole = _still_tail(demo.object_xy, idx, sigma)
+            idx, whole = still_tail(demo.object_xy, idx, sigma)
             p = demo.object_xy[idx].mean(axis=0)
             if not whole:  # the object moved after t0 (a push not found): no longer where it was left
                 after = None
@@ -304,7 +309,7 @@ def segment(
         n = float(np.hypot(*u[0]))
         return p if n == 0.0 else to_world(near + radius * u / n, after)[0]
 
-    sigma = _camera_noise(demo.object_xy)
+    sigma = camera_noise(demo.object_xy)
 
     def touches_face(p: NDArray[np.float64], when: float, j: int) -> bool:
         """Whether the outline point nearest the object at ``p`` (2,) lies on face ``j`` (within
@@ -342,8 +347,9 @@ def segment(
             continue  # the stroke stopped short of the object
         if not touches_face(before, t_start, j):
             continue  # another part of the tool touches: not this face's push
-        t_end = _zero_down(t, v_n[:, j], e0)
-        end_pose = _pose_at(t, pose, t_end)
+        t_top = _zero_down(t, v_n[:, j], e0)  # the farthest advance: the object is left touching here
+        t_end = 0.5 * (t_top + _fall_back(t, np.cumsum(v_n[:, j]) * dt, e0, r_back))
+        end_pose = _pose_at(t, pose, t_top)
         found.append((j, t_start, t_end, before, end_pose))
         prev_end, prev_pose, prev_face = t_end, end_pose, j
     # pass 2: contacts shorter than min_contact are touches; contacts of one face less than
