@@ -45,6 +45,22 @@ def _cmd_demos(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_learn(args: argparse.Namespace) -> int:
+    import time
+
+    from planner.skills import learn_skills
+
+    t0 = time.perf_counter()
+    skills = learn_skills(args.dataset, k=args.k, virtual=args.virtual)
+    path = skills.save(args.out)
+    ss = skills.ss
+    assert ss is not None  # learn_skills(with_ss=True)
+    print(f"learned from {args.dataset} in {time.perf_counter() - t0:.1f} s: OE skill (k = {skills.oe.k}, "
+          f"{len(skills.oe.recovered)} recovered demonstrations), SS skill ({ss.faces[0]} -> {ss.faces[1]}, "
+          f"{ss.n_demos} switches, virtual motion {ss.virtual!r}); wrote {path}")
+    return EXIT_OK
+
+
 def _cmd_segment(args: argparse.Namespace) -> int:
     import json
 
@@ -172,6 +188,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--n", type=int, default=8, help="number of demonstrations")
     p.add_argument("--seed", type=int, default=0, help="seed (generation is deterministic for it)")
     p.add_argument("--out", type=Path, required=True, help="dataset folder to write")
+    p = _add(sub, "learn", "learn the OE and SS skills from a demonstration dataset into one skills file",
+             "tooltransfer learn problems/data/finger_demos -o out/skills.json", _cmd_learn)
+    p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs)")
+    p.add_argument("-o", "--out", type=Path, required=True, help="skills file to write (JSON)")
+    p.add_argument("--k", type=float, default=0.5, help="adjusting factor of the mappings (6)-(7), in (0, 1)")
+    p.add_argument("--virtual", choices=("arch", "line"), default="arch", help="virtual object motion of the SS skill")
     p = _add(sub, "segment", "segment a dataset into pushes and switches (and draw it)",
              "tooltransfer segment problems/data/finger_demos --figure out/demos.png", _cmd_segment)
     p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs, see the README)")

@@ -4,8 +4,8 @@ Stages (each timed in the plan's metrics): skills (the universal OE skill learne
 dataset, cached in memory by the dataset's content hash), OE condensing with the chosen variant,
 a switch between consecutive pushes, approach and retreat, timing under the tool's speed and
 acceleration limits, inverse kinematics of the whole tool path (joint limits checked), and the
-checks: the shared OE metrics on the dense object path, the switches' clearances, the joint-limit
-violation.
+checks: the shared OE metrics on the dense object path, the switches' clearances, the tool body
+against the obstacles at every sample, the joint-limit violation.
 
 Switch variants (:mod:`planner.switches`): ``arch`` (the geometric reference of :mod:`tools.arch`),
 ``dmp`` (the SS skill recombined, eq. 18; its penetration is reported, not avoided) and ``opt`` (the
@@ -29,6 +29,7 @@ from planner.oe.qp_variant import QPOptions, condense_qp
 from planner.plan import Plan, Segment
 from planner.skills import Skills, learn_skills, load_skills_file
 from planner.switches import arch_planner, skill_planner
+from planner.tool_clearance import tool_obstacle_clearance
 from problems.task import Task, resolve, task_obstacles, task_platform, task_tool
 from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
 
@@ -78,6 +79,31 @@ def task_skills(task: Task, task_path: str | Path = ".", *, need_ss: bool = True
     return learn_skills(folder, task.oe.k, task.ss.virtual_motion, with_ss=need_ss)
 
 
+def effective_margin(task: Task, obstacles: list) -> float:
+    """The safety margin [m] the plan can keep: the task's ``safety_margin``, reduced to the object's
+    clearance from the nearest obstacle at the start or the target when that is smaller (an object
+    that starts touching an obstacle keeps at least its starting clearance; the plan's metrics
+    report the margin used).
+
+    Raises:
+        InputError: the object overlaps an obstacle at the start or the target.
+    """
+    import shapely
+
+    r = task.object.radius
+    margin = task.safety_margin
+    for field, point in (("start", task.start), ("target", task.target)):
+        disc = shapely.Point(point).buffer(r, quad_segs=64)
+        for i, o in enumerate(obstacles):
+            shape = shapely.Point(o.centre).buffer(o.radius, quad_segs=64) if hasattr(o, "centre") else o
+            gap = float(shapely.distance(disc, shape))
+            if gap == 0.0 and shapely.intersection(disc, shape).area > 1e-10:
+                raise InputError(field, f"an object position clear of obstacles[{i}] (the object of radius "
+                                 f"{r} m overlaps it)", list(point))
+            margin = min(margin, gap)
+    return margin
+
+
 def solve(task: Task, task_path: str | Path = ".") -> Plan:
     """Plan ``task`` (relative paths in it are relative to ``task_path``'s folder)."""
     stages: dict[str, float] = {}
@@ -95,6 +121,7 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     desc = _describe(task, tool, platform, obstacles)
     base = {"variant": {"oe": task.variants.oe, "ss": task.variants.ss}, "task": task.model_dump(mode="json"),
             **desc}
+    margin = effective_margin(task, obstacles)
     skills = task_skills(task, task_path, need_ss=task.variants.ss != "arch")
     lap("skills")
     t, x, _ = generalize(skills.oe.dmp, np.array(task.start), np.array(task.target))
@@ -102,11 +129,11 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     if task.variants.oe == "qp":
         o = task.oe
         opts = QPOptions(n_samples=o.n_samples, n_basis=o.n_basis, segments=o.segments, max_pushes=o.max_pushes,
-                         candidates=o.candidates, switch_price=o.switch_price, margin=task.safety_margin)
+                         candidates=o.candidates, switch_price=o.switch_price, margin=margin)
         push_plan = condense_qp(t, x, tool, platform, target, obstacles, opts)
     else:
         push_plan = condense_mapping(t, x, tool, platform, target, obstacles,
-                                     MappingOptions(k=task.oe.k, tube=task.oe.tube, margin=task.safety_margin))
+                                     MappingOptions(k=task.oe.k, tube=task.oe.tube, margin=margin))
     lap("oe")
     if push_plan.status != "solved":
         return Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base)
@@ -125,7 +152,7 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     except SwitchFailed as exc:
         return Plan(status="infeasible", reason=str(exc), metrics={**push_plan.metrics, **stages}, **base)
     lap("switches_and_timing")
-    metrics = {**push_plan.metrics, **stages}
+    metrics = {**push_plan.metrics, **stages, "safety_margin_used": margin}
     sws = [sw for *_, sw in motion.switches]
     metrics["switch_clearance_min"] = min((sw.min_clearance for sw in sws), default=float("inf"))
     metrics["switch_obstacle_clearance_min"] = min(
@@ -133,6 +160,8 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     metrics["switch_penetration_max"] = max(
         (max(sw.info.get("object_penetration", 0.0), sw.info.get("obstacle_penetration", 0.0)) for sw in sws),
         default=0.0)
+    near = tool_obstacle_clearance(tool, motion.tool_pose, obstacles)
+    metrics["tool_obstacle_clearance_min"] = near.distance
     metrics["joint_limit_violation_max"] = float(motion.joint_violation.max())
     metrics["duration"] = float(motion.t[-1])
     metrics["stretch"] = motion.stretch
@@ -141,6 +170,12 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
         return Plan(status="infeasible", metrics=metrics, **base,
                     reason=f"joint limits: the tool path leaves the Omni's limits at t = {motion.t[bad]:.2f} s "
                            f"by {motion.joint_violation[bad]:.3g} rad")
+    if near.distance <= 0.0:
+        k = near.sample
+        return Plan(status="infeasible", metrics=metrics, **base,
+                    reason=f"tool-obstacle collision: the tool outline overlaps obstacles[{near.obstacle}] at "
+                           f"t = {motion.t[k]:.2f} s ({motion.phase[k]}; tool at "
+                           f"{np.round(motion.tool_pose[k, :2], 4).tolist()} m)")
     pushes = tuple(Segment("push", a, b, (f,), {"direction": d}) for f, a, b, d in motion.pushes)
     switches = tuple(Segment("switch", a, b, (fa, fb), {"min_clearance": sw.min_clearance,
                                                          "penetration": sw.info.get("object_penetration", 0.0)})

@@ -132,7 +132,8 @@ class SkillsSpec(_Model):
 class Variants(_Model):
     oe: Literal["mapping", "qp"] = Field("qp", description="OE condensing: the paper's mapping or the QP search")
     ss: Literal["arch", "dmp", "opt"] = Field(
-        "arch", description="switch paths: the geometric arch (reference), DMP recombination or the CasADi NLP"
+        "opt", description="switch paths: the CasADi NLP (default), DMP recombination (the paper) or the "
+        "geometric arch (a reference)",
     )
 
 

@@ -26,7 +26,7 @@ def test_solve_transfer_task_writes_a_checkable_plan(tmp_path: Path, capsys) -> 
     assert len(plan.t) == len(plan.joints) == len(plan.phase) == len(plan.face) > 100
     assert set(plan.phase) == {"approach", "push", "switch", "retreat"}
     assert plan.metrics["joint_limit_violation_max"] == 0.0
-    assert plan.metrics["switch_clearance_min"] > 0.003
+    assert plan.metrics["switch_clearance_min"] >= 0.002 - 1e-6  # task.ss.clearance (opt switches)
     assert plan.metrics["goal_error"] <= 1e-3
     # the object stands still outside the pushes
     between = (plan.t > plan.pushes[0].t_end) & (plan.t < plan.pushes[1].t_start)

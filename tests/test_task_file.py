@@ -26,7 +26,7 @@ def test_defaults_and_runtime_objects(tmp_path: Path) -> None:
     data = {**BASE, "obstacles": [{"kind": "disc", "centre": [0.0, 0.16], "radius": 0.01},
                                   {"kind": "polygon", "vertices": [[0.0, 0.09], [0.02, 0.09], [0.02, 0.1]]}]}
     task = load_task(write(tmp_path, data))
-    assert task.variants.oe == "qp" and task.variants.ss == "arch"
+    assert task.variants.oe == "qp" and task.variants.ss == "opt"
     tool = build_tool(task)
     assert tool.name == "slope"
     assert task_platform(task, tool).a_t == tool.a_t

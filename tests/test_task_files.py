@@ -1,0 +1,67 @@
+"""Every committed task file (the paper's cases and the hard cases) plans to its stated outcome,
+and every solved plan passes the plan's own checks: joints within the limits, the object within
+the (used) safety margin of the obstacles, the tool body clear of them, the object at the target."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from planner.solve import solve
+from problems.task import load_task
+
+ROOT = Path(__file__).resolve().parents[1] / "problems"
+
+EXPECTED = {
+    "paper/demo_tool1.yaml": "solved",
+    "paper/transfer_tool2.yaml": "solved",
+    "paper/fig11_t_shape.yaml": "solved",
+    "paper/fig11_trapezoid.yaml": "solved",
+    "paper/fig14_safety_margin.yaml": "solved",
+    "hard/target_behind_obstacle.yaml": "solved",
+    "hard/target_at_edge_of_reach.yaml": "solved",
+    "hard/start_touching_obstacle.yaml": "solved",
+    "hard/only_face_pushes_away.yaml": "infeasible",
+    "hard/target_out_of_reach.yaml": "infeasible",
+}
+
+
+def test_every_task_file_is_listed() -> None:
+    found = {str(p.relative_to(ROOT)) for p in ROOT.glob("*/*.yaml") if p.parent.name in ("paper", "hard")}
+    assert found == set(EXPECTED)
+
+
+@pytest.mark.parametrize("name", sorted(EXPECTED))
+def test_task_file_outcome(name: str) -> None:
+    path = ROOT / name
+    plan = solve(load_task(path), path)
+    assert plan.status == EXPECTED[name], plan.reason
+    m = plan.metrics
+    if plan.status == "infeasible":
+        assert plan.reason
+        return
+    assert m["goal_error"] <= 1e-6
+    assert m["joint_limit_violation_max"] == 0.0
+    assert m["reach_violation_max"] <= 1e-9
+    assert m["cone_violation_max"] <= 1e-5
+    assert m["tool_obstacle_clearance_min"] > 0.0
+    assert m["switch_penetration_max"] <= 5e-6  # opt switches touch at the contacts only
+    assert m["obstacle_clearance_min"] >= m["safety_margin_used"] - 1e-6
+
+
+def test_start_touching_keeps_the_starting_clearance() -> None:
+    path = ROOT / "hard/start_touching_obstacle.yaml"
+    plan = solve(load_task(path), path)
+    assert plan.metrics["safety_margin_used"] == pytest.approx(0.0, abs=1e-6)
+    assert plan.metrics["obstacle_clearance_min"] >= -1e-6
+
+
+def test_object_overlapping_an_obstacle_is_bad_input(tmp_path: Path) -> None:
+    from dmp.errors import InputError
+
+    text = (ROOT / "hard/start_touching_obstacle.yaml").read_text().replace("[0.0225, 0.12]", "[0.03, 0.12]")
+    bad = tmp_path / "overlap.yaml"
+    bad.write_text(text.replace("../data/finger_demos", str(ROOT / "data" / "finger_demos")))
+    with pytest.raises(InputError, match="start"):
+        solve(load_task(bad), bad)
