@@ -127,3 +127,32 @@ def test_outside_polygon_holds_on_the_dense_grid() -> None:
     gap = shapely.distance(box, shapely.points(r.rollout.x)).min()
     assert gap >= 0.003 - 1e-9
     assert r.violations["obstacle"] <= 1e-9
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_exact_step_matches_quadprog_cold_and_warm(seed: int) -> None:
+    """The C dual active-set core (cold, and warm-started from a random guess of the active rows)
+    reaches quadprog's optimum of ``min 0.5 |z - z_c|^2, E z = f, G z <= h``."""
+    quadprog = pytest.importorskip("quadprog")
+    from dmp.qp.dual_active_set import DualActiveSet
+
+    rng = np.random.default_rng(seed)
+    n, m = 12, 60
+    z_c = rng.normal(size=n)
+    g = rng.normal(size=(m, n))
+    g /= np.linalg.norm(g, axis=1)[:, None]
+    inner = rng.normal(scale=0.3, size=n)
+    h = g @ inner + rng.uniform(0.0, 0.2, m)  # feasible: ``inner`` meets every row
+    e = rng.normal(size=(1, n))
+    f = e @ inner
+    ref = quadprog.solve_qp(np.eye(n), z_c, -np.vstack([e, g]).T, -np.concatenate([f, h]), meq=1)[0]
+    n_act = int(np.sum(g @ ref - h > -1e-9))
+    assert n_act >= 3  # the rows matter
+    for warm in (None, rng.choice(m, size=n_act + 3, replace=False)):
+        st = DualActiveSet(z_c, g, h)
+        st.add_equalities(e, f)
+        if warm is not None:
+            st.warm_start(warm)
+        z = st.solve(lambda _z: (np.zeros((0, n)), np.zeros(0)))
+        np.testing.assert_allclose(z, ref, atol=1e-10)
+        assert (g @ z - h).max() <= 1e-12

@@ -53,6 +53,8 @@ def _core() -> ctypes.CDLL:
         _pint, _ptr, _pint, _pint, _ptr,
     ]
     lib.gi_solve.restype = c_int
+    lib.gi_warm.argtypes = [c_int, _ptr, _ptr, _ptr, _ptr, _ptr, _ptr, _pint, c_int, _ptr, _ptr, _ptr, c_int, _ptr]
+    lib.gi_warm.restype = c_int
     return lib
 
 
@@ -87,6 +89,7 @@ class DualActiveSet:
         n = z_c.size
         self.n, self.tol = n, tol
         self.z = np.array(z_c, dtype=np.float64)
+        self._zc = self.z.copy()
         self.G = np.ascontiguousarray(g, dtype=np.float64).reshape(-1, n)
         self.h = np.ascontiguousarray(h, dtype=np.float64).ravel()
         self._Q = np.asfortranarray(np.eye(n))
@@ -126,6 +129,22 @@ class DualActiveSet:
             if code < 0:
                 raise DualInfeasible([], equalities=True)
             self.n_eq += code == 0
+
+    def warm_start(self, rows: NDArray[np.intp]) -> int:
+        """Take the candidate rows ``rows`` (indices into ``G``, a guess of the active set) as active,
+        then drop those with negative multipliers until the point is dual feasible; call after
+        :meth:`add_equalities` and before :meth:`solve`. Returns the number of rows kept."""
+        idx = np.ascontiguousarray(rows, dtype=np.int32)
+        if idx.size == 0:
+            return 0
+        if idx.min() < 0 or idx.max() >= self.h.size:
+            raise IndexError("warm start rows out of range")
+        p = self._p
+        return int(_core().gi_warm(
+            self.n, _addr(self.G, np.float64), _addr(self.h, np.float64), p["Q"], p["R"], p["u"], p["active"],
+            ctypes.byref(self._q), self.n_eq, p["z"], _addr(self._zc, np.float64), _addr(idx, np.int32), idx.size,
+            p["work"],
+        ))
 
     def add_rows(self, g: NDArray[np.float64], h: NDArray[np.float64]) -> None:
         """Append candidate inequality rows ``g z <= h``."""

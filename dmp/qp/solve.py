@@ -128,14 +128,16 @@ class _Levels:
 def _cutting_planes(
     pool: RowPool, levels: _Levels, tw: NDArray[np.float64], z_c: NDArray[np.float64],
     seed: NDArray[np.intp] | None, solver: str, options: dict[str, Any] | None, tol: float, stride: int,
-    cnt: _Counter, seed_with_backend: bool,
-) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
-    """Exact optimum over every dense row; returns ``z`` and the ids of the active rows."""
+    cnt: _Counter, seed_with_backend: bool, extra: NDArray[np.intp] | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.intp]]:
+    """Exact optimum over every dense row, starting from the guessed active rows ``seed`` (plus
+    candidates ``extra``); returns ``z``, the ids of the active rows and of every candidate."""
     a, b, eq_fams = pool.equality_rows()
     a_z, b_z = _normalise(a @ tw, b)
-    if seed is None and seed_with_backend:
-        seed = _seed(pool, tw, z_c, a_z, b_z, stride * levels.factor, solver, options, cnt)
-    cand = np.unique(seed) if seed is not None else np.zeros(0, dtype=np.intp)
+    guess = np.unique(seed) if seed is not None else np.zeros(0, dtype=np.intp)
+    cand = np.union1d(guess, extra) if extra is not None else guess
+    if seed is None and seed_with_backend:  # the backend's nearly active rows: candidates, not a guess
+        cand = _seed(pool, tw, z_c, a_z, b_z, stride * levels.factor, solver, options, cnt)
     known = np.zeros(pool.size, dtype=bool)
     known[cand] = True
     chunks = [cand]
@@ -161,6 +163,8 @@ def _cutting_planes(
 
     try:
         state.add_equalities(a_z, b_z)
+        if guess.size:
+            state.warm_start(np.searchsorted(cand, guess))
         z = state.solve(oracle)
     except DualInfeasible as inf:
         ids = np.concatenate(chunks)
@@ -175,7 +179,8 @@ def _cutting_planes(
     finally:
         cnt.n_exact += state.iterations
     cnt.finish = True
-    return z, np.concatenate(chunks)[np.asarray(state.active, dtype=np.intp)]
+    every = np.concatenate(chunks)
+    return z, every[np.asarray(state.active, dtype=np.intp)], every
 
 
 def _full(
@@ -250,7 +255,7 @@ def solve_fit(
     cnt = _Counter()
     nonconvex = any(c.linearised for c in problem.constraints)
     x_lin = aff_d.positions(w)
-    ws_keys = np.zeros(0, dtype=np.intp)
+    ws_keys = seen = np.zeros(0, dtype=np.intp)
     levels: _Levels | None = None
     obj_prev = np.inf
     n_coarse = coarse_samples if coarse_samples else COARSE_PER_BASIS * problem.dmp.n_basis
@@ -265,9 +270,11 @@ def solve_fit(
                     grid = np.arange(0, aff_d.t.size, problem.dense_factor)
                     levels = _Levels(Level.of(aff_d, pool.ks, grid), Level.of(aff_d, pool.ks, None),
                                      problem.dense_factor)
-                seed = ws_keys if scp > 1 else None  # re-linearised: warm start from the active rows
-                z, ws_keys = _cutting_planes(
+                # re-linearised: warm start from the active rows, the other rows seen as candidates
+                seed = ws_keys if scp > 1 else None
+                z, ws_keys, seen = _cutting_planes(
                     pool, levels, tw, z_c, seed, solver, options, tol, stride, cnt, seed_with_backend,
+                    seen if scp > 1 else None,
                 )
                 w = tw @ z
             else:
