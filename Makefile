@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test bench bench-sim bench-ss lint clean
+.PHONY: demo test bench bench-sim bench-ss bench-batch lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -32,6 +32,11 @@ bench-sim: $(PY)
 bench-ss: $(PY)
 	$(PY) -m pip install -q -e .
 	$(PY) benchmarks/bench_ss.py
+
+# 1,000 generated tasks x 4 variants on 2 cores, process pool and Dask LocalCluster (several minutes)
+bench-batch: $(PY)
+	$(PY) -m pip install -q -e .
+	$(PY) benchmarks/bench_batch.py
 
 lint: $(PY)
 	$(PY) -m ruff check .
