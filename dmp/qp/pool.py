@@ -2,15 +2,17 @@
 
 Every inequality row of every constraint at every dense sample has a flat id: constraint ``c``
 owns ids ``offset[c] .. offset[c] + m_c * K_c``, row ``j`` of its sample position ``p`` (in the
-constraint's samples ``k``) is ``offset[c] + j * K_c + p``, so each row's time series is
-contiguous. Rows are only materialised for the ids asked for; residuals come from a rollout of a
-subset of samples (a :class:`Level`): the constraint grid, the samples it points at, or all.
+constraint's samples ``k``) is ``offset[c] + j * K_c + p``. Rows are only materialised for the ids
+asked for. For residuals, the rows of all constraints are stacked as *series* (one per constraint
+row ``j``) over all dense samples, with neutral entries where a constraint does not apply, so that
+the residuals of every row on any subset of samples (a :class:`Samples`) take a handful of array
+operations whatever the number of constraints.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,211 +21,216 @@ from dmp.affine import AffineRollout
 from dmp.qp.constraints.base import Coefficients, Constraint
 
 Ids = NDArray[np.intp]
+Cols = NDArray[np.intp] | slice
+
+OFF = -1e30
+"""Residual of a series at a sample where its constraint does not apply (finite, so differences stay finite)."""
 
 
 @dataclass(frozen=True)
-class Level:
-    """Rollout data on the dense samples ``s`` (S,), and where each constraint's samples fall in ``s``.
+class Samples:
+    """The affine rollout restricted to the dense samples ``cols`` (a slice or sorted indices)."""
 
-    ``pos[c]`` are positions in the constraint's samples ``k`` that lie in ``s``, ``loc[c]`` their
-    index in ``s`` (a slice where contiguous, so gathers become views).
-    """
-
-    s: NDArray[np.intp]
+    cols: Cols
+    idx: NDArray[np.intp]
+    """the dense sample indices."""
     x_free: NDArray[np.float64]
     v_free: NDArray[np.float64]
     gx: NDArray[np.float64]
     gv: NDArray[np.float64]
-    pos: list[NDArray[np.intp]]
-    loc: list[NDArray[np.intp] | slice]
 
     @classmethod
-    def of(cls, aff: AffineRollout, ks: Sequence[NDArray[np.intp]], s: NDArray[np.intp] | None) -> Level:
-        """Level on samples ``s`` (sorted; None for every sample) for constraints sampled at ``ks``."""
-        if s is None:
-            s = np.arange(aff.t.size)
-            return cls(s, aff.x_free, aff.v_free, aff.Gx, aff.Gv, [np.arange(k.size) for k in ks],
-                       [_as_slice(k) for k in ks])
-        mask = np.zeros(aff.t.size, dtype=bool)
-        mask[s] = True
-        where = np.cumsum(mask) - 1
-        pos = [np.flatnonzero(mask[k]) for k in ks]
-        loc = [_as_slice(where[k[p]]) for k, p in zip(ks, pos, strict=True)]
-        return cls(s, aff.x_free[s], aff.v_free[s], np.ascontiguousarray(aff.Gx[s]),
-                   np.ascontiguousarray(aff.Gv[s]), pos, loc)
-
-
-def _as_slice(idx: NDArray[np.intp]) -> NDArray[np.intp] | slice:
-    """``idx`` (increasing) as a slice when it is a contiguous run."""
-    if idx.size and int(idx[-1]) - int(idx[0]) == idx.size - 1:
-        return slice(int(idx[0]), int(idx[-1]) + 1)
-    return idx
-
-
-@dataclass(frozen=True)
-class _Terms:
-    """One constraint's coefficients on a level, laid out for residuals without gathers:
-    ``neg_bound`` (m, P) or (m, 1) and, per dimension d, ``pos[d]`` / ``vel[d]`` (m, P) or (m, 1)."""
-
-    neg_bound: NDArray[np.float64]
-    pos: list[NDArray[np.float64]] | None
-    vel: list[NDArray[np.float64]] | None
-
-    @classmethod
-    def of(cls, co: Coefficients, pos: NDArray[np.intp]) -> _Terms:
-        def per_dim(a: NDArray[np.float64] | None) -> list[NDArray[np.float64]] | None:
-            if a is None:
-                return None
-            if _const(a):
-                return [np.ascontiguousarray(a[0, :, d, None]) for d in range(a.shape[2])]
-            return [np.ascontiguousarray(a[pos, :, d].T) for d in range(a.shape[2])]
-
-        nb = -(co.bound[:1].T if _const(co.bound) else co.bound[pos].T)
-        return cls(np.ascontiguousarray(nb), per_dim(co.a_pos), per_dim(co.a_vel))
-
-
-def _const(a: NDArray[np.float64]) -> bool:
-    """Whether ``a`` (K, ...) repeats one value along its first axis without copies (a broadcast)."""
-    return a.shape[0] > 0 and a.strides[0] == 0
+    def of(cls, aff: AffineRollout, cols: Cols) -> Samples:
+        idx = np.arange(aff.t.size)[cols] if isinstance(cols, slice) else cols
+        if isinstance(cols, slice) and cols == slice(None):
+            return cls(cols, idx, aff.x_free, aff.v_free, aff.Gx, aff.Gv)
+        return cls(cols, idx, aff.x_free[cols], aff.v_free[cols], np.ascontiguousarray(aff.Gx[cols]),
+                   np.ascontiguousarray(aff.Gv[cols]))
 
 
 @dataclass
 class RowPool:
-    """Every inequality row of every constraint at every dense sample, for one linearisation path."""
+    """Every inequality row of every constraint at every dense sample, for one linearisation path.
+
+    Attributes (series ``s`` = one row ``j`` of one inequality constraint, dense samples ``t``):
+        neg_bound: (S, T) ``-bound`` (``OFF`` where the constraint does not apply).
+        a_pos: (P, n, T) position coefficients of series [0, P) (zero where it does not apply).
+        a_vel: (S - vel_from, n, T) velocity coefficients of series [vel_from, S).
+        id_of: (S, T) row id (-1 where it does not apply).
+    """
 
     constraints: Sequence[Constraint]
     coeffs: list[Coefficients]
     aff: AffineRollout
     offset: NDArray[np.intp]
-    """(C + 1,) first id of each constraint; equality constraints own no ids."""
-    _prep: dict[int, tuple[Level, list[tuple[int, _Terms]]]] = field(default_factory=dict, repr=False)
+    first_series: NDArray[np.intp]
+    k_all: NDArray[np.intp]
+    k_start: NDArray[np.intp]
+    neg_bound: NDArray[np.float64]
+    a_pos: NDArray[np.float64]
+    a_vel: NDArray[np.float64]
+    id_of: NDArray[np.intp]
+    vel_from: int
 
     @classmethod
-    def build(cls, constraints: Sequence[Constraint], aff: AffineRollout, x_lin: NDArray[np.float64]) -> RowPool:
-        coeffs = [c.coefficients(aff.t, x_lin) for c in constraints]
-        sizes = [0 if c.equality else co.bound.size for c, co in zip(constraints, coeffs, strict=True)]
-        return cls(constraints, coeffs, aff, np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp))
+    def build(
+        cls, constraints: Sequence[Constraint], aff: AffineRollout, x_lin: NDArray[np.float64],
+        previous: RowPool | None = None,
+    ) -> RowPool:
+        """Rows linearised along ``x_lin`` (T, n). With ``previous`` (a pool of the same constraints
+        and grid, given up by the caller) its arrays are reused and only linearised constraints
+        are refreshed."""
+        coeffs = [c.coefficients(aff.t, x_lin) if (previous is None or c.linearised) else co
+                  for c, co in zip(constraints, previous.coeffs if previous else [None] * len(constraints),
+                                   strict=True)]
+        if previous is not None:
+            pool = previous
+            pool.coeffs = coeffs
+            for ci, c in enumerate(constraints):
+                if c.linearised and not c.equality:
+                    pool._fill(ci)
+            return pool
+        ineq = [not c.equality for c in constraints]
+        sizes = [co.bound.size if q else 0 for co, q in zip(coeffs, ineq, strict=True)]
+        t, n = aff.t.size, aff.n_dims
+        # series ordered by kind: position-only, both, velocity-only, so that the rows with
+        # position terms are series [0, n_pos) and those with velocity terms [n_pos_only, S)
+        kind = [(co.a_vel is not None) - (co.a_pos is not None) + 1 if q else -1
+                for co, q in zip(coeffs, ineq, strict=True)]
+        first = np.zeros(len(constraints), dtype=np.intp)
+        n_kind = [0, 0, 0]
+        for want in range(3):
+            for ci, kd in enumerate(kind):
+                if kd == want:
+                    first[ci] = sum(n_kind)
+                    n_kind[want] += coeffs[ci].bound.shape[1]
+        s = sum(n_kind)
+        pool = cls(
+            constraints, coeffs, aff,
+            offset=np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp),
+            first_series=first,
+            k_all=np.concatenate([np.zeros(0, dtype=np.intp)] + [co.k for co in coeffs]).astype(np.intp),
+            k_start=np.concatenate([[0], np.cumsum([co.k.size for co in coeffs])]).astype(np.intp),
+            neg_bound=np.full((s, t), OFF),
+            a_pos=np.zeros((n_kind[0] + n_kind[1], n, t)),
+            a_vel=np.zeros((n_kind[1] + n_kind[2], n, t)),
+            id_of=np.full((s, t), -1, dtype=np.intp),
+            vel_from=n_kind[0],
+        )
+        for ci, q in enumerate(ineq):
+            if q:
+                pool._fill(ci)
+        return pool
+
+    def _fill(self, ci: int) -> None:
+        co, s0 = self.coeffs[ci], int(self.first_series[ci])
+        k, m = co.k, co.bound.shape[1]
+        self.neg_bound[s0:s0 + m, k] = -co.bound.T
+        if co.a_pos is not None:
+            self.a_pos[s0:s0 + m][:, :, k] = co.a_pos.transpose(1, 2, 0)
+        if co.a_vel is not None:
+            v0 = s0 - self.vel_from
+            self.a_vel[v0:v0 + m][:, :, k] = co.a_vel.transpose(1, 2, 0)
+        self.id_of[s0:s0 + m, k] = self.offset[ci] + np.arange(m)[:, None] * k.size + np.arange(k.size)
 
     @property
     def size(self) -> int:
         return int(self.offset[-1])
 
-    @property
-    def ks(self) -> list[NDArray[np.intp]]:
-        return [co.k for co in self.coeffs]
-
-    def _inequalities(self) -> list[int]:
-        return [i for i, (c, co) in enumerate(zip(self.constraints, self.coeffs, strict=True))
-                if not c.equality and co.k.size]
-
-    def _terms(self, level: Level, cache: bool) -> list[tuple[int, _Terms]]:
-        key = id(level)
-        if key in self._prep and self._prep[key][0] is level:
-            return self._prep[key][1]
-        terms = [(ci, _Terms.of(self.coeffs[ci], level.pos[ci])) for ci in self._inequalities()
-                 if level.pos[ci].size]
-        if cache:
-            self._prep[key] = (level, terms)
-        return terms
-
-    def residuals(
-        self, w: NDArray[np.float64], level: Level, cache: bool = True
-    ) -> list[tuple[int, NDArray[np.float64]]]:
-        """Residuals ``(c, R)`` of every inequality constraint ``c`` on the level's samples, ``R`` of
-        shape (m_c, len(level.pos[c])) (<= 0 is satisfied), for flat weights ``w``. The level's
-        coefficient layout is kept for the next call when ``cache``."""
+    def residuals(self, w: NDArray[np.float64], smp: Samples) -> NDArray[np.float64]:
+        """Residuals (S, len(samples)) of every series at the samples (<= 0 is satisfied; about
+        ``OFF`` where a constraint does not apply) for flat weights ``w``."""
         wm = np.asarray(w).reshape(-1, self.aff.n_dims) @ self.aff.M.T
-        x = level.x_free + level.gx @ wm
-        v = level.v_free + level.gv @ wm
-        out = []
-        for ci, t in self._terms(level, cache):
-            loc = level.loc[ci]
-            r = t.neg_bound
-            for coef, xv in ((t.pos, x), (t.vel, v)):
-                if coef is not None:
-                    for d, c in enumerate(coef):
-                        r = r + c * xv[loc, d]
-            out.append((ci, np.broadcast_to(r, (r.shape[0], level.pos[ci].size))))
-        return out
+        cols = smp.cols
+        r = self.neg_bound[:, cols].copy()
+        n_pos = self.a_pos.shape[0]
+        for a, rows, base, g in ((self.a_pos, r[:n_pos], smp.x_free, smp.gx),
+                                 (self.a_vel, r[self.vel_from:], smp.v_free, smp.gv)):
+            if a.shape[0]:
+                xv = base + g @ wm
+                for d in range(xv.shape[1]):
+                    rows += a[:, d, cols] * xv[:, d]
+        return r
 
-    def ids(self, ci: int, j: NDArray[np.intp], p: NDArray[np.intp]) -> Ids:
-        """Ids of rows ``j`` at sample positions ``p`` of constraint ``ci``."""
-        return self.offset[ci] + j * self.coeffs[ci].k.size + p
+    def peaks(self, res: NDArray[np.float64], smp: Samples, threshold: float) -> Ids:
+        """Ids of the local maxima in time (over the samples) of rows violated by more than ``threshold``."""
+        peak = res > threshold
+        if not peak.any():
+            return np.zeros(0, dtype=np.intp)
+        peak[:, 1:] &= res[:, 1:] >= res[:, :-1]
+        peak[:, :-1] &= res[:, :-1] >= res[:, 1:]
+        s, c = np.nonzero(peak)
+        return self.id_of[s, smp.idx[c]]
 
-    def peaks(
-        self, res: list[tuple[int, NDArray[np.float64]]], level: Level, threshold: float, neighbours: int = 0
-    ) -> Ids:
-        """Ids of the local maxima in time (over the level's samples) of rows violated by more than
-        ``threshold``; with ``neighbours`` > 0 also the rows that many dense samples either side."""
-        out = []
-        for ci, r in res:
-            peak = r > threshold
-            if not peak.any():
-                continue
-            peak[:, 1:] &= r[:, 1:] >= r[:, :-1]
-            peak[:, :-1] &= r[:, :-1] >= r[:, 1:]
-            j, p = np.nonzero(peak)
-            p = level.pos[ci][p]
-            if neighbours:
-                kk = self.coeffs[ci].k.size
-                p = (p[:, None] + np.arange(-neighbours, neighbours + 1)).ravel()
-                j = np.repeat(j, 2 * neighbours + 1)
-                ok = (p >= 0) & (p < kk)
-                j, p = j[ok], p[ok]
-            out.append(self.ids(ci, j, p))
-        return np.concatenate(out) if out else np.zeros(0, dtype=np.intp)
-
-    def suspects(self, res: list[tuple[int, NDArray[np.float64]]], grid: Level, tol: float) -> NDArray[np.intp]:
+    def suspects(
+        self, res: NDArray[np.float64], grid: Samples, tol: float, outside: NDArray[np.bool_]
+    ) -> NDArray[np.intp]:
         """Dense samples that may violate a row, judged from the residuals ``res`` on the ``grid``
-        level (every ``factor``-th dense sample).
+        samples (sorted); ``outside`` is :meth:`outside_grid` of the grid.
 
         A stretch between two grid samples is suspect when its larger end residual plus half the
         second differences there (four times the interpolation-error estimate of a smooth residual)
-        exceeds ``tol``; dense samples of a constraint outside its grid samples are always suspects.
-        Only a filter: the caller confirms with a full pass.
+        exceeds ``tol``; dense samples of a constraint outside the span of its grid samples are
+        always suspects. Only a filter: the caller confirms with a full pass.
         """
+        if res.shape[0] == 0:
+            return np.flatnonzero(outside)
+        kg = grid.idx
+        on = res > 0.5 * OFF
+        d2 = np.zeros_like(res)
+        inner = on[:, :-2] & on[:, 1:-1] & on[:, 2:]
+        d2[:, 1:-1] = np.where(inner, np.abs(res[:, :-2] - 2.0 * res[:, 1:-1] + res[:, 2:]), 0.0)
+        top = (res + 0.5 * d2).max(axis=0)
+        bad = np.flatnonzero(np.maximum(top[:-1], top[1:]) > tol)
+        cover = np.zeros(self.aff.t.size + 1, dtype=np.int64)
+        np.add.at(cover, kg[bad], 1)
+        np.add.at(cover, kg[bad + 1] + 1, -1)
+        mask = np.cumsum(cover[:-1]) > 0
+        return np.flatnonzero(mask | outside)
+
+    def outside_grid(self, grid: Samples) -> NDArray[np.bool_]:
+        """(T,) dense samples of a constraint outside the span of its samples on ``grid`` (all of
+        them when fewer than two are on it)."""
         mask = np.zeros(self.aff.t.size, dtype=bool)
-        cover = np.zeros(mask.size + 1, dtype=np.int64)
-        seen = set()
-        for ci, r in res:
-            seen.add(ci)
-            k = self.coeffs[ci].k
-            kg = k[grid.pos[ci]]
-            if kg.size < 2:
-                mask[k] = True
+        on_grid = np.zeros(self.aff.t.size, dtype=bool)
+        on_grid[grid.idx] = True
+        for c, co in zip(self.constraints, self.coeffs, strict=True):
+            if c.equality or co.k.size == 0:
                 continue
-            d2 = np.zeros_like(r)
-            d2[:, 1:-1] = np.abs(r[:, :-2] - 2.0 * r[:, 1:-1] + r[:, 2:])
-            top = (r + 0.5 * d2).max(axis=0)
-            bad = np.flatnonzero(np.maximum(top[:-1], top[1:]) > tol)
-            np.add.at(cover, kg[bad], 1)
-            np.add.at(cover, kg[bad + 1] + 1, -1)
-            mask[k[(k < kg[0]) | (k > kg[-1])]] = True
-        for ci in self._inequalities():
-            if ci not in seen:  # no sample on the grid at all
-                mask[self.coeffs[ci].k] = True
-        mask |= np.cumsum(cover[:-1]) > 0
-        return np.flatnonzero(mask)
+            kin = co.k[on_grid[co.k]]
+            mask[co.k if kin.size < 2 else co.k[(co.k < kin[0]) | (co.k > kin[-1])]] = True
+        return mask
 
     def decode(self, ids: Ids) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
         """Constraint, row and sample position of each id."""
         ci = np.searchsorted(self.offset, ids, side="right") - 1
-        kk = np.array([co.k.size for co in self.coeffs], dtype=np.intp)[ci]
+        kk = np.diff(self.k_start)[ci]
         local = ids - self.offset[ci]
         return ci, local // kk, local % kk
 
     def rows(self, ids: Ids) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``G`` (len(ids), N*n) and ``h`` for the given ids, in order."""
-        nw = self.aff.n_weights
-        g, h = np.zeros((ids.size, nw)), np.zeros(ids.size)
+        aff = self.aff
+        n_b, n = aff.Gx.shape[1], aff.n_dims
         if ids.size == 0:
-            return g, h
+            return np.zeros((0, n_b * n)), np.zeros(0)
         ci, j, p = self.decode(ids)
-        for c in np.unique(ci).tolist():
-            sel = np.flatnonzero(ci == c)
-            rows = self.coeffs[c].rows(self.aff, p[sel], j[sel])
-            g[sel], h[sel] = rows.G, rows.h
-        return g, h
+        s = self.first_series[ci] + j
+        t = self.k_all[self.k_start[ci] + p]
+        g = np.zeros((ids.size, n_b, n))
+        h = -self.neg_bound[s, t]
+        n_pos = self.a_pos.shape[0]
+        for a, sel, s_a, resp, free in (
+            (self.a_pos, s < n_pos, s, aff.Gx, aff.x_free),
+            (self.a_vel, s >= self.vel_from, s - self.vel_from, aff.Gv, aff.v_free),
+        ):
+            if not sel.any():
+                continue
+            tt = t[sel]
+            coef = a[s_a[sel], :, tt]  # (m, n)
+            g[sel] += resp[tt][:, :, None] * (coef @ aff.M)[:, None, :]
+            h[sel] -= np.einsum("jd,jd->j", coef, free[tt])
+        return g.reshape(ids.size, n_b * n), h
 
     def equality_rows(self) -> tuple[NDArray[np.float64], NDArray[np.float64], list[str]]:
         """Every equality row ``A w = b`` and its family."""
@@ -243,9 +250,11 @@ class RowPool:
 
     def coarse_ids(self, stride: int) -> Ids:
         """Every inequality row at every ``stride``-th dense sample of each constraint (and its last)."""
-        out = []
-        for ci in self._inequalities():
-            kk, m = self.coeffs[ci].k.size, self.coeffs[ci].bound.shape[1]
+        out = [np.zeros(0, dtype=np.intp)]
+        for ci, (c, co) in enumerate(zip(self.constraints, self.coeffs, strict=True)):
+            if c.equality or co.k.size == 0:
+                continue
+            kk, m = co.k.size, co.bound.shape[1]
             p = np.unique(np.append(np.arange(0, kk, stride), kk - 1))
-            out.append(self.ids(ci, np.repeat(np.arange(m), p.size), np.tile(p, m)))
-        return np.concatenate(out) if out else np.zeros(0, dtype=np.intp)
+            out.append(self.offset[ci] + np.repeat(np.arange(m), p.size) * kk + np.tile(p, m))
+        return np.concatenate(out)

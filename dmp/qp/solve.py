@@ -38,7 +38,7 @@ from dmp.affine import AffineRollout
 from dmp.errors import InputError, SolverError
 from dmp.qp.backends import QPOutcome, check_solver, solve_qp
 from dmp.qp.dual_active_set import DualActiveSet, DualInfeasible
-from dmp.qp.pool import Level, RowPool
+from dmp.qp.pool import RowPool, Samples
 from dmp.qp.problem import FitProblem, stack_rows, unconstrained_weights
 from dmp.qp.result import FitResult
 from dmp.trajectory import Rollout
@@ -120,9 +120,11 @@ def _seed(
 class _Levels:
     """The sample subsets the oracle looks at: the constraint grid, then all dense samples."""
 
-    grid: Level
-    full: Level
+    grid: Samples
+    full: Samples
     factor: int
+    outside: NDArray[np.bool_]
+    """dense samples the grid says nothing about (see :meth:`RowPool.outside_grid`)."""
 
 
 def _cutting_planes(
@@ -153,8 +155,8 @@ def _cutting_planes(
         res_g = pool.residuals(w, levels.grid)
         new = take(pool.peaks(res_g, levels.grid, tol))
         if not new.size:
-            sus = Level.of(pool.aff, pool.ks, pool.suspects(res_g, levels.grid, tol))
-            new = take(pool.peaks(pool.residuals(w, sus, cache=False), sus, tol))
+            sus = Samples.of(pool.aff, pool.suspects(res_g, levels.grid, tol, levels.outside))
+            new = take(pool.peaks(pool.residuals(w, sus), sus, tol))
         if not new.size:
             new = take(pool.peaks(pool.residuals(w, levels.full), levels.full, tol))
         known[new] = True
@@ -257,6 +259,7 @@ def solve_fit(
     x_lin = aff_d.positions(w)
     ws_keys = seen = np.zeros(0, dtype=np.intp)
     levels: _Levels | None = None
+    pool: RowPool | None = None
     obj_prev = np.inf
     n_coarse = coarse_samples if coarse_samples else COARSE_PER_BASIS * problem.dmp.n_basis
     stride = max(1, round(np.asarray(problem.t).size / n_coarse))
@@ -265,11 +268,11 @@ def solve_fit(
         for scp in range(1, max_scp + 1):
             if tw is not None:
                 z_c = -tw.T @ q
-                pool = RowPool.build(problem.constraints, aff_d, x_lin)
+                pool = RowPool.build(problem.constraints, aff_d, x_lin, previous=pool)
                 if levels is None:
-                    grid = np.arange(0, aff_d.t.size, problem.dense_factor)
-                    levels = _Levels(Level.of(aff_d, pool.ks, grid), Level.of(aff_d, pool.ks, None),
-                                     problem.dense_factor)
+                    grid = Samples.of(aff_d, slice(0, None, problem.dense_factor))
+                    levels = _Levels(grid, Samples.of(aff_d, slice(None)), problem.dense_factor,
+                                     pool.outside_grid(grid))
                 # re-linearised: warm start from the active rows, the other rows seen as candidates
                 seed = ws_keys if scp > 1 else None
                 z, ws_keys, seen = _cutting_planes(
