@@ -124,14 +124,18 @@ class RowPool:
 
     def _fill(self, ci: int) -> None:
         co, s0 = self.coeffs[ci], int(self.first_series[ci])
-        k, m = co.k, co.bound.shape[1]
+        m = co.bound.shape[1]
+        kk = co.k.size
+        k: NDArray[np.intp] | slice = co.k
+        if kk and int(co.k[-1]) - int(co.k[0]) == kk - 1:  # a window: a slice writes much faster
+            k = slice(int(co.k[0]), int(co.k[0]) + kk)
         self.neg_bound[s0:s0 + m, k] = -co.bound.T
         if co.a_pos is not None:
-            self.a_pos[s0:s0 + m][:, :, k] = co.a_pos.transpose(1, 2, 0)
+            self.a_pos[s0:s0 + m, :, k] = co.a_pos.transpose(1, 2, 0)
         if co.a_vel is not None:
             v0 = s0 - self.vel_from
-            self.a_vel[v0:v0 + m][:, :, k] = co.a_vel.transpose(1, 2, 0)
-        self.id_of[s0:s0 + m, k] = self.offset[ci] + np.arange(m)[:, None] * k.size + np.arange(k.size)
+            self.a_vel[v0:v0 + m, :, k] = co.a_vel.transpose(1, 2, 0)
+        self.id_of[s0:s0 + m, k] = self.offset[ci] + np.arange(m)[:, None] * kk + np.arange(kk)
 
     @property
     def size(self) -> int:
@@ -152,15 +156,23 @@ class RowPool:
                     rows += a[:, d, cols] * xv[:, d]
         return r
 
-    def peaks(self, res: NDArray[np.float64], smp: Samples, threshold: float) -> Ids:
-        """Ids of the local maxima in time (over the samples) of rows violated by more than ``threshold``."""
+    def peak_cells(
+        self, res: NDArray[np.float64], smp: Samples, threshold: float
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """Series and dense sample of the local maxima in time (over the samples) of rows violated
+        by more than ``threshold``."""
         peak = res > threshold
         if not peak.any():
-            return np.zeros(0, dtype=np.intp)
+            return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
         peak[:, 1:] &= res[:, 1:] >= res[:, :-1]
         peak[:, :-1] &= res[:, :-1] >= res[:, 1:]
         s, c = np.nonzero(peak)
-        return self.id_of[s, smp.idx[c]]
+        return s, smp.idx[c]
+
+    def peaks(self, res: NDArray[np.float64], smp: Samples, threshold: float) -> Ids:
+        """Ids of the local maxima in time (over the samples) of rows violated by more than ``threshold``."""
+        s, t = self.peak_cells(res, smp, threshold)
+        return self.id_of[s, t]
 
     def suspects(
         self, res: NDArray[np.float64], grid: Samples, tol: float, outside: NDArray[np.bool_]

@@ -79,7 +79,7 @@ def _whitening(p: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _normalise(g: NDArray[np.float64], h: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    s = np.linalg.norm(g, axis=1)
+    s = np.sqrt(np.einsum("ij,ij->i", g, g))
     s[s == 0.0] = 1.0
     return g / s[:, None], h / s
 
