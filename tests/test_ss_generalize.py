@@ -63,3 +63,29 @@ def test_unreachable_end_contact_is_infeasible_with_the_reason(skill: SwitchSkil
     path = recombine(skill, task)
     assert path.status == "infeasible"
     assert "end contact pose" in path.reason and "unreachable" in path.reason
+
+
+def test_cached_linear_map_equals_fit_and_rollout(skill: SwitchSkill) -> None:
+    # planner.ss.recombination: the fit of f^o and the rollout as one linear map per grid
+    rng = np.random.default_rng(3)
+    for tool, fa, fb in [("finger", "upper", "left"), ("t_shape", "left", "top"), ("trapezoid", "left", "inclined")]:
+        task = SwitchTask(load_tool(tool), fa, fb, np.array([rng.uniform(-0.03, 0.03), rng.uniform(0.14, 0.18)]))
+        for n in (40, 77):
+            fast = recombine(skill, task, n_samples=n, fast=True)
+            slow = recombine(skill, task, n_samples=n, fast=False)
+            np.testing.assert_allclose(fast.info["x_contact_point"], slow.info["x_contact_point"], rtol=0, atol=1e-14)
+            np.testing.assert_allclose(fast.xy, slow.xy, rtol=0, atol=1e-14)
+            assert fast.object_penetration == pytest.approx(slow.object_penetration, abs=1e-15)
+
+
+def test_vectorized_disc_depths_equal_tools_clearance(skill: SwitchSkill) -> None:
+    from planner.ss.verify import sweep_check
+
+    for name in ("fig11a", "fig11a_stem", "fig11b"):
+        task = fig11_task(name)
+        path = recombine(skill, task, n_samples=40)
+        fast = sweep_check(task.tool, path.xy, path.yaw, task.shape, exact_disc="union")
+        slow = sweep_check(task.tool, path.xy, path.yaw, task.shape, exact_disc="substeps")
+        assert fast.max_penetration > 1e-3  # these dmp paths do penetrate: the depths are exercised
+        np.testing.assert_allclose(fast.depth, slow.depth, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(fast.gap, slow.gap, rtol=0, atol=1e-12)

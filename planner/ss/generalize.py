@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from dmp.errors import InfeasibleError, InputError
 from planner.ss.heading import centre_path, heading, rot
 from planner.ss.learn import SwitchSkill
+from planner.ss.recombination import dmp_settings, linear_recombination, recombination_map
 from planner.ss.result import SwitchPath
 from planner.ss.task import SwitchTask
 from planner.ss.verify import sweep_checks
@@ -72,11 +73,14 @@ def measure(path: SwitchPath, task: SwitchTask) -> SwitchPath:
 
 def recombine(
     skill: SwitchSkill, task: SwitchTask, *, n_samples: int = 100, way: Way | float = "short",
-    measured: bool = True,
+    measured: bool = True, fast: bool = True,
 ) -> SwitchPath:
     """The ``dmp`` switch path of ``task`` (module docstring) at ``n_samples`` times, measured with
     shapely unless ``measured`` is False; never raises for an impossible switch (status
-    ``infeasible`` with the reason)."""
+    ``infeasible`` with the reason). ``fast``: the fit of ``f^o`` and the rollout as one cached
+    linear map per time grid (:mod:`planner.ss.recombination`; the same numbers to round-off), when
+    the skill's DMPs are linear (scaling ``"none"``); False: :meth:`dmp.primitive.DMP.fit` and
+    ``rollout`` on every call."""
     t0 = time.perf_counter()
     if not isinstance(skill, SwitchSkill):
         raise InputError("skill", "a SwitchSkill", type(skill).__name__)
@@ -90,13 +94,17 @@ def recombine(
     t = np.linspace(0.0, T, n_samples)
     q_a, q_b, p_a, p_b = a.object_point, b.object_point, a.tool_point, b.tool_point
     x_virtual = virtual_motion(skill.virtual, t, q_a, q_b, task.shape, clearance=skill.clearance, way=way) - q_a
-    dmp_o = skill.new_dmp().fit(t, x_virtual)
     tool_shift = -rot(b.pose.yaw) @ (p_b - p_a)
     k1 = scale_factors(tool_shift, skill.tool_shift)
     k2 = np.ones(2)
-    w = skill.dmp_t.weights * k1 + dmp_o.weights * k2  # eq. (18), per axis
     g = (q_b - q_a) + tool_shift
-    x = skill.dmp_t.rollout(t, x0=np.zeros(2), g=g, tau=T, weights=w).x
+    if fast and linear_recombination(skill.dmp_t) and dmp_settings(skill.dmp_t) == dmp_settings(skill.dmp_x):
+        # the same maths as below as one cached linear map per grid (planner.ss.recombination)
+        x = recombination_map(skill.dmp_t, t).path(skill.dmp_t.weights * k1, x_virtual * k2, g)
+    else:
+        dmp_o = skill.new_dmp().fit(t, x_virtual)
+        w = skill.dmp_t.weights * k1 + dmp_o.weights * k2  # eq. (18), per axis
+        x = skill.dmp_t.rollout(t, x0=np.zeros(2), g=g, tau=T, weights=w).x
     corr = g - x[-1]
     x = x + corr * min_jerk(t / T)[:, None]
     xy = centre_path(task.omni, x + q_a, p_a)

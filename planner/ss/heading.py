@@ -10,6 +10,7 @@ switch NLP can use the heading as a function of position.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -57,11 +58,22 @@ def centre_path(
     is at ``x`` (K, 2), by fixed-point iteration on the heading (a contraction: the heading varies by
     ``|p| / |x - b|`` per metre, here well below 1)."""
     x = np.atleast_2d(np.asarray(x, dtype=np.float64))
-    pv = np.asarray(p, dtype=np.float64)
-    c = x - pv
+    px, py = (float(v) for v in np.asarray(p, dtype=np.float64))
+    c = x - (px, py)
     for _ in range(iters):
-        new = x - np.einsum("kij,j->ki", rot(heading(platform, c)), pv)
+        a = heading(platform, c)
+        ca, sa = np.cos(a), np.sin(a)
+        new = np.empty_like(c)
+        new[:, 0] = x[:, 0] - (ca * px - sa * py)
+        new[:, 1] = x[:, 1] - (sa * px + ca * py)
         if np.max(np.abs(new - c)) < tol:
             return new
         c = new
     return c
+
+
+def heading_scalar(platform: OmniPlatform, x: float, y: float) -> float:
+    """:func:`heading` of one point ``(x, y)`` [m] in scalar arithmetic (no arrays)."""
+    dx, dy = x - float(platform.base_xy[0]), y - float(platform.base_xy[1])
+    u = math.sqrt(max(dx * dx + dy * dy - D_TOOL**2, 1e-18))
+    return math.atan2(dy, dx) - math.atan2(D_TOOL, u) - math.pi / 2

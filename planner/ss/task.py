@@ -5,6 +5,7 @@ positions and select the potential contact points on the object and the tool").
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -13,7 +14,7 @@ from numpy.typing import NDArray
 
 from dmp.errors import InfeasibleError, InputError
 from dmp.validation import check_array, check_positive
-from planner.ss.heading import heading, rot
+from planner.ss.heading import heading_scalar
 from tools.contact import Contact, contact_pose
 from tools.model import Tool
 from tools.objects import Disc, DiscObject, ObjectModel, Obstacle, PolygonObject
@@ -94,12 +95,19 @@ class SwitchTask:
         # the heading fixed point yaw = heading(x(yaw)) of tools.contact.contact_on_platform, with the
         # closed-form heading (a contraction: |p| / |x - b| << 1), then the exact contact and the IK
         s0, s1 = f.contact_range
-        p = f.point(0.5 * (s0 + s1) if s is None else float(s))
-        yaw = float(heading(self.omni, self.centre)[0])
+        px, py = (float(v) for v in f.point(0.5 * (s0 + s1) if s is None else float(s)))
+        nx, ny = (float(v) for v in f.normal)
+        cx, cy = (float(v) for v in self.centre)
+        disc = self.obj.radius if isinstance(self.obj, DiscObject) else None
+        yaw = heading_scalar(self.omni, cx, cy)
         for _ in range(60):
-            n = rot(yaw) @ f.normal
-            x = self.centre + self.obj.support(-n) - rot(yaw) @ p
-            new = float(heading(self.omni, x)[0])
+            c, sn = math.cos(yaw), math.sin(yaw)
+            wx, wy = c * nx - sn * ny, sn * nx + c * ny  # the face normal in the world
+            if disc is not None:  # the disc's support point along -n, without arrays
+                qx, qy = cx - disc * wx / math.hypot(wx, wy), cy - disc * wy / math.hypot(wx, wy)
+            else:
+                qx, qy = (float(v) for v in self.centre + self.obj.support(np.array([-wx, -wy])))
+            new = heading_scalar(self.omni, qx - (c * px - sn * py), qy - (sn * px + c * py))
             done = abs(new - yaw) < 1e-14
             yaw = new
             if done:

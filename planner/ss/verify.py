@@ -6,8 +6,10 @@ hull of the piece at the step's two poses, grown by ``rho * dyaw^2 / 8`` (``rho`
 outline vertex from the tool origin) for the rotation; that growth is subtracted from the hull's
 distance, so the clearances here are lower bounds within that bound (below 1 um for the headings of
 a switch). The hulls of all steps and pieces are built and measured in one vectorized shapely call.
-Steps whose hull reaches into a shape get their penetration depth from
-:func:`tools.clearance.swept_penetration_depth` (the union of the pieces, exact for a disc).
+Steps whose hull reaches into a shape get their penetration depth by the construction of
+:func:`tools.clearance.swept_penetration_depth` (sub-steps, grown hulls, their union; exact for a
+disc): for a disc vectorized over all such steps (:func:`disc_depths`, the same numbers), for a
+polygon step by step.
 """
 
 from __future__ import annotations
@@ -24,6 +26,19 @@ from tools.clearance import swept_penetration_depth
 from tools.model import Tool
 from tools.objects import Disc, Obstacle
 from tools.pose import Pose2D
+
+_PIECES: dict[int, tuple[shapely.Polygon, tuple[NDArray[np.float64], ...], float]] = {}
+
+
+def tool_geometry(tool: Tool) -> tuple[tuple[NDArray[np.float64], ...], float]:
+    """The vertices (V, 2) [m] of each convex piece of ``tool`` (tool frame) and its radius ``rho``
+    [m], cached per outline object (``Tool.convex_pieces`` decomposes and checks the outline on every
+    access, about 0.2 ms; the cache keeps the outline alive, so its id is not reused)."""
+    hit = _PIECES.get(id(tool.outline))
+    if hit is None or hit[0] is not tool.outline:
+        verts = tuple(np.asarray(p.exterior.coords, dtype=np.float64)[:-1] for p in tool.convex_pieces)
+        hit = _PIECES[id(tool.outline)] = (tool.outline, verts, tool.radius)
+    return hit[1], hit[2]
 
 
 @dataclass(frozen=True)
@@ -54,26 +69,69 @@ def step_hulls(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64]) ->
     """Convex hulls (K-1, P) of each convex piece over each step, and the rotation growth (K-1,) [m]."""
     r = rot(yaw)  # (K, 2, 2)
     pieces = []
-    for piece in tool.convex_pieces:
-        v = np.asarray(piece.exterior.coords, dtype=np.float64)[:-1]  # (V, 2)
+    verts, rho = tool_geometry(tool)
+    for v in verts:
         w = np.einsum("kij,vj->kvi", r, v) + xy[:, None, :]  # (K, V, 2)
         pts = np.concatenate([w[:-1], w[1:]], axis=1)  # (K-1, 2V, 2)
         pieces.append(shapely.convex_hull(shapely.multipoints(pts)))
-    grow = tool.radius * np.diff(yaw) ** 2 / 8.0
+    grow = rho * np.diff(yaw) ** 2 / 8.0
     return np.stack(pieces, axis=1), grow
 
 
+def disc_depths(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], steps: NDArray[np.intp],
+                disc: Disc, tol: float = 1e-5) -> NDArray[np.float64]:
+    """Penetration depths [m] (len(steps),) into ``disc`` of the tool swept over the ``steps``
+    (indices k of the steps k -> k + 1 of ``xy`` (K, 2) / ``yaw`` (K,)), by the construction of
+    :func:`tools.clearance.swept_penetration_depth` vectorized over the steps: each step cut into
+    ``n = ceil(|dyaw| / sqrt(8 tol / rho))`` sub-steps, the hull of each convex piece over each
+    sub-step grown by ``rho (dyaw / n)^2 / 8``, their union ``U``; the depth is ``R - sd(c, U)``
+    (``sd`` negative inside)."""
+    verts, rho = tool_geometry(tool)
+    dyaw = np.abs(yaw[steps + 1] - yaw[steps])
+    n = np.maximum(1, np.ceil(dyaw / np.sqrt(8.0 * tol / rho))).astype(int)
+    n[dyaw == 0.0] = 1
+    n_max = int(n.max())
+    f = np.arange(n_max + 1) / n[:, None]  # (S, n_max + 1) fractions, past 1 for padding
+    f = np.minimum(f, 1.0)
+    a0, a1 = yaw[steps], yaw[steps + 1]
+    p = xy[steps][:, None, :] + f[..., None] * (xy[steps + 1] - xy[steps])[:, None, :]  # (S, n+1, 2)
+    r = rot(a0[:, None] + f * (a1 - a0)[:, None])  # (S, n+1, 2, 2)
+    grow = rho * (dyaw / n) ** 2 / 8.0
+    hulls = []
+    for v in verts:
+        w = np.einsum("snij,vj->snvi", r, v) + p[:, :, None, :]  # (S, n+1, V, 2)
+        pts = np.concatenate([w[:, :-1], w[:, 1:]], axis=2)  # (S, n, 2V, 2)
+        h = shapely.convex_hull(shapely.multipoints(pts))
+        h = np.where(grow[:, None] > 0, shapely.buffer(h, grow[:, None], quad_segs=4), h)
+        h[np.arange(n_max)[None, :] >= n[:, None]] = None  # padding beyond each step's sub-steps
+        hulls.append(h)
+    u = shapely.union_all(np.concatenate(hulls, axis=1), axis=1)
+    cx, cy = float(disc.centre[0]), float(disc.centre[1])
+    dist = shapely.distance(shapely.boundary(u), shapely.Point(cx, cy))
+    sd = np.where(shapely.contains_xy(u, cx, cy), -dist, dist)
+    return np.maximum(0.0, disc.radius - sd)
+
+
 def sweep_check(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], shape: Disc | shapely.Polygon,
-                hulls: tuple[NDArray, NDArray] | None = None, depth_tol: float = 1e-6) -> SweepCheck:
+                hulls: tuple[NDArray, NDArray] | None = None, depth_tol: float = 1e-6,
+                exact_disc: str = "union", sub_tol: float = 1e-5) -> SweepCheck:
     """Clearance and penetration of the tool swept along ``xy`` (K, 2) [m] / ``yaw`` (K,) [rad]
     against ``shape`` (a :class:`~tools.objects.Disc` or a shapely polygon). ``hulls`` from
     :func:`step_hulls` may be passed to share them between shapes. Steps reaching into a disc by
     more than ``depth_tol`` [m], or intersecting a polygon, get their exact depth (and ``gap = -depth``);
-    elsewhere the depth is ``max(0, -gap)``."""
+    elsewhere the depth is ``max(0, -gap)``. For a disc, ``exact_disc`` ``"union"`` measures those
+    depths with :func:`disc_depths` (all steps in one vectorized pass); ``"substeps"``: one
+    :func:`tools.clearance.swept_penetration_depth` per step (the same construction, step by step)."""
     h, grow = hulls if hulls is not None else step_hulls(tool, xy, yaw)
     if isinstance(shape, Disc):
         d = shapely.distance(h, shapely.Point(shape.centre)).min(axis=1) - shape.radius - grow
         inside = d < -depth_tol
+        if exact_disc == "union" and inside.any():
+            idx = np.flatnonzero(inside)
+            depth = np.maximum(0.0, -d)
+            depth[idx] = disc_depths(tool, xy, yaw, idx, shape, sub_tol)
+            d[idx] = np.minimum(d[idx], -depth[idx])
+            return SweepCheck(d, depth)
     else:
         d = shapely.distance(h, shape).min(axis=1) - grow
         inside = shapely.intersects(h, shape).any(axis=1)
