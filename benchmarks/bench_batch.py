@@ -47,10 +47,12 @@ def _run(batch: Path, db: Path, **kw: object) -> dict[str, float]:
     s = run_batch(batch, db, progress=False, **kw)
     wall = time.perf_counter() - t0
     with sqlite3.connect(db) as c:
-        cpu = c.execute("SELECT SUM(cpu_time), COUNT(*), SUM(status = 'solved'), SUM(status IN ('error', 'timeout')) "
-                        "FROM results").fetchone()
+        cpu = c.execute("SELECT SUM(cpu_time), COUNT(*), SUM(status = 'solved'), SUM(status IN ('error', 'timeout')), "
+                        "SUM(wall_time) FROM results").fetchone()
+    # busy: the share of the slots' time spent inside jobs (the executor's overhead and idle slots are the rest)
     return {"wall": wall, "run_wall": s.wall, "rows": s.stored, "job_cpu": cpu[0] or 0.0, "solved": cpu[2],
-            "failed": cpu[3], "parent_cpu": time.process_time() - c0, "slots": s.slots}
+            "failed": cpu[3], "parent_cpu": time.process_time() - c0, "slots": s.slots,
+            "busy": (cpu[4] or 0.0) / (s.wall * s.slots) if s.wall > 0 else float("nan")}
 
 
 def main() -> None:
@@ -72,10 +74,14 @@ def main() -> None:
             r = runs[int(np.argsort([x["wall"] for x in runs])[len(runs) // 2])]
             print(f"{name:>18}: {r['rows']} plans ({args.count} tasks x {n_var} variants) in {r['wall']:.1f} s wall "
                   f"(run {r['run_wall']:.1f} s after the warm-up), {r['solved']} solved, {r['failed']} error/timeout; "
-                  f"CPU in the jobs {r['job_cpu']:.1f} s; throughput {r['rows'] / r['run_wall'] / r['slots']:.3f} "
-                  f"plans/s per core ({r['rows'] / r['run_wall'] / r['slots'] / n_var:.3f} tasks/s per core)")
+                  f"CPU in the jobs {r['job_cpu']:.1f} s, slots busy {100 * r['busy']:.0f}%; "
+                  f"throughput {r['rows'] / r['run_wall'] / r['slots']:.3f} plans/s per core "
+                  f"({r['rows'] / r['run_wall'] / r['slots'] / n_var:.3f} tasks/s per core)")
         pw, dw = float(np.median([x["wall"] for x in pool])), float(np.median([x["wall"] for x in dask]))
-        print(f"Dask / pool wall time: {dw / pw:.2f} (target <= 1.3)")
+        pc = float(np.median([x["job_cpu"] for x in pool]))
+        dc = float(np.median([x["job_cpu"] for x in dask]))
+        print(f"Dask / pool wall time: {dw / pw:.2f} (target <= 1.3); CPU in the jobs: {dc / pc:.2f} "
+              "(a ratio far from 1 means the machine's load changed between the runs)")
         if args.count < 1000:
             per = float(np.median([x["run_wall"] for x in pool])) / args.count
             print(f"EXTRAPOLATED from {args.count} tasks (not measured): 1,000 tasks on the pool ~ "
