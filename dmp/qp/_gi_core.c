@@ -12,6 +12,7 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 /* x86-64 builds carry an AVX2/FMA clone of the two entry points next to the baseline one, picked
@@ -264,6 +265,50 @@ GI_CLONES int gi_warm(int n, const double *G, const double *h, double *Q, double
             for (int j = 0; j < i; ++j) u[j] -= col[j] * a;
         }
     }
+}
+
+/*
+ * Residuals of stacked constraint rows and their violated local maxima in time (the oracle's scan,
+ * see dmp/qp/pool.py): series s at dense sample t reads
+ *     r = nb[s, t] + sum_d apos[s, d, t] x[j, d]  (s < npos)  + sum_d avel[s - vfrom, d, t] v[j, d]  (s >= vfrom)
+ * for the L level samples t = idx[j] with positions x and velocities v (L x n, row-major); arrays
+ * nb (S x T), apos (npos x n x T), avel ((S - vfrom) x n x T) are C-ordered. Writes r to res
+ * (S x L) when res is not NULL, and the series and sample of every r > thr that is >= both
+ * neighbours (in level order) to out_s, out_t (up to cap). Returns the number of peaks (which may
+ * exceed cap: the caller then asks again with room for all).
+ */
+static double series_at(int s, int j, int t, int n, int T, int npos, int vfrom, const double *nb,
+                        const double *apos, const double *avel, const double *x, const double *v) {
+    double r = nb[(size_t)s * T + t];
+    if (s < npos)
+        for (int d = 0; d < n; ++d) r += apos[((size_t)s * n + d) * T + t] * x[(size_t)j * n + d];
+    if (s >= vfrom)
+        for (int d = 0; d < n; ++d) r += avel[((size_t)(s - vfrom) * n + d) * T + t] * v[(size_t)j * n + d];
+    return r;
+}
+
+int gi_scan(int S, int T, int L, const int64_t *idx, int n, int npos, int vfrom, const double *nb, const double *apos,
+            const double *avel, const double *x, const double *v, double thr, double *res, int *out_s, int64_t *out_t,
+            int cap) {
+    int count = 0;
+    for (int s = 0; s < S; ++s) {
+        double prev = -INFINITY, cur = L ? series_at(s, 0, (int)idx[0], n, T, npos, vfrom, nb, apos, avel, x, v) : 0.0;
+        for (int j = 0; j < L; ++j) {
+            const double next = j + 1 < L ? series_at(s, j + 1, (int)idx[j + 1], n, T, npos, vfrom, nb, apos, avel, x, v)
+                                          : -INFINITY;
+            if (res) res[(size_t)s * L + j] = cur;
+            if (cur > thr && cur >= prev && cur >= next) {
+                if (count < cap) {
+                    out_s[count] = s;
+                    out_t[count] = idx[j];
+                }
+                ++count;
+            }
+            prev = cur;
+            cur = next;
+        }
+    }
+    return count;
 }
 
 /* The module only carries the C functions above (loaded with ctypes); it has no Python API. */

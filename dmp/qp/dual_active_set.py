@@ -21,49 +21,17 @@ quadratic programs", Math. Programming 27 (1983) 1-33.
 from __future__ import annotations
 
 import ctypes
-import importlib.util
 from collections.abc import Callable
-from functools import cache
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from dmp.qp.native import addr, core
 
 RowSource = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64]]]
 """``oracle(z) -> (G_new, h_new)``: rows violated at ``z`` that the candidates lack (empty if none)."""
 
 _NEED_ROWS, _INFEASIBLE, _MAX_ITER = 0, -1, -2
-_ptr = ctypes.c_void_p  # arrays go in as raw addresses: ndpointer checks cost ~7 us per argument and call
-_pint = ctypes.POINTER(ctypes.c_int)
-
-
-@cache
-def _core() -> ctypes.CDLL:
-    spec = importlib.util.find_spec("dmp.qp._gi_core")
-    if spec is None or spec.origin is None:
-        raise ImportError(
-            "dmp.qp._gi_core is not built: reinstall tooltransfer with a C compiler (pip install -e .)"
-        )
-    lib = ctypes.CDLL(spec.origin)
-    c_int, c_dbl = ctypes.c_int, ctypes.c_double
-    lib.gi_equality.argtypes = [c_int, _ptr, _ptr, _ptr, _pint, _ptr, _ptr, c_dbl, _ptr]
-    lib.gi_equality.restype = c_int
-    lib.gi_solve.argtypes = [
-        c_int, c_int, _ptr, _ptr, _ptr, _ptr, _ptr, _ptr, _pint, c_int, _ptr, c_dbl, c_int,
-        _pint, _ptr, _pint, _pint, _ptr,
-    ]
-    lib.gi_solve.restype = c_int
-    lib.gi_warm.argtypes = [c_int, _ptr, _ptr, _ptr, _ptr, _ptr, _ptr, _pint, c_int, _ptr, _ptr, _ptr, c_int, _ptr]
-    lib.gi_warm.restype = c_int
-    return lib
-
-
-def _addr(a: NDArray[Any], dtype: type, fortran: bool = False) -> int:
-    """Address of ``a``'s data after checking the layout the C core assumes."""
-    ok = a.flags.f_contiguous if fortran else a.flags.c_contiguous
-    if a.dtype != dtype or not ok:
-        raise TypeError("dual active set: array of unexpected dtype or layout")
-    return int(a.ctypes.data)
 
 
 class DualInfeasible(Exception):
@@ -102,10 +70,10 @@ class DualActiveSet:
         self._work = np.zeros(4 * n)
         self._info = np.zeros(n + 2, dtype=np.int32)
         self._p = {
-            "Q": _addr(self._Q, np.float64, True), "R": _addr(self._R, np.float64, True),
-            "u": _addr(self._u, np.float64), "active": _addr(self._active, np.int32),
-            "z": _addr(self.z, np.float64), "work": _addr(self._work, np.float64),
-            "info": _addr(self._info, np.int32),
+            "Q": addr(self._Q, np.float64, True), "R": addr(self._R, np.float64, True),
+            "u": addr(self._u, np.float64), "active": addr(self._active, np.int32),
+            "z": addr(self.z, np.float64), "work": addr(self._work, np.float64),
+            "info": addr(self._info, np.int32),
         }
 
     @property
@@ -119,11 +87,11 @@ class DualActiveSet:
     def add_equalities(self, e: NDArray[np.float64], f: NDArray[np.float64]) -> None:
         """Take the equality rows ``e z = f`` (before any inequality); dependent consistent rows
         are skipped, dependent inconsistent ones raise :class:`DualInfeasible`."""
-        lib, p = _core(), self._p
+        lib, p = core(), self._p
         e = np.ascontiguousarray(e, dtype=np.float64).reshape(-1, self.n)
         for i in range(f.size):
             code = lib.gi_equality(
-                self.n, p["Q"], p["R"], p["u"], ctypes.byref(self._q), p["z"], _addr(e[i], np.float64),
+                self.n, p["Q"], p["R"], p["u"], ctypes.byref(self._q), p["z"], addr(e[i], np.float64),
                 float(f[i]), p["work"],
             )
             if code < 0:
@@ -140,9 +108,9 @@ class DualActiveSet:
         if idx.min() < 0 or idx.max() >= self.h.size:
             raise IndexError("warm start rows out of range")
         p = self._p
-        return int(_core().gi_warm(
-            self.n, _addr(self.G, np.float64), _addr(self.h, np.float64), p["Q"], p["R"], p["u"], p["active"],
-            ctypes.byref(self._q), self.n_eq, p["z"], _addr(self._zc, np.float64), _addr(idx, np.int32), idx.size,
+        return int(core().gi_warm(
+            self.n, addr(self.G, np.float64), addr(self.h, np.float64), p["Q"], p["R"], p["u"], p["active"],
+            ctypes.byref(self._q), self.n_eq, p["z"], addr(self._zc, np.float64), addr(idx, np.int32), idx.size,
             p["work"],
         ))
 
@@ -154,11 +122,11 @@ class DualActiveSet:
 
     def solve(self, oracle: RowSource, max_iter: int = 10_000) -> NDArray[np.float64]:
         """Iterate until no candidate and no oracle row is violated; returns ``z``."""
-        lib, p, info = _core(), self._p, self._info
+        lib, p, info = core(), self._p, self._info
         ninfo, eq_involved = ctypes.c_int(0), ctypes.c_int(0)
         while True:
             code = lib.gi_solve(
-                self.n, self.h.size, _addr(self.G, np.float64), _addr(self.h, np.float64), p["Q"], p["R"], p["u"],
+                self.n, self.h.size, addr(self.G, np.float64), addr(self.h, np.float64), p["Q"], p["R"], p["u"],
                 p["active"], ctypes.byref(self._q), self.n_eq, p["z"], self.tol, max_iter,
                 ctypes.byref(self._iters), p["info"], ctypes.byref(ninfo), ctypes.byref(eq_involved), p["work"],
             )

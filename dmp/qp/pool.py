@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from dmp.affine import AffineRollout
 from dmp.qp.constraints.base import Coefficients, Constraint
+from dmp.qp.native import addr, core
 
 Ids = NDArray[np.intp]
 Cols = NDArray[np.intp] | slice
@@ -155,6 +156,31 @@ class RowPool:
                 for d in range(xv.shape[1]):
                     rows += a[:, d, cols] * xv[:, d]
         return r
+
+    def scan(
+        self, w: NDArray[np.float64], smp: Samples, threshold: float, keep: bool = False
+    ) -> tuple[Ids, NDArray[np.float64] | None]:
+        """Ids of the local maxima in time (over the samples) of rows violated by more than
+        ``threshold``, and with ``keep`` the residuals (as :meth:`residuals`): the same as
+        :meth:`peaks` of :meth:`residuals`, in one pass of the compiled core."""
+        wm = np.asarray(w).reshape(-1, self.aff.n_dims) @ self.aff.M.T
+        x = np.ascontiguousarray(smp.x_free + smp.gx @ wm)
+        v = np.ascontiguousarray(smp.v_free + smp.gv @ wm)
+        n_s, n_t = self.neg_bound.shape
+        idx = np.ascontiguousarray(smp.idx, dtype=np.int64)
+        res = np.empty((n_s, idx.size)) if keep else None
+        cap = max(64, 4 * n_s)
+        while True:
+            out_s, out_t = np.empty(cap, dtype=np.int32), np.empty(cap, dtype=np.int64)
+            count = core().gi_scan(
+                n_s, n_t, idx.size, addr(idx, np.int64), self.aff.n_dims, self.a_pos.shape[0], self.vel_from,
+                addr(self.neg_bound, np.float64), addr(self.a_pos, np.float64), addr(self.a_vel, np.float64),
+                addr(x, np.float64), addr(v, np.float64), threshold, None if res is None else addr(res, np.float64),
+                addr(out_s, np.int32), addr(out_t, np.int64), cap,
+            )
+            if count <= cap:
+                return self.id_of[out_s[:count], out_t[:count]], res
+            cap = count
 
     def peak_cells(
         self, res: NDArray[np.float64], smp: Samples, threshold: float

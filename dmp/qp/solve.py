@@ -152,13 +152,13 @@ def _cutting_planes(
     def oracle(z: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         # the cheap grid first, then the dense samples the grid points at, then every dense sample
         w = tw @ z
-        res_g = pool.residuals(w, levels.grid)
-        new = take(pool.peaks(res_g, levels.grid, tol))
-        if not new.size:
+        ids, res_g = pool.scan(w, levels.grid, tol, keep=True)
+        new = take(ids)
+        if not new.size and res_g is not None:
             sus = Samples.of(pool.aff, pool.suspects(res_g, levels.grid, tol, levels.outside))
-            new = take(pool.peaks(pool.residuals(w, sus), sus, tol))
+            new = take(pool.scan(w, sus, tol)[0])
         if not new.size:
-            new = take(pool.peaks(pool.residuals(w, levels.full), levels.full, tol))
+            new = take(pool.scan(w, levels.full, tol)[0])
         known[new] = True
         chunks.append(new)
         return _rows_w(pool, new, tw)
