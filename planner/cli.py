@@ -16,6 +16,36 @@ from dmp.errors import ToolTransferError
 EXIT_OK, EXIT_INFEASIBLE, EXIT_BAD_INPUT = 0, 1, 2
 
 
+def _spinner(text: str, quiet: bool = False) -> object:
+    """A progress display for a step that takes more than a second (nothing when ``quiet``)."""
+    import contextlib
+
+    if quiet:
+        return contextlib.nullcontext()
+    from rich.console import Console
+
+    return Console(stderr=True).status(text)
+
+
+def _print_summary(summary: dict[str, object], title: str) -> None:
+    """A two-column rich table of a summary (lengths in m are printed in mm)."""
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=title, title_justify="left", show_header=False)
+    table.add_column("key")
+    table.add_column("value", justify="right")
+    for k, v in summary.items():
+        lengths = ("_error", "_deviation", "clearance_min", "penetration_max", "reach_violation_max")
+        if isinstance(v, float) and k.endswith(lengths) and "tracking" not in k:
+            table.add_row(f"{k} [mm]", f"{1e3 * v:.4g}")
+        elif isinstance(v, float):
+            table.add_row(k, f"{v:.4g}")
+        else:
+            table.add_row(k, str(v))
+    Console().print(table)
+
+
 def _cmd_demo(args: argparse.Namespace) -> int:
     from planner.demo import run_demo
 
@@ -25,12 +55,23 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
+    import json
+
+    from rich.console import Console
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
     from planner.demo import compare
 
-    args.out.mkdir(parents=True, exist_ok=True)
-    table, plans = compare(args.task, args.out)
-    print(table)
-    print(f"wrote the plans and fig10_condensed_paths.png to {args.out}/")
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), transient=True,
+                  disable=args.json) as bar:
+        job = bar.add_task("compare", total=None)
+        table, plans = compare(args.task, args.out, lambda text: bar.update(job, description=text))
+    if args.json:
+        print(json.dumps({name: {"status": p.status, "reason": p.reason, "metrics": p.metrics}
+                          for name, p in plans.items()}, default=float))
+    else:
+        Console().print(table)
+        print(f"wrote the plans (plan_*.json) and the figure compare_*.png to {args.out}/")
     return EXIT_OK if all(p.status == "solved" for p in plans.values()) else EXIT_INFEASIBLE
 
 
@@ -98,36 +139,60 @@ def _cmd_segment(args: argparse.Namespace) -> int:
 def _cmd_solve(args: argparse.Namespace) -> int:
     import json
 
+    from dmp.errors import InputError
     from planner.solve import solve
     from problems.task import load_task
 
     task = load_task(args.task)
-    if args.oe or args.ss:
-        variants = task.variants.model_copy(update={k: v for k, v in (("oe", args.oe), ("ss", args.ss)) if v})
+    chosen = {"oe": args.oe, "ss": args.ss}
+    if args.variant:
+        oe, _, ss = args.variant.partition("/")
+        if oe not in ("qp", "mapping") or ss not in ("opt", "dmp", "arch"):
+            raise InputError("--variant", "OE/SS with OE in {qp, mapping} and SS in {opt, dmp, arch}, e.g. qp/opt",
+                             args.variant)
+        chosen = {"oe": args.oe or oe, "ss": args.ss or ss}
+    if any(chosen.values()):
+        variants = task.variants.model_copy(update={k: v for k, v in chosen.items() if v})
         task = task.model_copy(update={"variants": variants})
-    plan = solve(task, args.task)
+    with _spinner(f"planning {args.task}", quiet=args.json):
+        plan = solve(task, args.task)
     if args.out:
         plan.write(args.out)
     m = plan.metrics
-    summary = {"status": plan.status, "reason": plan.reason, "variant": plan.variant,
-               "pushes": [p.faces[0] for p in plan.pushes], "plan": str(args.out) if args.out else None,
-               **{k: m[k] for k in ("goal_error", "cone_violation_max", "reach_violation_max",
-                                    "switch_clearance_min", "joint_limit_violation_max", "duration") if k in m}}
+    summary = {"status": plan.status, "reason": plan.reason, "variant": f"{plan.variant['oe']}/{plan.variant['ss']}",
+               "pushes": " ".join(p.faces[0] for p in plan.pushes), "plan": str(args.out) if args.out else None,
+               **{k: m[k] for k in ("goal_error", "cone_violation_max", "reach_violation_max", "obstacle_clearance_min",
+                                    "tool_obstacle_clearance_min", "switch_clearance_min", "switch_penetration_max",
+                                    "joint_limit_violation_max", "duration") if k in m},
+               "planning_time": sum(v for k, v in m.items() if k.startswith("time_"))}
+    executions = {}
     if args.simulate and plan.status == "solved":
+        from planner.closed_loop import execute_closed_loop
         from planner.simulate import simulate_plan
 
-        rep = simulate_plan(plan)
-        summary.update({"simulated_final_error": rep.final_error, "simulated_tool_deviation": rep.tool_deviation,
+        with _spinner("simulating open and closed loop", quiet=args.json):
+            rep = simulate_plan(plan)
+            cl = execute_closed_loop(plan)
+        executions = {"open loop": rep.execution, "closed loop": cl.execution}
+        summary.update({"open_loop_final_error": rep.final_error, "open_loop_tool_deviation": rep.tool_deviation,
+                        "closed_loop_final_error": cl.final_error, "closed_loop_status": cl.status,
                         "simulation_wall_time": rep.wall_time})
+    if args.plot and plan.status == "solved":
+        from planner.figures import fig12
+
+        where = Path(args.plot) if isinstance(args.plot, str) else (
+            args.out.with_suffix(".png") if args.out else Path(f"plan_{task.name}.png"))
+        summary["figure"] = str(fig12(plan, where, executions))
     if args.json:
         print(json.dumps(summary, default=float))
     else:
-        for k, v in summary.items():
-            print(f"{k:>26}: {v:.6g}" if isinstance(v, float) else f"{k:>26}: {v}")
+        _print_summary(summary, f"{task.name}: {plan.status}")
     return EXIT_OK if plan.status == "solved" else EXIT_INFEASIBLE
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
+    import json
+
     from planner.plan import read_plan
     from planner.simulate import simulate_plan
 
@@ -135,10 +200,35 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if plan.status != "solved":
         print(f"plan {args.plan} is {plan.status}: {plan.reason}")
         return EXIT_INFEASIBLE
-    rep = simulate_plan(plan)
-    print(f"final object error {1e3 * rep.final_error:.1f} mm, largest tool deviation "
-          f"{1e3 * rep.tool_deviation:.1f} mm, joint tracking error {rep.tracking_error:.3g} rad, "
-          f"{plan.t[-1] / rep.wall_time:.0f}x real time")
+    with _spinner(f"simulating {args.plan} open loop", quiet=args.json):
+        rep = simulate_plan(plan)
+    summary: dict[str, object] = {
+        "open_loop_final_error": rep.final_error, "open_loop_tool_deviation": rep.tool_deviation,
+        "open_loop_tracking_error": rep.tracking_error, "open_loop_wall_time": rep.wall_time,
+        "real_time_factor": float(plan.t[-1] / rep.wall_time)}
+    executions = {"open loop": rep.execution}
+    if args.closed_loop:
+        from planner.closed_loop import execute_closed_loop
+
+        with _spinner("executing closed loop (re-planning from the observed puck)", quiet=args.json):
+            cl = execute_closed_loop(plan)
+        executions["closed loop"] = cl.execution
+        summary.update({"closed_loop_final_error": cl.final_error, "closed_loop_status": cl.status,
+                        "closed_loop_reason": cl.reason, "closed_loop_pushes": cl.n_pushes,
+                        "closed_loop_switches": cl.n_switches, "closed_loop_wall_time": cl.wall_time})
+    if args.figure:
+        from planner.figures import fig12
+
+        summary["figure"] = str(fig12(plan, args.figure, executions))
+    if args.gif:
+        from planner.figures import execution_gif
+
+        with _spinner(f"writing {args.gif}", quiet=args.json):
+            summary["gif"] = str(execution_gif(plan, list(executions.values())[-1], args.gif))
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        _print_summary(summary, f"simulation of {args.plan}")
     return EXIT_OK
 
 
@@ -178,10 +268,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = _add(sub, "demo", "the main job: learn from the committed demos, compare the variants on the transfer "
              "to tool 2, simulate the qp plan", "tooltransfer demo --out out", _cmd_demo)
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
-    p = _add(sub, "compare", "solve a task with every OE variant: a metrics table and one figure",
-             "tooltransfer compare problems/paper/transfer_tool2.yaml --out out", _cmd_compare)
+    p = _add(sub, "compare", "solve a task with every variant pair (oe mapping|qp x ss dmp|opt): a metrics table "
+             "and one figure", "tooltransfer compare problems/paper/transfer_tool2.yaml --out out", _cmd_compare)
     p.add_argument("task", type=Path, help="task file (YAML)")
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
+    p.add_argument("--json", action="store_true", help="print every plan's status and metrics as JSON")
     p = _add(sub, "demos", "generate demonstrations with the scripted operator on the simulated Omni",
              "tooltransfer demos --tool finger --n 8 --seed 0 --out problems/data/finger_demos", _cmd_demos)
     p.add_argument("--tool", default="finger", help="demonstration tool (tool 1)")
@@ -207,11 +298,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--out", type=Path, default=None, help="write the plan (JSON) here")
     p.add_argument("--oe", choices=("qp", "mapping"), default=None, help="override the task's OE variant")
     p.add_argument("--ss", choices=("arch", "dmp", "opt"), default=None, help="override the task's switch variant")
-    p.add_argument("--simulate", action="store_true", help="execute the plan on the simulated platform")
+    p.add_argument("--variant", default=None, help="override both as OE/SS, e.g. qp/opt or mapping/dmp")
+    p.add_argument("--plot", nargs="?", const=True, default=None,
+                   help="draw the plan (Fig. 12; with --simulate also the executions) to PATH (default: next to -o)")
+    p.add_argument("--simulate", action="store_true",
+                   help="execute the plan on the simulated platform, open loop and closed loop")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
-    p = _add(sub, "simulate", "execute a plan file on the simulated platform (open loop)",
-             "tooltransfer simulate out/plan.json", _cmd_simulate)
+    p = _add(sub, "simulate", "execute a plan file on the simulated platform (open loop, and closed loop on request)",
+             "tooltransfer simulate out/plan.json --closed-loop --figure out/fig12.png --gif out/run.gif",
+             _cmd_simulate)
     p.add_argument("plan", type=Path, help="plan file (JSON)")
+    p.add_argument("--closed-loop", action="store_true",
+                   help="also execute closed loop (re-plan the corners from the observed puck)")
+    p.add_argument("--figure", type=Path, default=None, help="write planned versus executed paths (Fig. 12) here")
+    p.add_argument("--gif", type=Path, default=None, help="write an animated GIF of the (last) execution here")
+    p.add_argument("--json", action="store_true", help="print a JSON summary")
     p = _add(sub, "schema", "print the JSON Schema of task files (for editors)",
              "tooltransfer schema > task.schema.json", _cmd_schema)
     p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")

@@ -1,109 +1,151 @@
-"""The main job (``make demo``): the paper's transfer scenario end to end.
+"""The main job (``make demo``) and ``tooltransfer compare``.
 
-Learns the skills from the committed demonstrations (``problems/data/finger_demos``), compares the
-OE variants (the paper's mapping and this project's QP search) on the transfer to tool 2
-(``problems/paper/transfer_tool2.yaml``), executes the ``qp`` plan on the simulated platform, and
-writes the figures and plan files to the output folder.
+``compare``: solve a task with every variant pair (OE ``mapping``/``qp`` x SS ``dmp``/``opt``), write
+the plans, one figure with a panel per pair and a table of the shared metrics.
+
+``run_demo``: the paper's transfer scenario end to end: learn the skills from the committed
+demonstrations (``problems/data/finger_demos``) into a skills file, compare the variants on the
+transfer to tool 2 (``problems/paper/transfer_tool2.yaml``), execute the ``qp``/``opt`` plan on the
+simulated platform open loop (as the paper did) and closed loop (re-planning from the observed
+puck), and write every figure (Figs. 8-12, 14 and a GIF of the execution), plan and report to the
+output folder.
 """
 
 from __future__ import annotations
 
+import io
+from collections.abc import Callable
 from pathlib import Path
-
-import numpy as np
 
 from planner.plan import Plan
 from problems.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
 TRANSFER = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
+DATASET = ROOT / "problems" / "data" / "finger_demos"
+
+PAIRS = (("mapping", "dmp"), ("mapping", "opt"), ("qp", "dmp"), ("qp", "opt"))
+
+#: Rows of the comparison table: metric key, label, unit, scale.
+ROWS = (
+    ("status", "status", "", 1.0),
+    ("n_pushes", "pushes", "", 1.0),
+    ("goal_error", "goal error", "mm", 1e3),
+    ("cone_violation_max", "cone violation", "rad", 1.0),
+    ("reach_violation_max", "reach violation", "mm", 1e3),
+    ("obstacle_clearance_min", "object-obstacle clearance", "mm", 1e3),
+    ("tool_obstacle_clearance_min", "tool-obstacle clearance", "mm", 1e3),
+    ("deviation_mean", "mean deviation from skill", "mm", 1e3),
+    ("switch_clearance_min", "switch clearance (middle)", "mm", 1e3),
+    ("switch_penetration_max", "switch penetration", "mm", 1e3),
+    ("joint_limit_violation_max", "joint-limit violation", "rad", 1.0),
+    ("duration", "duration", "s", 1.0),
+    ("time_oe", "time: OE", "ms", 1e3),
+    ("time_switches_and_timing", "time: switches + timing", "ms", 1e3),
+)
 
 
-def compare(task_path: Path, out: Path) -> tuple[str, dict[str, Plan]]:
-    """Solve a task with every OE variant; write the plans and a figure like Fig. 10; return the
-    metrics table (text) and the plans."""
-    from planner.plots.push_plans import plot_push_plans
+def metrics_table(plans: dict[str, Plan], title: str = "") -> object:
+    """A rich table of the shared metrics, one column per plan."""
+    from rich.table import Table
+
+    table = Table(title=title or None, title_justify="left")
+    table.add_column("metric")
+    for name in plans:
+        table.add_column(name, justify="right")
+    for key, label, unit, scale in ROWS:
+        cells = []
+        for p in plans.values():
+            if key == "status":
+                cells.append(p.status if p.status == "solved" else f"[red]{p.status}[/red]")
+                continue
+            v = p.metrics.get(key)
+            cells.append("-" if v is None else f"{scale * v:.4g}")
+        table.add_row(f"{label} [{unit}]" if unit else label, *cells)
+    return table
+
+
+def render(renderable: object, width: int = 120) -> str:
+    """Plain text of a rich renderable (for report files)."""
+    from rich.console import Console
+
+    buf = io.StringIO()
+    Console(file=buf, width=width, color_system=None).print(renderable)
+    return buf.getvalue()
+
+
+def compare(
+    task_path: Path, out: Path, step: Callable[[str], None] = lambda _s: None
+) -> tuple[object, dict[str, Plan]]:
+    """Solve ``task_path`` with every variant pair (:data:`PAIRS`); write the plans
+    (``plan_<task>_<oe>_<ss>.json``) and ``compare_<task>.png`` to ``out``; return the metrics table
+    (rich) and the plans. ``step`` is called with a description before each solve (progress)."""
+    from planner.plots.execution import plot_plans
     from planner.solve import solve
-    from problems.task import task_obstacles, task_tool
 
     task = load_task(task_path)
-    plans, push_plans = {}, {}
-    for oe in ("mapping", "qp"):
-        t = task.model_copy(update={"variants": task.variants.model_copy(update={"oe": oe})})
-        plans[oe] = solve(t, task_path)
-        plans[oe].write(out / f"plan_{task.name}_{oe}.json")
-    keys = [("status", "", 1), ("n_pushes", "", 1), ("goal_error", "mm", 1e3), ("cone_violation_max", "rad", 1),
-            ("reach_violation_max", "mm", 1e3), ("obstacle_clearance_min", "mm", 1e3),
-            ("deviation_mean", "mm", 1e3), ("switch_clearance_min", "mm", 1e3), ("time_oe", "ms", 1e3)]
-    lines = [f"{'metric':<24}" + "".join(f"{oe:>14}" for oe in plans)]
-    for k, unit, scale in keys:
-        row = f"{k + (f' [{unit}]' if unit else ''):<24}"
-        for p in plans.values():
-            v = p.status if k == "status" else p.metrics.get(k, float("nan"))
-            row += f"{v:>14}" if isinstance(v, str) else f"{scale * v:>14.4g}"
-        lines.append(row)
-    from planner.oe.generalize import generalize
-    from planner.oe.mapping_variant import condense_mapping
-    from planner.oe.qp_variant import condense_qp
-    from planner.skills import oe_skill_from_dataset
-    from problems.task import resolve, task_platform
-
-    tool = task_tool(task)
-    platform, obstacles = task_platform(task, tool), task_obstacles(task)
-    skill = oe_skill_from_dataset(resolve(task_path, task.skills.dataset), task.oe.k)
-    tt, x, _ = generalize(skill.dmp, np.array(task.start), np.array(task.target))
-    push_plans["mapping"] = condense_mapping(tt, x, tool, platform, np.array(task.target), obstacles)
-    push_plans["qp"] = condense_qp(tt, x, tool, platform, np.array(task.target), obstacles)
-    plot_push_plans(push_plans, tool, out / "fig10_condensed_paths.png", obstacles=obstacles,
-                    margin=task.safety_margin, target=np.array(task.target), title=task.name)
-    return "\n".join(lines), plans
+    out.mkdir(parents=True, exist_ok=True)
+    plans: dict[str, Plan] = {}
+    for oe, ss in PAIRS:
+        step(f"solve {task.name} with oe {oe}, ss {ss}")
+        t = task.model_copy(update={"variants": task.variants.model_copy(update={"oe": oe, "ss": ss})})
+        plans[f"{oe}/{ss}"] = plan = solve(t, task_path)
+        plan.write(out / f"plan_{task.name}_{oe}_{ss}.json")
+    step("draw the comparison")
+    plot_plans(plans, out / f"compare_{task.name}.png")
+    return metrics_table(plans, f"{task.name}: variant pairs (oe/ss)"), plans
 
 
 def run_demo(out: Path) -> str:
     """Run the main job; returns the report text (also written to ``out/report.txt``)."""
-    import matplotlib
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from planner.plots.demonstrations import plot_demonstrations
-    from planner.plots.safety_margin import plot_safety_margin
-    from planner.segmentation import segment
+    from planner import figures
+    from planner.closed_loop import execute_closed_loop
     from planner.simulate import simulate_plan
-    from problems.dataset import load_dataset
-    from problems.paper_cases import DEFAULT_DATASET, default_oe_skill, transfer_case
-    from tools.library import load_tool
+    from planner.skills import Skills, learn_skills
 
     out.mkdir(parents=True, exist_ok=True)
-    ds = load_dataset(DEFAULT_DATASET)
-    tool1 = load_tool(ds.meta.tool)
-    plot_demonstrations(ds, [segment(d, tool1) for d in ds.demonstrations], tool1, out / "fig8a_demonstrations.png")
-    skill = default_oe_skill()
-    case = transfer_case()
-    fig, ax = plt.subplots(figsize=(6, 5))
-    for r in skill.recovered:
-        ax.plot(*r.x.T, color="0.65", lw=0.8)
-    ax.plot(*case.x.T, "r-", lw=2, label="universal OE skill")
-    ax.set_aspect("equal")
-    ax.set_title("recovered demonstrations (grey) and the learned skill (Fig. 8b)", fontsize=9)
-    ax.legend(fontsize=8)
-    fig.savefig(out / "fig8b_universal_skill.png", dpi=110)
-    plt.close(fig)
-    table, plans = compare(TRANSFER, out)
-    from planner.oe.mapping_variant import condense_mapping
-    from planner.oe.qp_variant import condense_qp
+    report: list[str] = []
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), transient=True) as bar:
+        job = bar.add_task("learn", total=None)
 
-    args = (case.t, case.x, case.tool, case.platform, case.target, case.obstacles)
-    plot_safety_margin(case.x, case.obstacles[0], {"mapping": condense_mapping(*args), "qp": condense_qp(*args)},
-                       out / "fig14_safety_margin.png")
-    report = ["transfer of tool 1's skills to tool 2 (problems/paper/transfer_tool2.yaml)", table]
-    qp = plans["qp"]
-    if qp.status == "solved":
-        sim = simulate_plan(qp)
-        report.append(
-            f"simulated qp plan (open loop): final object error {1e3 * sim.final_error:.1f} mm, largest tool "
-            f"deviation {1e3 * sim.tool_deviation:.1f} mm, {qp.t[-1]:.1f} s plan in {sim.wall_time:.2f} s"
-        )
+        def step(text: str) -> None:
+            bar.update(job, description=text)
+
+        step("learn the OE and SS skills from the demonstrations")
+        skills_file = learn_skills(DATASET).save(out / "skills.json")
+        skills = Skills.load(skills_file)
+        report.append(f"skills learned from {DATASET.relative_to(ROOT)} -> {skills_file}")
+        table, plans = compare(TRANSFER, out, step)
+        report.append(render(table))
+        main = plans["qp/opt"]
+        executions = {}
+        if main.status == "solved":
+            step("simulate the qp/opt plan open loop")
+            sim = simulate_plan(main)
+            executions["open loop"] = sim.execution
+            report.append(
+                f"qp/opt plan, open loop on the simulated Omni: final object error {1e3 * sim.final_error:.1f} mm, "
+                f"largest tool deviation {1e3 * sim.tool_deviation:.2f} mm, {main.t[-1]:.1f} s plan simulated in "
+                f"{sim.wall_time:.2f} s ({main.t[-1] / sim.wall_time:.0f}x real time)")
+            step("simulate the qp/opt plan closed loop (re-planning from the observed puck)")
+            closed = execute_closed_loop(main)
+            executions["closed loop"] = closed.execution
+            report.append(
+                f"qp/opt plan, closed loop: final object error {1e3 * closed.final_error:.1f} mm after "
+                f"{closed.n_pushes} pushes ({closed.status}{': ' + closed.reason if closed.reason else ''})")
+            step("draw Fig. 12 and the execution GIF")
+            report.append(f"wrote {figures.fig12(main, out / 'fig12_plan_and_execution.png', executions)}")
+            report.append(f"wrote {figures.execution_gif(main, executions['closed loop'], out / 'execution.gif')}")
+        step("draw Figs. 8-11 and 14")
+        a, b = figures.fig8(DATASET, skills, out)
+        report.append(f"wrote {a}\nwrote {b}")
+        report.append(f"wrote {figures.fig9(DATASET, out / 'fig9_switching_skills.png')}")
+        report.append(f"wrote {figures.fig10(TRANSFER, out / 'fig10_condensed_paths.png')}")
+        report.append(f"wrote {figures.fig11(skills, out / 'fig11_generalized_switches.png')}")
+        fig14_task = ROOT / "problems" / "paper" / "fig14_safety_margin.yaml"
+        report.append(f"wrote {figures.fig14(fig14_task, out / 'fig14_safety_margin.png')}")
     text = "\n".join(report)
     (out / "report.txt").write_text(text + "\n")
     return text

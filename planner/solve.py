@@ -62,6 +62,15 @@ def _describe(task: Task, tool: Any, platform: Any, obstacles: list) -> dict[str
     }
 
 
+def _as_loaded(task: Task, task_path: str | Path) -> dict[str, Any]:
+    """The task as JSON data with its skills path resolved (absolute), so a plan file stands alone."""
+    data = task.model_dump(mode="json")
+    for key in ("dataset", "file"):
+        if data["skills"].get(key) is not None:
+            data["skills"][key] = str(resolve(task_path, data["skills"][key]).resolve())
+    return data
+
+
 def task_skills(task: Task, task_path: str | Path = ".", *, need_ss: bool = True) -> Skills:
     """The skills ``task`` names: learned from its dataset (cached; the SS skill only if ``need_ss``)
     or read from its skills file.
@@ -119,7 +128,7 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     platform = task_platform(task, tool)
     obstacles = task_obstacles(task)
     desc = _describe(task, tool, platform, obstacles)
-    base = {"variant": {"oe": task.variants.oe, "ss": task.variants.ss}, "task": task.model_dump(mode="json"),
+    base = {"variant": {"oe": task.variants.oe, "ss": task.variants.ss}, "task": _as_loaded(task, task_path),
             **desc}
     margin = effective_margin(task, obstacles)
     skills = task_skills(task, task_path, need_ss=task.variants.ss != "arch")
