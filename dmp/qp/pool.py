@@ -72,6 +72,10 @@ class RowPool:
     a_vel: NDArray[np.float64]
     id_of: NDArray[np.intp]
     vel_from: int
+    series_of: NDArray[np.intp]
+    """(ids,) series of each row id."""
+    sample_of: NDArray[np.intp]
+    """(ids,) dense sample of each row id."""
 
     @classmethod
     def build(
@@ -117,6 +121,8 @@ class RowPool:
             a_vel=np.zeros((n_kind[1] + n_kind[2], n, t)),
             id_of=np.full((s, t), -1, dtype=np.intp),
             vel_from=n_kind[0],
+            series_of=np.zeros(int(sum(sizes)), dtype=np.intp),
+            sample_of=np.zeros(int(sum(sizes)), dtype=np.intp),
         )
         for ci, q in enumerate(ineq):
             if q:
@@ -137,6 +143,9 @@ class RowPool:
             v0 = s0 - self.vel_from
             self.a_vel[v0:v0 + m, :, k] = co.a_vel.transpose(1, 2, 0)
         self.id_of[s0:s0 + m, k] = self.offset[ci] + np.arange(m)[:, None] * kk + np.arange(kk)
+        ids = slice(int(self.offset[ci]), int(self.offset[ci + 1]))
+        self.series_of[ids] = np.repeat(np.arange(s0, s0 + m), kk)
+        self.sample_of[ids] = np.tile(co.k, m)
 
     @property
     def size(self) -> int:
@@ -250,24 +259,19 @@ class RowPool:
         """``G`` (len(ids), N*n) and ``h`` for the given ids, in order."""
         aff = self.aff
         n_b, n = aff.Gx.shape[1], aff.n_dims
-        if ids.size == 0:
-            return np.zeros((0, n_b * n)), np.zeros(0)
-        ci, j, p = self.decode(ids)
-        s = self.first_series[ci] + j
-        t = self.k_all[self.k_start[ci] + p]
+        s, t = self.series_of[ids], self.sample_of[ids]
         g = np.zeros((ids.size, n_b, n))
         h = -self.neg_bound[s, t]
-        n_pos = self.a_pos.shape[0]
-        for a, sel, s_a, resp, free in (
-            (self.a_pos, s < n_pos, s, aff.Gx, aff.x_free),
-            (self.a_vel, s >= self.vel_from, s - self.vel_from, aff.Gv, aff.v_free),
+        for a, first, resp, free in (
+            (self.a_pos, 0, aff.Gx, aff.x_free), (self.a_vel, self.vel_from, aff.Gv, aff.v_free)
         ):
-            if not sel.any():
+            if a.shape[0] == 0 or ids.size == 0:
                 continue
-            tt = t[sel]
-            coef = a[s_a[sel], :, tt]  # (m, n)
-            g[sel] += resp[tt][:, :, None] * (coef @ aff.M)[:, None, :]
-            h[sel] -= np.einsum("jd,jd->j", coef, free[tt])
+            sa = s - first
+            on = (sa >= 0) & (sa < a.shape[0])
+            coef = a[np.clip(sa, 0, a.shape[0] - 1), :, t] * on[:, None]  # (m, n), zero for other kinds
+            g += resp[t][:, :, None] * (coef @ aff.M)[:, None, :]
+            h -= np.einsum("jd,jd->j", coef, free[t])
         return g.reshape(ids.size, n_b * n), h
 
     def equality_rows(self) -> tuple[NDArray[np.float64], NDArray[np.float64], list[str]]:
