@@ -14,6 +14,10 @@ through ctypes): the DMP fits are degenerate (constraints active along stretches
 by the path at isolated instants), so the method takes hundreds of cheap steps, and interpreter
 overhead per step was the cost (about 100 us in NumPy against a few us compiled).
 
+A warm start (:meth:`DualActiveSet.warm_start`) takes a guess of the active rows at once and drops
+those with negative multipliers, which gives the dual-feasible start the method needs; the
+constrained fit uses it across re-linearisations.
+
 Reference: D. Goldfarb, A. Idnani, "A numerically stable dual method for solving strictly convex
 quadratic programs", Math. Programming 27 (1983) 1-33.
 """
