@@ -156,3 +156,23 @@ def test_exact_step_matches_quadprog_cold_and_warm(seed: int) -> None:
         z = st.solve(lambda _z: (np.zeros((0, n)), np.zeros(0)))
         np.testing.assert_allclose(z, ref, atol=1e-10)
         assert (g @ z - h).max() <= 1e-12
+
+
+def test_compiled_scan_matches_numpy_residuals_and_peaks() -> None:
+    """The oracle's compiled scan gives the NumPy residuals and local maxima on every kind of sample set."""
+    from dmp.qp.pool import RowPool, Samples
+    from dmp.qp.problem import unconstrained_weights
+
+    prob = l_push_case(20, 80).problem
+    aff = prob.affine("dense")
+    w = unconstrained_weights(*prob.quadratic())
+    pool = RowPool.build(prob.constraints, aff, aff.positions(w))
+    for cols in (slice(0, None, 10), slice(None), np.arange(3, aff.t.size, 7)):
+        smp = Samples.of(aff, cols)
+        res = pool.residuals(w, smp)
+        ids, res_c = pool.scan(w, smp, 1e-9, keep=True)
+        assert res_c is not None
+        np.testing.assert_allclose(res_c, res, rtol=0, atol=1e-15)
+        peaks = pool.peaks(res, smp, 1e-9)
+        assert peaks.size > 0  # the unconstrained fit violates rows
+        np.testing.assert_array_equal(np.sort(ids), np.sort(peaks))
