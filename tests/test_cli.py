@@ -1,4 +1,5 @@
-"""The demo job runs end to end through the CLI and writes its figure and table."""
+"""The demo job runs end to end through the CLI and writes every figure, plan and the report; every
+command has --help with an example; compare covers every variant pair."""
 
 from __future__ import annotations
 
@@ -7,11 +8,36 @@ from planner.cli import main
 
 def test_demo_runs_the_transfer_job(tmp_path, capsys) -> None:
     assert main(["demo", "--out", str(tmp_path)]) == 0
-    for name in ("fig8a_demonstrations.png", "fig8b_universal_skill.png", "fig10_condensed_paths.png",
-                 "fig14_safety_margin.png", "plan_transfer_tool2_qp.json", "plan_transfer_tool2_mapping.json"):
+    names = ["skills.json", "fig8a_demonstrations.png", "fig8b_universal_skill.png", "fig9_switching_skills.png",
+             "fig10_condensed_paths.png", "fig11_generalized_switches.png", "fig12_plan_and_execution.png",
+             "fig14_safety_margin.png", "execution.gif", "compare_transfer_tool2.png"]
+    names += [f"plan_transfer_tool2_{oe}_{ss}.json" for oe in ("mapping", "qp") for ss in ("dmp", "opt")]
+    for name in names:
         assert (tmp_path / name).stat().st_size > 1_000, name
     text = (tmp_path / "report.txt").read_text()
-    assert "simulated qp plan" in text and "solved" in text
+    assert "open loop" in text and "closed loop" in text and "solved" in text
+
+
+def test_every_command_has_help_with_an_example(capsys) -> None:
+    import argparse
+
+    import pytest
+
+    from planner.cli import build_parser
+
+    def commands(parser: argparse.ArgumentParser, prefix: list[str]) -> list[list[str]]:
+        subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        if not subs:
+            return [prefix]
+        return [c for name, p in subs[0].choices.items() for c in commands(p, [*prefix, name])]
+
+    found = commands(build_parser(), [])
+    assert len(found) >= 10
+    for argv in found:
+        with pytest.raises(SystemExit) as exc:
+            main([*argv, "--help"])
+        assert exc.value.code == 0
+        assert "example:" in capsys.readouterr().out, argv
 
 
 def test_schema_command_prints_the_task_schema(capsys) -> None:
