@@ -15,9 +15,10 @@
 #include <stdint.h>
 #include <string.h>
 
-/* x86-64 builds carry an AVX2/FMA clone of the two entry points next to the baseline one, picked
-   at load time (GCC function multiversioning); the helpers below are inlined into each clone. */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+/* x86-64 builds carry an AVX2/FMA clone of the three GI entry points next to the baseline one, picked
+   at load time (GCC function multiversioning through glibc ifuncs); the helpers below are inlined
+   into each clone. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__GLIBC__)
 #define GI_CLONES __attribute__((target_clones("avx2", "fma", "default")))
 #else
 #define GI_CLONES
