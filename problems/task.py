@@ -29,10 +29,14 @@ if TYPE_CHECKING:
 
 FORMAT = "tooltransfer.task/1"
 
-Finite = Annotated[float, Field(allow_inf_nan=False)]
-Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-Point = Annotated[tuple[Finite, Finite], Field(description="(x, y) in the world frame [m]")]
+# strict: a YAML true/false or a quoted number is a wrong type, not 1.0 / 0.0 (ints are still taken)
+Finite = Annotated[float, Field(allow_inf_nan=False, strict=True)]
+# bounded: 1e3 is far beyond any table-top quantity here (m, kg, m/s, m/s^2), huge values overflow downstream
+Positive = Annotated[float, Field(gt=0, le=1e3, allow_inf_nan=False, strict=True)]
+NonNegative = Annotated[float, Field(ge=0, le=1e3, allow_inf_nan=False, strict=True)]
+# table-top coordinates: within 10 m of the origin (huge values overflow the geometry downstream)
+Coordinate = Annotated[float, Field(ge=-10.0, le=10.0, allow_inf_nan=False, strict=True)]
+Point = Annotated[tuple[Coordinate, Coordinate], Field(description="(x, y) in the world frame [m], |x|, |y| <= 10")]
 
 
 class TaskFileError(InputError):
@@ -194,7 +198,7 @@ def _loc(loc: tuple[int | str, ...]) -> str:
     for part in loc:
         if isinstance(part, int):
             out += f"[{part}]"
-        elif part in ("disc", "polygon", "str", "InlineTool") or part.startswith(("function-", "tuple[")):
+        elif part in ("disc", "polygon", "str", "float", "InlineTool") or part.startswith(("function-", "tuple[")):
             continue  # pydantic's union-branch tags, not field names
         else:
             out += f".{part}" if out else str(part)
@@ -208,7 +212,8 @@ def task_from_dict(data: Any, source: str = "<dict>") -> Task:
     try:
         task = Task.model_validate(data)
     except ValidationError as exc:
-        err = exc.errors()[0]
+        # the deepest error: for `tool: str | InlineTool`, the inline tool's field, not "a valid string"
+        err = max(exc.errors(), key=lambda e: len(e["loc"]))
         got = err.get("input")
         got_txt = repr(got) if not isinstance(got, dict | list) else type(got).__name__
         raise TaskFileError(source, _loc(err["loc"]), err["msg"].removeprefix("Value error, "), got_txt) from None

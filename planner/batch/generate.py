@@ -146,7 +146,7 @@ def generate_task(spec: BatchSpec, index: int, dataset: str) -> GeneratedTask:
     for _ in range(_TRIES):
         start = _point_in(rng, start_area, "start", index)
         ring = shapely.Point(start).buffer(hi).difference(shapely.Point(start).buffer(lo))
-        if spec.heading is not None:
+        if spec.heading is not None and spec.heading[1] - spec.heading[0] < 2 * np.pi:
             a = np.linspace(spec.heading[0], spec.heading[1], 64)
             fan = np.vstack([start, start + 2 * hi * np.column_stack([np.cos(a), np.sin(a)])])
             ring = ring.intersection(shapely.Polygon(fan))
