@@ -176,3 +176,24 @@ def test_compiled_scan_matches_numpy_residuals_and_peaks() -> None:
         peaks = pool.peaks(res, smp, 1e-9)
         assert peaks.size > 0  # the unconstrained fit violates rows
         np.testing.assert_array_equal(np.sort(ids), np.sort(peaks))
+
+
+def test_pool_rows_equal_the_condensed_rows() -> None:
+    """Rows built by the compiled core for row ids equal the condensed form's rows (``stack_rows``)."""
+    from dmp.qp.pool import RowPool
+    from dmp.qp.problem import unconstrained_weights
+
+    prob = l_push_case(20, 80).problem
+    aff = prob.affine("dense")
+    x = aff.positions(unconstrained_weights(*prob.quadratic()))
+    pool = RowPool.build(prob.constraints, aff, x)
+    g, h, fam, *_ = stack_rows(prob.constraints, aff, x)
+    ids = []
+    for ci, c in enumerate(prob.constraints):  # stack_rows is sample-major; ids are row-major
+        if not c.equality:
+            kk, m = pool.coeffs[ci].k.size, pool.coeffs[ci].bound.shape[1]
+            ids.append(pool.offset[ci] + (np.arange(m)[None, :] * kk + np.arange(kk)[:, None]).ravel())
+    g_pool, h_pool = pool.rows(np.concatenate(ids))
+    np.testing.assert_allclose(g_pool, g, rtol=0, atol=1e-14 * np.abs(g).max())
+    np.testing.assert_allclose(h_pool, h, rtol=0, atol=1e-14 * np.abs(h).max())
+    assert pool.families(np.arange(pool.size)) == set(fam)

@@ -312,6 +312,44 @@ int gi_scan(int S, int T, int L, const int64_t *idx, int n, int npos, int vfrom,
     return count;
 }
 
+/*
+ * Rows G w <= h of the stacked constraint rows ids[0..m) (see gi_scan for the layout): row id reads
+ * series s = series_of[id] at dense sample t = sample_of[id]; with cp = apos[s, :, t] (s < npos),
+ * cv = avel[s - vfrom, :, t] (s >= vfrom), zero otherwise,
+ *     G[i, b n + e] = Gx[t, b] (cp M)[e] + Gv[t, b] (cv M)[e],   h[i] = -nb[s, t] - cp . xf[t] - cv . vf[t]
+ * (w = W.ravel() with W of shape (N, n), dmp/affine.py). Gx, Gv (T x N), xf, vf (T x n), M (n x n),
+ * G (m x N n) row-major. work: 4n doubles.
+ */
+void gi_rows(int m, const int64_t *ids, const int64_t *series_of, const int64_t *sample_of, int T, int n, int N,
+             int npos, int vfrom, const double *nb, const double *apos, const double *avel, const double *Gx,
+             const double *Gv, const double *xf, const double *vf, const double *M, double *G, double *h,
+             double *work) {
+    double *cp = work, *cv = work + n, *cpm = work + 2 * n, *cvm = work + 3 * n;
+    for (int i = 0; i < m; ++i) {
+        const int64_t s = series_of[ids[i]], t = sample_of[ids[i]];
+        double hi = -nb[s * T + t];
+        for (int d = 0; d < n; ++d) {
+            cp[d] = s < npos ? apos[(s * n + d) * T + t] : 0.0;
+            cv[d] = s >= vfrom ? avel[((s - vfrom) * n + d) * T + t] : 0.0;
+            hi -= cp[d] * xf[t * n + d] + cv[d] * vf[t * n + d];
+        }
+        for (int e = 0; e < n; ++e) {
+            double a = 0.0, b = 0.0;
+            for (int d = 0; d < n; ++d) {
+                a += cp[d] * M[d * n + e];
+                b += cv[d] * M[d * n + e];
+            }
+            cpm[e] = a;
+            cvm[e] = b;
+        }
+        double *row = G + (size_t)i * N * n;
+        const double *gx = Gx + (size_t)t * N, *gv = Gv + (size_t)t * N;
+        for (int k = 0; k < N; ++k)
+            for (int e = 0; e < n; ++e) row[k * n + e] = gx[k] * cpm[e] + gv[k] * cvm[e];
+        h[i] = hi;
+    }
+}
+
 /* The module only carries the C functions above (loaded with ctypes); it has no Python API. */
 static struct PyModuleDef gi_module = {PyModuleDef_HEAD_INIT, "_gi_core", NULL, -1, NULL};
 

@@ -42,6 +42,11 @@ def core() -> ctypes.CDLL:
         c_int, c_int, c_int, PTR, c_int, c_int, c_int, PTR, PTR, PTR, PTR, PTR, c_dbl, PTR, PTR, PTR, c_int,
     ]
     lib.gi_scan.restype = c_int
+    lib.gi_rows.argtypes = [
+        c_int, PTR, PTR, PTR, c_int, c_int, c_int, c_int, c_int, PTR, PTR, PTR, PTR, PTR, PTR, PTR, PTR, PTR, PTR,
+        PTR,
+    ]
+    lib.gi_rows.restype = None
     return lib
 
 

@@ -76,6 +76,8 @@ class RowPool:
     """(ids,) series of each row id."""
     sample_of: NDArray[np.intp]
     """(ids,) dense sample of each row id."""
+    _addr: dict[str, int] | None = None
+    _keep: dict[str, NDArray[np.float64]] | None = None
 
     @classmethod
     def build(
@@ -181,11 +183,11 @@ class RowPool:
         cap = max(64, 4 * n_s)
         while True:
             out_s, out_t = np.empty(cap, dtype=np.int32), np.empty(cap, dtype=np.int64)
+            p = self._native()
             count = core().gi_scan(
                 n_s, n_t, idx.size, addr(idx, np.int64), self.aff.n_dims, self.a_pos.shape[0], self.vel_from,
-                addr(self.neg_bound, np.float64), addr(self.a_pos, np.float64), addr(self.a_vel, np.float64),
-                addr(x, np.float64), addr(v, np.float64), threshold, None if res is None else addr(res, np.float64),
-                addr(out_s, np.int32), addr(out_t, np.int64), cap,
+                p["neg_bound"], p["a_pos"], p["a_vel"], addr(x, np.float64), addr(v, np.float64), threshold,
+                None if res is None else addr(res, np.float64), addr(out_s, np.int32), addr(out_t, np.int64), cap,
             )
             if count <= cap:
                 return self.id_of[out_s[:count], out_t[:count]], res
@@ -256,23 +258,31 @@ class RowPool:
         return ci, local // kk, local % kk
 
     def rows(self, ids: Ids) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``G`` (len(ids), N*n) and ``h`` for the given ids, in order."""
-        aff = self.aff
-        n_b, n = aff.Gx.shape[1], aff.n_dims
-        s, t = self.series_of[ids], self.sample_of[ids]
-        g = np.zeros((ids.size, n_b, n))
-        h = -self.neg_bound[s, t]
-        for a, first, resp, free in (
-            (self.a_pos, 0, aff.Gx, aff.x_free), (self.a_vel, self.vel_from, aff.Gv, aff.v_free)
-        ):
-            if a.shape[0] == 0 or ids.size == 0:
-                continue
-            sa = s - first
-            on = (sa >= 0) & (sa < a.shape[0])
-            coef = a[np.clip(sa, 0, a.shape[0] - 1), :, t] * on[:, None]  # (m, n), zero for other kinds
-            g += resp[t][:, :, None] * (coef @ aff.M)[:, None, :]
-            h -= np.einsum("jd,jd->j", coef, free[t])
-        return g.reshape(ids.size, n_b * n), h
+        """``G`` (len(ids), N*n) and ``h`` for the given ids, in order (built by the compiled core)."""
+        aff, p = self.aff, self._native()
+        ids = np.ascontiguousarray(ids, dtype=np.int64)
+        g, h = np.empty((ids.size, aff.n_weights)), np.empty(ids.size)
+        if ids.size:
+            core().gi_rows(
+                ids.size, addr(ids, np.int64), p["series_of"], p["sample_of"], aff.t.size, aff.n_dims,
+                aff.Gx.shape[1], self.a_pos.shape[0], self.vel_from, p["neg_bound"], p["a_pos"], p["a_vel"],
+                p["Gx"], p["Gv"], p["x_free"], p["v_free"], p["M"], addr(g, np.float64), addr(h, np.float64),
+                p["work"],
+            )
+        return g, h
+
+    def _native(self) -> dict[str, int]:
+        """Addresses of the arrays the compiled core reads (kept alive on the pool; refills write in place)."""
+        if self._addr is None:
+            aff = self.aff
+            names = ("Gx", "Gv", "x_free", "v_free", "M")
+            keep = {k: np.ascontiguousarray(getattr(aff, k), dtype=np.float64) for k in names}
+            keep["work"] = np.zeros(4 * aff.n_dims)
+            self._keep = keep
+            self._addr = {k: addr(a, np.float64) for k, a in keep.items()}
+            self._addr |= {k: addr(getattr(self, k), np.float64) for k in ("neg_bound", "a_pos", "a_vel")}
+            self._addr |= {k: addr(getattr(self, k), np.int64) for k in ("series_of", "sample_of")}
+        return self._addr
 
     def equality_rows(self) -> tuple[NDArray[np.float64], NDArray[np.float64], list[str]]:
         """Every equality row ``A w = b`` and its family."""
