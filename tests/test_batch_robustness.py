@@ -20,7 +20,7 @@ from planner.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASET = str(ROOT / "problems" / "data" / "finger_demos")
-SETTINGS = settings(derandomize=True, deadline=None, database=None,
+SETTINGS = settings(derandomize=True, deadline=None, database=None, max_examples=40,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 
 BASE = {"format": "tooltransfer.task/1", "name": "prop", "tool": "slope", "start": [0.045, 0.12],
@@ -92,7 +92,7 @@ def test_broken_numbers_and_types_exit_2_naming_the_field(tmp_path, capsys, wher
     pytest.param("mapping", "arch", marks=pytest.mark.xfail(
         strict=True, raises=Exception, reason="planner bug found here: the mapping variant's path out of reach "
         "gives NaN tool poses, tools.arch.swept_clearance raises shapely's GEOSException (a traceback)")),
-    ("qp", "arch"), ("qp", "opt"), ("mapping", "dmp"), ("mapping", "opt")])
+    ("qp", "arch"), ("mapping", "dmp")])
 @pytest.mark.parametrize("where", [{"target": [0.0, 0.3]}, {"start": [0.3, 0.12]}])
 def test_far_out_of_reach_is_an_answer(tmp_path, capsys, oe, ss, where) -> None:
     code, err = _solve(tmp_path, {**BASE, **where, "variants": {"oe": oe, "ss": ss}}, capsys)
