@@ -5,8 +5,10 @@ owns ids ``offset[c] .. offset[c] + m_c * K_c``, row ``j`` of its sample positio
 constraint's samples ``k``) is ``offset[c] + j * K_c + p``. Rows are only materialised for the ids
 asked for. For residuals, the rows of all constraints are stacked as *series* (one per constraint
 row ``j``) over all dense samples, with neutral entries where a constraint does not apply, so that
-the residuals of every row on any subset of samples (a :class:`Samples`) take a handful of array
-operations whatever the number of constraints.
+the residuals of every row on any subset of samples (a :class:`Samples`) and their violated local
+maxima take one pass of the compiled core (:meth:`RowPool.scan`; :meth:`RowPool.residuals` and
+:meth:`RowPool.peaks` are the same in NumPy), whatever the number of constraints; the rows of new
+ids are built there too (:meth:`RowPool.rows`).
 """
 
 from __future__ import annotations
@@ -65,7 +67,6 @@ class RowPool:
     aff: AffineRollout
     offset: NDArray[np.intp]
     first_series: NDArray[np.intp]
-    k_all: NDArray[np.intp]
     k_start: NDArray[np.intp]
     neg_bound: NDArray[np.float64]
     a_pos: NDArray[np.float64]
@@ -116,7 +117,6 @@ class RowPool:
             constraints, coeffs, aff,
             offset=np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp),
             first_series=first,
-            k_all=np.concatenate([np.zeros(0, dtype=np.intp)] + [co.k for co in coeffs]).astype(np.intp),
             k_start=np.concatenate([[0], np.cumsum([co.k.size for co in coeffs])]).astype(np.intp),
             neg_bound=np.full((s, t), OFF),
             a_pos=np.zeros((n_kind[0] + n_kind[1], n, t)),
