@@ -79,6 +79,8 @@ class RowPool:
     """(ids,) dense sample of each row id."""
     _addr: dict[str, int] | None = None
     _keep: dict[str, NDArray[np.float64]] | None = None
+    _eq: tuple[NDArray[np.float64], NDArray[np.float64], list[str]] | None = None
+    _out: tuple[NDArray[np.int32], NDArray[np.int64]] | None = None
 
     @classmethod
     def build(
@@ -180,9 +182,12 @@ class RowPool:
         n_s, n_t = self.neg_bound.shape
         idx = np.ascontiguousarray(smp.idx, dtype=np.int64)
         res = np.empty((n_s, idx.size)) if keep else None
-        cap = max(64, 4 * n_s)
+        if self._out is None:
+            cap = max(256, 8 * n_s)
+            self._out = (np.empty(cap, dtype=np.int32), np.empty(cap, dtype=np.int64))
         while True:
-            out_s, out_t = np.empty(cap, dtype=np.int32), np.empty(cap, dtype=np.int64)
+            out_s, out_t = self._out
+            cap = out_s.size
             p = self._native()
             count = core().gi_scan(
                 n_s, n_t, idx.size, addr(idx, np.int64), self.aff.n_dims, self.a_pos.shape[0], self.vel_from,
@@ -191,7 +196,7 @@ class RowPool:
             )
             if count <= cap:
                 return self.id_of[out_s[:count], out_t[:count]], res
-            cap = count
+            self._out = (np.empty(count, dtype=np.int32), np.empty(count, dtype=np.int64))
 
     def peak_cells(
         self, res: NDArray[np.float64], smp: Samples, threshold: float
@@ -285,7 +290,13 @@ class RowPool:
         return self._addr
 
     def equality_rows(self) -> tuple[NDArray[np.float64], NDArray[np.float64], list[str]]:
-        """Every equality row ``A w = b`` and its family."""
+        """Every equality row ``A w = b`` and its family (kept across refills unless an equality
+        constraint is linearised)."""
+        if self._eq is None or any(c.equality and c.linearised for c in self.constraints):
+            self._eq = self._equality_rows()
+        return self._eq
+
+    def _equality_rows(self) -> tuple[NDArray[np.float64], NDArray[np.float64], list[str]]:
         gs, hs, fams = [np.zeros((0, self.aff.n_weights))], [np.zeros(0)], []
         for c, co in zip(self.constraints, self.coeffs, strict=True):
             if c.equality and co.k.size:
