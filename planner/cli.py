@@ -38,7 +38,11 @@ def _print_summary(summary: dict[str, object], title: str) -> None:
     for k, v in summary.items():
         lengths = ("_error", "_deviation", "clearance_min", "penetration_max", "reach_violation_max")
         if isinstance(v, float) and k.endswith(lengths) and "tracking" not in k:
-            table.add_row(f"{k} [mm]", f"{1e3 * v:.4g}")
+            table.add_row(f"{k} \\[mm]", f"{1e3 * v:.4g}")
+        elif isinstance(v, float) and k in ("cone_violation_max", "joint_limit_violation_max", "tracking_error"):
+            table.add_row(f"{k} \\[rad]", f"{v:.4g}")
+        elif isinstance(v, float) and (k.endswith("_time") or k == "duration"):
+            table.add_row(f"{k} \\[s]", f"{v:.4g}")
         elif isinstance(v, float):
             table.add_row(k, f"{v:.4g}")
         else:

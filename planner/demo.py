@@ -61,7 +61,7 @@ def metrics_table(plans: dict[str, Plan], title: str = "") -> object:
                 continue
             v = p.metrics.get(key)
             cells.append("-" if v is None else f"{scale * v:.4g}")
-        table.add_row(f"{label} [{unit}]" if unit else label, *cells)
+        table.add_row(f"{label} \\[{unit}]" if unit else label, *cells)
     return table
 
 
