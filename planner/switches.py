@@ -29,6 +29,7 @@ from planner.ss import SwitchSkill, SwitchTask, optimize, recombine
 from tools.arch import NoArch, swept_clearance, switch_path
 from tools.model import Tool
 from tools.objects import Disc, DiscObject
+from tools.omni.ik import joint_path
 from tools.omni.platform import OmniPlatform
 
 Obstacle = Disc | shapely.Polygon
@@ -57,6 +58,10 @@ def arch_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: S
 
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
              pose_b: NDArray[np.float64]) -> SwitchPath:
+        ends = joint_path(platform, np.vstack([pose_a[:2], pose_b[:2]]))
+        if np.any(~np.isfinite(ends.heading) | (ends.violation > 0)):
+            return SwitchPath(np.zeros((0, 2)), "infeasible", f"a contact pose of the switch {face_a} -> {face_b} "
+                              f"(object at {np.round(obj, 4).tolist()} m) is outside the Omni's reach")
         da = pose_a[2] + tool.face(face_a).push_angle
         db = pose_b[2] + tool.face(face_b).push_angle
         try:
@@ -64,6 +69,11 @@ def arch_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: S
         except NoArch as exc:
             return SwitchPath(np.zeros((0, 2)), "infeasible", str(exc))
         dense = densify(xy, 0.0005)
+        reach = joint_path(platform, dense)
+        bad = np.flatnonzero(~np.isfinite(reach.heading) | (reach.violation > 0))
+        if bad.size:
+            return SwitchPath(np.zeros((0, 2)), "infeasible", f"the arch leaves the Omni's reach at "
+                              f"{np.round(dense[bad[0]], 4).tolist()} m (object at {np.round(obj, 4).tolist()} m)")
         near = min((swept_clearance(tool, platform, dense, o.centre, o.radius) for o in discs), default=np.inf)
         return SwitchPath(xy, min_clearance=swept_clearance(tool, platform, dense[8:-8], obj, radius),
                           info={"obstacle_clearance": float(near), "obstacle_penetration": 0.0,
