@@ -77,16 +77,17 @@ def test_failures_become_rows_and_the_batch_goes_on(tmp_path) -> None:
 
 
 def test_a_killed_worker_process_is_replaced(tmp_path) -> None:
-    """A pool worker killed from outside (not the sandbox): its job runs again on a fresh pool."""
+    """A job that kills its pool worker (the sandbox's parent) breaks the pool: the pool is replaced,
+    the other running jobs run again, and the job that killed it twice becomes an error row."""
+    killer = ["sh", "-c", "kill -9 $(ps -o ppid= -p $PPID)"]  # sh's parent is the sandbox; its parent, the worker
     jobs = [Job(f"k{i}", "v", entry="builtins:dict", args=({"status": "solved"},), timeout=10) for i in range(6)]
-    jobs.insert(0, Job("victim", "v", entry="os:kill", args=(os.getpid(), 0), timeout=10))
+    jobs.insert(2, Job("victim", "v", entry="subprocess:call", args=(killer,), timeout=10))
     with ResultStore(tmp_path / "r.sqlite") as store, open_executor(workers=2) as slots:
-        first = slots.executor.submit(os.getpid)
-        pid = first.result()
-        os.kill(pid, signal.SIGKILL)
-        time.sleep(0.3)
         s = run_jobs(jobs, store, slots, progress=False)
-        assert store.count() == 7 and s.stored == 7
+        rows = {r["task_id"]: r for r in store.rows()}
+    assert s.stored == 7 and set(rows) == {"victim", *(f"k{i}" for i in range(6))}
+    assert rows["victim"]["status"] == "error" and "died twice" in rows["victim"]["reason"]
+    assert all(rows[f"k{i}"]["status"] == "solved" for i in range(6))
 
 
 def _spawn(args: list[str]) -> subprocess.Popen:

@@ -156,7 +156,7 @@ def run_jobs(jobs: Sequence[Job], store: ResultStore, slots: Slots, *, info: dic
                    TextColumn("{task.fields[counts]}"), console=console, disable=not progress, transient=False)
     queue = list(reversed(todo))
     attempts: Counter = Counter()
-    inflight: dict[Future, Job] = {}
+    inflight: dict[Future, tuple[Job, Any]] = {}  # future -> (job, the executor it went to)
     window = 2 * max(1, slots.slots)
     start = time.perf_counter()
 
@@ -172,11 +172,14 @@ def run_jobs(jobs: Sequence[Job], store: ResultStore, slots: Slots, *, info: dic
                 while queue and not stop.is_set() and len(inflight) < window:
                     job = queue.pop()
                     try:
-                        inflight[slots.executor.submit(run_job, job)] = job
+                        inflight[slots.executor.submit(run_job, job)] = (job, slots.executor)
                     except BrokenProcessPool:
                         queue.append(job)
                         slots.renew()
                 if stop.is_set():
+                    if queue and progress:
+                        console.print(f"stopping: finishing {len(inflight)} running jobs (Ctrl-C again to abandon "
+                                      "them); the store can be resumed")
                     for f in [f for f in inflight if f.cancel()]:
                         inflight.pop(f)
                     queue.clear()
@@ -185,13 +188,15 @@ def run_jobs(jobs: Sequence[Job], store: ResultStore, slots: Slots, *, info: dic
                 finished, _ = wait(list(inflight), timeout=0.25, return_when=FIRST_COMPLETED)
                 broken = False
                 for f in finished:
-                    job = inflight.pop(f)
+                    job, executor = inflight.pop(f)
                     try:
                         row = f.result()
                     except CancelledError:
+                        if not stop.is_set():
+                            queue.append(job)  # cancelled by a pool replacement, never run
                         continue
                     except BrokenProcessPool:
-                        broken = True
+                        broken = broken or executor is slots.executor  # a pool already replaced is not renewed
                         attempts[job.key] += 1
                         if attempts[job.key] < 2 and not stop.is_set():
                             queue.append(job)
