@@ -73,9 +73,9 @@ class RowPool:
     a_vel: NDArray[np.float64]
     id_of: NDArray[np.intp]
     vel_from: int
-    series_of: NDArray[np.intp]
+    series_of: NDArray[np.int64]
     """(ids,) series of each row id."""
-    sample_of: NDArray[np.intp]
+    sample_of: NDArray[np.int64]
     """(ids,) dense sample of each row id."""
     _addr: dict[str, int] | None = None
     _keep: dict[str, NDArray[np.float64]] | None = None
@@ -125,8 +125,8 @@ class RowPool:
             a_vel=np.zeros((n_kind[1] + n_kind[2], n, t)),
             id_of=np.full((s, t), -1, dtype=np.intp),
             vel_from=n_kind[0],
-            series_of=np.zeros(int(sum(sizes)), dtype=np.intp),
-            sample_of=np.zeros(int(sum(sizes)), dtype=np.intp),
+            series_of=np.zeros(int(sum(sizes)), dtype=np.int64),
+            sample_of=np.zeros(int(sum(sizes)), dtype=np.int64),
         )
         for ci, q in enumerate(ineq):
             if q:
