@@ -216,8 +216,11 @@ def _full(
 def _settled(problem: FitProblem, aff: AffineRollout, w: NDArray[np.float64], x: NDArray[np.float64],
              tol: float) -> bool:
     """Whether every linearised constraint that is not conservative holds within ``tol`` at ``w``."""
+    exact_only_on_path = [c for c in problem.constraints if c.linearised and not c.conservative]
+    if not exact_only_on_path:
+        return True
     v = aff.velocities(w)
-    return all(c.violation(aff.t, x, v) <= tol for c in problem.constraints if c.linearised and not c.conservative)
+    return all(c.violation(aff.t, x, v) <= tol for c in exact_only_on_path)
 
 
 def solve_fit(
