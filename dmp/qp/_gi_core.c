@@ -278,35 +278,43 @@ GI_CLONES int gi_warm(int n, const double *G, const double *h, double *Q, double
  * neighbours (in level order) to out_s, out_t (up to cap). Returns the number of peaks (which may
  * exceed cap: the caller then asks again with room for all).
  */
-static double series_at(int s, int j, int t, int n, int T, int npos, int vfrom, const double *nb,
-                        const double *apos, const double *avel, const double *x, const double *v) {
-    double r = nb[(size_t)s * T + t];
-    if (s < npos)
-        for (int d = 0; d < n; ++d) r += apos[((size_t)s * n + d) * T + t] * x[(size_t)j * n + d];
-    if (s >= vfrom)
-        for (int d = 0; d < n; ++d) r += avel[((size_t)(s - vfrom) * n + d) * T + t] * v[(size_t)j * n + d];
-    return r;
-}
-
 int gi_scan(int S, int T, int L, const int64_t *idx, int n, int npos, int vfrom, const double *nb, const double *apos,
             const double *avel, const double *x, const double *v, double thr, double *res, int *out_s, int64_t *out_t,
-            int cap) {
+            int cap, int64_t start, int64_t step, double *buf) {
+    /* the level's samples are idx[j] = start + j step when step > 0 (a slice: strided reads the
+       compiler can stream), otherwise the array idx; rows go to res (or the scratch buf, L doubles) */
     int count = 0;
     for (int s = 0; s < S; ++s) {
-        double prev = -INFINITY, cur = L ? series_at(s, 0, (int)idx[0], n, T, npos, vfrom, nb, apos, avel, x, v) : 0.0;
+        double *r = res ? res + (size_t)s * L : buf;
+        const double *nbs = nb + (size_t)s * T;
+        if (step > 0) {
+            for (int j = 0; j < L; ++j) r[j] = nbs[start + j * step];
+        } else {
+            for (int j = 0; j < L; ++j) r[j] = nbs[idx[j]];
+        }
+        for (int kind = 0; kind < 2; ++kind) {
+            const int on = kind == 0 ? s < npos : s >= vfrom;
+            if (!on) continue;
+            const double *a = kind == 0 ? apos + (size_t)s * n * T : avel + (size_t)(s - vfrom) * n * T;
+            const double *xv = kind == 0 ? x : v;
+            for (int d = 0; d < n; ++d) {
+                const double *ad = a + (size_t)d * T;
+                if (step > 0) {
+                    for (int j = 0; j < L; ++j) r[j] += ad[start + j * step] * xv[(size_t)j * n + d];
+                } else {
+                    for (int j = 0; j < L; ++j) r[j] += ad[idx[j]] * xv[(size_t)j * n + d];
+                }
+            }
+        }
         for (int j = 0; j < L; ++j) {
-            const double next = j + 1 < L ? series_at(s, j + 1, (int)idx[j + 1], n, T, npos, vfrom, nb, apos, avel, x, v)
-                                          : -INFINITY;
-            if (res) res[(size_t)s * L + j] = cur;
-            if (cur > thr && cur >= prev && cur >= next) {
+            const double cur = r[j];
+            if (cur > thr && (j == 0 || cur >= r[j - 1]) && (j + 1 == L || cur >= r[j + 1])) {
                 if (count < cap) {
                     out_s[count] = s;
-                    out_t[count] = idx[j];
+                    out_t[count] = step > 0 ? start + j * step : idx[j];
                 }
                 ++count;
             }
-            prev = cur;
-            cur = next;
         }
     }
     return count;

@@ -38,8 +38,10 @@ def core() -> ctypes.CDLL:
     lib.gi_solve.restype = c_int
     lib.gi_warm.argtypes = [c_int, PTR, PTR, PTR, PTR, PTR, PTR, PINT, c_int, PTR, PTR, PTR, c_int, PTR]
     lib.gi_warm.restype = c_int
+    c_i64 = ctypes.c_int64
     lib.gi_scan.argtypes = [
         c_int, c_int, c_int, PTR, c_int, c_int, c_int, PTR, PTR, PTR, PTR, PTR, c_dbl, PTR, PTR, PTR, c_int,
+        c_i64, c_i64, PTR,
     ]
     lib.gi_scan.restype = c_int
     lib.gi_rows.argtypes = [

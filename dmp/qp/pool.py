@@ -182,6 +182,10 @@ class RowPool:
         n_s, n_t = self.neg_bound.shape
         idx = np.ascontiguousarray(smp.idx, dtype=np.int64)
         res = np.empty((n_s, idx.size)) if keep else None
+        buf = np.empty(max(1, idx.size))
+        start, step = 0, 0
+        if isinstance(smp.cols, slice):
+            start, _, step = smp.cols.indices(n_t)
         if self._out is None:
             cap = max(256, 8 * n_s)
             self._out = (np.empty(cap, dtype=np.int32), np.empty(cap, dtype=np.int64))
@@ -193,6 +197,7 @@ class RowPool:
                 n_s, n_t, idx.size, addr(idx, np.int64), self.aff.n_dims, self.a_pos.shape[0], self.vel_from,
                 p["neg_bound"], p["a_pos"], p["a_vel"], addr(x, np.float64), addr(v, np.float64), threshold,
                 None if res is None else addr(res, np.float64), addr(out_s, np.int32), addr(out_t, np.int64), cap,
+                start, step, addr(buf, np.float64),
             )
             if count <= cap:
                 return self.id_of[out_s[:count], out_t[:count]], res
