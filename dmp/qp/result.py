@@ -24,9 +24,10 @@ class FitResult:
         objective: value of ``0.5 w'Pw + q'w``.
         rollout: the motion on the dense grid.
         build_time, solve_time: [s]; iterations: backend iterations summed (None if unknown);
-        n_qp: backend calls; n_exact: exact projections; n_rows: inequality rows active at the
-        end (cutting planes) or in the QP (full); scp_iterations: outer
-        linearisation rounds; families/reason: for infeasible problems.
+        n_qp: backend calls; n_exact: add/drop steps of the exact dual active-set method, over
+        all linearisations (the rows a warm start takes at once are not counted); n_rows:
+        inequality rows active at the end (cutting planes) or in the QP (full); scp_iterations:
+        outer linearisation rounds; families/reason: for infeasible problems.
     """
 
     status: str
