@@ -1,70 +1,87 @@
 """The ``opt`` variant: a smooth, non-penetrating switch path near the ``dmp`` one, solved with CasADi
 and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`planner.ss.nlp`).
 
-1. The ``dmp`` path (:func:`planner.ss.generalize.recombine`) at the N knots' times: the reference
-   and the primal initial guess (separating directions from its geometry); optionally the dual
-   values of the cached solver's last successful solve (``warm_duals``, off by default: measured
-   slower), with IPOPT's ``warm_start_init_point``.
+1. The ``dmp`` path (:func:`planner.ss.generalize.recombine`) at the N knots' times is the reference.
+   The primal initial guess (separating directions from its geometry) is the ``dmp`` path when it
+   keeps out of the C-obstacle (``init="auto"``), else a path round the C-obstacle
+   (:mod:`planner.ss.initial`; the ``dmp`` path of a new tool often goes right through the object,
+   and IPOPT started there used to run out of iterations); when the NLP ends without a solution the
+   next start is tried (the other way round; ``max_starts``), each try an attempt in ``info``.
+   Optionally the dual values of the cached solver's last successful solve (``warm_duals``, off by
+   default: measured slower), with IPOPT's ``warm_start_init_point``.
 2. Contact poses that already overlap the object (another part of the tool than the face) or an
    obstacle make the switch infeasible before any solve, as do unreachable ones.
 3. The margin to the object is ``margin`` over the middle of the path, ramped linearly to 0 at the
    two contact knots over ``ramp_share`` of the knots at each end; to the obstacles it ramps from
    ``min(margin, half the contact poses' clearance)`` to ``margin``.
-   The reach rows are left out when the ``dmp`` path stays ``reach_band`` inside the reach region.
+   The reach rows are left out when the ``dmp`` path and the start stay ``reach_band`` inside the
+   reach region. Steps between knots are bounded (``step_factor``, ``min_step``): no tunnelling.
 4. After the solve, the swept outline between knots is measured exactly with shapely
    (:mod:`planner.ss.verify`) and the reach on a path 4 times denser (:func:`tools.omni.ik.joint_path`).
    A penetration deeper than ``touch_tol`` (the two contacts touch, so a few micrometres of swept
    hull at the contact steps is contact, not penetration) or a reach violation triggers a refinement:
    1.5 times the knots and 1.5 times the margin plus the depth found, up to ``max_refine`` times; if
    it still fails the result is ``failed`` with the numbers, never a silent path.
-5. A solver that ends without a feasible point gives ``infeasible`` with the constraint family of
-   the largest violation (the NLP is local: the reason says so).
+5. A solver that ends without a feasible point from every start gives ``infeasible`` with the
+   constraint family of the largest violation and the starts tried (the NLP is local: the reason
+   says so).
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import replace
 
 import numpy as np
+import shapely
 from numpy.typing import NDArray
 
 from dmp.errors import InputError
 from planner.ss.bodies import UNIT, all_bodies
 from planner.ss.generalize import measure, recombine
 from planner.ss.heading import heading
+from planner.ss.initial import c_obstacle, pushed_out, round_paths
 from planner.ss.learn import SwitchSkill
 from planner.ss.nlp import MODELS, SOLVERS, SwitchNLP, get_nlp, initial_separators
 from planner.ss.result import SwitchPath
 from planner.ss.task import SwitchTask
+from planner.ss.verify import pose_depth_and_gap
 from planner.ss.virtual import Way
-from tools.clearance import clearance, penetration_depth
 from tools.contact import Contact
 from tools.omni.ik import joint_path
 from tools.omni.platform import OmniPlatform
-from tools.omni.reach import reach_sector, wedge_rows
+from tools.omni.reach import LinearRows, ReachSector, reach_sector, wedge_rows
 
 
-def _contact_checks(task: SwitchTask, contacts: tuple[Contact, Contact], touch_tol: float) -> str | None:
-    """Why the contact poses make the switch impossible, or None."""
+def _contact_checks(task: SwitchTask, contacts: tuple[Contact, Contact], touch_tol: float
+                    ) -> tuple[str | None, float]:
+    """Why the contact poses make the switch impossible (or None), and their smallest clearance [m]
+    from the obstacles (inf without obstacles)."""
+    gap = np.inf
     for label, c in zip(("start", "end"), contacts, strict=True):
-        d = penetration_depth(task.tool, c.pose, task.shape)
+        d, _ = pose_depth_and_gap(task.tool, c.pose, task.shape)
         if d > touch_tol:
             return (f"the {label} contact pose ({c.face!r}) overlaps the object by {1e3 * d:.3f} mm "
-                    "(another part of the tool reaches into it)")
+                    "(another part of the tool reaches into it)"), gap
         for i, o in enumerate(task.obstacles):
-            d = penetration_depth(task.tool, c.pose, o)
+            d, g = pose_depth_and_gap(task.tool, c.pose, o)
             if d > 0.0:
-                return f"the {label} contact pose ({c.face!r}) overlaps obstacle {i} by {1e3 * d:.3f} mm"
-    return None
+                return f"the {label} contact pose ({c.face!r}) overlaps obstacle {i} by {1e3 * d:.3f} mm", gap
+            gap = min(gap, g)
+    return None, gap
+
+
+@functools.lru_cache(maxsize=16)
+def _reach(platform: OmniPlatform) -> tuple[ReachSector, LinearRows]:
+    return reach_sector(platform), wedge_rows(platform)
 
 
 def reach_slack(platform: OmniPlatform, xy: NDArray[np.float64]) -> float:
     """Smallest distance [m] of the points ``xy`` (K, 2) from the boundary of the reach sector
     (annulus radii and waist half-planes; negative outside)."""
-    sec = reach_sector(platform)
-    wr = wedge_rows(platform)
+    sec, wr = _reach(platform)
     r = np.hypot(*(xy - sec.centre).T)
     return float(min(np.min(r - sec.r_in), np.min(sec.r_out - r), np.min(wr.h - xy @ wr.G.T)))
 
@@ -88,6 +105,42 @@ def _violations(nlp: SwitchNLP, z: NDArray[np.float64], p: NDArray[np.float64]) 
     return sorted(worst.items(), key=lambda kv: -kv[1])
 
 
+def _length(x: NDArray[np.float64]) -> float:
+    """Length [m] of the polyline ``x`` (N, 2)."""
+    return float(np.sum(np.hypot(*np.diff(x, axis=0).T)))
+
+
+def _objective(x: NDArray[np.float64], ref: NDArray[np.float64], smooth: float) -> float:
+    """The NLP's objective [mm^2] at the path ``x`` (N, 2) [m] with the reference ``ref`` (N, 2) [m]."""
+    xm, rm = x / UNIT, ref / UNIT
+    acc = xm[2:] - 2 * xm[1:-1] + xm[:-2]
+    return float(np.sum((xm - rm) ** 2) / len(xm) + smooth * np.sum(acc**2))
+
+
+def _starts(task: SwitchTask, ref: SwitchPath, shapes: tuple, margin: float, smooth: float, init: str
+            ) -> list[tuple[str, NDArray[np.float64]]]:
+    """Initial paths (label, (N, 2) [m]) to start the NLP from, in order (:mod:`planner.ss.initial`):
+    the ``dmp`` path first when it stays out of the C-obstacle (at the middle heading, within
+    ``margin``), else the paths round the C-obstacle, the one with the smaller objective first, and
+    the others after."""
+    dmp = ("dmp", ref.xy)
+    if init == "dmp":
+        return [dmp]
+    psi = float(np.mean(ref.yaw))
+    cobs = c_obstacle(task.tool, psi, shapes, margin)
+    inner = ref.xy[1:-1]
+    inside = shapely.contains_xy(cobs, inner[:, 0], inner[:, 1])
+    depth = shapely.distance(shapely.boundary(cobs), shapely.points(inner[inside])) if inside.any() else np.zeros(0)
+    rounds = sorted(round_paths(task.tool, ref.xy[0], ref.xy[-1], psi, shapes, margin, len(ref.xy), cobs=cobs),
+                    key=lambda x: _objective(x, ref.xy, smooth))
+    if init == "pushed":
+        rounds = sorted((pushed_out(ref.xy, x, cobs) for x in rounds), key=lambda x: _objective(x, ref.xy, smooth))
+    labelled = [(f"round {i + 1}", x) for i, x in enumerate(rounds)]
+    if depth.size == 0 or float(depth.max()) <= margin:
+        return [dmp, *labelled]
+    return [*labelled, dmp]
+
+
 def optimize(
     skill: SwitchSkill,
     task: SwitchTask,
@@ -103,6 +156,10 @@ def optimize(
     warm_duals: bool = False,
     way: Way | float = "short",
     reach_band: float | None = 0.03,
+    init: str = "auto",
+    max_starts: int = 2,
+    step_factor: float = 2.5,
+    min_step: float = 3e-3,
 ) -> SwitchPath:
     """The ``opt`` switch path of ``task`` (module docstring).
 
@@ -119,13 +176,20 @@ def optimize(
         max_refine: refinements after a failed exact check.
         smooth: weight of the squared second differences against the squared distance to the
             ``dmp`` path (both in mm^2).
-        warm_duals: pass the cached solver's last dual values (primal: the ``dmp`` path always). Off by
+        warm_duals: pass the cached solver's last dual values (primal: the start, ``init``). Off by
             default: over 200 random switches the duals of the previous, different switch did not help
             (median 25.9 vs 21.1 ms, at most 206 vs 123 iterations; benchmarks/bench_ss.py).
         way: which way round the object the virtual motion goes.
         reach_band: the reach rows are left out of the NLP when the ``dmp`` path keeps this distance
             [m] from the reach region's boundary (a smaller NLP); the exact check still tests reach,
             and a violation puts the rows back for the refinement. None: always in.
+        init: the NLP's initial path: ``"auto"`` (the ``dmp`` path when it keeps out of the
+            C-obstacle, else a path round it, :mod:`planner.ss.initial`), ``"dmp"`` (always the
+            ``dmp`` path, as before).
+        max_starts: initial paths tried (in the order of ``init``) when the NLP ends without a solution
+            (each try is an attempt in ``info["attempts"]``, timed).
+        step_factor, min_step: the largest step between knots [m] is ``max(step_factor * L / (N - 1),
+            min_step)`` with ``L`` the length of the start path (:mod:`planner.ss.nlp`, no tunnelling).
     """
     t_start = time.perf_counter()
     if solver not in SOLVERS:
@@ -136,57 +200,80 @@ def optimize(
         raise InputError("margin", "a positive length [m]", repr(margin))
     if not (np.isfinite(touch_tol) and touch_tol >= 0):
         raise InputError("touch_tol", "a length >= 0 [m]", repr(touch_tol))
+    if init not in ("auto", "dmp", "pushed"):
+        raise InputError("init", "'auto' or 'dmp'", repr(init))
+    if not isinstance(max_starts, int) or max_starts < 1:
+        raise InputError("max_starts", "an integer >= 1", repr(max_starts))
     ref = recombine(skill, task, n_samples=n_knots, way=way, measured=False)
     if not ref.ok:
         return replace(ref, variant="opt")
     assert ref.start is not None and ref.end is not None
-    why = _contact_checks(task, (ref.start, ref.end), touch_tol)
+    why, obs_gap = _contact_checks(task, (ref.start, ref.end), touch_tol)
     if why is not None:
         return SwitchPath("opt", "infeasible", why, start=ref.start, end=ref.end)
     bodies = all_bodies(task.shape, task.obstacles)
-    ends = [ref.start.pose, ref.end.pose]
-    obs_gap = min((clearance(task.tool, e, o) for e in ends for o in task.obstacles), default=np.inf)
-    info: dict[str, object] = {"attempts": [], "k1": ref.info["k1"], "model": model, "solver": solver}
+    info: dict[str, object] = {"attempts": [], "k1": ref.info["k1"], "model": model, "solver": solver, "init": init}
+    attempts: list[dict[str, object]] = info["attempts"]  # type: ignore[assignment]
     N, m = n_knots, margin
-    use_reach = reach_band is None or reach_slack(task.omni, ref.xy) < reach_band
-    for attempt in range(max_refine + 1):
-        if attempt:
+    shapes = (task.shape, *task.obstacles)
+    failure: SwitchPath | None = None
+    use_reach = False
+    for level in range(max_refine + 1):
+        if level:
             ref = recombine(skill, task, n_samples=N, way=way, measured=False)
+        starts = _starts(task, ref, shapes, m, smooth, init)
+        # the reach rows when the reference or the first start come near the reach boundary, or the
+        # exact check found a violation before
+        use_reach = use_reach or reach_band is None or min(
+            reach_slack(task.omni, x) for x in (ref.xy, starts[0][1])) < reach_band
         nlp, built = get_nlp(task.tool, N, task.omni, bodies, model=model, solver=solver, smooth=smooth,
                              reach=use_reach)
         r = ramp(N, ramp_share)
         m_obj = m * r
         m_obs = r * m + (1 - r) * min(m, 0.5 * obs_gap)
-        p = np.concatenate([ref.xy.ravel() / UNIT, m_obj / UNIT, m_obs / UNIT, *[b.data for b in bodies]])
-        xy_mm = ref.xy / UNIT
-        z0 = np.concatenate([xy_mm.ravel(), initial_separators(nlp, xy_mm, ref.yaw, bodies).ravel(order="F")])
+        p = np.concatenate([ref.xy.ravel() / UNIT, m_obj / UNIT, m_obs / UNIT, *[b.data for b in bodies], [0.0]])
         lbx = np.full(nlp.n_vars, -np.inf)
         ubx = np.full(nlp.n_vars, np.inf)
         for k in (0, N - 1):
-            lbx[2 * k:2 * k + 2] = ubx[2 * k:2 * k + 2] = xy_mm[k]
-        args = {"x0": z0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": nlp.lbg, "ubg": nlp.ubg}
-        if warm_duals and nlp.last_duals is not None:
-            args["lam_x0"], args["lam_g0"] = nlp.last_duals
-        t0 = time.perf_counter()
-        sol = nlp.solver(**args)
-        t_solve = time.perf_counter() - t0
-        st = nlp.solver.stats()
-        z = np.asarray(sol["x"]).ravel()
-        rec = {"n_knots": N, "margin": m, "built": built, "reach_rows": use_reach,
-               "build_time": nlp.build_time if built else 0.0, "solve_time": t_solve,
-               "status": st.get("return_status", ""), "iterations": int(st.get("iter_count", -1))}
-        info["attempts"].append(rec)  # type: ignore[union-attr]
-        if not st.get("success", False):
+            lbx[2 * k:2 * k + 2] = ubx[2 * k:2 * k + 2] = ref.xy[k] / UNIT
+        solved = None
+        for label, x_init in starts[:max_starts]:
+            # steps up to step_factor times the start's mean step (and at least min_step)
+            p[-1] = max(step_factor * _length(x_init) / (N - 1), min_step) / UNIT
+            xy_mm = x_init / UNIT
+            seps = initial_separators(nlp, xy_mm, heading(task.omni, x_init), bodies)
+            z0 = np.concatenate([xy_mm.ravel(), seps.ravel(order="F")])
+            args = {"x0": z0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": nlp.lbg, "ubg": nlp.ubg}
+            if warm_duals and nlp.last_duals is not None:
+                args["lam_x0"], args["lam_g0"] = nlp.last_duals
+            t0 = time.perf_counter()
+            sol = nlp.solver(**args)
+            t_solve = time.perf_counter() - t0
+            st = nlp.solver.stats()
+            z = np.asarray(sol["x"]).ravel()
+            rec: dict[str, object] = {
+                "n_knots": N, "margin": m, "start": label, "built": built, "reach_rows": use_reach,
+                "build_time": nlp.build_time if built else 0.0, "solve_time": t_solve,
+                "status": st.get("return_status", ""), "iterations": int(st.get("iter_count", -1))}
+            attempts.append(rec)
+            built = False
+            if st.get("success", False):
+                solved = z
+                nlp.last_duals = (np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel())
+                break
             viol = _violations(nlp, z, p)
             status = "infeasible" if viol and viol[0][1] > 1e-7 else "failed"
             listed = ", ".join(f"{name} by {1e3 * v:.3f} mm" for name, v in viol)
-            why = (f"the NLP ({solver}, local) ended with {rec['status']!r}: no feasible switch path found; "
-                   f"violated at its last iterate: {listed}" if status == "infeasible"
-                   else f"the NLP ({solver}) ended with {rec['status']!r} at a feasible point")
-            return SwitchPath("opt", status, why, start=ref.start, end=ref.end,
-                              info={**info, "time": time.perf_counter() - t_start})
-        nlp.last_duals = (np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel())
-        xy = z[:2 * N].reshape(N, 2) * UNIT
+            tried = ", ".join(str(a["start"]) for a in attempts if a["n_knots"] == N)
+            why = (f"the NLP ({solver}, local) ended with {rec['status']!r}: no feasible switch path found "
+                   f"(started from: {tried}); violated at its last iterate: {listed}" if status == "infeasible"
+                   else f"the NLP ({solver}) ended with {rec['status']!r} at a feasible point (started from: {tried})")
+            failure = SwitchPath("opt", status, why, start=ref.start, end=ref.end)
+        if solved is None:
+            assert failure is not None
+            info.update(iterations=sum(int(a["iterations"]) for a in attempts), time=time.perf_counter() - t_start)
+            return replace(failure, info=info)
+        xy = solved[:2 * N].reshape(N, 2) * UNIT
         xy[0], xy[-1] = ref.start.pose.position, ref.end.pose.position
         yaw = heading(task.omni, xy)
         t0 = time.perf_counter()
@@ -196,12 +283,11 @@ def optimize(
         rec["verify_time"] = time.perf_counter() - t0
         rec["penetration"] = path.max_penetration
         rec["reach_violation"] = reach
+        use_reach = use_reach or reach > 0.0
         if path.max_penetration <= touch_tol and reach == 0.0:
-            info.update(iterations=sum(a["iterations"] for a in info["attempts"]),  # type: ignore[union-attr]
-                        refinements=attempt, n_knots=N, margin=m, time=time.perf_counter() - t_start)
+            info.update(iterations=sum(int(a["iterations"]) for a in attempts),
+                        refinements=level, n_knots=N, margin=m, time=time.perf_counter() - t_start)
             return replace(path, info=info)
-        if reach > 0.0:
-            use_reach = True
         N, m = math.ceil(1.5 * N), 1.5 * m + path.max_penetration
     last = info["attempts"][-1]  # type: ignore[index]
     return SwitchPath(

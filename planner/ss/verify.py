@@ -112,6 +112,25 @@ def disc_depths(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], s
     return np.maximum(0.0, disc.radius - sd)
 
 
+def pose_depth_and_gap(tool: Tool, pose: Pose2D, shape: Disc | shapely.Polygon) -> tuple[float, float]:
+    """Penetration depth and clearance [m] of the tool at ``pose`` and ``shape``: for a disc from the
+    cached pieces (:func:`disc_depths` on a step of zero length, and the pieces' distance to the
+    centre), the same as :func:`tools.clearance.penetration_depth` / ``clearance``; for a polygon,
+    those functions."""
+    if not isinstance(shape, Disc):
+        from tools.clearance import clearance, penetration_depth
+
+        return penetration_depth(tool, pose, shape), clearance(tool, pose, shape)
+    xy = np.array([[pose.x, pose.y], [pose.x, pose.y]])
+    yaw = np.array([pose.yaw, pose.yaw])
+    depth = float(disc_depths(tool, xy, yaw, np.array([0]), shape)[0])
+    verts, _ = tool_geometry(tool)
+    r = rot(pose.yaw)
+    placed = shapely.polygons([v @ r.T + xy[0] for v in verts])
+    gap = float(shapely.distance(placed, shapely.Point(shape.centre)).min()) - shape.radius
+    return depth, max(0.0, gap)
+
+
 def sweep_check(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], shape: Disc | shapely.Polygon,
                 hulls: tuple[NDArray, NDArray] | None = None, depth_tol: float = 1e-6,
                 exact_disc: str = "union", sub_tol: float = 1e-5) -> SweepCheck:
