@@ -53,7 +53,7 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
     a1.set(xlabel="obstacles", ylabel="success rate (solved)", ylim=(-0.03, 1.03),
            title="success against obstacle count (95% Wilson)")
     a1.xaxis.get_major_locator().set_params(integer=True)
-    a2.set(xlabel="min distance of start/target inside the reach boundary [mm] (quintile bins)",
+    a2.set(xlabel="depth of start/target inside the reach, the smaller [mm] (quintiles)",
            ylabel="success rate (solved)", ylim=(-0.03, 1.03), title="success against reach margin")
     for a in (a1, a2):
         a.grid(alpha=0.3)
