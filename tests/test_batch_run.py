@@ -62,6 +62,22 @@ def test_pool_and_dask_give_the_same_rows_once_each(tmp_path) -> None:
     assert main(["batch", "run", str(other), "--db", str(tmp_path / "pool.sqlite"), "-q", "--resume"]) == 2
 
 
+def test_scheduler_address_connects_to_a_running_cluster(tmp_path) -> None:
+    """--scheduler ADDRESS: the same runner on an existing cluster (here in-process worker threads, each
+    with its own sandbox)."""
+    from distributed import LocalCluster
+
+    jobs = [Job(f"j{i}", "v", entry="builtins:dict", args=({"status": "solved", "reason": str(i)},), timeout=30)
+            for i in range(5)]
+    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
+        with ResultStore(tmp_path / "r.sqlite") as store, open_executor(scheduler=cluster.scheduler_address) as slots:
+            assert (slots.kind, slots.slots) == ("dask", 2)
+            s = run_jobs(jobs, store, slots, progress=False)
+            rows = store.rows()
+    assert s.stored == 5 and sorted(r["reason"] for r in rows) == [str(i) for i in range(5)]
+    assert len({r["worker"] for r in rows}) == 1  # one worker process, two threads
+
+
 def test_failures_become_rows_and_the_batch_goes_on(tmp_path) -> None:
     jobs = [Job("a", "v", entry="math:hypot", args=(1.0, 1.0), timeout=10),  # not a row
             Job("b", "v", entry="time:sleep", args=(30,), timeout=1.0),

@@ -146,6 +146,12 @@ class Sandbox:
             self._proc.wait()
         self.close()
 
+    def __del__(self) -> None:
+        try:
+            self.kill()
+        except Exception:  # interpreter shutdown: the child exits on its own (its input closes)
+            pass
+
     def close(self) -> None:
         """Let the child exit (its input closes) and release the pipes and the log."""
         for c in (self._tx, self._rx):
