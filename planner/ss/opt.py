@@ -14,8 +14,8 @@ and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`planner.ss.
 3. The margin to the object is ``margin`` over the middle of the path, ramped linearly to 0 at the
    two contact knots over ``ramp_share`` of the knots at each end; to the obstacles it ramps from
    ``min(margin, half the contact poses' clearance)`` to ``margin``.
-   The reach rows are left out when the ``dmp`` path and the start stay ``reach_band`` inside the
-   reach region. Steps between knots are bounded (``step_factor``, ``min_step``): no tunnelling.
+   A family of reach rows is left out when the ``dmp`` path and the start keep ``reach_band`` from
+   its boundary. Steps between knots are bounded (``step_factor``, ``min_step``): no tunnelling.
 4. After the solve, the swept outline between knots is measured exactly with shapely
    (:mod:`planner.ss.verify`) and the reach on a path 4 times denser (:func:`tools.omni.ik.joint_path`).
    A penetration deeper than ``touch_tol`` (the two contacts touch, so a few micrometres of swept
@@ -78,12 +78,18 @@ def _reach(platform: OmniPlatform) -> tuple[ReachSector, LinearRows]:
     return reach_sector(platform), wedge_rows(platform)
 
 
+def reach_slacks(platform: OmniPlatform, xy: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Smallest distances [m] (3,) of the points ``xy`` (K, 2) from the inner circle, the outer circle
+    and the waist half-planes of the reach sector (negative outside)."""
+    sec, wr = _reach(platform)
+    r = np.hypot(*(xy - sec.centre).T)
+    return np.array([np.min(r - sec.r_in), np.min(sec.r_out - r), np.min(wr.h - xy @ wr.G.T)])
+
+
 def reach_slack(platform: OmniPlatform, xy: NDArray[np.float64]) -> float:
     """Smallest distance [m] of the points ``xy`` (K, 2) from the boundary of the reach sector
     (annulus radii and waist half-planes; negative outside)."""
-    sec, wr = _reach(platform)
-    r = np.hypot(*(xy - sec.centre).T)
-    return float(min(np.min(r - sec.r_in), np.min(sec.r_out - r), np.min(wr.h - xy @ wr.G.T)))
+    return float(np.min(reach_slacks(platform, xy)))
 
 
 def ramp(n_knots: int, share: float) -> NDArray[np.float64]:
@@ -160,6 +166,7 @@ def optimize(
     max_starts: int = 2,
     step_factor: float = 2.5,
     min_step: float = 3e-3,
+    separators: str = "angle",
 ) -> SwitchPath:
     """The ``opt`` switch path of ``task`` (module docstring).
 
@@ -180,9 +187,10 @@ def optimize(
             default: over 200 random switches the duals of the previous, different switch did not help
             (median 25.9 vs 21.1 ms, at most 206 vs 123 iterations; benchmarks/bench_ss.py).
         way: which way round the object the virtual motion goes.
-        reach_band: the reach rows are left out of the NLP when the ``dmp`` path keeps this distance
-            [m] from the reach region's boundary (a smaller NLP); the exact check still tests reach,
-            and a violation puts the rows back for the refinement. None: always in.
+        reach_band: each family of reach rows (inner circle, outer circle, waist wedge) is left out of
+            the NLP when the ``dmp`` path and the start keep this distance [m] from its boundary (a
+            smaller NLP); the exact check still tests reach, and a violation puts all rows back for
+            the refinement. None: always in.
         init: the NLP's initial path: ``"auto"`` (the ``dmp`` path when it keeps out of the
             C-obstacle, else a path round it, :mod:`planner.ss.initial`), ``"dmp"`` (always the
             ``dmp`` path, as before).
@@ -190,6 +198,7 @@ def optimize(
             (each try is an attempt in ``info["attempts"]``, timed).
         step_factor, min_step: the largest step between knots [m] is ``max(step_factor * L / (N - 1),
             min_step)`` with ``L`` the length of the start path (:mod:`planner.ss.nlp`, no tunnelling).
+        separators: ``"angle"`` or ``"vector"`` (:data:`planner.ss.nlp.SEPARATORS`).
     """
     t_start = time.perf_counter()
     if solver not in SOLVERS:
@@ -217,17 +226,18 @@ def optimize(
     N, m = n_knots, margin
     shapes = (task.shape, *task.obstacles)
     failure: SwitchPath | None = None
-    use_reach = False
+    any_violation = False
     for level in range(max_refine + 1):
         if level:
             ref = recombine(skill, task, n_samples=N, way=way, measured=False)
         starts = _starts(task, ref, shapes, m, smooth, init)
         # the reach rows when the reference or the first start come near the reach boundary, or the
         # exact check found a violation before
-        use_reach = use_reach or reach_band is None or min(
-            reach_slack(task.omni, x) for x in (ref.xy, starts[0][1])) < reach_band
+        near = np.minimum(reach_slacks(task.omni, ref.xy), reach_slacks(task.omni, starts[0][1])) < (
+            np.inf if reach_band is None else reach_band)
+        use_reach = (True, True, True) if any_violation else tuple(bool(v) for v in near)
         nlp, built = get_nlp(task.tool, N, task.omni, bodies, model=model, solver=solver, smooth=smooth,
-                             reach=use_reach)
+                             reach=use_reach, separators=separators)
         r = ramp(N, ramp_share)
         m_obj = m * r
         m_obs = r * m + (1 - r) * min(m, 0.5 * obs_gap)
@@ -283,7 +293,7 @@ def optimize(
         rec["verify_time"] = time.perf_counter() - t0
         rec["penetration"] = path.max_penetration
         rec["reach_violation"] = reach
-        use_reach = use_reach or reach > 0.0
+        any_violation = any_violation or reach > 0.0
         if path.max_penetration <= touch_tol and reach == 0.0:
             info.update(iterations=sum(int(a["iterations"]) for a in attempts),
                         refinements=level, n_knots=N, margin=m, time=time.perf_counter() - t_start)

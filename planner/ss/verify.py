@@ -121,14 +121,15 @@ def pose_depth_and_gap(tool: Tool, pose: Pose2D, shape: Disc | shapely.Polygon) 
         from tools.clearance import clearance, penetration_depth
 
         return penetration_depth(tool, pose, shape), clearance(tool, pose, shape)
-    xy = np.array([[pose.x, pose.y], [pose.x, pose.y]])
-    yaw = np.array([pose.yaw, pose.yaw])
-    depth = float(disc_depths(tool, xy, yaw, np.array([0]), shape)[0])
     verts, _ = tool_geometry(tool)
     r = rot(pose.yaw)
-    placed = shapely.polygons([v @ r.T + xy[0] for v in verts])
-    gap = float(shapely.distance(placed, shapely.Point(shape.centre)).min()) - shape.radius
-    return depth, max(0.0, gap)
+    placed = shapely.polygons([v @ r.T + (pose.x, pose.y) for v in verts])
+    dist = float(shapely.distance(placed, shapely.Point(shape.centre)).min())
+    if dist > 0.0:  # the centre outside every piece: sd(c, union) is the smallest distance, exactly
+        return max(0.0, shape.radius - dist), max(0.0, dist - shape.radius)
+    xy = np.array([[pose.x, pose.y], [pose.x, pose.y]])
+    yaw = np.array([pose.yaw, pose.yaw])
+    return float(disc_depths(tool, xy, yaw, np.array([0]), shape)[0]), 0.0
 
 
 def sweep_check(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], shape: Disc | shapely.Polygon,
