@@ -88,8 +88,14 @@ def open_executor(workers: int | None = None, scheduler: str | None = None,
     cluster = None
     try:
         if dask_local is not None:
-            cluster = LocalCluster(n_workers=dask_local, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
+            import dask
+
+            # the workers only wait on their sandboxes: their statistical profiler (100 Hz) and GIL
+            # monitor (1 kHz) would take CPU from the jobs
+            with dask.config.set({"distributed.worker.profile.enabled": False,
+                                  "distributed.admin.system-monitor.gil.enabled": False}):
+                cluster = LocalCluster(n_workers=dask_local, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, silence_logs=logging.ERROR)
             client = Client(cluster)
         else:
             try:
