@@ -84,17 +84,3 @@ def round_paths(tool: Tool, start: NDArray[np.float64], end: NDArray[np.float64]
         out.append(pts)
     return out
 
-
-def pushed_out(ref: NDArray[np.float64], arc: NDArray[np.float64], cobs: shapely.Geometry) -> NDArray[np.float64]:
-    """The reference path ``ref`` (N, 2) [m] with its interior knots that lie inside the C-obstacle
-    ``cobs`` moved to the nearest point of the polyline ``arc`` (N, 2) (a :func:`round_paths`
-    candidate, so all of them leave on the same side); the other knots are kept."""
-    out = ref.copy()
-    inner = ref[1:-1]
-    inside = shapely.contains_xy(cobs, inner[:, 0], inner[:, 1])
-    if inside.any():
-        line = shapely.LineString(arc)
-        pts = shapely.points(inner[inside])
-        at = shapely.line_locate_point(line, pts)
-        out[1:-1][inside] = shapely.get_coordinates(shapely.line_interpolate_point(line, at))
-    return out

@@ -30,8 +30,10 @@ and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`planner.ss.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import time
+from collections.abc import Iterator
 from dataclasses import replace
 
 import numpy as np
@@ -42,7 +44,7 @@ from dmp.errors import InputError
 from planner.ss.bodies import UNIT, all_bodies
 from planner.ss.generalize import measure, recombine
 from planner.ss.heading import heading
-from planner.ss.initial import c_obstacle, pushed_out, round_paths
+from planner.ss.initial import c_obstacle, round_paths
 from planner.ss.learn import SwitchSkill
 from planner.ss.nlp import MODELS, SOLVERS, SwitchNLP, get_nlp, initial_separators
 from planner.ss.result import SwitchPath
@@ -124,27 +126,28 @@ def _objective(x: NDArray[np.float64], ref: NDArray[np.float64], smooth: float) 
 
 
 def _starts(task: SwitchTask, ref: SwitchPath, shapes: tuple, margin: float, smooth: float, init: str
-            ) -> list[tuple[str, NDArray[np.float64]]]:
-    """Initial paths (label, (N, 2) [m]) to start the NLP from, in order (:mod:`planner.ss.initial`):
+            ) -> Iterator[tuple[str, NDArray[np.float64]]]:
+    """Initial paths (label, (N, 2) [m]) to start the NLP from, in order, lazily (:mod:`planner.ss.initial`):
     the ``dmp`` path first when it stays out of the C-obstacle (at the middle heading, within
     ``margin``), else the paths round the C-obstacle, the one with the smaller objective first, and
     the others after."""
     dmp = ("dmp", ref.xy)
     if init == "dmp":
-        return [dmp]
+        yield dmp
+        return
     psi = float(np.mean(ref.yaw))
     cobs = c_obstacle(task.tool, psi, shapes, margin)
     inner = ref.xy[1:-1]
     inside = shapely.contains_xy(cobs, inner[:, 0], inner[:, 1])
-    depth = shapely.distance(shapely.boundary(cobs), shapely.points(inner[inside])) if inside.any() else np.zeros(0)
+    clear = not inside.any() or float(shapely.distance(shapely.boundary(cobs), shapely.points(inner[inside])).max()) \
+        <= margin
+    if clear:
+        yield dmp
     rounds = sorted(round_paths(task.tool, ref.xy[0], ref.xy[-1], psi, shapes, margin, len(ref.xy), cobs=cobs),
                     key=lambda x: _objective(x, ref.xy, smooth))
-    if init == "pushed":
-        rounds = sorted((pushed_out(ref.xy, x, cobs) for x in rounds), key=lambda x: _objective(x, ref.xy, smooth))
-    labelled = [(f"round {i + 1}", x) for i, x in enumerate(rounds)]
-    if depth.size == 0 or float(depth.max()) <= margin:
-        return [dmp, *labelled]
-    return [*labelled, dmp]
+    yield from ((f"round {i + 1}", x) for i, x in enumerate(rounds))
+    if not clear:
+        yield dmp
 
 
 def optimize(
@@ -209,7 +212,7 @@ def optimize(
         raise InputError("margin", "a positive length [m]", repr(margin))
     if not (np.isfinite(touch_tol) and touch_tol >= 0):
         raise InputError("touch_tol", "a length >= 0 [m]", repr(touch_tol))
-    if init not in ("auto", "dmp", "pushed"):
+    if init not in ("auto", "dmp"):
         raise InputError("init", "'auto' or 'dmp'", repr(init))
     if not isinstance(max_starts, int) or max_starts < 1:
         raise InputError("max_starts", "an integer >= 1", repr(max_starts))
@@ -231,9 +234,10 @@ def optimize(
         if level:
             ref = recombine(skill, task, n_samples=N, way=way, measured=False)
         starts = _starts(task, ref, shapes, m, smooth, init)
+        first = next(starts)
         # the reach rows when the reference or the first start come near the reach boundary, or the
         # exact check found a violation before
-        near = np.minimum(reach_slacks(task.omni, ref.xy), reach_slacks(task.omni, starts[0][1])) < (
+        near = np.minimum(reach_slacks(task.omni, ref.xy), reach_slacks(task.omni, first[1])) < (
             np.inf if reach_band is None else reach_band)
         use_reach = (True, True, True) if any_violation else tuple(bool(v) for v in near)
         nlp, built = get_nlp(task.tool, N, task.omni, bodies, model=model, solver=solver, smooth=smooth,
@@ -247,7 +251,7 @@ def optimize(
         for k in (0, N - 1):
             lbx[2 * k:2 * k + 2] = ubx[2 * k:2 * k + 2] = ref.xy[k] / UNIT
         solved = None
-        for label, x_init in starts[:max_starts]:
+        for label, x_init in itertools.islice(itertools.chain([first], starts), max_starts):
             # steps up to step_factor times the start's mean step (and at least min_step)
             p[-1] = max(step_factor * _length(x_init) / (N - 1), min_step) / UNIT
             xy_mm = x_init / UNIT
