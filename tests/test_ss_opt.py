@@ -102,3 +102,54 @@ def test_solver_is_reused_and_capsule_model_solves(skill: SwitchSkill) -> None:
     assert again.ok and not again.info["attempts"][0]["built"]
     cap = optimize(skill, task, model="capsule", solver="sqp")
     check_solved(task, cap, 5e-6)
+
+
+# Random switches of the benchmark (seed 0) that used to end with IPOPT's iteration limit, started
+# from a dmp path 25-28 mm deep in the object ("armpit" of the T-shape), and one whose solution
+# tunnelled through the object and an obstacle between two knots (8.6 mm, refinements then failed).
+HARD = {
+    "t_armpit_right": ("t_shape", "stem_left", "right", (0.051092, 0.1719379), 0.0364, 0.4259, ()),
+    "t_armpit_top": ("t_shape", "stem_left", "top", (-0.01243079, 0.18256196), 0.106, 0.8236, ()),
+    "i_tunnel": ("i_shape", "left", "right", (0.07660951, 0.17343962), 0.8473, 0.9705,
+                 (((0.06555662, 0.11750425), 0.014485457526108997),)),
+}
+
+
+@pytest.mark.parametrize("name", sorted(HARD))
+def test_hard_switches_are_solved_from_a_path_round_the_object(skill: SwitchSkill, name: str) -> None:
+    from tools.objects import Disc
+
+    tool, fa, fb, c, sa, sb, obs = HARD[name]
+    task = SwitchTask(load_tool(tool), fa, fb, np.array(c), s_from=sa, s_to=sb,
+                      obstacles=tuple(Disc(np.array(o), r) for o, r in obs))
+    assert recombine(skill, task, n_samples=40).max_penetration > 5e-3  # the dmp path goes through
+    path = optimize(skill, task)
+    check_solved(task, path, 5e-6)
+    assert path.info["attempts"][0]["start"].startswith("round")
+    steps = np.hypot(*np.diff(path.xy, axis=0).T)
+    assert steps.max() < 0.5 * 2 * task.obj.radius  # no jump across the object between two knots
+
+
+def test_round_paths_join_the_contacts_outside_the_c_obstacle() -> None:
+    from planner.ss.initial import c_obstacle, round_paths
+
+    task = fig11_task("fig11a_stem")
+    a, b = task.contact("from"), task.contact("to")
+    psi = 0.5 * (a.pose.yaw + b.pose.yaw)
+    paths = round_paths(task.tool, a.pose.position, b.pose.position, psi, (task.shape,), 1e-3, 40)
+    assert len(paths) == 2  # one each way round
+    inside = c_obstacle(task.tool, psi, (task.shape,), 0.0)  # the C-obstacle without the margin
+    for x in paths:
+        np.testing.assert_allclose(x[[0, -1]], [a.pose.position, b.pose.position], atol=0)
+        assert not shapely.contains_xy(inside, x[1:-1, 0], x[1:-1, 1]).any()
+    # the two ways round differ: one goes by each side of the object
+    d = b.pose.position - a.pose.position
+    side = [np.sign(d[0] * (x[20] - a.pose.position)[1] - d[1] * (x[20] - a.pose.position)[0]) for x in paths]
+    assert side[0] != side[1]
+
+
+@pytest.mark.parametrize("separators", ["angle", "vector"])
+def test_both_separator_forms_solve_the_fig11_cases(skill: SwitchSkill, separators: str) -> None:
+    for name in ("fig11a", "fig11b"):
+        task = fig11_task(name)
+        check_solved(task, optimize(skill, task, separators=separators), 1e-4)
