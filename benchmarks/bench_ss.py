@@ -1,7 +1,8 @@
 """SS switching benchmark, one command: `python benchmarks/bench_ss.py`. Medians (the machine is shared
 and timings are noisy). Targets (issue 6): ``opt`` switch with a reused solver at N = 40 for the
 library's tools (convex pieces), shapely verification included, <= 15 ms; a capsule tool <= 3 ms;
-``dmp`` switch <= 2 ms; IPOPT iteration counts and the failure rate over >= 200 random switches."""
+``dmp`` switch <= 2 ms; IPOPT iteration counts and the failure rate over >= 200 random switches.
+Wall and CPU (``time.process_time``) medians; a peer configuration is measured in the same run."""
 
 from __future__ import annotations
 
@@ -11,10 +12,12 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import collections
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
-from planner.ss import SwitchTask, learn_switch_skill, optimize, recombine
+from planner.ss import SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
 from planner.ss.adapter import dataset_switches, default_dataset
 from planner.ss.cases import FIG11, fig11_task, random_task
 from planner.ss.nlp import Capsule
@@ -33,39 +36,59 @@ def _kind(reason: str) -> str:
     return reason.split(":")[0].replace("the NLP ", "NLP ")
 
 
+def _timed(fn: Callable[..., Any], *args: Any, **kw: Any) -> tuple[Any, float, float]:
+    """(result, wall [s], CPU [s]) of one call."""
+    c0, w0 = time.process_time(), time.perf_counter()
+    r = fn(*args, **kw)
+    return r, time.perf_counter() - w0, time.process_time() - c0
+
+
+def run_opt(skill: SwitchSkill, tasks: list[SwitchTask], label: str, **kw: Any) -> None:
+    """The opt variant over ``tasks`` with a reused solver (each structure built once before)."""
+    for t in tasks:
+        optimize(skill, t, **kw)
+    wall, cpu, solve, ver, its, status, starts = [], [], [], [], [], collections.Counter(), collections.Counter()
+    for t in tasks:
+        r, w, c = _timed(optimize, skill, t, **kw)
+        status[r.status if r.ok else f"{r.status} ({_kind(r.reason)})"] += 1
+        if r.ok:
+            wall.append(w)
+            cpu.append(c)
+            solve.append(sum(a["solve_time"] for a in r.info["attempts"]))
+            ver.append(sum(a.get("verify_time", 0.0) for a in r.info["attempts"]))
+            its.append(r.info["iterations"])
+            starts[f"{r.info['attempts'][0]['start']}, {len(r.info['attempts'])} attempt(s)"] += 1
+    n = len(tasks)
+    fails = n - status["solved"] - sum(v for k, v in status.items() if "contact pose" in k)
+    print(f"opt {label} over {n} random switches (library tools, random faces and contact points, 30% with a disc "
+          f"obstacle): whole switch wall {_ms(wall)}, CPU {_ms(cpu)}; NLP solve {_ms(solve)}; shapely check "
+          f"{_ms(ver)}; IPOPT iterations median {np.median(its):.0f}, p90 {np.percentile(its, 90):.0f}, max "
+          f"{max(its)}; failure rate (not solved although both contact poses are possible) {fails}/{n} "
+          f"({100 * fails / n:.1f} %); outcomes {dict(status)}; solved from {dict(starts)}")
+
+
 def main(n_random: int = 200, seed: int = 0) -> None:
     demos = dataset_switches(default_dataset(), ("upper", "left"))
     skill = learn_switch_skill(demos, virtual="arch", tool="finger")
     print(f"skill: {len(demos)} upper->left switches of the default dataset, virtual motion 'arch'")
+    print(f"machine load (1, 5, 15 min): {os.getloadavg()} on {os.cpu_count()} CPUs (CPU times are less "
+          "sensitive to it than wall times)")
     rng = np.random.default_rng(seed)
     tasks = [random_task(rng, obstacle_prob=0.3) for _ in range(n_random)]
-    for warm in (True, False):
-        for t in tasks:  # build every solver structure once (reuse is what is measured)
-            optimize(skill, t, warm_duals=warm)
-        tot, solve, ver, its, status = [], [], [], [], collections.Counter()
-        for t in tasks:
-            r = optimize(skill, t, warm_duals=warm)
-            status[r.status if r.ok else f"{r.status} ({_kind(r.reason)})"] += 1
-            if r.ok:
-                tot.append(r.info["time"])
-                solve.append(sum(a["solve_time"] for a in r.info["attempts"]))
-                ver.append(sum(a["verify_time"] for a in r.info["attempts"]))
-                its.append(r.info["iterations"])
-        fails = n_random - status["solved"] - sum(v for k, v in status.items() if "contact pose" in k)
-        print(f"opt (pieces, IPOPT, N = 40, dual warm start {'on' if warm else 'off'}) over {n_random} random switches "
-              f"(library tools, random faces and contact points, 30% with a disc obstacle): whole switch {_ms(tot)}; "
-              f"NLP solve {_ms(solve)}; shapely check {_ms(ver)}; IPOPT iterations median {np.median(its):.0f}, "
-              f"p90 {np.percentile(its, 90):.0f}, max {max(its)}; failure rate (not solved although both contact "
-              f"poses are possible) {fails}/{n_random} ({100 * fails / n_random:.1f} %); outcomes {dict(status)}")
+    run_opt(skill, tasks, "(pieces, IPOPT, N = 40, defaults)")
+    run_opt(skill, tasks, "(angle separators)", separators="angle")
+    run_opt(skill, tasks, "(peer in the same run: the dmp path as the only start, as before)", init="dmp")
     for name in FIG11:
         task = fig11_task(name)
         optimize(skill, task)
-        tt = []
+        tt, tc = [], []
         for _ in range(15):
-            r = optimize(skill, task)
-            tt.append(r.info["time"])
+            r, w, c = _timed(optimize, skill, task)
+            tt.append(w)
+            tc.append(c)
         d = recombine(skill, task, n_samples=40)
-        print(f"{name} ({FIG11[name][0]}, {FIG11[name][1]} -> {FIG11[name][2]}): opt {_ms(tt)}, "
+        print(f"{name} ({FIG11[name][0]}, {FIG11[name][1]} -> {FIG11[name][2]}): opt wall {_ms(tt)}, CPU {_ms(tc)}, "
+              f"start {r.info['attempts'][0]['start']!r}, "
               f"{r.info['iterations']} iterations, penetration {1e3 * r.object_penetration:.4f} mm, clearance "
               f"{1e3 * r.object_clearance:.2f} mm; dmp penetration {1e3 * d.object_penetration:.2f} mm")
     finger = load_tool("finger")
@@ -75,28 +98,27 @@ def main(n_random: int = 200, seed: int = 0) -> None:
     for solver in ("sqp", "ipopt"):
         for t in ctasks[:1]:
             optimize(skill, t, model="capsule", solver=solver)
-        tot, its, ok = [], [], 0
+        tot, cpu, its, ok = [], [], [], 0
         for t in ctasks:
-            r = optimize(skill, t, model="capsule", solver=solver)
+            r, w, c = _timed(optimize, skill, t, model="capsule", solver=solver)
             ok += r.ok
             if r.ok:
-                tot.append(r.info["time"])
+                tot.append(w)
+                cpu.append(c)
                 its.append(r.info["iterations"])
         print(f"opt capsule model of tool 1 (radius {1e3 * cap.radius:.2f} mm), {solver}, N = 40, 40 switches: "
-              f"{_ms(tot)}, iterations median {np.median(its):.0f}, solved {ok}/40")
-    dt = []
-    for t in tasks:
-        t0 = time.perf_counter()
-        recombine(skill, t, n_samples=40)
-        dt.append(time.perf_counter() - t0)
-    dn = []
-    for t in tasks:
-        t0 = time.perf_counter()
-        recombine(skill, t, n_samples=40, measured=False)
-        dn.append(time.perf_counter() - t0)
-    print(f"dmp switch (40 samples) over {n_random} random switches: with the shapely report {_ms(dt)}; "
-          f"path only {_ms(dn)}")
-
+              f"wall {_ms(tot)}, CPU {_ms(cpu)}, iterations median {np.median(its):.0f}, solved {ok}/40")
+    res: dict[str, tuple[list[float], list[float]]] = {}
+    for label, kw in (("with the shapely report", {}), ("path only", {"measured": False}),
+                      ("with the shapely report, peer: DMP.fit and rollout on every call", {"fast": False})):
+        wall, cpu = [], []
+        for t in tasks:
+            _, w, c = _timed(recombine, skill, t, n_samples=40, **kw)
+            wall.append(w)
+            cpu.append(c)
+        res[label] = (wall, cpu)
+    print(f"dmp switch (40 samples) over {n_random} random switches: "
+          + "; ".join(f"{k}: wall {_ms(w)}, CPU {_ms(c)}" for k, (w, c) in res.items()))
 
 if __name__ == "__main__":
     main()

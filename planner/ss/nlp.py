@@ -2,9 +2,11 @@
 
 Decision variables (millimetres, :data:`planner.ss.bodies.UNIT`): the tool centre points ``X_k``
 (N, 2) at N knots, and per interior knot, convex piece of the tool and body (object or obstacle
-piece), a separating direction ``n`` (2,) (plus an offset ``beta`` for a polygonal body), by default
-as an angle ``n = (cos phi, sin phi)`` (:data:`SEPARATORS`; one variable and no norm row instead
-of two and ``|n|^2 <= 1``: a smaller KKT system, median NLP solve 11 vs 14 ms over 200 random switches).
+piece), a separating direction ``n`` (2,) with ``|n|^2 <= 1`` (plus an offset ``beta`` for a polygonal
+body). Optionally (:data:`SEPARATORS`) ``n = (cos phi, sin phi)``: one variable and no norm row, a
+smaller KKT system (median NLP solve 11 vs 14 ms over 200 random switches) but a worse tail (p90 53
+vs 22 iterations; on Fig. 11a the first start ran out of iterations: the angle must turn round where
+the vector can shrink through zero), so not the default.
 
 Heading: **a function of position through the Omni's waist** (:func:`planner.ss.heading.heading_casadi`,
 smooth inside the reach annulus), not fixed over the move: the tool's yaw at knot k is
@@ -120,9 +122,9 @@ def _sqp(nlp: dict[str, Any], max_iter: int) -> Any:
 #: Registered NLP backends: name -> builder(nlp dict, max_iter) -> casadi Function.
 SOLVERS: dict[str, Callable[[dict[str, Any], int], Any]] = {"ipopt": _ipopt, "sqp": _sqp}
 MODELS: tuple[str, ...] = ("pieces", "capsule")
-#: Separating directions as an angle ``n = (cos phi, sin phi)`` (one variable, no norm row) or as a
-#: vector ``n`` with ``|n|^2 <= 1`` (two variables and a row).
-SEPARATORS: tuple[str, ...] = ("angle", "vector")
+#: Separating directions as a vector ``n`` with ``|n|^2 <= 1`` (two variables and a row; the default)
+#: or as an angle ``n = (cos phi, sin phi)`` (one variable, no norm row; module docstring).
+SEPARATORS: tuple[str, ...] = ("vector", "angle")
 
 
 @dataclass
@@ -177,7 +179,7 @@ def reach_families(reach: bool | tuple[bool, bool, bool]) -> tuple[bool, bool, b
 def build_nlp(
     tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
     solver: str = "ipopt", smooth: float = 10.0, reach_margin: float = 1e-4, max_iter: int = 150,
-    reach: bool | tuple[bool, bool, bool] = True, separators: str = "angle",
+    reach: bool | tuple[bool, bool, bool] = True, separators: str = "vector",
 ) -> SwitchNLP:
     """Build the NLP (module docstring) for ``tool`` at ``n_knots`` knots against bodies of the kinds
     of ``bodies`` (their values are parameters of each solve). ``reach``: which reach row families
@@ -311,7 +313,7 @@ _CACHE: dict[tuple, SwitchNLP] = {}
 
 def get_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
             solver: str = "ipopt", smooth: float = 10.0, reach: bool | tuple[bool, bool, bool] = True,
-            separators: str = "angle") -> tuple[SwitchNLP, bool]:
+            separators: str = "vector") -> tuple[SwitchNLP, bool]:
     """The cached NLP for this structure (built on first use); returns ``(nlp, built_now)``."""
     key = (_tool_key(tool), model, n_knots, platform, tuple(b.signature for b in bodies),
            tuple(b.family == "object" for b in bodies), solver, smooth, reach_families(reach), separators)
