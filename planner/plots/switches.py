@@ -97,7 +97,9 @@ def plot_generalized_switches(skill: SwitchSkill, tasks: Mapping[str, SwitchTask
     """Fig. 11 for both variants: one row per task, the ``dmp`` path (left) and the ``opt`` path
     (right): the tool at the start (blue, its first face thick), five internal steps (grey) and the end
     (orange, the second face in yellow), the tool centre point's path, the object (dark red) and the
-    obstacles; each title gives the penetration measured with shapely [mm]."""
+    obstacles, and for ``opt`` the path the NLP started from (green dotted: the ``dmp`` path or a
+    path round the object, :mod:`planner.ss.initial`); each title gives the penetration measured with
+    shapely [mm]."""
     fig, axes = _figure(2, len(tasks))
     for row, (name, task) in enumerate(tasks.items()):
         for col, variant in enumerate(("dmp", "opt")):
@@ -105,6 +107,11 @@ def plot_generalized_switches(skill: SwitchSkill, tasks: Mapping[str, SwitchTask
             path = recombine(skill, task, n_samples=40) if variant == "dmp" else optimize(skill, task)
             if path.ok:
                 _draw_path(ax, task, path.xy, path.yaw)
+                if variant == "opt" and "x_start" in path.info:  # the NLP's start (planner.ss.initial)
+                    start = np.asarray(path.info["x_start"])
+                    ax.plot(*(1e3 * start).T, ":", color="tab:green", lw=1.0,
+                            label=f"NLP start ({path.info['attempts'][-1]['start']})")
+                    ax.legend(fontsize=7, loc="best")
                 ax.set_title(f"{name} ({task.tool.name}) {variant}: penetration "
                              f"{1e3 * path.object_penetration:.2f} mm", fontsize=9)
             else:

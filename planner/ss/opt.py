@@ -274,6 +274,7 @@ def optimize(
             built = False
             if st.get("success", False):
                 solved = z
+                info["x_start"] = x_init
                 nlp.last_duals = (np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel())
                 break
             viol = _violations(nlp, z, p)

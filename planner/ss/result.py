@@ -30,7 +30,8 @@ class SwitchPath:
             the middle of the path, where the full margin applies).
         obstacle_penetration, obstacle_clearance: the same against the obstacles (whole path).
         info: numbers of the computation (k1, k2, end correction, solver status, iterations,
-            refinements, knots, margin, timings [s]).
+            refinements, knots, margin, timings [s]; for ``opt`` every solve in ``attempts`` with the
+            start it used, and ``x_start`` (N, 2) [m], the start of the solve returned).
     """
 
     variant: str
