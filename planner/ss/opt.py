@@ -15,7 +15,8 @@ and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`planner.ss.
    two contact knots over ``ramp_share`` of the knots at each end; to the obstacles it ramps from
    ``min(margin, half the contact poses' clearance)`` to ``margin``.
    A family of reach rows is left out when the ``dmp`` path and the start keep ``reach_band`` from
-   its boundary. Steps between knots are bounded (``step_factor``, ``min_step``): no tunnelling.
+   its boundary, an obstacle when they keep the tool ``body_band`` from it. Steps between knots are
+   bounded (``step_factor``, ``min_step``): no tunnelling.
 4. After the solve, the swept outline between knots is measured exactly with shapely
    (:mod:`planner.ss.verify`) and the reach on a path 4 times denser (:func:`tools.omni.ik.joint_path`).
    A penetration deeper than ``touch_tol`` (the two contacts touch, so a few micrometres of swept
@@ -33,7 +34,7 @@ import functools
 import itertools
 import math
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -49,9 +50,10 @@ from planner.ss.learn import SwitchSkill
 from planner.ss.nlp import MODELS, SOLVERS, SwitchNLP, get_nlp, initial_separators
 from planner.ss.result import SwitchPath
 from planner.ss.task import SwitchTask
-from planner.ss.verify import pose_depth_and_gap
+from planner.ss.verify import pose_depth_and_gap, tool_geometry
 from planner.ss.virtual import Way
 from tools.contact import Contact
+from tools.objects import Disc
 from tools.omni.ik import joint_path
 from tools.omni.platform import OmniPlatform
 from tools.omni.reach import LinearRows, ReachSector, reach_sector, wedge_rows
@@ -150,6 +152,22 @@ def _starts(task: SwitchTask, ref: SwitchPath, shapes: tuple, margin: float, smo
         yield dmp
 
 
+def _near_obstacles(task: SwitchTask, paths: Sequence[NDArray[np.float64]], band: float) -> set[int]:
+    """Indices of the obstacles within ``band`` [m] of the tool (a disc of its radius about the
+    reference point) at some knot of ``paths`` (each (N, 2) [m])."""
+    _, rho = tool_geometry(task.tool)
+    pts = np.vstack(paths)
+    out = set()
+    for i, o in enumerate(task.obstacles):
+        if isinstance(o, Disc):
+            gap = float(np.min(np.hypot(*(pts - o.centre).T))) - o.radius
+        else:
+            gap = float(np.min(shapely.distance(shapely.points(pts), o)))
+        if gap - rho <= band:
+            out.add(i)
+    return out
+
+
 def optimize(
     skill: SwitchSkill,
     task: SwitchTask,
@@ -170,6 +188,7 @@ def optimize(
     step_factor: float = 2.5,
     min_step: float = 3e-3,
     separators: str = "vector",
+    body_band: float | None = 0.01,
 ) -> SwitchPath:
     """The ``opt`` switch path of ``task`` (module docstring).
 
@@ -201,6 +220,10 @@ def optimize(
             (each try is an attempt in ``info["attempts"]``, timed).
         step_factor, min_step: the largest step between knots [m] is ``max(step_factor * L / (N - 1),
             min_step)`` with ``L`` the length of the start path (:mod:`planner.ss.nlp`, no tunnelling).
+        body_band: an obstacle is left out of the NLP when every knot of the ``dmp`` path and of the
+            start keeps the tool (its radius about the reference point) this far [m] from it; the
+            exact check still tests it, and a penetration puts every obstacle back for the
+            refinement. None: always in.
         separators: ``"vector"`` or ``"angle"`` (:data:`planner.ss.nlp.SEPARATORS`: the angle form is
             faster in the median, slower in the tail).
     """
@@ -224,15 +247,17 @@ def optimize(
     why, obs_gap = _contact_checks(task, (ref.start, ref.end), touch_tol)
     if why is not None:
         return SwitchPath("opt", "infeasible", why, start=ref.start, end=ref.end)
-    bodies = all_bodies(task.shape, task.obstacles)
+    every_body = all_bodies(task.shape, task.obstacles)
     info: dict[str, object] = {"attempts": [], "k1": ref.info["k1"], "model": model, "solver": solver, "init": init}
     attempts: list[dict[str, object]] = info["attempts"]  # type: ignore[assignment]
     N, m = n_knots, margin
     shapes = (task.shape, *task.obstacles)
     failure: SwitchPath | None = None
     any_violation = False
-    for level in range(max_refine + 1):
-        if level:
+    all_obstacles = body_band is None
+    level = 0
+    while level <= max_refine:
+        if len(ref.xy) != N:
             ref = recombine(skill, task, n_samples=N, way=way, measured=False)
         starts = _starts(task, ref, shapes, m, smooth, init)
         first = next(starts)
@@ -241,6 +266,10 @@ def optimize(
         near = np.minimum(reach_slacks(task.omni, ref.xy), reach_slacks(task.omni, first[1])) < (
             np.inf if reach_band is None else reach_band)
         use_reach = (True, True, True) if any_violation else tuple(bool(v) for v in near)
+        # obstacles the tool cannot come within body_band of from the reference or the first start
+        # are left out (the exact check still tests them; a penetration puts them all back)
+        keep = _near_obstacles(task, (ref.xy, first[1]), np.inf if all_obstacles else body_band)
+        bodies = [b for b in every_body if b.family == "object" or int(b.family.split()[1]) in keep]
         nlp, built = get_nlp(task.tool, N, task.omni, bodies, model=model, solver=solver, smooth=smooth,
                              reach=use_reach, separators=separators)
         r = ramp(N, ramp_share)
@@ -304,6 +333,10 @@ def optimize(
             info.update(iterations=sum(int(a["iterations"]) for a in attempts),
                         refinements=level, n_knots=N, margin=m, time=time.perf_counter() - t_start)
             return replace(path, info=info)
+        if len(bodies) < len(every_body) and path.obstacle_penetration > touch_tol:
+            all_obstacles = True  # an obstacle left out was hit: the same knots and margin with all of them
+            continue
+        level += 1
         N, m = math.ceil(1.5 * N), 1.5 * m + path.max_penetration
     last = info["attempts"][-1]  # type: ignore[index]
     return SwitchPath(
