@@ -153,3 +153,13 @@ def test_both_separator_forms_solve_the_fig11_cases(skill: SwitchSkill, separato
     for name in ("fig11a", "fig11b"):
         task = fig11_task(name)
         check_solved(task, optimize(skill, task, separators=separators), 1e-4)
+
+
+@pytest.mark.parametrize(("field", "value"), [("init", "nope"), ("max_starts", 0), ("step_factor", -1.0),
+                                              ("min_step", float("nan")), ("body_band", -0.01),
+                                              ("reach_band", float("inf")), ("separators", "polar")])
+def test_bad_options_raise_input_error(skill: SwitchSkill, field: str, value: object) -> None:
+    from dmp.errors import InputError
+
+    with pytest.raises(InputError, match=field):
+        optimize(skill, fig11_task("fig11b"), **{field: value})

@@ -240,6 +240,12 @@ def optimize(
         raise InputError("init", "'auto' or 'dmp'", repr(init))
     if not isinstance(max_starts, int) or max_starts < 1:
         raise InputError("max_starts", "an integer >= 1", repr(max_starts))
+    for name, value in (("step_factor", step_factor), ("min_step", min_step)):
+        if not (np.isfinite(value) and value > 0):
+            raise InputError(name, "a positive number", repr(value))
+    for name, band in (("reach_band", reach_band), ("body_band", body_band)):
+        if band is not None and not (np.isfinite(band) and band >= 0):
+            raise InputError(name, "None or a length >= 0 [m]", repr(band))
     ref = recombine(skill, task, n_samples=n_knots, way=way, measured=False)
     if not ref.ok:
         return replace(ref, variant="opt")
