@@ -221,3 +221,14 @@ def test_report_statistics_and_files(tmp_path, capsys) -> None:
     assert len((tmp_path / "rep" / "results.csv").read_text().splitlines()) == 11
     assert "70.0" in capsys.readouterr().out
     assert main(["batch", "report", str(tmp_path / "missing.sqlite")]) == 2
+
+
+def test_retry_forgets_only_the_asked_statuses(tmp_path, capsys) -> None:
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        for i, status in enumerate(("solved", "infeasible", "error", "timeout", "error")):
+            store.put({"task_id": f"t{i}", "variant": "v", "status": status})
+        assert store.forget(["error", "timeout"]) == 3
+        assert sorted(k for k, _ in store.done()) == ["t0", "t1"]
+    batch = _batch(tmp_path)
+    assert main(["batch", "run", str(batch), "--db", str(tmp_path / "x.sqlite"), "--resume", "--retry", "solved"]) == 2
+    assert "--retry" in capsys.readouterr().err
