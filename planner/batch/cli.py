@@ -37,7 +37,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
                   progress=not args.quiet)
     counts = ", ".join(f"{k} {v}" for k, v in sorted(s.counts.items())) or "nothing to do"
     print(f"{s.stored} results stored ({counts}), {s.skipped} already done, of {s.total}; "
-          f"{s.wall:.1f} s on {s.slots} {s.kind} slots: {s.throughput:.3f} tasks/s per slot")
+          f"{s.wall:.1f} s on {s.slots} {s.kind} slots: {s.throughput:.3f} results (task-variant pairs) per second "
+          "per slot")
     if s.interrupted:
         print(f"stopped before the end: carry on with `tooltransfer batch run {args.batch} --db {args.db} --resume`")
         return EXIT_INTERRUPTED
