@@ -219,55 +219,58 @@ def build_nlp(
     m_obs = ca.SX.sym("m_obs", N)
     bpar = [ca.SX.sym(f"body{i}", b.data.size) for i, b in enumerate(bodies)]
     s_max = ca.SX.sym("s_max")
-    # heading and rotation at each interior knot
-    yaw = [heading_casadi(platform, X[0, k] * UNIT, X[1, k] * UNIT) for k in range(N)]
-    rot = [(ca.cos(a), ca.sin(a)) for a in yaw]
+    # Rows are built vectorized over the interior knots (each expression a (1, N - 2) row: a few
+    # hundred CasADi operations instead of one per knot, 115 -> ~10 ms), then stacked knot by knot
+    # (``ca.vec`` of the (rows per knot, N - 2) matrix), the same order as one knot at a time.
+    K = N - 2
+    Xi, Yi = X[0, 1:N - 1], X[1, 1:N - 1]
+    yaw = heading_casadi(platform, Xi * UNIT, Yi * UNIT)
+    cos_k, sin_k = ca.cos(yaw), ca.sin(yaw)
 
-    def world(k: int, v: NDArray[np.float64]) -> tuple[Any, Any]:
-        c, s = rot[k]
-        return X[0, k] + c * v[0] - s * v[1], X[1, k] + s * v[0] + c * v[1]
+    def world(v: NDArray[np.float64]) -> tuple[Any, Any]:
+        return Xi + cos_k * v[0] - sin_k * v[1], Yi + sin_k * v[0] + cos_k * v[1]
 
-    rows: list[Any] = []
+    def knot_major(per_knot: list[Any]) -> Any:
+        return ca.vec(ca.vertcat(*per_knot))
+
+    blocks: list[Any] = []
     families: list[tuple[str, int, int]] = []
     count = 0
     for bi, b in enumerate(bodies):
         start = count
         p = bpar[bi]
-        for k in range(1, N - 1):
-            m = m_obj[k] if b.family == "object" else m_obs[k]
-            if model == "capsule":
-                assert capsule is not None
-                ax, ay = world(k, capsule.a)
-                bx, by = world(k, capsule.b)
-                ex, ey = bx - ax, by - ay
-                t = ca.fmin(1, ca.fmax(0, ((p[0] - ax) * ex + (p[1] - ay) * ey) / (ex * ex + ey * ey)))
-                dx, dy = p[0] - ax - t * ex, p[1] - ay - t * ey
-                rows.append(ca.sqrt(dx * dx + dy * dy) - (p[2] + capsule.radius + m))
-                count += 1
-                continue
+        m = (m_obj if b.family == "object" else m_obs)[1:N - 1].T
+        per_knot: list[Any] = []
+        if model == "capsule":
+            assert capsule is not None
+            ax, ay = world(capsule.a)
+            bx, by = world(capsule.b)
+            ex, ey = bx - ax, by - ay
+            t = ca.fmin(1, ca.fmax(0, ((p[0] - ax) * ex + (p[1] - ay) * ey) / (ex * ex + ey * ey)))
+            dx, dy = p[0] - ax - t * ex, p[1] - ay - t * ey
+            per_knot.append(ca.sqrt(dx * dx + dy * dy) - (p[2] + capsule.radius + m))
+        else:
             for j, verts in enumerate(pieces):
                 off = next(o for (jj, bb, o, _) in sep_layout if jj == j and bb == bi)
                 if angle:
-                    n0, n1 = ca.cos(S[off, k - 1]), ca.sin(S[off, k - 1])
-                    beta = S[off + 1, k - 1] if b.kind == "poly" else None
+                    n0, n1 = ca.cos(S[off, :]), ca.sin(S[off, :])
+                    beta = S[off + 1, :] if b.kind == "poly" else None
                 else:
-                    n0, n1 = S[off, k - 1], S[off + 1, k - 1]
-                    beta = S[off + 2, k - 1] if b.kind == "poly" else None
+                    n0, n1 = S[off, :], S[off + 1, :]
+                    beta = S[off + 2, :] if b.kind == "poly" else None
                 for v in verts:
-                    wx, wy = world(k, v)
+                    wx, wy = world(v)
                     if b.kind == "disc":
-                        rows.append(n0 * (wx - p[0]) + n1 * (wy - p[1]) - (p[2] + m))
+                        per_knot.append(n0 * (wx - p[0]) + n1 * (wy - p[1]) - (p[2] + m))
                     else:
-                        rows.append(n0 * wx + n1 * wy - beta - m)
-                    count += 1
+                        per_knot.append(n0 * wx + n1 * wy - beta - m)
                 if b.kind == "poly":
-                    nv = b.data.size // 2
-                    for vi in range(nv):
-                        rows.append(beta - (n0 * p[2 * vi] + n1 * p[2 * vi + 1]))
-                        count += 1
+                    for vi in range(b.data.size // 2):
+                        per_knot.append(beta - (n0 * p[2 * vi] + n1 * p[2 * vi + 1]))
                 if not angle:
-                    rows.append(1 - n0 * n0 - n1 * n1)
-                    count += 1
+                    per_knot.append(1 - n0 * n0 - n1 * n1)
+        blocks.append(knot_major(per_knot))
+        count += len(per_knot) * K
         families.append((b.family, start, count))
     sec = reach_sector(platform)
     wr = wedge_rows(platform)
@@ -275,28 +278,29 @@ def build_nlp(
     r_in, r_out = (sec.r_in + reach_margin) / UNIT, (sec.r_out - reach_margin) / UNIT
     start = count
     inner, outer, wedge = reach_families(reach)
-    for k in range(1, N - 1):
-        r2 = (X[0, k] - bx0) ** 2 + (X[1, k] - by0) ** 2
-        if inner:
-            rows.append((r2 - r_in**2) / r_in)
-        if outer:
-            rows.append((r_out**2 - r2) / r_out)
-        for gi in range(2 if wedge else 0):
-            rows.append(wr.h[gi] / UNIT - reach_margin / UNIT - (wr.G[gi, 0] * X[0, k] + wr.G[gi, 1] * X[1, k]))
-        count += inner + outer + 2 * wedge
+    r2 = (Xi - bx0) ** 2 + (Yi - by0) ** 2
+    per_knot = []
+    if inner:
+        per_knot.append((r2 - r_in**2) / r_in)
+    if outer:
+        per_knot.append((r_out**2 - r2) / r_out)
+    for gi in range(2 if wedge else 0):
+        per_knot.append(wr.h[gi] / UNIT - reach_margin / UNIT - (wr.G[gi, 0] * Xi + wr.G[gi, 1] * Yi))
+    if per_knot:
+        blocks.append(knot_major(per_knot))
+        count += len(per_knot) * K
     families.append(("reach", start, count))
     # step length between consecutive knots at most s_max (no tunnelling through a body between knots)
     start = count
-    for k in range(N - 1):
-        d2 = (X[0, k + 1] - X[0, k]) ** 2 + (X[1, k + 1] - X[1, k]) ** 2
-        rows.append((s_max * s_max - d2) / s_max)
-        count += 1
+    dX = X[:, 1:] - X[:, :-1]
+    blocks.append(((s_max * s_max - (dX[0, :] ** 2 + dX[1, :] ** 2)) / s_max).T)
+    count += N - 1
     families.append(("step", start, count))
     track = ca.sumsqr(X - Xd) / N
     acc = ca.sumsqr(X[:, 2:] - 2 * X[:, 1:-1] + X[:, :-2])
     z = ca.vertcat(ca.vec(X), ca.vec(S)) if S is not None else ca.vec(X)
     pv = ca.vertcat(ca.vec(Xd), m_obj, m_obs, *bpar, s_max)
-    nlp = {"x": z, "p": pv, "f": track + smooth * acc, "g": ca.vertcat(*rows)}
+    nlp = {"x": z, "p": pv, "f": track + smooth * acc, "g": ca.vertcat(*blocks)}
     fn = SOLVERS[solver](nlp, max_iter)
     g_fn = ca.Function("ss_rows", [z, pv], [nlp["g"]])
     lbg = np.zeros(count)
