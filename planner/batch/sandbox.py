@@ -37,7 +37,7 @@ class Outcome:
 
     Attributes:
         kind: ``ok`` (``value`` holds the return value), ``exception`` (``message`` names the type and
-            text; ``detail`` holds the traceback's last frames), ``timeout`` or ``crash`` (the child
+            text; ``detail`` holds the traceback's last 12 frames), ``timeout`` or ``crash`` (the child
             died: ``message`` names the signal or exit code, ``detail`` the tail of its stderr).
         wall: wall time of the call [s] (the timeout for a timeout).
     """
@@ -191,7 +191,7 @@ def _child_main() -> None:  # pragma: no cover - runs in the child process
         try:
             reply = ("ok", _resolve(entry)(*args), "", "")
         except Exception as exc:
-            tb = "".join(traceback.format_exception(exc, limit=-4))
+            tb = "".join(traceback.format_exception(exc, limit=-12))
             reply = ("exception", None, f"{type(exc).__name__}: {exc}", tb)
         try:
             tx.send(reply)

@@ -65,7 +65,7 @@ def run_job(job: Job) -> dict[str, Any]:
     elif out.kind == "timeout":
         row.update(status="timeout", reason=out.message)
     else:
-        row.update(status="error", reason=out.message, detail=out.detail[-4000:])
+        row.update(status="error", reason=out.message, detail=out.detail[-8000:])
     row["finished_at"] = time.time()
     return row
 
