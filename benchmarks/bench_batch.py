@@ -52,7 +52,8 @@ def _run(batch: Path, db: Path, **kw: object) -> dict[str, float]:
     # busy: the share of the slots' time spent inside jobs (the executor's overhead and idle slots are the rest)
     return {"wall": wall, "run_wall": s.wall, "rows": s.stored, "job_cpu": cpu[0] or 0.0, "solved": cpu[2],
             "failed": cpu[3], "parent_cpu": time.process_time() - c0, "slots": s.slots,
-            "busy": (cpu[4] or 0.0) / (s.wall * s.slots) if s.wall > 0 else float("nan")}
+            "busy": (cpu[4] or 0.0) / (s.wall * s.slots) if s.wall > 0 else float("nan"),
+            "share": (cpu[0] or 0.0) / cpu[4] if cpu[4] else float("nan")}
 
 
 def main() -> None:
@@ -74,7 +75,8 @@ def main() -> None:
             r = runs[int(np.argsort([x["wall"] for x in runs])[len(runs) // 2])]
             print(f"{name:>18}: {r['rows']} plans ({args.count} tasks x {n_var} variants) in {r['wall']:.1f} s wall "
                   f"(run {r['run_wall']:.1f} s after the warm-up), {r['solved']} solved, {r['failed']} error/timeout; "
-                  f"CPU in the jobs {r['job_cpu']:.1f} s, slots busy {100 * r['busy']:.0f}%; "
+                  f"CPU in the jobs {r['job_cpu']:.1f} s, slots busy {100 * r['busy']:.0f}%, jobs' CPU share "
+                  f"{100 * r['share']:.0f}% (other load on the machine lowers it); "
                   f"throughput {r['rows'] / r['run_wall'] / r['slots']:.3f} plans/s per core "
                   f"({r['rows'] / r['run_wall'] / r['slots'] / n_var:.3f} tasks/s per core)")
         pw, dw = float(np.median([x["wall"] for x in pool])), float(np.median([x["wall"] for x in dask]))
