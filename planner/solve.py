@@ -176,9 +176,11 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     metrics["stretch"] = motion.stretch
     if not np.isfinite(metrics["joint_limit_violation_max"]) or metrics["joint_limit_violation_max"] > 1e-9:
         bad = int(np.argmax(motion.joint_violation))
-        return Plan(status="infeasible", metrics=metrics, **base,
-                    reason=f"joint limits: the tool path leaves the Omni's limits at t = {motion.t[bad]:.2f} s "
-                           f"by {motion.joint_violation[bad]:.3g} rad")
+        where = (f"at t = {motion.t[bad]:.2f} s ({motion.phase[bad]}; tool at "
+                 f"{np.round(motion.tool_pose[bad, :2], 4).tolist()} m)")
+        why = ("the tool path leaves the Omni's reach" if not np.isfinite(motion.joint_violation[bad])
+               else f"the tool path leaves the Omni's joint limits by {motion.joint_violation[bad]:.3g} rad")
+        return Plan(status="infeasible", metrics=metrics, **base, reason=f"joint limits: {why} {where}")
     if near.distance <= 0.0:
         k = near.sample
         return Plan(status="infeasible", metrics=metrics, **base,

@@ -33,9 +33,12 @@ class ToolClearance:
 def tool_obstacle_clearance(tool: Tool, tool_pose: NDArray[np.float64],
                             obstacles: Sequence[Disc | shapely.Polygon]) -> ToolClearance:
     """Distance between the tool outline at each pose of ``tool_pose`` (K, 3) (x, y [m], yaw [rad],
-    world frame) and each obstacle; 0 where they overlap."""
-    if not obstacles or len(tool_pose) == 0:
+    world frame) and each obstacle; 0 where they overlap. Samples without a pose (NaN: outside the
+    Omni's reach, reported by the joint-limit check) are skipped."""
+    ok = np.flatnonzero(np.all(np.isfinite(tool_pose), axis=1))
+    if not obstacles or ok.size == 0:
         return ToolClearance(float("inf"), -1, -1)
+    tool_pose = tool_pose[ok]
     ring = np.asarray(tool.outline.exterior.coords)[:-1]
     c, s = np.cos(tool_pose[:, 2]), np.sin(tool_pose[:, 2])
     x = tool_pose[:, None, 0] + c[:, None] * ring[None, :, 0] - s[:, None] * ring[None, :, 1]
@@ -50,5 +53,5 @@ def tool_obstacle_clearance(tool: Tool, tool_pose: NDArray[np.float64],
             d = shapely.distance(polys, o)
         k = int(np.argmin(d))
         if d[k] < best.distance:
-            best = ToolClearance(float(d[k]), k, j)
+            best = ToolClearance(float(d[k]), int(ok[k]), j)
     return best

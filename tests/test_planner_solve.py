@@ -59,3 +59,15 @@ def test_switches_keep_clear_of_the_obstacles(tmp_path: Path) -> None:
     plan = solve(load_task(PAPER / "transfer_tool2.yaml"), PAPER / "transfer_tool2.yaml")
     assert plan.status == "solved"
     assert plan.metrics["switch_obstacle_clearance_min"] >= 0.002 - 1e-9  # the switch clearance (task.ss)
+
+
+def test_mapping_plan_out_of_reach_is_infeasible_not_a_crash(tmp_path: Path, capsys) -> None:
+    # generated batch task bench-00007 (mapping/dmp): its dmp switch leaves the Omni's reach; the
+    # tool-obstacle check met NaN poses there and raised a GEOSException before it was fixed
+    task = tmp_path / "task.yaml"
+    task.write_text(
+        "format: tooltransfer.task/1\nname: bench7\ntool: finger\nstart: [0.10413, 0.141061]\n"
+        "target: [0.005465, 0.174809]\nobstacles:\n  - {kind: disc, centre: [0.071121, 0.139549], radius: 0.005904}\n"
+        f"skills: {{dataset: {ROOT / 'problems' / 'data' / 'finger_demos'}}}\nvariants: {{oe: mapping, ss: dmp}}\n")
+    assert main(["solve", str(task), "--json"]) == 1
+    assert "reach" in json.loads(capsys.readouterr().out)["reason"]
