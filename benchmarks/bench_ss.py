@@ -11,6 +11,8 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import collections
+import subprocess
+import sys
 import time
 from collections.abc import Callable
 from typing import Any
@@ -120,5 +122,39 @@ def main(n_random: int = 200, seed: int = 0) -> None:
     print(f"dmp switch (40 samples) over {n_random} random switches: "
           + "; ".join(f"{k}: wall {_ms(w)}, CPU {_ms(c)}" for k, (w, c) in res.items()))
 
+_FRESH = """
+import time
+t0 = time.perf_counter()
+import casadi as ca
+from planner.ss.bodies import all_bodies
+from planner.ss.cases import fig11_task
+from planner.ss.nlp import build_nlp
+t1 = time.perf_counter()
+task = fig11_task("fig11a")
+bodies = all_bodies(task.shape, task.obstacles)
+a = build_nlp(task.tool, 40, task.omni, bodies)
+b = build_nlp(task.tool, 40, task.omni, bodies, reach=(False, True, False))
+blob = a.solver.serialize()
+t2 = time.perf_counter()
+ca.Function.deserialize(blob)
+t3 = time.perf_counter()
+print(f"{1e3 * (t1 - t0):.0f} {1e3 * a.build_time:.0f} {1e3 * b.build_time:.0f} {1e3 * (t3 - t2):.0f} {len(blob)}")
+"""
+
+
+def fresh_builds(runs: int = 3) -> None:
+    """Solver build cost in fresh processes (Fig. 11a, N = 40): the first structure (it also loads the
+    IPOPT plugin), a second one, and loading the first from CasADi's serialization instead."""
+    rows = []
+    for _ in range(runs):
+        out = subprocess.run([sys.executable, "-c", _FRESH], capture_output=True, text=True, check=True)
+        rows.append([float(v) for v in out.stdout.split()])
+    imp, first, second, load, size = np.median(np.array(rows), axis=0)
+    print(f"fresh process, Fig. 11a structure, N = 40 (medians of {runs}): import {imp:.0f} ms; first build "
+          f"{first:.0f} ms (with the IPOPT plugin load), second structure {second:.0f} ms; deserializing the "
+          f"built solver instead {load:.0f} ms ({size / 1e6:.1f} MB): no cheaper than building, so not cached on disk")
+
+
 if __name__ == "__main__":
+    fresh_builds()
     main()

@@ -42,6 +42,14 @@ Solvers (:data:`SOLVERS`): ``"ipopt"`` (interior point; warm start with primal a
 fast on the small capsule model; ``qpOASES`` is not used: it keeps state between calls).
 Building costs milliseconds, so :func:`get_nlp` caches one per structure (tool, model, N, platform,
 body kinds, solver) and solves change only parameters, bounds and the initial guess.
+
+Build cost in a fresh process (Fig. 11a structure, N = 40, ``benchmarks/bench_ss.py``): the rows are
+built vectorized over the knots (12 ms; 115 ms one knot at a time), ``nlpsol`` (derivatives and
+sparsity, mostly the Lagrangian's Hessian) 30-55 ms, plus about 20 ms once per process to load the
+IPOPT plugin: 46-53 ms per structure. Not cached on disk: deserializing the built solver
+(``Function.serialize``, 4.7 MB) took 47-85 ms, no less than building it; a generated and compiled
+NLP (``generate_dependencies``, gcc) loads in 4 ms and solves 5-10 % faster, but compiling it took
+5-11 s and needs a C compiler at run time.
 """
 
 from __future__ import annotations
