@@ -108,6 +108,11 @@ def _ipopt(nlp: dict[str, Any], max_iter: int) -> Any:
     # constr_viol_tol (1e-4 mm), and the exact shapely check decides penetration anyway. With the
     # adaptive barrier update: median 13 instead of 18 iterations over 200 random switches.
     # calc_lam_p off: the parameters' multipliers are not used (one evaluation less per solve).
+    # Most of IPOPT's time per iteration is the adaptive mu oracle (quality function: 9 of 14 ms on
+    # Fig. 11b), yet none of these was faster over 97 captured solves (min-of-3 CPU medians, same run):
+    # mu_oracle loqo / probing (16-17 instead of 13 iterations), mu_strategy monotone (17),
+    # quality_function_max_section_steps 3, max_soc 0, adaptive_mu_globalization never-monotone-mode /
+    # kkt-error, nlp_scaling_method none, MUMPS scaling off or pivot order 0.
     return ca.nlpsol("ss_ipopt", "ipopt", nlp, {
         "print_time": False, "error_on_fail": False, "calc_lam_p": False,
         "ipopt": {"print_level": 0, "sb": "yes", "max_iter": max_iter, "tol": 1e-4, "acceptable_tol": 1e-3,
