@@ -6,8 +6,9 @@ slot are in flight; each finished future's row is committed at once. ``resume`` 
 first Ctrl-C (SIGINT) stops submitting, cancels what has not started, waits for the running jobs
 (each is bounded by its timeout) and stores them; a second Ctrl-C abandons them. Either way the
 store holds only whole rows and ``--resume`` carries on. A broken process pool (a worker killed
-from outside) is replaced and its running jobs are run again once; a job in flight during two
-breaks, or whose Dask worker died, becomes an ``error`` row.
+from outside) is replaced and its running jobs are run again once, each alone (so that the job
+that breaks it again is the culprit, and the others are not charged for it); a job that breaks the
+pool running alone, or whose Dask worker died, becomes an ``error`` row.
 """
 
 from __future__ import annotations
@@ -170,6 +171,12 @@ def run_jobs(jobs: Sequence[Job], store: ResultStore, slots: Slots, *, info: dic
             t = bar.add_task("batch", total=len(todo), counts="")
             while queue or inflight:
                 while queue and not stop.is_set() and len(inflight) < window:
+                    # a job that was running when the pool broke is a suspect: it runs alone, so a job
+                    # that breaks the pool again is the culprit and the others are not charged for it
+                    if any(attempts[j.key] for j, _ in inflight.values()):
+                        break
+                    if attempts[queue[-1].key] and inflight:
+                        break
                     job = queue.pop()
                     try:
                         inflight[slots.executor.submit(run_job, job)] = (job, slots.executor)
