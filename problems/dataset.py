@@ -222,15 +222,10 @@ def _read_csv(path: Path) -> Demonstration:
 
 def load_meta(folder: str | Path) -> Meta:
     """Read and validate ``meta.yaml`` of a dataset folder (errors name the field path)."""
+    from problems.yaml_file import read_yaml
+
     meta_path = Path(folder) / "meta.yaml"
-    try:
-        raw = yaml.safe_load(meta_path.read_text())
-    except OSError as exc:
-        raise DatasetError(str(meta_path), "<file>", "a readable meta.yaml", exc.strerror) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else "<file>"
-        raise DatasetError(str(meta_path), where, "valid YAML", getattr(exc, "problem", str(exc))) from None
+    raw = read_yaml(meta_path, DatasetError, "meta.yaml")
     try:
         return Meta.model_validate(raw)
     except ValidationError as exc:

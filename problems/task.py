@@ -16,7 +16,6 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 import shapely
-import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from dmp.errors import InputError
@@ -236,18 +235,9 @@ def task_from_dict(data: Any, source: str = "<dict>") -> Task:
 
 def load_task(path: str | Path) -> Task:
     """Read and validate a task file (YAML or JSON)."""
-    p = Path(path)
-    try:
-        text = p.read_text()
-    except OSError as exc:
-        raise TaskFileError(str(p), "<file>", "a readable task file", exc.strerror) from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else "<file>"
-        raise TaskFileError(str(p), where, "valid YAML", getattr(exc, "problem", str(exc))) from None
-    return task_from_dict(data, str(p))
+    from problems.yaml_file import read_yaml
+
+    return task_from_dict(read_yaml(path, TaskFileError, "task file"), str(path))
 
 
 def task_tool(task: Task) -> Tool:

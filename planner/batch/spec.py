@@ -31,7 +31,6 @@ import json
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-import yaml
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from problems.task import TaskFileError, _loc
@@ -171,16 +170,10 @@ def batch_from_dict(data: Any, source: str = "<dict>") -> BatchSpec:
 
 def load_batch(path: str | Path) -> BatchSpec:
     """Read and validate a batch file (YAML or JSON)."""
+    from problems.yaml_file import read_yaml
+
     p = Path(path)
-    try:
-        data = yaml.safe_load(p.read_text())
-    except OSError as exc:
-        raise BatchFileError(str(p), "<file>", "a readable batch file", exc.strerror) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else "<file>"
-        raise BatchFileError(str(p), where, "valid YAML", getattr(exc, "problem", str(exc))) from None
-    spec = batch_from_dict(data, str(p))
+    spec = batch_from_dict(read_yaml(p, BatchFileError, "batch file"), str(p))
     folder = dataset_folder(spec, p)
     if not folder.is_dir():
         raise BatchFileError(str(p), "dataset", "a dataset folder (relative to the batch file)", str(folder))
