@@ -73,30 +73,34 @@ def fig9(dataset: str | Path, out: str | Path) -> Path:
     return plot_learned_switches(demos, skills, out)
 
 
-def fig10(task_path: str | Path, out: str | Path) -> Path:
-    """Fig. 10: the task's condensed object paths with the mapping and the qp variants."""
+def _condensed(task_path: str | Path) -> tuple:
+    """The task's tool, obstacles, margin used, target, generalized universal path (T, 2) [m] and its
+    condensed push plans with the mapping and the qp variants."""
     from planner.oe.generalize import generalize
     from planner.oe.mapping_variant import MappingOptions, condense_mapping
-    from planner.oe.qp_variant import QPOptions, condense_qp
-    from planner.plots.push_plans import plot_push_plans
-    from planner.solve import effective_margin, task_skills
+    from planner.oe.qp_variant import condense_qp
+    from planner.solve import effective_margin, qp_options, task_skills
     from problems.task import load_task, task_obstacles, task_platform, task_tool
 
     task = load_task(task_path)
     tool = task_tool(task)
     platform, obstacles = task_platform(task, tool), task_obstacles(task)
     margin = effective_margin(task, obstacles)
-    skills = task_skills(task, task_path, need_ss=False)
     target = np.array(task.target)
-    t, x, _ = generalize(skills.oe.dmp, np.array(task.start), target)
-    o = task.oe
+    t, x, _ = generalize(task_skills(task, task_path, need_ss=False).oe.dmp, np.array(task.start), target)
     plans = {
         "mapping (paper)": condense_mapping(t, x, tool, platform, target, obstacles,
-                                            MappingOptions(k=o.k, tube=o.tube, margin=margin)),
-        "qp": condense_qp(t, x, tool, platform, target, obstacles, QPOptions(
-            n_samples=o.n_samples, n_basis=o.n_basis, segments=o.segments, max_pushes=o.max_pushes,
-            candidates=o.candidates, switch_price=o.switch_price, margin=margin)),
+                                            MappingOptions(k=task.oe.k, tube=task.oe.tube, margin=margin)),
+        "qp": condense_qp(t, x, tool, platform, target, obstacles, qp_options(task, margin)),
     }
+    return task, tool, obstacles, margin, target, x, plans
+
+
+def fig10(task_path: str | Path, out: str | Path) -> Path:
+    """Fig. 10: the task's condensed object paths with the mapping and the qp variants."""
+    from planner.plots.push_plans import plot_push_plans
+
+    task, tool, obstacles, margin, target, _, plans = _condensed(task_path)
     return plot_push_plans(plans, tool, out, obstacles=obstacles, margin=margin, target=target, title=task.name)
 
 
@@ -121,32 +125,16 @@ def fig12(plan: Plan, out: str | Path, executions: Mapping[str, Execution] | Non
 
 
 def fig14(task_path: str | Path, out: str | Path, margins: tuple[float, ...] = (0.0, 0.005, 0.01)) -> Path:
-    """Fig. 14: the outer map (7) with several safety margins round the task's first obstacle (left)
-    and the mapping and qp condensed paths with the task's margin (right)."""
+    """Fig. 14: the outer map (7) with several safety margins round the task's first disc obstacle
+    (left) and the mapping and qp condensed paths with the task's margin (right)."""
     from dmp.errors import InputError
-    from planner.oe.generalize import generalize
-    from planner.oe.mapping_variant import MappingOptions, condense_mapping
-    from planner.oe.qp_variant import QPOptions, condense_qp
     from planner.plots.safety_margin import plot_safety_margin
-    from planner.solve import effective_margin, task_skills
-    from problems.task import load_task, task_obstacles, task_platform, task_tool
     from tools.objects import Disc
 
-    task = load_task(task_path)
-    tool = task_tool(task)
-    platform, obstacles = task_platform(task, tool), task_obstacles(task)
+    _, _, obstacles, _, _, x, plans = _condensed(task_path)
     discs = [o for o in obstacles if isinstance(o, Disc)]
     if not discs:
         raise InputError("obstacles", "a task with a disc obstacle for Fig. 14", len(obstacles))
-    margin = effective_margin(task, obstacles)
-    skills = task_skills(task, task_path, need_ss=False)
-    target = np.array(task.target)
-    t, x, _ = generalize(skills.oe.dmp, np.array(task.start), target)
-    plans = {
-        "mapping": condense_mapping(t, x, tool, platform, target, obstacles,
-                                    MappingOptions(k=task.oe.k, tube=task.oe.tube, margin=margin)),
-        "qp": condense_qp(t, x, tool, platform, target, obstacles, QPOptions(margin=margin)),
-    }
     return plot_safety_margin(x, discs[0], plans, out, margins=margins)
 
 

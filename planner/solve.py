@@ -88,6 +88,13 @@ def task_skills(task: Task, task_path: str | Path = ".", *, need_ss: bool = True
     return learn_skills(folder, task.oe.k, task.ss.virtual_motion, with_ss=need_ss)
 
 
+def qp_options(task: Task, margin: float) -> QPOptions:
+    """The ``qp`` variant's options from the task's ``oe`` section, with the safety ``margin`` [m]."""
+    o = task.oe
+    return QPOptions(n_samples=o.n_samples, n_basis=o.n_basis, segments=o.segments, max_pushes=o.max_pushes,
+                     candidates=o.candidates, switch_price=o.switch_price, margin=margin)
+
+
 def effective_margin(task: Task, obstacles: list) -> float:
     """The safety margin [m] the plan can keep: the task's ``safety_margin``, reduced to the object's
     clearance from the nearest obstacle at the start or the target when that is smaller (an object
@@ -136,10 +143,7 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     t, x, _ = generalize(skills.oe.dmp, np.array(task.start), np.array(task.target))
     target = np.array(task.target)
     if task.variants.oe == "qp":
-        o = task.oe
-        opts = QPOptions(n_samples=o.n_samples, n_basis=o.n_basis, segments=o.segments, max_pushes=o.max_pushes,
-                         candidates=o.candidates, switch_price=o.switch_price, margin=margin)
-        push_plan = condense_qp(t, x, tool, platform, target, obstacles, opts)
+        push_plan = condense_qp(t, x, tool, platform, target, obstacles, qp_options(task, margin))
     else:
         push_plan = condense_mapping(t, x, tool, platform, target, obstacles,
                                      MappingOptions(k=task.oe.k, tube=task.oe.tube, margin=margin))
