@@ -115,6 +115,10 @@ class _Loop:
         from planner.solve import effective_margin
 
         self.margin = effective_margin(task, self.obstacles)
+        import shapely
+
+        self.obstacle_shapes = [shapely.Point(ob.centre).buffer(ob.radius) if hasattr(ob, "centre") else ob
+                                for ob in self.obstacles]
         self.seen: dict[str, int] = {}
 
     def observe(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -137,6 +141,10 @@ class _Loop:
         """The puck's expected world direction [rad] pushed by ``face`` at ``o``: normal + bias."""
         return float(self.frames[face].push_direction(o[None])[0]) + self.bias[face]
 
+    def unit(self, face: str, o: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Unit vector (2,) of :meth:`direction`."""
+        return _heading_unit(self.direction(face, o))
+
     def contact(self, face: str) -> str | None:
         """Bring ``face`` into contact with the observed puck; the reason when impossible."""
         o, pose = self.observe()
@@ -144,10 +152,7 @@ class _Loop:
         if self.face == face:
             if np.hypot(*(target[:2] - pose[:2])) < 5e-4:
                 return None
-            u_a = np.array([np.cos(pose[2] + self.tool.face(face).push_angle),
-                            np.sin(pose[2] + self.tool.face(face).push_angle)])
-            u_b = np.array([np.cos(target[2] + self.tool.face(face).push_angle),
-                            np.sin(target[2] + self.tool.face(face).push_angle)])
+            u_a, u_b = (_heading_unit(p[2] + self.tool.face(face).push_angle) for p in (pose, target))
             self.move(np.vstack([pose[:2], pose[:2] - BACK_OFF * u_a, target[:2] - BACK_OFF * u_b, target[:2]]))
             return None
         assert self.face is not None  # the approach put a face in contact
@@ -254,7 +259,7 @@ def execute_closed_loop(plan: Plan, *, chunk: float = 0.015, tolerance: float = 
         if np.hypot(*(target - o)) <= tolerance:
             status = "reached"
             break
-        if _predicted_error(loop, pair, o, target) > np.hypot(*(target - o)) - 5e-4:
+        if _pair_plan(loop, pair, o, target)[1] > np.hypot(*(target - o)) - 5e-4:
             status = "closest"
             reason = (f"the faces {' and '.join(pair)} cannot bring the puck closer than "
                       f"{1e3 * np.hypot(*(target - o)):.1f} mm (their observed push directions)")
@@ -263,16 +268,16 @@ def execute_closed_loop(plan: Plan, *, chunk: float = 0.015, tolerance: float = 
         # the first round pushes both faces as planned, aiming ``stage`` short of the target along the
         # middle of the two faces' directions, so the rest lies inside the span of the faces' pushes
         # whatever the first round's errors; later rounds only what brings the puck closer
-        todo = list(pair) if rounds == 1 else _faces_to_push(loop, pair, o, target)
+        todo = list(pair) if rounds == 1 else _pair_plan(loop, pair, o, target)[0]
         aim = target
         if rounds == 1 and len(pair) == 2:
-            mid = sum(np.array([np.cos(loop.direction(f, o)), np.sin(loop.direction(f, o))]) for f in pair)
+            mid = sum(loop.unit(f, o) for f in pair)
             aim = target - stage * mid / np.linalg.norm(mid)
         if rounds == 1 and len(pair) == 2 and _share(loop, todo, 0, o, aim) <= 2e-4:
             # the faces' expected directions do not split the way to the aim from here: when the last
             # face alone gets close, it pushes alone; else (the plan pushes at the cone's edge) the
             # first face follows its planned push, re-anchored at the puck
-            u = np.array([np.cos(loop.direction(pair[1], o)), np.sin(loop.direction(pair[1], o))])
+            u = loop.unit(pair[1], o)
             r = aim - o
             alone = o + max(0.0, r @ u) * u
             if np.hypot(*(aim - alone)) > 0.3 * np.hypot(*r) or _hits(loop, [o, alone]):
@@ -313,17 +318,20 @@ def execute_closed_loop(plan: Plan, *, chunk: float = 0.015, tolerance: float = 
                             time.perf_counter() - start, ex, loop.log)
 
 
+def _heading_unit(angle: float) -> NDArray[np.float64]:
+    return np.array([np.cos(angle), np.sin(angle)])
+
+
 def _straight(loop: _Loop, face: str, o: NDArray[np.float64], length: float) -> NDArray[np.float64]:
     """Object path (K, 2) [m]: ``length`` from ``o`` along the face's expected direction."""
-    d = loop.direction(face, o)
     s = np.linspace(0.0, length, max(3, int(length / 5e-4)))
-    return o + s[:, None] * np.array([np.cos(d), np.sin(d)])
+    return o + s[:, None] * loop.unit(face, o)
 
 
 def _blocked(loop: _Loop, pair: list[str], o: NDArray[np.float64], target: NDArray[np.float64]) -> bool:
     """Whether the two straight pushes of ``pair`` from ``o`` to ``target`` (corner where the
     expected directions meet) bring the puck within the safety margin of an obstacle."""
-    u = [np.array([np.cos(loop.direction(f, o)), np.sin(loop.direction(f, o))]) for f in pair]
+    u = [loop.unit(f, o) for f in pair]
     a = np.column_stack(u)
     if abs(np.linalg.det(a)) < 1e-6:
         return False
@@ -340,9 +348,8 @@ def _hits(loop: _Loop, points: list[NDArray[np.float64]]) -> bool:
         return False
     grow = loop.task.object.radius + loop.margin
     swept = shapely.LineString(points).buffer(grow)
-    shapes = [shapely.Point(ob.centre).buffer(ob.radius) if hasattr(ob, "centre") else ob for ob in loop.obstacles]
     near = shapely.Point(points[0]).buffer(grow + 1e-3)
-    return any(swept.difference(near).intersects(sh) for sh in shapes)
+    return any(swept.difference(near).intersects(sh) for sh in loop.obstacle_shapes)
 
 
 def _along(planned: NDArray[np.float64], o: NDArray[np.float64], length: float) -> NDArray[np.float64]:
@@ -357,38 +364,27 @@ def _along(planned: NDArray[np.float64], o: NDArray[np.float64], length: float) 
     return keep - keep[0] + o if len(keep) >= 2 else np.vstack([o, o + rest[1] - rest[0]])
 
 
-def _faces_to_push(loop: _Loop, pair: list[str], o: NDArray[np.float64], target: NDArray[np.float64]) -> list[str]:
-    """The faces of ``pair`` to push this round: both when the rest splits into positive shares
-    along their expected directions, else the one face whose push alone comes closest."""
+def _pair_plan(loop: _Loop, pair: list[str], o: NDArray[np.float64],
+               target: NDArray[np.float64]) -> tuple[list[str], float]:
+    """The faces of ``pair`` to push this round, and the distance [m] to ``target`` they would leave
+    along their expected directions: both faces with 0 left when the rest splits into positive
+    shares, else the one face whose push alone comes closest (a single face: its projection)."""
     r = target - o
-    us = [np.array([np.cos(loop.direction(f, o)), np.sin(loop.direction(f, o))]) for f in pair]
+    us = [loop.unit(f, o) for f in pair]
+    rest = [float(np.hypot(*(r - max(0.0, r @ u) * u))) for u in us]
     if len(us) == 2 and abs(np.linalg.det(np.column_stack(us))) >= 1e-6:
         if np.all(np.linalg.solve(np.column_stack(us), r) > 0):
-            return list(pair)
-    rest = [float(np.hypot(*(r - max(0.0, r @ u) * u))) for u in us]
-    return [pair[int(np.argmin(rest))]]
-
-
-def _predicted_error(loop: _Loop, pair: list[str], o: NDArray[np.float64], target: NDArray[np.float64]) -> float:
-    """Distance [m] to the target left after pushing each face of ``pair`` its (non-negative) share
-    along its expected direction."""
-    r = target - o
-    us = [np.array([np.cos(loop.direction(f, o)), np.sin(loop.direction(f, o))]) for f in pair]
-    if len(us) == 2 and abs(np.linalg.det(np.column_stack(us))) >= 1e-6:
-        coef = np.maximum(np.linalg.solve(np.column_stack(us), r), 0.0)
-        if np.all(coef > 0):
-            return 0.0
-        # one face alone: the better of the two projections
-        return float(min(np.hypot(*(r - max(0.0, r @ u) * u)) for u in us))
-    u = us[-1]
-    return float(np.hypot(*(r - max(0.0, r @ u) * u)))
+            return list(pair), 0.0
+        best = int(np.argmin(rest))
+        return [pair[best]], rest[best]
+    return [pair[int(np.argmin(rest))]], rest[-1]
 
 
 def _share(loop: _Loop, pair: list[str], k: int, o: NDArray[np.float64], target: NDArray[np.float64]) -> float:
     """How far [m] face ``pair[k]`` should still push: the remaining displacement split along the
     pair's expected directions at ``o`` (for a single face: the projection on its direction)."""
     r = target - o
-    us = [np.array([np.cos(loop.direction(f, o)), np.sin(loop.direction(f, o))]) for f in pair[k:]]
+    us = [loop.unit(f, o) for f in pair[k:]]
     if len(us) == 1:
         return max(0.0, float(r @ us[0]))
     a = np.column_stack(us)
