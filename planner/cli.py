@@ -50,6 +50,30 @@ def _print_summary(summary: dict[str, object], title: str) -> None:
     Console().print(table)
 
 
+def _execute(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str, object], dict[str, object]]:
+    """Execute a solved plan on the simulated platform open loop (and closed loop on request): the
+    summary fields and the executions by mode."""
+    from planner.simulate import simulate_plan
+
+    with _spinner("simulating open loop", quiet=quiet):
+        rep = simulate_plan(plan)  # type: ignore[arg-type]
+    summary: dict[str, object] = {
+        "open_loop_final_error": rep.final_error, "open_loop_tool_deviation": rep.tool_deviation,
+        "open_loop_tracking_error": rep.tracking_error, "open_loop_wall_time": rep.wall_time,
+        "real_time_factor": float(plan.t[-1] / rep.wall_time)}  # type: ignore[attr-defined]
+    executions: dict[str, object] = {"open loop": rep.execution}
+    if closed_loop:
+        from planner.closed_loop import execute_closed_loop
+
+        with _spinner("executing closed loop (re-planning from the observed puck)", quiet=quiet):
+            cl = execute_closed_loop(plan)  # type: ignore[arg-type]
+        executions["closed loop"] = cl.execution
+        summary.update({"closed_loop_final_error": cl.final_error, "closed_loop_status": cl.status,
+                        "closed_loop_reason": cl.reason, "closed_loop_pushes": cl.n_pushes,
+                        "closed_loop_switches": cl.n_switches, "closed_loop_wall_time": cl.wall_time})
+    return summary, executions
+
+
 def _cmd_demo(args: argparse.Namespace) -> int:
     from planner.demo import run_demo
 
@@ -169,18 +193,10 @@ def _cmd_solve(args: argparse.Namespace) -> int:
                                     "tool_obstacle_clearance_min", "switch_clearance_min", "switch_penetration_max",
                                     "joint_limit_violation_max", "duration") if k in m},
                "planning_time": sum(v for k, v in m.items() if k.startswith("time_"))}
-    executions = {}
+    executions: dict = {}
     if args.simulate and plan.status == "solved":
-        from planner.closed_loop import execute_closed_loop
-        from planner.simulate import simulate_plan
-
-        with _spinner("simulating open and closed loop", quiet=args.json):
-            rep = simulate_plan(plan)
-            cl = execute_closed_loop(plan)
-        executions = {"open loop": rep.execution, "closed loop": cl.execution}
-        summary.update({"open_loop_final_error": rep.final_error, "open_loop_tool_deviation": rep.tool_deviation,
-                        "closed_loop_final_error": cl.final_error, "closed_loop_status": cl.status,
-                        "simulation_wall_time": rep.wall_time})
+        outcome, executions = _execute(plan, closed_loop=True, quiet=args.json)
+        summary.update(outcome)
     if args.plot and plan.status == "solved":
         from planner.figures import fig12
 
@@ -198,28 +214,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     import json
 
     from planner.plan import read_plan
-    from planner.simulate import simulate_plan
 
     plan = read_plan(args.plan)
     if plan.status != "solved":
         print(f"plan {args.plan} is {plan.status}: {plan.reason}")
         return EXIT_INFEASIBLE
-    with _spinner(f"simulating {args.plan} open loop", quiet=args.json):
-        rep = simulate_plan(plan)
-    summary: dict[str, object] = {
-        "open_loop_final_error": rep.final_error, "open_loop_tool_deviation": rep.tool_deviation,
-        "open_loop_tracking_error": rep.tracking_error, "open_loop_wall_time": rep.wall_time,
-        "real_time_factor": float(plan.t[-1] / rep.wall_time)}
-    executions = {"open loop": rep.execution}
-    if args.closed_loop:
-        from planner.closed_loop import execute_closed_loop
-
-        with _spinner("executing closed loop (re-planning from the observed puck)", quiet=args.json):
-            cl = execute_closed_loop(plan)
-        executions["closed loop"] = cl.execution
-        summary.update({"closed_loop_final_error": cl.final_error, "closed_loop_status": cl.status,
-                        "closed_loop_reason": cl.reason, "closed_loop_pushes": cl.n_pushes,
-                        "closed_loop_switches": cl.n_switches, "closed_loop_wall_time": cl.wall_time})
+    summary, executions = _execute(plan, closed_loop=args.closed_loop, quiet=args.json)
     if args.figure:
         from planner.figures import fig12
 
