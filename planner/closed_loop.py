@@ -47,6 +47,7 @@ from planner.oe.face_frame import FaceFrame
 from planner.plan import Plan
 from planner.timing import min_jerk_along, min_jerk_duration
 from problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
+from tools.objects import Disc
 from tools.omni.ik import joint_path
 from tools.sim import Execution, SimPlatform
 
@@ -115,10 +116,7 @@ class _Loop:
         from planner.solve import effective_margin
 
         self.margin = effective_margin(task, self.obstacles)
-        import shapely
-
-        self.obstacle_shapes = [shapely.Point(ob.centre).buffer(ob.radius) if hasattr(ob, "centre") else ob
-                                for ob in self.obstacles]
+        self.obstacle_shapes = [ob.polygon() if isinstance(ob, Disc) else ob for ob in self.obstacles]
         self.seen: dict[str, int] = {}
 
     def observe(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -31,12 +31,11 @@ from planner.skills import Skills, learn_skills, load_skills_file
 from planner.switches import arch_planner, skill_planner
 from planner.tool_clearance import tool_obstacle_clearance
 from problems.task import Task, resolve, task_obstacles, task_platform, task_tool
+from tools.objects import Disc
 from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
 
 
 def _describe(task: Task, tool: Any, platform: Any, obstacles: list) -> dict[str, Any]:
-    from tools.objects import Disc
-
     return {
         "platform": {
             "dh": [
@@ -111,7 +110,7 @@ def effective_margin(task: Task, obstacles: list) -> float:
     for field, point in (("start", task.start), ("target", task.target)):
         disc = shapely.Point(point).buffer(r, quad_segs=64)
         for i, o in enumerate(obstacles):
-            shape = shapely.Point(o.centre).buffer(o.radius, quad_segs=64) if hasattr(o, "centre") else o
+            shape = o.polygon() if isinstance(o, Disc) else o
             gap = float(shapely.distance(disc, shape))
             if gap == 0.0 and shapely.intersection(disc, shape).area > 1e-10:
                 raise InputError(field, f"an object position clear of obstacles[{i}] (the object of radius "
