@@ -26,13 +26,14 @@ def test_cutting_planes_hold_every_constraint_on_dense_grid() -> None:
     assert set(r.violations) == {"cone", "workspace", "endpoint", "end_velocity", "obstacle"}
     assert r.max_violation <= 1e-8
     assert np.linalg.norm(r.rollout.x[-1] - case.reference[-1]) < 1e-9  # terminal constraint
-    assert r.n_qp == 0  # the exact step alone: no backend call by default
+    assert r.n_qp == 1  # OSQP, the default backend, solved the coarse seed (then the exact step)
 
 
 def test_backend_seed_reaches_the_same_exact_optimum() -> None:
     case = l_push_case(30, 200)
-    plain = solve_fit(case.problem, max_scp=1)
-    seeded = solve_fit(case.problem, max_scp=1, seed_with_backend=True)
+    plain = solve_fit(case.problem, max_scp=1, seed_with_backend=False)
+    seeded = solve_fit(case.problem, max_scp=1)
+    assert plain.n_qp == 0  # the exact step alone
     assert seeded.n_qp == 1  # OSQP solved the coarse seed
     assert seeded.status == plain.status == "solved"
     assert seeded.max_violation <= 1e-8
