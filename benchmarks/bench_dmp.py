@@ -5,9 +5,10 @@
 2. Constrained fit (cone + hexagon + disc), 2x30 weights / 200 samples and 2x60 / 1,000 samples,
    one linearisation: our path (OSQP on the whitened coarse rows, then the exact dual active-set
    step with dense cutting planes; also the exact step alone) against OSQP, quadprog and clarabel
-   on the plain condensed formulation through qpsolvers, with the true max violation on the dense grid (10x the constraint grid); also ours
-   re-linearised until the path settles (the default, warm-started across linearisations).
-   CPU-time medians of interleaved runs (the machine is shared), ratios to quadprog in the same run.
+   on the plain condensed formulation through qpsolvers, with the true max violation on the dense
+   grid (10x the constraint grid); also ours re-linearised until the path settles (the default,
+   warm-started across linearisations). CPU-time medians of interleaved runs (the machine is
+   shared), ratios to quadprog in the same run.
 OPENBLAS_NUM_THREADS=1 is set.
 """
 
