@@ -78,6 +78,7 @@ def main(n_random: int = 200, seed: int = 0) -> None:
     rng = np.random.default_rng(seed)
     tasks = [random_task(rng, obstacle_prob=0.3) for _ in range(n_random)]
     run_opt(skill, tasks, "(pieces, IPOPT, N = 40, defaults)")
+    run_opt(skill, tasks, "(peer in the same run: vector separators, the default before)", separators="vector")
     run_opt(skill, tasks, "(angle separators)", separators="angle")
     run_opt(skill, tasks, "(peer in the same run: the dmp path as the only start, as before)", init="dmp")
     for name in FIG11:

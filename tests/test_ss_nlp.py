@@ -21,7 +21,7 @@ def test_rows_knot_by_knot_in_order() -> None:
     obstacles = (Disc(np.array([0.05, 0.17]), 0.01),)
     bodies = all_bodies(task.shape, obstacles)
     N = 9
-    nlp = build_nlp(task.tool, N, task.omni, bodies, reach=True)
+    nlp = build_nlp(task.tool, N, task.omni, bodies, reach=True, separators="vector")
     X = (np.array([0.0, 0.16]) + rng.uniform(-0.03, 0.03, (N, 2))) / UNIT  # (N, 2) [mm]
     S = rng.normal(size=(nlp.n_sep, N - 2))
     m_obj, m_obs = rng.uniform(0, 2, N), rng.uniform(0, 2, N)
@@ -55,3 +55,38 @@ def test_rows_knot_by_knot_in_order() -> None:
     assert g.shape == expected.shape
     np.testing.assert_allclose(g, expected, rtol=1e-12, atol=1e-9)
     assert [f for f, _, _ in nlp.families] == ["object", "obstacle 0", "reach", "step"]
+
+
+def test_distance_rows_are_shapely_signed_distances() -> None:
+    """``separators="distance"``: each disc body's row per knot and piece is the signed distance from
+    the disc's centre to the placed piece (shapely: distance outside, minus the depth to the
+    boundary inside) less radius and margin, with no separating variables."""
+    import shapely
+    from shapely.affinity import rotate, translate
+
+    rng = np.random.default_rng(5)
+    task = fig11_task("fig11a")  # the T-shape: two convex pieces
+    obstacles = (Disc(np.array([0.03, 0.18]), 0.012),)
+    bodies = all_bodies(task.shape, obstacles)
+    N = 12
+    nlp = build_nlp(task.tool, N, task.omni, bodies, reach=False, separators="distance")
+    assert nlp.n_sep == 0 and len(nlp.pieces) == 2
+    X = (task.centre + rng.uniform(-0.04, 0.04, (N, 2))) / UNIT  # some knots put a piece over the centre
+    m_obj, m_obs = rng.uniform(0, 2, N), rng.uniform(0, 2, N)
+    p = np.concatenate([X.ravel(), m_obj, m_obs, *[b.data for b in bodies], [25.0]])
+    g = np.asarray(nlp.rows(X.ravel(), p)).ravel()
+    yaw = heading(task.omni, X * UNIT)
+    expected, inside = [], 0
+    for b in bodies:
+        m = m_obj if b.family == "object" else m_obs
+        centre = shapely.Point(*b.data[:2])
+        for k in range(1, N - 1):
+            for verts in nlp.pieces:
+                piece = translate(rotate(shapely.Polygon(verts), yaw[k], origin=(0, 0), use_radians=True), *X[k])
+                d = piece.exterior.distance(centre)
+                if piece.contains(centre):
+                    d, inside = -d, inside + 1
+                expected.append(d - (b.data[2] + m[k]))
+    n_body = len(expected)
+    np.testing.assert_allclose(g[:n_body], expected, atol=1e-6)
+    assert inside > 0  # the inside branch was exercised

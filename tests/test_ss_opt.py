@@ -148,8 +148,8 @@ def test_round_paths_join_the_contacts_outside_the_c_obstacle() -> None:
     assert side[0] != side[1]
 
 
-@pytest.mark.parametrize("separators", ["angle", "vector"])
-def test_both_separator_forms_solve_the_fig11_cases(skill: SwitchSkill, separators: str) -> None:
+@pytest.mark.parametrize("separators", ["angle", "vector", "distance"])
+def test_every_separator_form_solves_the_fig11_cases(skill: SwitchSkill, separators: str) -> None:
     for name in ("fig11a", "fig11b"):
         task = fig11_task(name)
         check_solved(task, optimize(skill, task, separators=separators), 1e-4)

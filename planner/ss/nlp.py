@@ -1,12 +1,19 @@
 """The switch NLP (the ``opt`` variant's solver problem), built once per structure and reused.
 
 Decision variables (millimetres, :data:`planner.ss.bodies.UNIT`): the tool centre points ``X_k``
-(N, 2) at N knots, and per interior knot, convex piece of the tool and body (object or obstacle
-piece), a separating direction ``n`` (2,) with ``|n|^2 <= 1`` (plus an offset ``beta`` for a polygonal
-body). Optionally (:data:`SEPARATORS`) ``n = (cos phi, sin phi)``: one variable and no norm row, a
-smaller KKT system (median NLP solve 11 vs 14 ms over 200 random switches) but a worse tail (p90 53
-vs 22 iterations; on Fig. 11a the first start ran out of iterations: the angle must turn round where
-the vector can shrink through zero), so not the default.
+(N, 2) at N knots, plus separating variables where a row needs them (:data:`SEPARATORS`):
+
+* ``"distance"`` (the default): none for a disc body; the row is the exact signed distance from the
+  disc's centre to each convex piece, computed in the tool frame (module rows below). Over 200
+  random switches (``benchmarks/bench_ss.py``, same run): median NLP solve 8.1 vs 12.8 ms, median 8
+  vs 13 IPOPT iterations (p90 13 vs 22), the same 188 solved and 12 infeasible as ``"vector"``.
+  Polygonal bodies keep the vector separators.
+* ``"vector"``: per interior knot, convex piece of the tool and body, a separating direction ``n``
+  (2,) with ``|n|^2 <= 1`` (plus an offset ``beta`` for a polygonal body);
+* ``"angle"``: ``n = (cos phi, sin phi)``: one variable and no norm row, a smaller KKT system than
+  ``"vector"`` (median NLP solve 11 vs 14 ms) but a worse tail (p90 53 vs 22 iterations; on Fig.
+  11a the first start ran out of iterations: the angle must turn round where the vector can shrink
+  through zero).
 
 Heading: **a function of position through the Omni's waist** (:func:`planner.ss.heading.heading_casadi`,
 smooth inside the reach annulus), not fixed over the move: the tool's yaw at knot k is
@@ -15,9 +22,16 @@ the constraints see are the ones the arm will place.
 
 Rows (all smooth and analytic; no shapely inside the solver):
 
-* non-penetration, piece-vs-disc: ``n . (w_i - c) >= R + m_k`` for every vertex ``w_i`` of the piece
-  with ``|n| = 1`` (or ``|n|^2 <= 1``): the piece lies beyond the line at distance ``R + m_k`` from the centre, so its
-  distance to the disc is at least ``m_k`` (exact for a convex piece: such ``n`` exists iff it is);
+* non-penetration, piece-vs-disc, ``"distance"``: with ``l`` the disc's centre in the tool frame
+  (``R(yaw)^T (c - X_k)``, so the piece's edges are constants), ``sd(l) >= R + m_k`` where ``sd`` is
+  the least clamped point-to-edge distance when ``l`` is outside the piece (some edge line has it on
+  its outer side) and the largest signed edge-line distance (negative) inside: exact, continuously
+  differentiable outside, no extra variables (the clamped-distance idea of the capsule model applied
+  to every edge);
+* non-penetration, piece-vs-disc, ``"vector"``/``"angle"``: ``n . (w_i - c) >= R + m_k`` for every
+  vertex ``w_i`` of the piece with ``|n| = 1`` (or ``|n|^2 <= 1``): the piece lies beyond the line
+  at distance ``R + m_k`` from the centre, so its distance to the disc is at least ``m_k`` (exact for
+  a convex piece: such ``n`` exists iff it is);
 * piece-vs-convex polygon: ``n . w_i - beta >= m_k``, ``n . o_l <= beta``, ``|n| = 1`` (a separating
   line with a gap of at least ``m_k``);
 * with the ``capsule`` model (a tool that is a segment grown by a radius ``r``) the clamped
@@ -135,9 +149,10 @@ def _sqp(nlp: dict[str, Any], max_iter: int) -> Any:
 #: Registered NLP backends: name -> builder(nlp dict, max_iter) -> casadi Function.
 SOLVERS: dict[str, Callable[[dict[str, Any], int], Any]] = {"ipopt": _ipopt, "sqp": _sqp}
 MODELS: tuple[str, ...] = ("pieces", "capsule")
-#: Separating directions as a vector ``n`` with ``|n|^2 <= 1`` (two variables and a row; the default)
-#: or as an angle ``n = (cos phi, sin phi)`` (one variable, no norm row; module docstring).
-SEPARATORS: tuple[str, ...] = ("vector", "angle")
+#: Non-penetration rows for disc bodies: the exact signed distance (no variables; the default), or
+#: separating directions as a vector ``n`` with ``|n|^2 <= 1`` (two variables and a row) or as an angle
+#: ``n = (cos phi, sin phi)`` (one variable, no norm row); module docstring.
+SEPARATORS: tuple[str, ...] = ("vector", "angle", "distance")
 
 
 @dataclass
@@ -192,7 +207,7 @@ def reach_families(reach: bool | tuple[bool, bool, bool]) -> tuple[bool, bool, b
 def build_nlp(
     tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
     solver: str = "ipopt", smooth: float = 10.0, reach_margin: float = 1e-4, max_iter: int = 150,
-    reach: bool | tuple[bool, bool, bool] = True, separators: str = "vector",
+    reach: bool | tuple[bool, bool, bool] = True, separators: str = "distance",
 ) -> SwitchNLP:
     """Build the NLP (module docstring) for ``tool`` at ``n_knots`` knots against bodies of the kinds
     of ``bodies`` (their values are parameters of each solve). ``reach``: which reach row families
@@ -219,10 +234,13 @@ def build_nlp(
         capsule = Capsule(c.a / UNIT, c.b / UNIT, c.radius / UNIT)
     sep_layout: list[tuple[int, int, int, bool]] = []
     n_sep = 0
+    distance = separators == "distance"
     if model == "pieces":
         for j in range(len(pieces)):
             for bi, b in enumerate(bodies):
                 poly = b.kind == "poly"
+                if distance and not poly:
+                    continue  # the signed distance row needs no separating variables
                 sep_layout.append((j, bi, n_sep, poly))
                 n_sep += (1 if angle else 2) + (1 if poly else 0)
     X = ca.SX.sym("X", 2, N)
@@ -262,6 +280,12 @@ def build_nlp(
             t = ca.fmin(1, ca.fmax(0, ((p[0] - ax) * ex + (p[1] - ay) * ey) / (ex * ex + ey * ey)))
             dx, dy = p[0] - ax - t * ex, p[1] - ay - t * ey
             per_knot.append(ca.sqrt(dx * dx + dy * dy) - (p[2] + capsule.radius + m))
+        elif distance and b.kind == "disc":
+            # the disc's centre in the tool frame at each knot
+            rx, ry = p[0] - Xi, p[1] - Yi
+            lx, ly = cos_k * rx + sin_k * ry, cos_k * ry - sin_k * rx
+            for verts in pieces:
+                per_knot.append(_signed_distance(verts, lx, ly) - (p[2] + m))
         else:
             for j, verts in enumerate(pieces):
                 off = next(o for (jj, bb, o, _) in sep_layout if jj == j and bb == bi)
@@ -325,12 +349,42 @@ def build_nlp(
     )
 
 
+def _signed_distance(verts: NDArray[np.float64], lx: Any, ly: Any) -> Any:
+    """Signed distance [mm] from the point ``(lx, ly)`` (in the tool frame, [mm]) to the convex piece
+    with vertices ``verts`` (V, 2) [mm]: outside, the least clamped point-to-edge distance (exact,
+    continuously differentiable); inside, the largest signed distance to the edges' lines
+    (negative). In the tool frame the edges are constants, so the expression (and its Hessian) stays
+    small; vectorised over the knots like the other rows."""
+    import casadi as ca
+
+    v = np.asarray(verts, dtype=np.float64)
+    if _area2(v) < 0:
+        v = v[::-1]
+    d2, line = None, None
+    for i in range(len(v)):
+        a, e = v[i], v[(i + 1) % len(v)] - v[i]
+        ee = float(e @ e)
+        rx, ry = lx - a[0], ly - a[1]
+        t = ca.fmin(1, ca.fmax(0, (rx * e[0] + ry * e[1]) / ee))
+        dx, dy = rx - t * e[0], ry - t * e[1]
+        di = dx * dx + dy * dy
+        li = (rx * e[1] - ry * e[0]) / np.sqrt(ee)  # signed distance to the edge's line, positive outside
+        d2 = di if d2 is None else ca.fmin(d2, di)
+        line = li if line is None else ca.fmax(line, li)
+    return ca.if_else(line > 0, ca.sqrt(d2 + 1e-12), line)
+
+
+def _area2(v: NDArray[np.float64]) -> float:
+    """Twice the signed area of the polygon ``v`` (V, 2) (positive when counter-clockwise)."""
+    return float(np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1]))
+
+
 _CACHE: dict[tuple, SwitchNLP] = {}
 
 
 def get_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
             solver: str = "ipopt", smooth: float = 10.0, reach: bool | tuple[bool, bool, bool] = True,
-            separators: str = "vector") -> tuple[SwitchNLP, bool]:
+            separators: str = "distance") -> tuple[SwitchNLP, bool]:
     """The cached NLP for this structure (built on first use); returns ``(nlp, built_now)``."""
     key = (_tool_key(tool), model, n_knots, platform, tuple(b.signature for b in bodies),
            tuple(b.family == "object" for b in bodies), solver, smooth, reach_families(reach), separators)

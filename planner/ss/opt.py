@@ -187,7 +187,7 @@ def optimize(
     max_starts: int = 2,
     step_factor: float = 2.5,
     min_step: float = 3e-3,
-    separators: str = "vector",
+    separators: str = "distance",
     body_band: float | None = 0.01,
 ) -> SwitchPath:
     """The ``opt`` switch path of ``task`` (module docstring).
@@ -224,8 +224,9 @@ def optimize(
             start keeps the tool (its radius about the reference point) this far [m] from it; the
             exact check still tests it, and a penetration puts every obstacle back for the
             refinement. None: always in.
-        separators: ``"vector"`` or ``"angle"`` (:data:`planner.ss.nlp.SEPARATORS`: the angle form is
-            faster in the median, slower in the tail).
+        separators: the non-penetration rows of disc bodies, ``"distance"`` (exact signed distance, no
+            extra variables), ``"vector"`` or ``"angle"`` (separating directions);
+            :data:`planner.ss.nlp.SEPARATORS` and the module docstring there give the measurements.
     """
     t_start = time.perf_counter()
     if solver not in SOLVERS:
