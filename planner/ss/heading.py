@@ -55,20 +55,29 @@ def centre_path(
     platform: OmniPlatform, x: ArrayLike, p: ArrayLike, iters: int = 30, tol: float = 1e-13
 ) -> NDArray[np.float64]:
     """Inverse of :func:`point_path`: tool centre points (K, 2) [m] whose tool-frame point ``p`` (2,)
-    is at ``x`` (K, 2), by fixed-point iteration on the heading (a contraction: the heading varies by
-    ``|p| / |x - b|`` per metre, here well below 1)."""
+    is at ``x`` (K, 2): Newton's method on ``c + R(heading(c)) p - x = 0`` per point (the 2 x 2
+    Jacobian ``I + R'(h) p grad(h)^T`` in closed form), from ``c = x - p``; 3-4 steps where the
+    fixed-point iteration on the heading took 15-20 (it contracts by about ``|p| / |x - b|``)."""
     x = np.atleast_2d(np.asarray(x, dtype=np.float64))
     px, py = (float(v) for v in np.asarray(p, dtype=np.float64))
+    bx, by = (float(v) for v in np.asarray(platform.base_xy, dtype=np.float64))
     c = x - (px, py)
     for _ in range(iters):
-        a = heading(platform, c)
-        ca, sa = np.cos(a), np.sin(a)
-        new = np.empty_like(c)
-        new[:, 0] = x[:, 0] - (ca * px - sa * py)
-        new[:, 1] = x[:, 1] - (sa * px + ca * py)
-        if np.max(np.abs(new - c)) < tol:
-            return new
-        c = new
+        dx, dy = c[:, 0] - bx, c[:, 1] - by
+        r2 = dx * dx + dy * dy
+        u = np.sqrt(np.maximum(r2 - D_TOOL**2, 1e-18))
+        h = np.arctan2(dy, dx) - np.arctan2(D_TOOL, u) - np.pi / 2
+        ch, sh = np.cos(h), np.sin(h)
+        qx, qy = ch * px - sh * py, sh * px + ch * py  # R(h) p
+        fx, fy = c[:, 0] + qx - x[:, 0], c[:, 1] + qy - x[:, 1]
+        if np.max(np.abs(fx) + np.abs(fy)) < tol:
+            break
+        gx = (-dy + D_TOOL * dx / u) / r2  # grad of the heading
+        gy = (dx + D_TOOL * dy / u) / r2
+        # J = I + (-qy, qx)^T (gx, gy)
+        j11, j12, j21, j22 = 1.0 - qy * gx, -qy * gy, qx * gx, 1.0 + qx * gy
+        det = j11 * j22 - j12 * j21
+        c = c - np.column_stack([(j22 * fx - j12 * fy) / det, (j11 * fy - j21 * fx) / det])
     return c
 
 

@@ -26,7 +26,7 @@ import shapely
 from numpy.typing import NDArray
 
 from planner.ss.heading import rot
-from planner.ss.verify import tool_geometry
+from planner.ss.verify import point_hulls, tool_geometry
 from planner.ss.virtual import min_jerk
 from tools.decompose import convex_decomposition
 from tools.model import Tool
@@ -50,7 +50,7 @@ def c_obstacle(tool: Tool, psi: float, shapes: Sequence[Disc | shapely.Polygon],
                 o = np.asarray(piece.exterior.coords, dtype=np.float64)[:-1]
                 for p in placed:
                     pts = (o[:, None, :] - p[None, :, :]).reshape(-1, 2)
-                    hull = shapely.convex_hull(shapely.multipoints(pts))
+                    hull = point_hulls(pts)
                     parts.append(shapely.buffer(hull, margin, quad_segs=quad_segs) if margin > 0 else hull)
     return shapely.union_all(parts)
 
