@@ -24,9 +24,10 @@ The default path runs the backend first (``seed_with_backend=True``): OSQP solve
 without polishing, the whitened QP over the rows of a coarse subset (one sample per basis
 function) that the unconstrained optimum violates, and the rows it finds active are the exact
 step's first candidates. OSQP's answer is never returned as such: the exact step finishes. Measured
-on the L-push case (``benchmarks/bench_dmp.py``): the seed costs 1.5-3 ms at 2 x 30 / 200
-samples and 3-4 ms at 2 x 60 / 1,000 and does not shorten the exact step (as many add/drop
-steps with it as without); ``seed_with_backend=False`` skips it. Seeding on every coarse row, or
+on the L-push case (``benchmarks/bench_dmp.py``): the seed (35 rows at 2 x 30 / 200 samples,
+25 OSQP iterations) costs about 1.5 ms there and 3 ms at 2 x 60 / 1,000, mostly the Python side of
+qpsolvers and osqp, and does not shorten the exact step (as many add/drop steps with it as
+without); ``seed_with_backend=False`` skips it. Seeding on every coarse row, or
 taking OSQP's active rows as a warm-start guess of the active set, cost more (the guess made the
 active set's factorisation ill-conditioned).
 
