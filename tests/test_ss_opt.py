@@ -163,3 +163,25 @@ def test_bad_options_raise_input_error(skill: SwitchSkill, field: str, value: ob
 
     with pytest.raises(InputError, match=field):
         optimize(skill, fig11_task("fig11b"), **{field: value})
+
+
+def test_polygon_object_with_disc_and_polygon_obstacles(skill: SwitchSkill) -> None:
+    """Mixed bodies under the default rows: the square object and a square obstacle keep their
+    separating variables, the disc obstacle gets signed-distance rows; the path does not penetrate."""
+    from tools.objects import Disc, PolygonObject
+
+    c = np.array([0.0, 0.16])
+    square = PolygonObject(shapely.box(-0.015, -0.015, 0.015, 0.015))
+    task = SwitchTask(load_tool("finger"), "upper", "left", c, obj=square,
+                      obstacles=(Disc(c + np.array([0.055, 0.02]), 0.01), shapely.box(-0.075, 0.17, -0.06, 0.185)))
+    # the upper face meets the square flush (its heading iteration alternates between two corners):
+    # the contact has the Omni's heading at its position and touches without overlap
+    from planner.ss.heading import heading
+    from planner.ss.verify import pose_depth_and_gap
+
+    a = task.contact("from")
+    assert abs(heading(task.omni, a.pose.position)[0] - a.pose.yaw) < 1e-12
+    assert pose_depth_and_gap(task.tool, a.pose, task.shape) == (0.0, 0.0)
+    path = optimize(skill, task)
+    check_solved(task, path, 5e-6)
+    assert path.obstacle_penetration <= 5e-6

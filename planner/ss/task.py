@@ -20,6 +20,7 @@ from tools.model import Tool
 from tools.objects import Disc, DiscObject, ObjectModel, Obstacle, PolygonObject
 from tools.omni.ik import inverse_kinematics
 from tools.omni.platform import OmniPlatform
+from tools.pose import Pose2D
 
 
 @dataclass(frozen=True)
@@ -100,6 +101,7 @@ class SwitchTask:
         cx, cy = (float(v) for v in self.centre)
         disc = self.obj.radius if isinstance(self.obj, DiscObject) else None
         yaw = heading_scalar(self.omni, cx, cy)
+        done, prev = False, yaw
         for _ in range(60):
             c, sn = math.cos(yaw), math.sin(yaw)
             wx, wy = c * nx - sn * ny, sn * nx + c * ny  # the face normal in the world
@@ -109,13 +111,63 @@ class SwitchTask:
                 qx, qy = (float(v) for v in self.centre + self.obj.support(np.array([-wx, -wy])))
             new = heading_scalar(self.omni, qx - (c * px - sn * py), qy - (sn * px + c * py))
             done = abs(new - yaw) < 1e-14
-            yaw = new
+            prev, yaw = yaw, new
             if done:
                 break
-        con = contact_pose(self.tool, face, self.centre, yaw + f.push_angle, s=s, yaw=yaw, obj=self.obj)
+        if done or disc is not None:
+            con = contact_pose(self.tool, face, self.centre, yaw + f.push_angle, s=s, yaw=yaw, obj=self.obj)
+        else:
+            con = self._flush_contact(which, face, prev, yaw)
         ik = inverse_kinematics(self.omni, con.pose.position)
         if not ik.reachable:
             label = "start" if which == "from" else "end"
             raise InfeasibleError("switch", ["reach"], f"{label} contact pose ({face!r} on the object at "
                                   f"{np.round(self.centre, 4).tolist()}) unreachable: {ik.reason}: {ik.detail}")
         return con
+
+    def _flush_contact(self, which: str, face: str, yaw_a: float, yaw_b: float) -> Contact:
+        """The contact when the heading iteration alternates between two vertices of a polygonal
+        object (``yaw_a``, ``yaw_b`` [rad] its last two iterates): the face then lies flush on the
+        edge between them, at the yaw that makes it parallel, and the contact point slides along the
+        edge to where the Omni's heading is that yaw (a root in the edge parameter, by bisection).
+        Raises :class:`InfeasibleError` when no point of the edge gives that heading."""
+        import scipy.optimize
+
+        f = self.tool.face(face)
+        s0, s1 = f.contact_range
+        s = self.s_from if which == "from" else self.s_to
+        s = 0.5 * (s0 + s1) if s is None else float(s)
+        p = f.point(s)
+        assert isinstance(self.obj, PolygonObject)  # discs always settle
+
+        def support(yaw: float) -> NDArray[np.float64]:
+            c, sn = math.cos(yaw), math.sin(yaw)
+            n = np.array([c * f.normal[0] - sn * f.normal[1], sn * f.normal[0] + c * f.normal[1]])
+            return np.asarray(self.obj.support(-n), dtype=np.float64)
+
+        va, vb = support(yaw_a), support(yaw_b)
+        label = "start" if which == "from" else "end"
+        edge = vb - va
+        if float(np.hypot(*edge)) < 1e-12:
+            raise InfeasibleError("switch", ["contact"], f"the {label} contact heading did not settle ({face!r})")
+        # the face's world normal must point into the object, against the edge's outward normal
+        out = np.array([edge[1], -edge[0]]) / float(np.hypot(*edge))
+        if out @ (0.5 * (va + vb)) < 0:
+            out = -out
+        yaw = math.atan2(-out[1], -out[0]) - math.atan2(f.normal[1], f.normal[0])
+        c, sn = math.cos(yaw), math.sin(yaw)
+        rp = np.array([c * p[0] - sn * p[1], sn * p[0] + c * p[1]])
+
+        def gap(t: float) -> float:
+            x = self.centre + va + t * edge - rp
+            return math.remainder(heading_scalar(self.omni, float(x[0]), float(x[1])) - yaw, 2 * math.pi)
+
+        if gap(0.0) * gap(1.0) > 0:
+            raise InfeasibleError("switch", ["contact"], (
+                f"the {label} contact ({face!r} flush on an edge of the object) has no point where the "
+                "Omni's heading keeps the face parallel to the edge"))
+        t = scipy.optimize.brentq(gap, 0.0, 1.0, xtol=1e-15)
+        q = self.centre + va + t * edge
+        x = q - rp
+        n = np.array([c * f.normal[0] - sn * f.normal[1], sn * f.normal[0] + c * f.normal[1]])
+        return Contact(Pose2D(float(x[0]), float(x[1]), yaw), face, s, p, q, n, yaw + f.push_angle, 0.0)
