@@ -198,3 +198,34 @@ def test_pool_rows_equal_the_condensed_rows() -> None:
     np.testing.assert_allclose(g_pool, g, rtol=0, atol=1e-14 * np.abs(g).max())
     np.testing.assert_allclose(h_pool, h, rtol=0, atol=1e-14 * np.abs(h).max())
     assert pool.families(np.arange(pool.size)) == set(fam)
+
+
+def test_misleading_warm_start_is_proved_again_cold(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every coarse row guessed active at once (far more than the 60 variables, nearly dependent):
+    the warm-started exact step ends in a spurious infeasibility proof, the step is re-run cold, and
+    the optimum is the cold one."""
+    import dmp.qp.solve as S
+    from dmp.qp.pool import RowPool, Samples
+
+    case = l_push_case(30, 200)
+    pr = case.problem
+    aff = pr.affine("dense")
+    p, q = pr.quadratic()
+    tw = S._whitening(p)
+    z_c = -tw.T @ q
+    pool = RowPool.build(pr.constraints, aff, aff.positions(tw @ z_c))
+    grid = Samples.of(aff, slice(0, None, pr.dense_factor))
+    levels = S._Levels(grid, Samples.of(aff, slice(None)), pr.dense_factor, pool.outside_grid(grid))
+    cold = solve_fit(pr, max_scp=1, seed_with_backend=False)
+    runs: list[bool] = []
+    inner = S._cutting_planes
+
+    def spy(*args: object, **kw: object) -> object:
+        runs.append(args[4] is None)  # seed None: a cold run
+        return inner(*args, **kw)
+
+    monkeypatch.setattr(S, "_cutting_planes", spy)
+    z, _, _ = spy(pool, levels, tw, z_c, pool.coarse_ids(20), "osqp", None, 1e-9, 3, S._Counter(), False)
+    assert runs == [False, True]  # warm, then cold
+    w = tw @ z
+    assert abs(0.5 * w @ p @ w + q @ w - cold.objective) <= 1e-9 * abs(cold.objective)
