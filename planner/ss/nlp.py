@@ -60,8 +60,10 @@ body kinds, solver) and solves change only parameters, bounds and the initial gu
 Build cost in a fresh process (Fig. 11a structure, N = 40, ``benchmarks/bench_ss.py``): the rows are
 built vectorized over the knots (12 ms; 115 ms one knot at a time), ``nlpsol`` (derivatives and
 sparsity, mostly the Lagrangian's Hessian) 30-55 ms, plus about 20 ms once per process to load the
-IPOPT plugin: 46-53 ms per structure. Not cached on disk: deserializing the built solver
-(``Function.serialize``, 4.7 MB) took 47-85 ms, no less than building it; a generated and compiled
+IPOPT plugin: 46-53 ms per structure (vector separators, a quiet machine). With the signed-distance
+rows, in a slower phase of this shared machine: 85-145 ms, the same as the vector form measured
+alongside. Not cached on disk: deserializing the built solver (``Function.serialize``, 4.7-9.3 MB)
+took 47-165 ms, no less than building it; a generated and compiled
 NLP (``generate_dependencies``, gcc) loads in 4 ms and solves 5-10 % faster, but compiling it took
 5-11 s and needs a C compiler at run time.
 """
