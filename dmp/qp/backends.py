@@ -70,12 +70,10 @@ def _status(solver: str, found: bool, extras: dict[str, Any]) -> tuple[str, bool
     return status, ("primal infeasible" in low or "primalinfeasible" in low)
 
 
-def _dense_csc(m: NDArray[np.float64] | sp.spmatrix) -> sp.csc_matrix:
-    """``m`` as a CSC matrix; a dense array keeps every entry (zeros too: the rows here are dense),
-    built from its column-major values directly (scipy's generic conversion goes through COO and
-    took about 0.3 ms per matrix of a small QP)."""
-    if sp.issparse(m):
-        return sp.csc_matrix(m)
+def _dense_csc(m: NDArray[np.float64]) -> sp.csc_matrix:
+    """The dense array ``m`` as a CSC matrix keeping every entry (zeros too: the rows here are
+    dense), built from its column-major values directly (scipy's generic conversion goes through
+    COO and took about 0.3 ms per matrix of a small QP)."""
     a = np.asarray(m, dtype=np.float64)
     r, c = a.shape
     return sp.csc_matrix(

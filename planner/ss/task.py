@@ -140,12 +140,10 @@ class SwitchTask:
         p = f.point(s)
         assert isinstance(self.obj, PolygonObject)  # discs always settle
 
-        def support(yaw: float) -> NDArray[np.float64]:
-            c, sn = math.cos(yaw), math.sin(yaw)
-            n = np.array([c * f.normal[0] - sn * f.normal[1], sn * f.normal[0] + c * f.normal[1]])
-            return np.asarray(self.obj.support(-n), dtype=np.float64)
+        def normal(yaw: float) -> NDArray[np.float64]:  # the face's normal in the world
+            return Pose2D(0.0, 0.0, yaw).rotate(f.normal)
 
-        va, vb = support(yaw_a), support(yaw_b)
+        va, vb = (np.asarray(self.obj.support(-normal(y)), dtype=np.float64) for y in (yaw_a, yaw_b))
         label = "start" if which == "from" else "end"
         edge = vb - va
         if float(np.hypot(*edge)) < 1e-12:
@@ -155,8 +153,7 @@ class SwitchTask:
         if out @ (0.5 * (va + vb)) < 0:
             out = -out
         yaw = math.atan2(-out[1], -out[0]) - math.atan2(f.normal[1], f.normal[0])
-        c, sn = math.cos(yaw), math.sin(yaw)
-        rp = np.array([c * p[0] - sn * p[1], sn * p[0] + c * p[1]])
+        rp = Pose2D(0.0, 0.0, yaw).rotate(p)
 
         def gap(t: float) -> float:
             x = self.centre + va + t * edge - rp
@@ -169,5 +166,4 @@ class SwitchTask:
         t = scipy.optimize.brentq(gap, 0.0, 1.0, xtol=1e-15)
         q = self.centre + va + t * edge
         x = q - rp
-        n = np.array([c * f.normal[0] - sn * f.normal[1], sn * f.normal[0] + c * f.normal[1]])
-        return Contact(Pose2D(float(x[0]), float(x[1]), yaw), face, s, p, q, n, yaw + f.push_angle, 0.0)
+        return Contact(Pose2D(float(x[0]), float(x[1]), yaw), face, s, p, q, normal(yaw), yaw + f.push_angle, 0.0)
