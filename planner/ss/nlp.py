@@ -263,6 +263,12 @@ def build_nlp(
     def world(v: NDArray[np.float64]) -> tuple[Any, Any]:
         return Xi + cos_k * v[0] - sin_k * v[1], Yi + sin_k * v[0] + cos_k * v[1]
 
+    def tool_frame(cx: Any, cy: Any) -> tuple[Any, Any]:
+        """The world point ``(cx, cy)`` in the tool frame at each interior knot (there the tool's
+        outline is constant, so distance expressions and their Hessians stay small)."""
+        rx, ry = cx - Xi, cy - Yi
+        return cos_k * rx + sin_k * ry, cos_k * ry - sin_k * rx
+
     def knot_major(per_knot: list[Any]) -> Any:
         return ca.vec(ca.vertcat(*per_knot))
 
@@ -276,16 +282,11 @@ def build_nlp(
         per_knot: list[Any] = []
         if model == "capsule":
             assert capsule is not None
-            ax, ay = world(capsule.a)
-            bx, by = world(capsule.b)
-            ex, ey = bx - ax, by - ay
-            t = ca.fmin(1, ca.fmax(0, ((p[0] - ax) * ex + (p[1] - ay) * ey) / (ex * ex + ey * ey)))
-            dx, dy = p[0] - ax - t * ex, p[1] - ay - t * ey
-            per_knot.append(ca.sqrt(dx * dx + dy * dy) - (p[2] + capsule.radius + m))
+            lx, ly = tool_frame(p[0], p[1])
+            d2 = _clamped_d2(lx, ly, capsule.a, capsule.b - capsule.a)
+            per_knot.append(ca.sqrt(d2) - (p[2] + capsule.radius + m))
         elif distance and b.kind == "disc":
-            # the disc's centre in the tool frame at each knot
-            rx, ry = p[0] - Xi, p[1] - Yi
-            lx, ly = cos_k * rx + sin_k * ry, cos_k * ry - sin_k * rx
+            lx, ly = tool_frame(p[0], p[1])
             for verts in pieces:
                 per_knot.append(_signed_distance(verts, lx, ly) - (p[2] + m))
         else:
@@ -365,15 +366,22 @@ def _signed_distance(verts: NDArray[np.float64], lx: Any, ly: Any) -> Any:
     d2, line = None, None
     for i in range(len(v)):
         a, e = v[i], v[(i + 1) % len(v)] - v[i]
-        ee = float(e @ e)
-        rx, ry = lx - a[0], ly - a[1]
-        t = ca.fmin(1, ca.fmax(0, (rx * e[0] + ry * e[1]) / ee))
-        dx, dy = rx - t * e[0], ry - t * e[1]
-        di = dx * dx + dy * dy
-        li = (rx * e[1] - ry * e[0]) / np.sqrt(ee)  # signed distance to the edge's line, positive outside
+        di = _clamped_d2(lx, ly, a, e)
+        li = ((lx - a[0]) * e[1] - (ly - a[1]) * e[0]) / np.sqrt(float(e @ e))  # to the edge's line, + outside
         d2 = di if d2 is None else ca.fmin(d2, di)
         line = li if line is None else ca.fmax(line, li)
     return ca.if_else(line > 0, ca.sqrt(d2 + 1e-12), line)
+
+
+def _clamped_d2(lx: Any, ly: Any, a: NDArray[np.float64], e: NDArray[np.float64]) -> Any:
+    """Squared distance [mm^2] from ``(lx, ly)`` to the constant segment from ``a`` along ``e`` (2,) [mm]
+    (the clamped point-to-segment distance)."""
+    import casadi as ca
+
+    rx, ry = lx - a[0], ly - a[1]
+    t = ca.fmin(1, ca.fmax(0, (rx * e[0] + ry * e[1]) / float(e @ e)))
+    dx, dy = rx - t * e[0], ry - t * e[1]
+    return dx * dx + dy * dy
 
 
 def _area2(v: NDArray[np.float64]) -> float:
