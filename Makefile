@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test bench bench-sim bench-ss bench-batch lint clean
+.PHONY: demo test bench bench-sim bench-ss bench-batch bench-exec lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -37,6 +37,11 @@ bench-ss: $(PY)
 bench-batch: $(PY)
 	$(PY) -m pip install -q -e .
 	$(PY) benchmarks/bench_batch.py
+
+# 60 generated tasks + 2 paper tasks planned and executed open and closed loop on 2 cores (a few minutes)
+bench-exec: $(PY)
+	$(PY) -m pip install -q -e .
+	$(PY) benchmarks/bench_execution.py
 
 lint: $(PY)
 	$(PY) -m ruff check .

@@ -1,0 +1,549 @@
+"""Execution benchmark: how close the planner's plans bring the puck to the target on the simulated Omni.
+
+Run with `python benchmarks/bench_execution.py` (or `make bench-exec`). For every task:
+
+1. plan it (:func:`planner.solve.solve`): status, reason, planning wall and CPU time;
+2. a solved plan is executed open loop (:func:`planner.simulate.simulate_plan`) and closed loop
+   (:func:`planner.closed_loop.execute_closed_loop`, a fixed camera-noise seed): the puck's final
+   distance to the target [m] and the closed loop's status. An exception in either (or in the
+   planner) is recorded as ``"exception: <type>: <message>"`` and counted; the benchmark goes on.
+
+Tasks: the generated batch ``problems/batch/execution_60.yaml`` (60 tasks, five library tools in
+turn, up to one obstacle) and the paper's tasks ``problems/paper/transfer_tool2.yaml`` and
+``demo_tool1.yaml`` (reported apart). Every task runs with every variant of ``--variants``
+(``oe/ss`` pairs; default the planner's default ``qp/opt``). Tasks run in a process pool
+(``--workers``, default 2); each worker learns (or loads) the skills once, before its first task.
+
+Report: the solve rate with the infeasible reasons grouped, the open- and closed-loop final errors
+over solved plans (median, p90, max, share within 2 mm and 5 mm; the shares count every solved plan,
+an execution that raised counts as a miss), the closed loop's statuses, a per-tool table, the paper
+tasks, the slowest tasks and the total time. ``--json PATH`` writes every per-task row (and the run's
+settings) for comparing runs.
+
+    python benchmarks/bench_execution.py                                  # 60 + 2 tasks, qp/opt
+    python benchmarks/bench_execution.py --count 10 --no-closed-loop      # a quick look
+    python benchmarks/bench_execution.py --variants qp/opt,mapping/opt --json out/exec.json
+
+Single-threaded BLAS (``OPENBLAS_NUM_THREADS=1``); planning times vary by some percent on a shared
+machine. Learned skills are cached in ``$TOOLTRANSFER_CACHE`` (default ``~/.cache/tooltransfer``),
+keyed by the dataset's content, not by the code: point it at an empty folder to learn them afresh.
+
+Adding a measure: compute it in :func:`run_task` (a new key of the row; it goes to the JSON as is)
+and show it in :func:`report`.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse
+import json
+import math
+import multiprocessing
+import re
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+BATCH = ROOT / "problems" / "batch" / "execution_60.yaml"
+PAPER = (ROOT / "problems" / "paper" / "transfer_tool2.yaml", ROOT / "problems" / "paper" / "demo_tool1.yaml")
+OE_VARIANTS = ("qp", "mapping")
+SS_VARIANTS = ("opt", "dmp", "arch")
+WITHIN = (0.002, 0.005)
+"""Final-error thresholds [m] of the shares reported."""
+
+Row = dict[str, Any]
+
+
+@dataclass(frozen=True)
+class Job:
+    """One task with one variant, as sent to a worker.
+
+    Attributes:
+        task_id: the generated task's id or the paper task's name.
+        kind: ``"generated"`` or ``"paper"``.
+        tool: library tool name.
+        index: position in the batch (-1 for paper tasks).
+        n_obstacles: obstacles in the task.
+        data: the task's fields (as in a task file).
+        source: the path relative paths in ``data`` are relative to.
+        oe, ss: the variant.
+        closed_loop: also execute closed loop.
+        seed: camera-noise seed of the closed loop.
+        timeout: [s] per stage (planning, open loop, closed loop); 0 for none.
+    """
+
+    task_id: str
+    kind: str
+    tool: str
+    index: int
+    n_obstacles: int
+    data: dict[str, Any] = field(repr=False)
+    source: str
+    oe: str
+    ss: str
+    closed_loop: bool = True
+    seed: int = 0
+    timeout: float = 0.0
+
+    @property
+    def variant(self) -> str:
+        return f"{self.oe}/{self.ss}"
+
+
+class StageTimeout(Exception):
+    """A stage of a task ran past ``--timeout``."""
+
+
+@contextmanager
+def _deadline(seconds: float, what: str) -> Iterator[None]:
+    """Raise :class:`StageTimeout` in the block after ``seconds`` (SIGALRM; main thread only)."""
+    if seconds <= 0:
+        yield
+        return
+
+    def fire(signum: int, frame: object) -> None:
+        raise StageTimeout(f"{what} ran past {seconds:g} s")
+
+    old = signal.signal(signal.SIGALRM, fire)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, old)
+
+
+def _exception(exc: BaseException) -> str:
+    msg = " ".join(str(exc).split())
+    return f"exception: {type(exc).__name__}: {msg[:300]}"
+
+
+def _finite(v: Any) -> float | None:
+    try:
+        f = float(v)
+    except (TypeError, ValueError):
+        return None
+    return f if math.isfinite(f) else None
+
+
+def _count(v: Any) -> int | None:
+    f = _finite(v)
+    return None if f is None else round(f)
+
+
+def _task(job: Job) -> Any:
+    from problems.task import Variants, task_from_dict
+
+    task = task_from_dict(job.data, job.source)
+    return task.model_copy(update={"variants": Variants(oe=job.oe, ss=job.ss)})
+
+
+def run_task(job: Job) -> Row:
+    """Plan one task and execute a solved plan open and closed loop; the row of its measures
+    (never raises for the task's own failures). Errors in m, times in s; absent measures are None."""
+    started = time.perf_counter()
+    row: Row = {"task_id": job.task_id, "kind": job.kind, "index": job.index, "tool": job.tool,
+                "variant": job.variant, "n_obstacles": job.n_obstacles, "status": None, "reason": "",
+                "plan_wall": None, "plan_cpu": None, "n_pushes": None, "n_switches": None, "duration": None,
+                "open_loop_status": None, "open_loop_error": None, "open_loop_wall": None,
+                "closed_loop_status": None, "closed_loop_reason": "", "closed_loop_error": None,
+                "closed_loop_wall": None, "closed_loop_n_pushes": None, "closed_loop_n_switches": None,
+                "worker": os.getpid()}
+    from planner.solve import solve
+
+    wall, cpu = time.perf_counter(), time.process_time()
+    try:
+        with _deadline(job.timeout, "planning"):
+            plan = solve(_task(job), job.source)
+    except Exception as exc:
+        now = time.perf_counter()
+        row.update(status=_exception(exc), plan_wall=now - wall, task_wall=now - started)
+        return row
+    m = plan.metrics
+    row.update(status=plan.status, reason=plan.reason or "", plan_wall=time.perf_counter() - wall,
+               plan_cpu=time.process_time() - cpu, n_pushes=_count(m.get("n_pushes")),
+               time_skills=_finite(m.get("time_skills")), time_oe=_finite(m.get("time_oe")),
+               time_switches_and_timing=_finite(m.get("time_switches_and_timing")))
+    if plan.status == "solved":
+        from planner.closed_loop import execute_closed_loop
+        from planner.simulate import simulate_plan
+
+        row.update(n_switches=len(plan.switches), duration=_finite(m.get("duration")))
+        t0 = time.perf_counter()
+        try:
+            with _deadline(job.timeout, "open loop"):
+                rep = simulate_plan(plan)
+            row.update(open_loop_status="ok", open_loop_error=rep.final_error)
+        except Exception as exc:
+            row["open_loop_status"] = _exception(exc)
+        row["open_loop_wall"] = time.perf_counter() - t0
+        if job.closed_loop:
+            t0 = time.perf_counter()
+            try:
+                with _deadline(job.timeout, "closed loop"):
+                    cl = execute_closed_loop(plan, seed=job.seed)
+                row.update(closed_loop_status=cl.status, closed_loop_reason=cl.reason, closed_loop_error=cl.final_error,
+                           closed_loop_n_pushes=cl.n_pushes, closed_loop_n_switches=cl.n_switches)
+            except Exception as exc:
+                row["closed_loop_status"] = _exception(exc)
+            row["closed_loop_wall"] = time.perf_counter() - t0
+    row["task_wall"] = time.perf_counter() - started
+    return row
+
+
+def warm_up(jobs: Sequence[tuple[dict[str, Any], str]]) -> None:
+    """Import the planner and the platform and learn (or load) the skills the tasks name."""
+    import planner.closed_loop
+    import planner.simulate  # noqa: F401
+    from planner.solve import task_skills
+    from problems.task import task_from_dict
+
+    for data, source in jobs:
+        task = task_from_dict(data, source)
+        task_skills(task, source, need_ss=task.variants.ss != "arch")
+
+
+def _init_worker(skills: Sequence[tuple[dict[str, Any], str]]) -> None:
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's
+    warm_up(skills)
+
+
+def parse_variants(text: str) -> list[tuple[str, str]]:
+    """``"qp/opt,mapping/opt"`` -> ``[("qp", "opt"), ("mapping", "opt")]``."""
+    out = []
+    for part in text.split(","):
+        oe, _, ss = part.strip().partition("/")
+        if oe not in OE_VARIANTS or ss not in SS_VARIANTS:
+            raise argparse.ArgumentTypeError(f"variants as oe/ss pairs (oe in {OE_VARIANTS}, ss in {SS_VARIANTS}), "
+                                             f"not {part.strip()!r}")
+        if (oe, ss) not in out:
+            out.append((oe, ss))
+    return out
+
+
+def make_jobs(batch: Path, count: int | None, variants: Sequence[tuple[str, str]], paper: bool,
+              closed_loop: bool, seed: int, timeout: float) -> list[Job]:
+    """The jobs: the paper tasks first (their closed loops are the longest), then the generated
+    tasks in order, each with every variant."""
+    import yaml
+
+    from planner.batch.generate import generate_tasks
+    from planner.batch.spec import load_batch
+    from problems.task import load_task, task_obstacles
+
+    spec = load_batch(batch)
+    tasks = generate_tasks(spec, batch)
+    if count is not None:
+        tasks = tasks[:count]
+    jobs = []
+    for oe, ss in variants:
+        common = {"oe": oe, "ss": ss, "closed_loop": closed_loop, "seed": seed, "timeout": timeout}
+        for p in PAPER if paper else ():
+            task = load_task(p)
+            tool = task.tool if isinstance(task.tool, str) else task.tool.name
+            jobs.append(Job(task.name, "paper", tool, -1, len(task_obstacles(task)), yaml.safe_load(p.read_text()),
+                            str(p), **common))
+        jobs += [Job(g.task_id, "generated", g.tool, g.index, g.n_obstacles, g.data, str(batch), **common)
+                 for g in tasks]
+    return jobs
+
+
+def _progress_line(done: int, total: int, r: Row) -> str:
+    def mm(v: float | None) -> str:
+        return "-" if v is None else f"{1e3 * v:.1f} mm"
+
+    s = f"[{done:>3}/{total}] {r['task_id']:<16} {r['tool']:<9} {r['variant']:<11} {r['status']}"
+    if r["status"] == "solved":
+        s += f" plan {r['plan_wall']:.2f} s | open {mm(r['open_loop_error'])}"
+        if r["open_loop_status"] != "ok":
+            s += f" ({r['open_loop_status']})"
+        if r["closed_loop_status"] is not None:
+            s += f" | closed {r['closed_loop_status']} {mm(r['closed_loop_error'])}"
+    s += f" | {r.get('task_wall') or 0.0:.1f} s"
+    return s
+
+
+def run_jobs(jobs: Sequence[Job], workers: int, on_row: Callable[[Row], None] | None = None) -> list[Row]:
+    """Every job's row, in the jobs' order, from a process pool of ``workers`` (1: in this process).
+    When a worker dies (the pool breaks), the jobs it took down are run again one by one, each in a
+    pool of its own; a job whose worker dies then becomes a ``crash`` row."""
+    skills = list({(j.data["skills"].get("dataset"), j.source): (j.data, j.source) for j in jobs}.values())
+    warm_up(skills)  # learn once here, so the workers load the skills from the cache
+    rows: dict[int, Row] = {}
+
+    def done(i: int, row: Row) -> None:
+        rows[i] = row
+        if on_row:
+            on_row(row)
+
+    if workers <= 1:
+        for i, job in enumerate(jobs):
+            done(i, run_task(job))
+        return [rows[i] for i in range(len(jobs))]
+    ctx = multiprocessing.get_context("spawn")
+
+    def pool(n: int) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(n, mp_context=ctx, initializer=_init_worker, initargs=(skills,))
+
+    broken = []
+    with pool(workers) as ex:
+        futures: dict[Future[Row], int] = {ex.submit(run_task, job): i for i, job in enumerate(jobs)}
+        pending = set(futures)
+        while pending:
+            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in finished:
+                i = futures[fut]
+                try:
+                    done(i, fut.result())
+                except BrokenProcessPool:
+                    broken.append(i)
+                except Exception as exc:  # pickling and the like
+                    done(i, _crash_row(jobs[i], _exception(exc)))
+    for i in sorted(broken):
+        with pool(1) as ex:
+            try:
+                done(i, ex.submit(run_task, jobs[i]).result())
+            except BrokenProcessPool:
+                done(i, _crash_row(jobs[i], "the worker process died"))
+            except Exception as exc:
+                done(i, _crash_row(jobs[i], _exception(exc)))
+    return [rows[i] for i in range(len(jobs))]
+
+
+def _crash_row(job: Job, why: str) -> Row:
+    return {"task_id": job.task_id, "kind": job.kind, "index": job.index, "tool": job.tool, "variant": job.variant,
+            "n_obstacles": job.n_obstacles, "status": f"crash: {why}", "reason": "", "plan_wall": None,
+            "plan_cpu": None, "n_pushes": None, "open_loop_status": None, "open_loop_error": None,
+            "closed_loop_status": None, "closed_loop_error": None, "task_wall": None}
+
+
+# ---------------------------------------------------------------------------------------------- report
+
+
+def _reason_group(reason: str) -> str:
+    """A reason with its numbers replaced by ``#``, so that reasons of one kind group together."""
+    return re.sub(r"-?\d+(?:\.\d+)?(?:e-?\d+)?", "#", reason or "(no reason given)")
+
+
+def error_stats(errors: Sequence[float | None], n_plans: int) -> dict[str, float | int | None]:
+    """Median, p90 and max [m] of the measured errors, and the share of ``n_plans`` within each of
+    :data:`WITHIN` (an unmeasured plan counts as a miss)."""
+    e = np.array([v for v in errors if v is not None], dtype=float)
+    out: dict[str, float | int | None] = {"n": len(e), "median": None, "p90": None, "max": None}
+    if len(e):
+        out.update(median=float(np.median(e)), p90=float(np.percentile(e, 90)), max=float(e.max()))
+    for w in WITHIN:
+        out[f"within_{round(1e3 * w)}mm"] = (float(np.sum(e <= w)) / n_plans) if n_plans else None
+    return out
+
+
+def _mm(v: float | None) -> str:
+    return "-" if v is None else f"{1e3 * v:.1f}"
+
+
+def _pct(v: float | None) -> str:
+    return "-" if v is None else f"{100 * v:.0f} %"
+
+
+def _is_exc(status: str | None) -> bool:
+    return bool(status) and status.startswith(("exception:", "crash:"))
+
+
+def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None:
+    """Print the tables of the rows (module docstring), one section per variant."""
+    from rich import box
+    from rich.console import Console
+    from rich.table import Table
+
+    con = console or Console(markup=False, highlight=False)
+    for variant in dict.fromkeys(r["variant"] for r in rows):
+        vrows = [r for r in rows if r["variant"] == variant]
+        gen = [r for r in vrows if r["kind"] == "generated"]
+        solved = [r for r in gen if r["status"] == "solved"]
+        infeasible = [r for r in gen if r["status"] == "infeasible"]
+        failed = [r for r in gen if _is_exc(r["status"])]
+        con.rule(f"variant {variant}")
+        if gen:
+            con.print(f"generated tasks: solved {len(solved)}/{len(gen)} ({_pct(len(solved) / len(gen))}), "
+                      f"infeasible {len(infeasible)}, planner exceptions {len(failed)}")
+            plan_t = [r["plan_wall"] for r in gen if r["plan_wall"] is not None]
+            if plan_t:
+                con.print(f"planning wall time per task: median {np.median(plan_t):.2f} s, "
+                          f"p90 {np.percentile(plan_t, 90):.2f} s, max {max(plan_t):.2f} s; "
+                          f"CPU total {sum(r['plan_cpu'] or 0.0 for r in gen):.1f} s")
+        if infeasible or failed:
+            t = Table("count", "reason (numbers as #)", title="infeasible reasons (top 8) and planner exceptions",
+                      box=box.SIMPLE_HEAD, title_justify="left")
+            groups = Counter(_reason_group(r["reason"]) for r in infeasible)
+            for reason, n in groups.most_common(8):
+                t.add_row(str(n), reason)
+            rest = sum(groups.values()) - sum(n for _, n in groups.most_common(8))
+            if rest:
+                t.add_row(str(rest), f"({len(groups) - 8} other reasons)")
+            for r in failed:
+                t.add_row("1", f"{r['task_id']}: {r['status']}")
+            con.print(t)
+        if solved:
+            t = Table("execution", "n", "median mm", "p90 mm", "max mm", "<= 2 mm", "<= 5 mm", "exceptions",
+                      title=f"final error over the {len(solved)} solved plans (shares of all solved plans)",
+                      box=box.SIMPLE_HEAD, title_justify="left")
+            ol = error_stats([r["open_loop_error"] for r in solved], len(solved))
+            t.add_row("open loop", str(ol["n"]), _mm(ol["median"]), _mm(ol["p90"]), _mm(ol["max"]),
+                      _pct(ol["within_2mm"]), _pct(ol["within_5mm"]),
+                      str(sum(_is_exc(r["open_loop_status"]) for r in solved)))
+            ran_cl = [r for r in solved if r["closed_loop_status"] is not None]
+            if ran_cl:
+                cl = error_stats([r["closed_loop_error"] for r in ran_cl], len(ran_cl))
+                t.add_row("closed loop", str(cl["n"]), _mm(cl["median"]), _mm(cl["p90"]), _mm(cl["max"]),
+                          _pct(cl["within_2mm"]), _pct(cl["within_5mm"]),
+                          str(sum(_is_exc(r["closed_loop_status"]) for r in ran_cl)))
+            con.print(t)
+            if ran_cl:
+                statuses = Counter("exception" if _is_exc(r["closed_loop_status"]) else r["closed_loop_status"]
+                                   for r in ran_cl)
+                con.print("closed-loop statuses: " + ", ".join(f"{s} {n}" for s, n in statuses.most_common()))
+                exec_t = [r["closed_loop_wall"] for r in ran_cl if r["closed_loop_wall"] is not None]
+                con.print(f"closed-loop wall time per plan: median {np.median(exec_t):.1f} s, max {max(exec_t):.1f} s; "
+                          f"open loop median {np.median([r['open_loop_wall'] for r in solved]):.1f} s")
+                fails = Counter(_reason_group(r["closed_loop_reason"]) for r in ran_cl
+                                if r["closed_loop_status"] == "failed")
+                for reason, n in fails.most_common(5):
+                    con.print(f"  failed x{n}: {reason}")
+        if gen:
+            t = Table("tool", "tasks", "solved", "open median mm", "open <= 5 mm", "closed median mm",
+                      "closed <= 2 mm", title="per tool (shares of the tool's solved plans)", box=box.SIMPLE_HEAD,
+                      title_justify="left")
+            for tool in dict.fromkeys(r["tool"] for r in gen):
+                tr = [r for r in gen if r["tool"] == tool]
+                ts = [r for r in tr if r["status"] == "solved"]
+                ol = error_stats([r["open_loop_error"] for r in ts], len(ts))
+                cl_rows = [r for r in ts if r["closed_loop_status"] is not None]
+                cl = error_stats([r["closed_loop_error"] for r in cl_rows], len(cl_rows))
+                t.add_row(tool, str(len(tr)), str(len(ts)), _mm(ol["median"]), _pct(ol["within_5mm"]),
+                          _mm(cl["median"]), _pct(cl["within_2mm"]))
+            con.print(t)
+        paper = [r for r in vrows if r["kind"] == "paper"]
+        if paper:
+            t = Table("paper task", "tool", "status", "plan s", "pushes", "open loop mm", "closed loop mm",
+                      "closed-loop status", title="paper tasks", box=box.SIMPLE_HEAD, title_justify="left")
+            for r in paper:
+                plan_s = "-" if r["plan_wall"] is None else f"{r['plan_wall']:.2f}"
+                ol = _mm(r["open_loop_error"]) if not _is_exc(r["open_loop_status"]) else r["open_loop_status"]
+                t.add_row(r["task_id"], r["tool"], r["status"] if r["status"] == "solved" else
+                          f"{r['status']}: {r['reason']}", plan_s, "-" if r["n_pushes"] is None else
+                          str(r["n_pushes"]), ol, _mm(r["closed_loop_error"]), r["closed_loop_status"] or "-")
+            con.print(t)
+    slow = sorted((r for r in rows if r.get("task_wall") is not None), key=lambda r: -r["task_wall"])[:5]
+    if slow:
+        t = Table("task", "variant", "status", "task s", "plan s", "open s", "closed s", title="slowest tasks",
+                  box=box.SIMPLE_HEAD, title_justify="left")
+
+        def sec(v: float | None) -> str:
+            return "-" if v is None else f"{v:.1f}"
+
+        for r in slow:
+            t.add_row(r["task_id"], r["variant"], r["status"], sec(r["task_wall"]), sec(r["plan_wall"]),
+                      sec(r.get("open_loop_wall")), sec(r.get("closed_loop_wall")))
+        con.print(t)
+    busy = sum(r.get("task_wall") or 0.0 for r in rows)
+    con.print(f"total: {len(rows)} task runs in {wall:.1f} s wall ({wall / 60:.1f} min); "
+              f"sum of task times {busy:.1f} s")
+
+
+def _commit() -> str | None:
+    try:
+        out = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True, check=True)
+        dirty = subprocess.run(["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return out.stdout.strip() + ("+dirty" if dirty else "")
+
+
+def _clean(v: Any) -> Any:
+    if isinstance(v, float | np.floating):
+        return float(v) if math.isfinite(v) else None
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, dict):
+        return {k: _clean(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_clean(x) for x in v]
+    return v
+
+
+def write_json(path: Path, rows: Sequence[Row], meta: dict[str, Any]) -> None:
+    """``{"meta": ..., "rows": [...]}``; non-finite numbers as null."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(_clean({"meta": meta, "rows": list(rows)}), indent=1, allow_nan=False))
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--batch", type=Path, default=BATCH, help="batch file of the generated tasks")
+    ap.add_argument("--count", type=int, default=None, help="only the first N generated tasks")
+    ap.add_argument("--variants", type=parse_variants, default=[("qp", "opt")],
+                    help="oe/ss pairs, comma-separated (default qp/opt), e.g. qp/opt,mapping/opt")
+    ap.add_argument("--workers", type=int, default=2, help="worker processes (1: in this process)")
+    ap.add_argument("--no-closed-loop", dest="closed_loop", action="store_false", help="skip the closed loop")
+    ap.add_argument("--no-paper", dest="paper", action="store_false", help="skip the two paper tasks")
+    ap.add_argument("--seed", type=int, default=0, help="camera-noise seed of the closed loop")
+    ap.add_argument("--timeout", type=float, default=600.0,
+                    help="per task stage (planning, open loop, closed loop) [s], recorded as an exception; 0: none")
+    ap.add_argument("--json", type=Path, default=None, help="write every per-task row to this file")
+    ap.add_argument("--quiet", action="store_true", help="no line per finished task")
+    args = ap.parse_args(argv)
+
+    from rich.console import Console
+
+    con = Console(width=None if sys.stdout.isatty() else 150, markup=False, highlight=False)
+    t0 = time.perf_counter()
+    jobs = make_jobs(args.batch, args.count, args.variants, args.paper, args.closed_loop, args.seed, args.timeout)
+    variants = ",".join(f"{o}/{s}" for o, s in args.variants)
+    commit = _commit()
+    con.print(f"execution benchmark: {len(jobs)} task runs ({args.batch.name}"
+              f"{'' if args.count is None else f', first {args.count}'}{' + paper tasks' if args.paper else ''}; "
+              f"variants {variants}; closed loop {'on, seed ' + str(args.seed) if args.closed_loop else 'off'}); "
+              f"{args.workers} workers")
+    from planner.skills import cache_dir
+
+    con.print(f"commit {commit}; skills cache {cache_dir()}")
+    done = 0
+
+    def on_row(r: Row) -> None:
+        nonlocal done
+        done += 1
+        if not args.quiet:
+            print(_progress_line(done, len(jobs), r), flush=True)
+
+    rows = run_jobs(jobs, args.workers, on_row)
+    wall = time.perf_counter() - t0
+    report(rows, wall, con)
+    if args.json is not None:
+        meta = {"commit": commit, "batch": str(args.batch), "count": args.count, "variants": variants,
+                "closed_loop": args.closed_loop, "seed": args.seed, "workers": args.workers, "timeout": args.timeout,
+                "wall": wall, "python": sys.version.split()[0], "argv": sys.argv[1:],
+                "finished": time.strftime("%Y-%m-%d %H:%M:%S")}
+        write_json(args.json, rows, meta)
+        con.print(f"rows written to {args.json}")
+
+
+if __name__ == "__main__":
+    main()
