@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from planner.ss.heading import centre_path, heading, point_path
+from tools.omni.heading import centre_path, heading, point_path
 from tools.omni.platform import OmniPlatform
 
 PLATFORM = OmniPlatform()

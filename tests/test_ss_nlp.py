@@ -6,9 +6,9 @@ import numpy as np
 
 from planner.ss.bodies import UNIT, all_bodies
 from planner.ss.cases import fig11_task
-from planner.ss.heading import heading
 from planner.ss.nlp import build_nlp
 from tools.objects import Disc
+from tools.omni.heading import heading
 from tools.omni.reach import reach_sector, wedge_rows
 
 

@@ -176,8 +176,8 @@ def test_polygon_object_with_disc_and_polygon_obstacles(skill: SwitchSkill) -> N
                       obstacles=(Disc(c + np.array([0.055, 0.02]), 0.01), shapely.box(-0.075, 0.17, -0.06, 0.185)))
     # the upper face meets the square flush (its heading iteration alternates between two corners):
     # the contact has the Omni's heading at its position and touches without overlap
-    from planner.ss.heading import heading
     from planner.ss.verify import pose_depth_and_gap
+    from tools.omni.heading import heading
 
     a = task.contact("from")
     assert abs(heading(task.omni, a.pose.position)[0] - a.pose.yaw) < 1e-12

@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from dmp.errors import InputError
 from dmp.validation import check_array, check_positive, check_time
-from planner.ss.heading import rot
+from tools.omni.heading import rot
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ For the task's contacts ``(p_A, q_A)`` and ``(p_B, q_B)`` (with the headings the
 A DMP approaches its goal asymptotically; the few micrometres left at ``t = T`` are removed by adding
 ``(g - x(T)) s(t)`` with the minimum-jerk ``s`` (reported as ``info["end_correction"]``), so the path
 starts and ends exactly at the contacts. The tool centre point follows from the heading the Omni
-imposes (fixed point, :func:`planner.ss.heading.centre_path`). The swept tool is then measured
+imposes (fixed point, :func:`tools.omni.heading.centre_path`). The swept tool is then measured
 exactly against the object and the obstacles (:mod:`planner.ss.verify`): this variant does not
 avoid penetration, it reports it.
 """
@@ -28,13 +28,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmp.errors import InfeasibleError, InputError
-from planner.ss.heading import centre_path, heading, rot
 from planner.ss.learn import SwitchSkill
 from planner.ss.recombination import dmp_settings, linear_recombination, recombination_map
 from planner.ss.result import SwitchPath
 from planner.ss.task import SwitchTask
 from planner.ss.verify import sweep_checks
 from planner.ss.virtual import Way, min_jerk, virtual_motion
+from tools.omni.heading import centre_path, heading, rot
 from tools.omni.ik import joint_path
 
 #: Share of the steps at each end of a path that count as "near the contacts" for the clearance report.

@@ -15,7 +15,7 @@ Decision variables (millimetres, :data:`planner.ss.bodies.UNIT`): the tool centr
   11a the first start ran out of iterations: the angle must turn round where the vector can shrink
   through zero).
 
-Heading: **a function of position through the Omni's waist** (:func:`planner.ss.heading.heading_casadi`,
+Heading: **a function of position through the Omni's waist** (:func:`tools.omni.heading.heading_casadi`,
 smooth inside the reach annulus), not fixed over the move: the tool's yaw at knot k is
 ``yaw(X_k)``, exactly the heading the arm will have there, so the vertices ``w = X_k + R(yaw(X_k)) v``
 the constraints see are the ones the arm will place.
@@ -80,8 +80,8 @@ from numpy.typing import NDArray
 
 from dmp.errors import InputError
 from planner.ss.bodies import UNIT, Body
-from planner.ss.heading import heading_casadi
 from tools.model import Tool
+from tools.omni.heading import heading_casadi
 from tools.omni.platform import OmniPlatform
 from tools.omni.reach import reach_sector, wedge_rows
 

@@ -44,7 +44,6 @@ from numpy.typing import NDArray
 from dmp.errors import InputError
 from planner.ss.bodies import UNIT, all_bodies
 from planner.ss.generalize import measure, recombine
-from planner.ss.heading import heading
 from planner.ss.initial import c_obstacle, round_paths
 from planner.ss.learn import SwitchSkill
 from planner.ss.nlp import MODELS, SOLVERS, SwitchNLP, get_nlp, initial_separators
@@ -54,6 +53,7 @@ from planner.ss.verify import pose_depth_and_gap, tool_geometry
 from planner.ss.virtual import Way
 from tools.contact import Contact
 from tools.objects import Disc
+from tools.omni.heading import heading
 from tools.omni.ik import joint_path
 from tools.omni.platform import OmniPlatform
 from tools.omni.reach import LinearRows, ReachSector, reach_sector, wedge_rows

@@ -16,13 +16,13 @@ from numpy.typing import ArrayLike, NDArray
 from dmp.errors import InfeasibleError, InputError
 from dmp.validation import check_array, check_positive
 from planner.ss.demo import DemoSwitch
-from planner.ss.heading import heading
 from planner.ss.virtual import min_jerk
 from tools.arch import switch_path
 from tools.contact import Contact, contact_on_platform
 from tools.library import load_tool
 from tools.model import Tool
 from tools.objects import OBJECT_RADIUS
+from tools.omni.heading import heading
 from tools.omni.platform import OmniPlatform
 
 

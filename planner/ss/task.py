@@ -14,10 +14,10 @@ from numpy.typing import NDArray
 
 from dmp.errors import InfeasibleError, InputError
 from dmp.validation import check_array, check_positive
-from planner.ss.heading import heading_scalar
 from tools.contact import Contact, contact_pose
 from tools.model import Tool
 from tools.objects import Disc, DiscObject, ObjectModel, Obstacle, PolygonObject
+from tools.omni.heading import heading_scalar
 from tools.omni.ik import inverse_kinematics
 from tools.omni.platform import OmniPlatform
 from tools.pose import Pose2D

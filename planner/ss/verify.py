@@ -21,10 +21,10 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from planner.ss.heading import rot
 from tools.clearance import swept_penetration_depth
 from tools.model import Tool
 from tools.objects import Disc, Obstacle
+from tools.omni.heading import rot
 from tools.pose import Pose2D
 
 _PIECES: dict[int, tuple[shapely.Polygon, tuple[NDArray[np.float64], ...], float]] = {}

@@ -1,0 +1,1 @@
+"""Quasi-static push mechanics of a round object under a tool (DESIGN section 10)."""

@@ -1,0 +1,157 @@
+"""Inverse push model, for planning: the tool motion that makes a face push the puck along a wanted path.
+
+A straight face touches the disc (radius ``R``) at the foot of the perpendicular from its centre,
+so with the contact at arc length ``s`` along the face (from its ``start``, direction ``e``, outward
+normal ``n``; tool frame) the puck's centre sits at ``c_T(s) = start + s e + R n`` in the tool
+frame, and the tool pose follows from the centre ``c`` and the heading ``psi`` the Omni imposes
+there: ``x_tool = c - R(psi) c_T(s)`` with ``psi = heading(x_tool)``
+(:func:`tools.omni.heading.centre_path`).
+
+While the contact sticks, the tool's contact point moves with the puck's rim point: the same normal
+speed as the centre and ``kappa = 1 + 1/c^2`` times its sideways speed (:mod:`tools.pushing.mechanics`).
+In the tool frame the contact therefore rolls along the face,
+
+    ds/dt = -(1/c^2) (v_c . e_w) - sigma R dpsi/dt,      sigma = e . (J n) = +-1,
+
+where ``e_w`` is the face direction in the world: the centre's sideways travel moves it ``1/c^2``
+times as far the other way, and a turn of the heading rolls the disc along the face by ``R`` per
+radian. Given the centre's path and where the contact starts, ``s`` follows by integration (the
+trapezoidal rule in the heading) and, with it, the tool poses. The path is admissible when every
+step lies in the friction cone about the contact normal (the contact sticks) and ``s`` stays on
+the face.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from dmp.errors import InputError
+from dmp.validation import check_array, check_positive
+from tools.model import Tool
+from tools.omni.heading import centre_path, heading
+from tools.omni.platform import OmniPlatform
+from tools.pushing.mechanics import PushMechanics, cone_margin, perp
+
+
+@dataclass(frozen=True)
+class FaceGeometry:
+    """A face in the tool frame, for the inverse model.
+
+    Attributes:
+        name: face name.
+        start: (2,) face start [m]; direction: (2,) unit vector along it; length: [m].
+        normal: (2,) outward unit normal; sigma: ``direction . (J normal)`` (+1 or -1).
+        lo, hi: usable arc lengths [m] (the face's contact range).
+    """
+
+    name: str
+    start: NDArray[np.float64]
+    direction: NDArray[np.float64]
+    length: float
+    normal: NDArray[np.float64]
+    sigma: float
+    lo: float
+    hi: float
+
+    @classmethod
+    def of(cls, tool: Tool, face: str) -> FaceGeometry:
+        f = tool.face(face)
+        e = (f.end - f.start) / f.length
+        sigma = float(np.sign(e @ perp(f.normal)))
+        s0, s1 = f.contact_range
+        return cls(face, f.start.copy(), e, f.length, f.normal.copy(), sigma, s0 * f.length, s1 * f.length)
+
+    def centre_in_tool(self, s: ArrayLike, radius: float) -> NDArray[np.float64]:
+        """The puck's centre (K, 2) [m] in the tool frame with the contact at arc lengths ``s`` (K,)."""
+        s = np.atleast_1d(np.asarray(s, dtype=np.float64))
+        return self.start + s[:, None] * self.direction + radius * self.normal
+
+
+@dataclass(frozen=True)
+class FacePush:
+    """The tool motion realising a push (K samples).
+
+    Attributes:
+        face: the face; tool_pose: (K, 3) ``x, y`` [m] and ``yaw`` [rad].
+        s: (K,) arc length [m] of the contact along the face (from its start).
+        normal: (K, 2) the contact normal in the world (into the puck).
+        cone_margin: (K-1,) ``atan(mu) - |phi_c|`` [rad] of each step (negative: outside the cone,
+            the contact would slide; ``-pi``: a step that pulls).
+        edge_margin: least distance [m] of the contact from the ends of the face's usable range
+            (negative: it leaves the face).
+    """
+
+    face: FaceGeometry
+    tool_pose: NDArray[np.float64]
+    s: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    cone_margin: NDArray[np.float64]
+
+    @property
+    def edge_margin(self) -> float:
+        return float(min(np.min(self.s - self.face.lo), np.min(self.face.hi - self.s)))
+
+    @property
+    def sticks(self) -> bool:
+        """Whether every step that moves the puck lies inside the friction cone."""
+        return bool(np.all(self.cone_margin >= 0.0))
+
+
+def _poses(face: FaceGeometry, c: NDArray[np.float64], s: NDArray[np.float64], radius: float,
+           platform: OmniPlatform | None, yaw: NDArray[np.float64] | None) -> NDArray[np.float64]:
+    ct = face.centre_in_tool(s, radius)
+    if platform is not None:
+        xy = centre_path(platform, c, ct)
+        psi = heading(platform, xy)
+    else:
+        assert yaw is not None
+        psi = yaw
+        co, si = np.cos(psi), np.sin(psi)
+        xy = c - np.column_stack([co * ct[:, 0] - si * ct[:, 1], si * ct[:, 0] + co * ct[:, 1]])
+    return np.column_stack([xy, psi])
+
+
+def push_tool_path(
+    tool: Tool, face: str, object_xy: ArrayLike, radius: float, mech: PushMechanics, s0: float, *,
+    platform: OmniPlatform | None = None, yaw: ArrayLike | None = None, iters: int = 8,
+) -> FacePush:
+    """The tool poses that push the puck along ``object_xy`` (K, 2) [m] with ``face``, the contact
+    starting at arc length ``s0`` [m] along the face, sticking throughout.
+
+    The heading comes from ``platform`` (the Omni's, a function of the tool's position) or is given
+    as ``yaw`` (K,) [rad]; exactly one of them.
+    """
+    if (platform is None) == (yaw is None):
+        raise InputError("platform", "exactly one of platform and yaw")
+    g = FaceGeometry.of(tool, face)
+    c = check_array(object_xy, "object_xy", shape=(None, 2))
+    if c.shape[0] < 2:
+        raise InputError("object_xy", "at least 2 samples", f"{c.shape[0]}")
+    r = check_positive(radius, "radius")
+    yaw_a = None if yaw is None else check_array(yaw, "yaw", shape=(c.shape[0],))
+    dc = np.diff(c, axis=0)
+    s = np.full(c.shape[0], float(s0))
+    for _ in range(iters):
+        pose = _poses(g, c, s, r, platform, yaw_a)
+        psi = pose[:, 2]
+        mid = 0.5 * (psi[:-1] + psi[1:])
+        e_w = np.column_stack([np.cos(mid) * g.direction[0] - np.sin(mid) * g.direction[1],
+                               np.sin(mid) * g.direction[0] + np.cos(mid) * g.direction[1]])
+        step = -mech.rolling * np.einsum("ij,ij->i", dc, e_w) - g.sigma * r * np.diff(psi)
+        new = float(s0) + np.concatenate([[0.0], np.cumsum(step)])
+        done = float(np.max(np.abs(new - s))) < 1e-13
+        s = new
+        if done:
+            break
+    pose = _poses(g, c, s, r, platform, yaw_a)
+    psi = pose[:, 2]
+    n_w = np.column_stack([np.cos(psi) * g.normal[0] - np.sin(psi) * g.normal[1],
+                           np.sin(psi) * g.normal[0] + np.cos(psi) * g.normal[1]])
+    n_mid = 0.5 * (n_w[:-1] + n_w[1:])
+    n_mid /= np.linalg.norm(n_mid, axis=1)[:, None]
+    margin = cone_margin(dc, n_mid, mech)
+    still = np.hypot(dc[:, 0], dc[:, 1]) < 1e-12
+    return FacePush(g, pose, s, n_w, np.where(still, mech.friction_angle, margin))
