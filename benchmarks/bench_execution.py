@@ -395,7 +395,8 @@ def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None
                 t.add_row(str(n), reason)
             rest = sum(groups.values()) - sum(n for _, n in groups.most_common(8))
             if rest:
-                t.add_row(str(rest), f"({len(groups) - 8} other reasons)")
+                other = len(groups) - 8
+                t.add_row(str(rest), f"({other} other reason{'s' if other > 1 else ''})")
             for r in failed:
                 t.add_row("1", f"{r['task_id']}: {r['status']}")
             con.print(t)
@@ -425,6 +426,10 @@ def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None
                                 if r["closed_loop_status"] == "failed")
                 for reason, n in fails.most_common(5):
                     con.print(f"  failed x{n}: {reason}")
+            for r in solved:
+                for stage in ("open_loop", "closed_loop"):
+                    if _is_exc(r[f"{stage}_status"]):
+                        con.print(f"  {stage.replace('_', ' ')} of {r['task_id']}: {r[f'{stage}_status']}")
         if gen:
             t = Table("tool", "tasks", "solved", "open median mm", "open <= 5 mm", "closed median mm",
                       "closed <= 2 mm", title="per tool (shares of the tool's solved plans)", box=box.SIMPLE_HEAD,
