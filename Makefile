@@ -38,7 +38,7 @@ bench-batch: $(PY)
 	$(PY) -m pip install -q -e .
 	$(PY) benchmarks/bench_batch.py
 
-# 60 generated tasks + 2 paper tasks planned and executed open and closed loop on 2 cores (a few minutes)
+# 60 generated tasks + 2 paper tasks planned and executed open and closed loop on 2 cores (about 25 s)
 bench-exec: $(PY)
 	$(PY) -m pip install -q -e .
 	$(PY) benchmarks/bench_execution.py
