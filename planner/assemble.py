@@ -2,31 +2,35 @@
 
 Timeline (DESIGN section 1; the object stands still outside the pushes):
 
-1. approach: from ``approach_distance`` behind the first contact pose (against the first push's
-   direction; halved until the move is within the Omni's reach) to it, a minimum-jerk straight move;
-2. pushes: the condensed object motion, the tool at the active face's contact pose (heading as the
-   Omni imposes it), timed by the OE motion stretched by one factor so that the tool keeps within
-   the maximum speed and acceleration;
-3. between consecutive pushes a switch: the tool path from the switch planner (:class:`SwitchPath`),
+1. approach: from ``approach_distance`` behind the first contact pose (along the face's normal
+   there, so the tool meets the object where the push starts; halved until the move is within the
+   Omni's reach) to it, a minimum-jerk straight move;
+2. pushes: the condensed object motion with the tool poses of the inverse push model (each push's
+   ``tool_pose``: the contact rolling along the face, heading as the Omni imposes it), timed by the
+   OE motion stretched by one factor so that the tool keeps within the maximum speed and
+   acceleration;
+3. between consecutive pushes a switch (a change of face) or a re-contact (the same face touching
+   again elsewhere): the tool path from the switch or re-contact planner (:class:`SwitchPath`),
    timed by a minimum-jerk arc-length profile within the limits;
-4. retreat: back off ``approach_distance`` against the last push's direction.
+4. retreat: back off ``approach_distance`` along the last contact's normal.
 
 Joints come from the vectorized inverse kinematics of the whole tool path (limits checked).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.oe.face_frame import FaceFrame
-from planner.oe.push_plan import PushPlan
+from planner.oe.push_plan import Push, PushPlan
 from planner.timing import min_jerk_along, min_jerk_duration, stretch_factor
+from tools.model import Tool
 from tools.omni.ik import joint_path
 from tools.omni.platform import OmniPlatform
+from tools.pose import rotation
 
 
 @dataclass(frozen=True)
@@ -88,11 +92,18 @@ def _line(a: NDArray[np.float64], b: NDArray[np.float64], v_max: float, a_max: f
     return min_jerk_along(np.vstack([a, b]), dur, n)
 
 
+def _normal_angle(tool: Tool, push: Push, at: int) -> float:
+    """World angle [rad] of the pushing face's outward normal at sample ``at`` of ``push``."""
+    n = rotation(float(push.tool_pose[at, 2])) @ tool.face(push.face).normal
+    return float(np.arctan2(n[1], n[0]))
+
+
 def assemble(
     plan: PushPlan,
-    frames: Mapping[str, FaceFrame],
+    tool: Tool,
     platform: OmniPlatform,
     switch: SwitchPlanner,
+    recontact: SwitchPlanner,
     *,
     v_max: float,
     a_max: float,
@@ -102,13 +113,13 @@ def assemble(
     """Assemble the timed tool motion of a solved push plan (see the module docstring).
 
     Args:
-        plan: a solved push plan; frames: the face frames of its tool on ``platform``.
-        switch: plans each switch's tool path.
+        plan: a solved push plan (its pushes carry their tool poses); tool: its tool.
+        switch: plans each change of face; recontact: each re-contact of the same face.
         v_max, a_max: tool speed [m/s] and acceleration [m/s^2] limits; approach_distance: [m].
         dt: sample spacing [s] of approach, switches and retreat (pushes keep the plan's samples).
     """
     pushes = plan.pushes
-    poses = [frames[p.face].tool_pose(plan.object_xy[p.samples]) for p in pushes]
+    poses = [p.tool_pose for p in pushes]
     c = max(stretch_factor(plan.t[p.samples], pp[:, :2], v_max, a_max) for p, pp in zip(pushes, poses, strict=True))
     t_parts: list[NDArray[np.float64]] = []
     obj_parts: list[NDArray[np.float64]] = []
@@ -131,7 +142,7 @@ def assemble(
         now = float(t_parts[-1][-1]) if len(t_parts[-1]) else now
 
     first, last = pushes[0], pushes[-1]
-    back0 = _reachable_back(platform, poses[0][0, :2], first.direction, approach_distance)
+    back0 = _reachable_back(platform, poses[0][0, :2], _normal_angle(tool, first, 0), approach_distance)
     tt, xy = _line(poses[0][0, :2] + back0, poses[0][0, :2], v_max, a_max, dt)
     add(tt, np.repeat(plan.object_xy[first.samples[:1]], len(tt), axis=0), xy, "approach", None)
     for i, p in enumerate(pushes):
@@ -141,7 +152,8 @@ def assemble(
         if i + 1 < len(pushes):
             nxt = pushes[i + 1]
             obj = plan.object_xy[p.samples[-1]]
-            sw = switch(obj, p.face, poses[i][-1], nxt.face, poses[i + 1][0])
+            planner = recontact if nxt.recontact else switch
+            sw = planner(obj, p.face, poses[i][-1], nxt.face, poses[i + 1][0])
             if sw.status != "solved":
                 raise SwitchFailed(p.face, nxt.face, sw.reason)
             length = float(np.sum(np.linalg.norm(np.diff(sw.xy, axis=0), axis=1)))
@@ -152,7 +164,7 @@ def assemble(
             add(tt, np.repeat(obj[None], n, axis=0), xy, "switch", None)
             switch_spans.append((p.face, nxt.face, start, now, sw))
     end = poses[-1][-1, :2]
-    back1 = _reachable_back(platform, end, last.direction, approach_distance)
+    back1 = _reachable_back(platform, end, _normal_angle(tool, last, -1), approach_distance)
     tt, xy = _line(end, end + back1, v_max, a_max, dt)
     add(tt, np.repeat(plan.object_xy[last.samples[-1:]], len(tt), axis=0), xy, "retreat", None)
     t = np.concatenate(t_parts)

@@ -95,8 +95,10 @@ class _Loop:
         self.platform = task_platform(task, self.tool)
         self.obstacles = task_obstacles(task)
         self.sim = SimPlatform(self.tool, self.platform, self.obstacles)
-        self.frames = {f: FaceFrame.build(self.tool, f, self.platform, radius=task.object.radius)
-                       for f in self.tool.face_names}
+        from planner.solve import effective_margin, task_scene
+
+        self.scene = task_scene(task, self.obstacles, effective_margin(task, self.obstacles))
+        self.frames = {f: FaceFrame.build(self.tool, f, self.platform, self.scene) for f in self.tool.face_names}
         self.bias = dict.fromkeys(self.tool.face_names, 0.0)
         self.parts: list[Execution] = []
         self.log: list[str] = []

@@ -79,7 +79,7 @@ def _condensed(task_path: str | Path) -> tuple:
     from planner.oe.generalize import generalize
     from planner.oe.mapping_variant import MappingOptions, condense_mapping
     from planner.oe.qp_variant import condense_qp
-    from planner.solve import effective_margin, qp_options, task_skills
+    from planner.solve import effective_margin, qp_options, task_scene, task_skills
     from problems.task import load_task, task_obstacles, task_platform, task_tool
 
     task = load_task(task_path)
@@ -87,11 +87,13 @@ def _condensed(task_path: str | Path) -> tuple:
     platform, obstacles = task_platform(task, tool), task_obstacles(task)
     margin = effective_margin(task, obstacles)
     target = np.array(task.target)
-    t, x, _ = generalize(task_skills(task, task_path, need_ss=False).oe.dmp, np.array(task.start), target)
+    skills = task_skills(task, task_path, need_ss=False)
+    scene = task_scene(task, obstacles, margin, skills)
+    t, x, _ = generalize(skills.oe.dmp, np.array(task.start), target)
     plans = {
-        "mapping (paper)": condense_mapping(t, x, tool, platform, target, obstacles,
-                                            MappingOptions(k=task.oe.k, tube=task.oe.tube, margin=margin)),
-        "qp": condense_qp(t, x, tool, platform, target, obstacles, qp_options(task, margin)),
+        "mapping (paper)": condense_mapping(t, x, tool, platform, scene, target,
+                                            MappingOptions(k=task.oe.k, tube=task.oe.tube)),
+        "qp": condense_qp(t, x, tool, platform, scene, target, qp_options(task)),
     }
     return task, tool, obstacles, margin, target, x, plans
 
@@ -101,7 +103,8 @@ def fig10(task_path: str | Path, out: str | Path) -> Path:
     from planner.plots.push_plans import plot_push_plans
 
     task, tool, obstacles, margin, target, _, plans = _condensed(task_path)
-    return plot_push_plans(plans, tool, out, obstacles=obstacles, margin=margin, target=target, title=task.name)
+    return plot_push_plans(plans, tool, out, radius=task.object.radius, obstacles=obstacles, margin=margin,
+                           target=target, title=task.name)
 
 
 def fig11(skills: Skills, out: str | Path) -> Path:
@@ -131,11 +134,11 @@ def fig14(task_path: str | Path, out: str | Path, margins: tuple[float, ...] = (
     from planner.plots.safety_margin import plot_safety_margin
     from tools.objects import Disc
 
-    _, _, obstacles, _, _, x, plans = _condensed(task_path)
+    task, _, obstacles, _, _, x, plans = _condensed(task_path)
     discs = [o for o in obstacles if isinstance(o, Disc)]
     if not discs:
         raise InputError("obstacles", "a task with a disc obstacle for Fig. 14", len(obstacles))
-    return plot_safety_margin(x, discs[0], plans, out, margins=margins)
+    return plot_safety_margin(x, discs[0], plans, out, radius=task.object.radius, margins=margins)
 
 
 def execution_gif(plan: Plan, ex: Execution, out: str | Path) -> Path:

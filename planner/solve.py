@@ -1,11 +1,17 @@
 """The planner end to end: a task in, a plan out (``planner.solve``).
 
 Stages (each timed in the plan's metrics): skills (the universal OE skill learned from the task's
-dataset, cached in memory by the dataset's content hash), OE condensing with the chosen variant,
-a switch between consecutive pushes, approach and retreat, timing under the tool's speed and
-acceleration limits, inverse kinematics of the whole tool path (joint limits checked), and the
-checks: the shared OE metrics on the dense object path, the switches' clearances, the tool body
-against the obstacles at every sample, the joint-limit violation.
+dataset, cached in memory by the dataset's content hash), the scene (object radius, push mechanics,
+obstacles, margin: :mod:`planner.scene`), OE condensing with the chosen variant (pushes realised
+by the inverse push model, :mod:`planner.oe.contacts`), a switch between consecutive pushes of
+different faces and a re-contact between pieces of one face, approach and retreat, timing under the
+tool's speed and acceleration limits, inverse kinematics of the whole tool path (joint limits
+checked), and the checks: the shared OE metrics on the dense object path, the switches' clearances,
+the tool body against the obstacles at every sample, the joint-limit violation, and the plan's
+self-consistency: the forward push model (:mod:`tools.pushing.forward`) replays the whole planned
+tool path from the start and must reproduce the planned object path within
+``oe.self_consistency_tol`` (a switch that knocks the object, a push the mechanics would not
+deliver, fail here with the time and place).
 
 Switch variants (:mod:`planner.switches`): ``arch`` (the geometric reference of :mod:`tools.arch`),
 ``dmp`` (the SS skill recombined, eq. 18; its penetration is reported, not avoided) and ``opt`` (the
@@ -22,17 +28,20 @@ import numpy as np
 
 from dmp.errors import InputError
 from planner.assemble import SwitchFailed, assemble
-from planner.oe.face_frame import FaceFrame
 from planner.oe.generalize import generalize
 from planner.oe.mapping_variant import MappingOptions, condense_mapping
 from planner.oe.qp_variant import QPOptions, condense_qp
 from planner.plan import Plan, Segment
+from planner.recontact import recontact_planner
+from planner.scene import Scene
 from planner.skills import Skills, learn_skills, load_skills_file
 from planner.switches import arch_planner, skill_planner
 from planner.tool_clearance import tool_obstacle_clearance
 from problems.task import Task, resolve, task_obstacles, task_platform, task_tool
 from tools.objects import Disc
 from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
+from tools.pushing.forward import simulate
+from tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
 
 
 def _describe(task: Task, tool: Any, platform: Any, obstacles: list) -> dict[str, Any]:
@@ -87,11 +96,27 @@ def task_skills(task: Task, task_path: str | Path = ".", *, need_ss: bool = True
     return learn_skills(folder, task.oe.k, task.ss.virtual_motion, with_ss=need_ss)
 
 
-def qp_options(task: Task, margin: float) -> QPOptions:
-    """The ``qp`` variant's options from the task's ``oe`` section, with the safety ``margin`` [m]."""
+def qp_options(task: Task) -> QPOptions:
+    """The ``qp`` variant's options from the task's ``oe`` section."""
     o = task.oe
     return QPOptions(n_samples=o.n_samples, n_basis=o.n_basis, segments=o.segments, max_pushes=o.max_pushes,
-                     candidates=o.candidates, switch_price=o.switch_price, margin=margin)
+                     candidates=o.candidates, switch_price=o.switch_price, max_contacts=o.max_contacts)
+
+
+def task_mechanics(task: Task, skills: Skills | None = None) -> PushMechanics:
+    """The push model's parameters: the task's ``object.mechanics`` override, else those identified
+    with the skills, else the platform's nominal values (:data:`PLATFORM_MECHANICS`)."""
+    spec = task.object.mechanics
+    if spec is not None:
+        return PushMechanics(spec.mu, spec.c, "task")
+    identified = getattr(skills, "mechanics", None)
+    return identified if isinstance(identified, PushMechanics) else PLATFORM_MECHANICS
+
+
+def task_scene(task: Task, obstacles: list, margin: float, skills: Skills | None = None) -> Scene:
+    """The :class:`Scene` of ``task``: its object, mechanics, obstacles and the ``margin`` [m] used."""
+    return Scene(task.object.radius, task_mechanics(task, skills), tuple(obstacles), margin,
+                 task.oe.friction_cone_fraction, task.oe.contact_margin)
 
 
 def effective_margin(task: Task, obstacles: list) -> float:
@@ -139,17 +164,17 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
     margin = effective_margin(task, obstacles)
     skills = task_skills(task, task_path, need_ss=task.variants.ss != "arch")
     lap("skills")
+    scene = task_scene(task, obstacles, margin, skills)
     t, x, _ = generalize(skills.oe.dmp, np.array(task.start), np.array(task.target))
     target = np.array(task.target)
     if task.variants.oe == "qp":
-        push_plan = condense_qp(t, x, tool, platform, target, obstacles, qp_options(task, margin))
+        push_plan = condense_qp(t, x, tool, platform, scene, target, qp_options(task))
     else:
-        push_plan = condense_mapping(t, x, tool, platform, target, obstacles,
-                                     MappingOptions(k=task.oe.k, tube=task.oe.tube, margin=margin))
+        push_plan = condense_mapping(t, x, tool, platform, scene, target,
+                                     MappingOptions(k=task.oe.k, tube=task.oe.tube))
     lap("oe")
     if push_plan.status != "solved":
         return Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base)
-    frames = {f: FaceFrame.build(tool, f, platform) for f in tool.face_names}
     radius = task.object.radius
     if task.variants.ss == "arch":
         switch = arch_planner(tool, platform, radius, obstacles, task.ss.clearance)
@@ -158,13 +183,15 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
             raise InputError("skills", "an SS skill for the switch variant " + repr(task.variants.ss), "none")
         switch = skill_planner(task.variants.ss, skills.ss, tool, platform, radius, obstacles, task.ss.clearance,
                                task.ss.n_knots)
+    recontact = recontact_planner(tool, platform, radius, obstacles)
     try:
-        motion = assemble(push_plan, frames, platform, switch, v_max=task.timing.max_tool_speed,
+        motion = assemble(push_plan, tool, platform, switch, recontact, v_max=task.timing.max_tool_speed,
                           a_max=task.timing.max_tool_accel, approach_distance=task.timing.approach_distance)
     except SwitchFailed as exc:
         return Plan(status="infeasible", reason=str(exc), metrics={**push_plan.metrics, **stages}, **base)
     lap("switches_and_timing")
-    metrics = {**push_plan.metrics, **stages, "safety_margin_used": margin}
+    metrics = {**push_plan.metrics, **stages, "safety_margin_used": margin,
+               "mechanics_mu": scene.mechanics.mu, "mechanics_c": scene.mechanics.c}
     sws = [sw for *_, sw in motion.switches]
     metrics["switch_clearance_min"] = min((sw.min_clearance for sw in sws), default=float("inf"))
     metrics["switch_obstacle_clearance_min"] = min(
@@ -184,6 +211,17 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
         why = ("the tool path leaves the Omni's reach" if not np.isfinite(motion.joint_violation[bad])
                else f"the tool path leaves the Omni's joint limits by {motion.joint_violation[bad]:.3g} rad")
         return Plan(status="infeasible", metrics=metrics, **base, reason=f"joint limits: {why} {where}")
+    t_replay = time.perf_counter()
+    replay = simulate(tool, motion.tool_pose, np.array(task.start), radius, scene.mechanics)
+    off = np.linalg.norm(replay.object_xy - motion.object_xy, axis=1)
+    metrics["self_consistency_max"] = float(off.max())
+    metrics["time_replay"] = time.perf_counter() - t_replay
+    if off.max() > task.oe.self_consistency_tol:
+        k = int(np.argmax(off > task.oe.self_consistency_tol))
+        return Plan(status="infeasible", metrics=metrics, **base,
+                    reason=f"self-consistency: replayed through the push model, the planned tool path moves the "
+                           f"object {1e3 * off.max():.2f} mm off the planned path (from t = {motion.t[k]:.2f} s, "
+                           f"{motion.phase[k]}; object planned at {np.round(motion.object_xy[k], 4).tolist()} m)")
     if near.distance <= 0.0:
         k = near.sample
         return Plan(status="infeasible", metrics=metrics, **base,

@@ -31,6 +31,7 @@ from tools.model import Tool
 from tools.objects import Disc, DiscObject
 from tools.omni.ik import joint_path
 from tools.omni.platform import OmniPlatform
+from tools.pose import rotation
 
 Obstacle = Disc | shapely.Polygon
 
@@ -49,6 +50,17 @@ def densify(xy: NDArray[np.float64], step: float) -> NDArray[np.float64]:
     n = max(2, int(np.ceil(s[-1] / step)) + 1)
     u = np.linspace(0.0, s[-1], n)
     return np.column_stack([np.interp(u, s, xy[:, j]) for j in range(2)])
+
+
+def contact_fraction(tool: Tool, face: str, obj: NDArray[np.float64], pose: NDArray[np.float64],
+                     radius: float) -> float:
+    """Fraction along ``face`` (in its contact range) where the tool at ``pose`` (3,) touches the disc
+    of ``radius`` [m] centred at ``obj`` (2,) [m]: the foot of the perpendicular from the centre."""
+    f = tool.face(face)
+    local = rotation(-float(pose[2])) @ (np.asarray(obj, float) - np.asarray(pose[:2], float))
+    d = f.end - f.start
+    s = float((local - radius * f.normal - f.start) @ d / (d @ d))
+    return float(np.clip(s, *f.contact_range))
 
 
 def arch_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: Sequence[Obstacle],
@@ -90,8 +102,9 @@ def skill_planner(variant: str, skill: SwitchSkill, tool: Tool, platform: OmniPl
 
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
              pose_b: NDArray[np.float64]) -> SwitchPath:
-        task = SwitchTask(tool, face_a, face_b, np.asarray(obj, float), obj=DiscObject(radius), obstacles=obs,
-                          platform=platform)
+        s_a, s_b = (contact_fraction(tool, f, obj, p, radius) for f, p in ((face_a, pose_a), (face_b, pose_b)))
+        task = SwitchTask(tool, face_a, face_b, np.asarray(obj, float), s_from=s_a, s_to=s_b,
+                          obj=DiscObject(radius), obstacles=obs, platform=platform)
         if variant == "dmp":
             res = recombine(skill, task)
         else:

@@ -97,12 +97,25 @@ class InlineTool(_Model):
     notes: str = ""
 
 
+class MechanicsSpec(_Model):
+    """The push model's parameters (DESIGN section 10), overriding the ones identified from the
+    demonstrations (or the platform's nominal values when none were identified)."""
+
+    mu: float = Field(gt=0, le=10, allow_inf_nan=False, strict=True,
+                      description="Coulomb friction coefficient between the tool and the object")
+    c: float = Field(gt=0, le=2, allow_inf_nan=False, strict=True,
+                     description="limit-surface ratio m_max / (R f_max) of the object on the table "
+                                 "(2/3 uniform pressure, 1 a rim)")
+
+
 class ObjectSpec(_Model):
     """The pushed object: a disc (the paper's puck)."""
 
     radius: Positive = Field(0.0175, description="[m]")
     mass: Positive = Field(0.02, description="[kg], for the simulated platform")
     friction: Positive = Field(0.3, description="sliding friction coefficient against the table")
+    mechanics: MechanicsSpec | None = Field(
+        None, description="push model override (default: identified with the skills, else mu 0.8, c 0.59)")
 
 
 class LimitsSpec(_Model):
@@ -151,6 +164,15 @@ class OEOptions(_Model):
     switch_price: NonNegative = Field(2e-7, description="cost per face change [m^2]")
     k: float = Field(0.5, gt=0, lt=1, description="adjusting factor of the mappings (6)-(7)")
     tube: Positive = Field(0.01, description="tube radius around the universal path, mapping variant [m]")
+    friction_cone_fraction: float = Field(
+        0.5, gt=0, le=1, allow_inf_nan=False,
+        description="share of the friction cone's half-angle atan(mu) the planned object directions may use")
+    contact_margin: NonNegative = Field(
+        0.0005, description="distance the contact keeps from the ends of a face's usable range [m]")
+    max_contacts: int = Field(3, ge=1, le=10, description="most contacts (re-contacts + 1) one push may use")
+    self_consistency_tol: Positive = Field(
+        1e-4, description="largest distance between the planned object path and the push model's replay "
+                          "of the planned tool path for a solved plan [m]")
 
 
 class SSOptions(_Model):

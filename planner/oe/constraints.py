@@ -7,6 +7,10 @@
   annular sector about the joint-1 axis (:mod:`planner.oe.face_frame`); its two straight sides are
   exact half-planes, its outer arc is replaced by chords inside it and its inner arc by a tangent
   half-plane linearised at the current path (conservative), family ``"reach"``.
+* :class:`ContactOnFace`: the contact stays on the face's usable segment while the object moves
+  (DESIGN section 10): sticking, the contact rolls along the face by ``1/c^2`` times the object's
+  sideways travel in the face frame and by ``R`` per radian the heading turns, a condition on the
+  object's positions over the push, linearised at the current path (family ``"contact"``).
 """
 
 from __future__ import annotations
@@ -18,6 +22,8 @@ from dmp.errors import InputError
 from dmp.qp.constraints import OutsideDisc, PositionPolygon
 from dmp.qp.constraints.base import Coefficients, Constraint
 from planner.oe.face_frame import FaceFrame
+from tools.pushing.inverse import FaceGeometry
+from tools.pushing.mechanics import PushMechanics
 
 
 class HeadingCone(Constraint):
@@ -85,3 +91,86 @@ def reach_constraints(
                               window=window)
     r_in = float(np.hypot(frame.reach[0], frame.offset))
     return [polygon, OutsideDisc(frame.base, r_in, family=family, window=window)]
+
+
+def heading_gradient(frame: FaceFrame, p: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Gradient (K, 2) [rad/m] of the tool heading :meth:`FaceFrame.heading` with the object at
+    ``p`` (K, 2) [m]: ``((-d_y, d_x) + offset d / u) / |d|^2`` with ``d = p - base``."""
+    d = p - frame.base
+    r2 = np.einsum("ij,ij->i", d, d)
+    u = np.sqrt(np.maximum(r2 - frame.offset**2, 1e-18))
+    return (np.stack([-d[:, 1], d[:, 0]], axis=1) + frame.offset * d / u[:, None]) / r2[:, None]
+
+
+class ContactOnFace(Constraint):
+    """The contact stays on the face's usable segment (``[lo, hi]``, arc length [m]) over the window.
+
+    While the contact sticks it rolls along the face at ``ds/dt = a(x) . v`` with
+    ``a(x) = -(1/c^2) e_w(x) - sigma R grad psi(x)`` (:mod:`tools.pushing.inverse`: the object's
+    sideways travel in the face frame and the heading's turn, ``e_w`` the face's world direction at
+    the heading ``psi`` the Omni imposes with the object at ``x``). The push may use ``n`` contacts
+    (re-contacts in between, :mod:`planner.oe.contacts`); the rows bound the rolling *rate* by a share
+    of the forward speed,
+
+        |a(x_k) . v_k| <= beta n(x_k) . v_k,      beta = n (hi - lo) / L,
+
+    with ``n(x)`` the face's world normal and ``L`` the object's travel along it over the window, so
+    the contact's total travel ``int |ds|`` stays within ``n`` usable lengths and ``n`` contacts
+    carry the push (the greedy split of :func:`planner.oe.contacts.realise_span` then needs at most
+    ``n``). ``n`` and ``L`` come from the first linearisation path (the unconstrained fit, close to
+    the universal path): ``n`` is the least number of contacts it would need, at most
+    ``max_contacts``. Velocity rows linearised at the current path like the cone's (``a`` and the
+    normal from it): exact on that path, non-conservative. The contacts are then placed exactly on
+    the fitted path by :func:`planner.oe.contacts.realise_span`.
+    """
+
+    linearised = True
+    conservative = False
+
+    def __init__(self, frame: FaceFrame, face: FaceGeometry, mech: PushMechanics, radius: float,
+                 lo: float, hi: float, *, max_contacts: int = 1, family: str = "contact",
+                 window: tuple[float, float] | None = None) -> None:
+        super().__init__(family, window)
+        if not hi > lo:
+            raise InputError("contact range", f"hi > lo [m] on face {face.name!r}", f"[{lo}, {hi}]")
+        self.frame, self.face, self.mech, self.radius, self.lo, self.hi = frame, face, mech, radius, lo, hi
+        self.max_contacts = max_contacts
+        self.contacts: int | None = None
+        self.beta = 1e3
+
+    def rolling_rate(self, x: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``a(x)`` (K, 2) (contact speed along the face per object velocity) and the world normals
+        (K, 2) with the object at ``x`` (K, 2) [m]."""
+        psi = self.frame.heading(x)
+        e, n = self.face.direction, self.face.normal
+        c, s = np.cos(psi), np.sin(psi)
+        e_w = np.stack([c * e[0] - s * e[1], s * e[0] + c * e[1]], axis=1)
+        n_w = np.stack([c * n[0] - s * n[1], s * n[0] + c * n[1]], axis=1)
+        a = -self.mech.rolling * e_w - self.face.sigma * self.radius * heading_gradient(self.frame, x)
+        return a, n_w
+
+    def travel(self, t: NDArray[np.float64], x: NDArray[np.float64], v: NDArray[np.float64]) -> tuple[float, float]:
+        """The contact's total travel ``int |ds|`` [m] and the object's travel along the normal [m]
+        over samples ``t`` (K,) [s] of the path ``x``, ``v`` (K, 2)."""
+        a, n_w = self.rolling_rate(x)
+        dt = np.diff(t)
+        rate, fwd = np.einsum("ij,ij->i", a, v), np.einsum("ij,ij->i", n_w, v)
+        mid = lambda f: 0.5 * (f[:-1] + f[1:])  # noqa: E731 - trapezoidal rule
+        return float(np.sum(np.abs(mid(rate)) * dt)), float(np.sum(mid(fwd) * dt))
+
+    def _coefficients(self, k: NDArray[np.intp], t: NDArray[np.float64], x_lin: NDArray[np.float64]) -> Coefficients:
+        if x_lin.shape[1] != 2:
+            raise InputError("ContactOnFace", "a planar (2-D) motion", f"{x_lin.shape[1]}-D")
+        if k.size < 3:
+            return Coefficients(k[:0], None, np.zeros((0, 2, 2)), np.zeros((0, 2)))
+        x = x_lin[k]
+        v = np.gradient(x, t[k], axis=0)
+        if self.contacts is None:  # the first linearisation (the unconstrained fit) fixes n and beta
+            need, forward = self.travel(t[k], x, v)
+            width = self.hi - self.lo
+            self.contacts = int(min(self.max_contacts, max(1, np.ceil(need / width - 1e-9))))
+            self.beta = self.contacts * width / forward if forward > 1e-9 else 1e3
+        beta = self.beta
+        a, n_w = self.rolling_rate(x)
+        rows = np.stack([a - beta * n_w, -a - beta * n_w], axis=1)
+        return Coefficients(k, None, rows, np.zeros((k.size, 2)))

@@ -12,6 +12,13 @@ so the object is at
 form the same kind of annular sector as the tool centre point's: reach ``u + c_y`` and offset
 ``d_t - c_x``. Knowing ``p_o`` gives ``a`` in closed form, hence the heading and the face's push
 direction in the world: :class:`FaceFrame`.
+
+The directions a face may push the object in are those of its friction cone about the face's
+outward normal (DESIGN section 10: a round object under a flat face moves inside
+``|phi_c| <= atan(mu)`` about the normal, whatever the tool does), narrowed to the scene's
+``cone_fraction`` of it and intersected with the tool file's ``push_angle +- theta_b`` (the
+operator's preference): :attr:`FaceFrame.push_angle` and :attr:`FaceFrame.theta_b` describe that
+admissible cone (its middle and half-width), so every consumer of the frame plans inside it.
 """
 
 from __future__ import annotations
@@ -23,8 +30,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from dmp.errors import InputError
 from dmp.validation import check_array
+from planner.scene import Scene
 from tools.model import Tool
-from tools.objects import OBJECT_RADIUS
 from tools.omni.dh import D_TOOL
 from tools.omni.platform import OmniPlatform
 from tools.omni.reach import reach_sector
@@ -37,13 +44,15 @@ class FaceFrame:
     Attributes:
         face: face name.
         centre_in_tool: shape (2,), the object's centre in the tool frame while in contact [m].
-        push_angle: the face's push direction in the tool frame [rad].
-        theta_b: the face's cone half-angle [rad].
+        push_angle: middle of the admissible cone of object directions, tool frame [rad].
+        theta_b: half-width of the admissible cone [rad] (see the module docstring).
         base: shape (2,), world position of the joint-1 axis [m].
         base_yaw: [rad].
         waist: ``(a_lo, a_hi)``, range of ``a = base_yaw + q1`` [rad].
         reach: ``(u_in, u_out)``, range of the object's arm-plane coordinate ``u + c_y`` [m].
         offset: the object's offset ``d_t - c_x`` from the arm's plane [m].
+        normal_angle: the face's outward normal in the tool frame [rad].
+        s: arc length [m] of the contact point along the face (from its start).
     """
 
     face: str
@@ -55,34 +64,51 @@ class FaceFrame:
     waist: tuple[float, float]
     reach: tuple[float, float]
     offset: float
+    normal_angle: float = 0.0
+    s: float = 0.0
 
     @classmethod
-    def build(
-        cls, tool: Tool, face: str, platform: OmniPlatform, *, s: float | None = None, radius: float = OBJECT_RADIUS
-    ) -> FaceFrame:
-        """Frame of ``face`` of ``tool`` on ``platform``, contact at fraction ``s`` along the face
-        (default the middle of its contact range), object a disc of ``radius`` [m]."""
+    def build(cls, tool: Tool, face: str, platform: OmniPlatform, scene: Scene, *, s: float | None = None) -> FaceFrame:
+        """Frame of ``face`` of ``tool`` on ``platform`` for the ``scene``'s object (radius, friction
+        cone), contact at fraction ``s`` along the face (default the middle of its contact range).
+
+        Raises:
+            InputError: ``s`` outside the contact range, a face that places the object in front of
+                the arm's axis, or a face whose cone (``push_angle +- theta_b``) and friction cone
+                do not overlap (it cannot push at all).
+        """
         f = tool.face(face)
         s0, s1 = f.contact_range
         s = 0.5 * (s0 + s1) if s is None else float(s)
         if not s0 - 1e-12 <= s <= s1 + 1e-12:
             raise InputError("s", f"a fraction in face {face!r}'s contact range [{s0}, {s1}]", repr(s))
-        c = f.point(s) + radius * f.normal
+        c = f.point(s) + scene.radius * f.normal
         sec = reach_sector(platform)
         u_lo, u_hi = sec.u_range[0] + c[1], sec.u_range[1] + c[1]
         if u_lo <= 0.0:
             raise InputError("tool", f"face {face!r} placing the object in front of the arm's axis", f"u {u_lo}")
+        lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b, scene.cone_half_angle)
+        if hi <= lo:
+            raise InputError(f"tool.faces.{face}", "a push cone (push_angle +- theta_b) that overlaps the friction "
+                             f"cone (+-{np.degrees(scene.cone_half_angle):.1f} deg about the normal)",
+                             f"no overlap (push_angle {f.push_angle:.4g}, normal {f.normal_angle:.4g} rad)")
         return cls(
             face=face,
             centre_in_tool=c,
-            push_angle=f.push_angle,
-            theta_b=f.theta_b,
+            push_angle=0.5 * (lo + hi),
+            theta_b=0.5 * (hi - lo),
             base=sec.centre.copy(),
             base_yaw=sec.base_yaw,
             waist=(sec.base_yaw + sec.q1_range[0], sec.base_yaw + sec.q1_range[1]),
             reach=(u_lo, u_hi),
             offset=D_TOOL - c[0],
+            normal_angle=f.normal_angle,
+            s=s * f.length,
         )
+
+    def normal_direction(self, p: ArrayLike) -> NDArray[np.float64]:
+        """World direction [rad] (K,) of the face's outward normal with the object at ``p`` (K, 2) [m]."""
+        return self.heading(p) + self.normal_angle
 
     def waist_angle(self, p: ArrayLike) -> NDArray[np.float64]:
         """``a = base_yaw + q1`` [rad] (K,) with the object at ``p`` (K, 2) [m] (forward branch).
@@ -111,3 +137,15 @@ class FaceFrame:
         cx, cy = self.centre_in_tool
         xy = pts - np.stack([c * cx - s * cy, s * cx + c * cy], axis=1)
         return np.column_stack([xy, yaw])
+
+
+def admissible_cone(
+    normal_angle: float, push_angle: float, theta_b: float, friction_half: float
+) -> tuple[float, float]:
+    """The tool-frame directions ``[lo, hi]`` [rad] a face may push in: its friction cone
+    ``normal_angle +- friction_half`` intersected with the operator's ``push_angle +- theta_b``
+    (``hi <= lo`` when they do not overlap)."""
+    off = float((push_angle - normal_angle + np.pi) % (2 * np.pi) - np.pi)
+    lo = max(-friction_half, off - theta_b)
+    hi = min(friction_half, off + theta_b)
+    return normal_angle + lo, normal_angle + hi

@@ -14,7 +14,14 @@ Along the generalized universal path:
 3. the motion direction relative to the chosen face is compressed into its cone by (6), the
    compressed steps are integrated and every new point is kept inside a tube of radius ``tube``
    about the universal path by the inner map (7);
-4. the end error is removed by a linear blend over the last push so the object reaches the target.
+4. the end error is removed by a linear blend over the last push so the object reaches the target;
+5. the pushes are realised by the same inverse push model as the ``qp`` variant's
+   (:mod:`planner.oe.contacts`: tool poses, the contact rolling along the face, re-contacts where one
+   contact cannot carry the travel), so the two variants are compared on equal terms.
+
+The faces' cones are the same admissible cones as the ``qp`` variant's (the friction cone about the
+normal, narrowed to the scene's fraction, intersected with the tool file's cone; see
+:mod:`planner.oe.face_frame`): (6) compresses the directions into them.
 
 As in the paper there is no reach constraint; the shared metrics show what that costs (cone
 violations where the tube pulls the path, reach violations where a face cannot be placed).
@@ -32,11 +39,13 @@ from numpy.typing import NDArray
 from dmp.errors import InputError
 from dmp.mappings import angle_map, inner_map_points, outer_map_points, wrap_angle
 from dmp.validation import check_array, check_positive
+from planner.oe.contacts import PushRefused, realise_pushes
 from planner.oe.face_frame import FaceFrame
 from planner.oe.metrics import plan_metrics
-from planner.oe.push_plan import Push, PushPlan
+from planner.oe.push_plan import PushPlan
+from planner.scene import Scene
 from tools.model import Tool
-from tools.objects import OBJECT_RADIUS, Disc, Obstacle
+from tools.objects import Disc, Obstacle
 from tools.omni.platform import OmniPlatform
 
 
@@ -47,14 +56,12 @@ class MappingOptions:
     Attributes:
         k: adjusting factor of (6) and (7), in (0, 1).
         tube: radius of the tube about the universal path [m] (inner (7)).
-        margin: safety margin delta [m] of the outer map (section IV.E).
         min_push: shortest push [samples]; shorter runs of one face join their neighbour.
         n_samples: samples of the condensed path.
     """
 
     k: float = 0.5
     tube: float = 0.01
-    margin: float = 0.005
     min_push: int = 5
     n_samples: int = 400
 
@@ -62,8 +69,6 @@ class MappingOptions:
         if not 0.0 < self.k < 1.0:
             raise InputError("oe.k", "a number in (0, 1)", repr(self.k))
         check_positive(self.tube, "oe.tube")
-        if not np.isfinite(self.margin) or self.margin < 0:
-            raise InputError("oe.margin", "a finite number >= 0 [m]", repr(self.margin))
         for name in ("min_push", "n_samples"):
             v = getattr(self, name)
             if not isinstance(v, int) or v < 1:
@@ -79,14 +84,15 @@ def _as_disc(o: Obstacle) -> Disc:
 
 
 def avoid_obstacles(
-    x: NDArray[np.float64], obstacles: Sequence[Obstacle], k: float, margin: float
+    x: NDArray[np.float64], obstacles: Sequence[Obstacle], k: float, margin: float, radius: float
 ) -> NDArray[np.float64]:
-    """Push the path ``x`` (T, 2) [m] out of every obstacle with the outer map (7) and margin."""
+    """Push the path ``x`` (T, 2) [m] of an object of ``radius`` [m] out of every obstacle with the
+    outer map (7) and ``margin`` [m]."""
     out = x.copy()
     for o in map(_as_disc, obstacles):
         d = np.linalg.norm(out - o.centre, axis=1)
         safe = d > 0  # a point exactly at a centre has no direction to be pushed in: left to the metrics
-        out[safe] = outer_map_points(out[safe], o.centre, o.radius + OBJECT_RADIUS, k, delta=margin)
+        out[safe] = outer_map_points(out[safe], o.centre, o.radius + radius, k, delta=margin)
     return out
 
 
@@ -120,8 +126,8 @@ def condense_mapping(
     universal: NDArray[np.float64],
     tool: Tool,
     platform: OmniPlatform,
+    scene: Scene,
     target: NDArray[np.float64] | None = None,
-    obstacles: Sequence[Obstacle] = (),
     options: MappingOptions | None = None,
 ) -> PushPlan:
     """Condense the generalized universal path for ``tool`` by the paper's mappings.
@@ -135,13 +141,15 @@ def condense_mapping(
     target = universal[-1] if target is None else check_array(target, "target", shape=(2,))
     tt = np.linspace(t[0], t[-1], opts.n_samples)
     gen = np.column_stack([np.interp(tt, t, universal[:, j]) for j in range(2)])
-    ref = avoid_obstacles(gen, obstacles, opts.k, opts.margin)
+    if not isinstance(scene, Scene):
+        raise InputError("scene", "a planner.scene.Scene", type(scene).__name__)
+    ref = avoid_obstacles(gen, scene.obstacles, opts.k, scene.margin, scene.radius)
     # the outer map's tail moves every point a little, the start and target too: take the ends'
     # displacement out linearly in time so the path still runs from the start to the target
     s = ((tt - tt[0]) / (tt[-1] - tt[0]))[:, None]
     ref = ref - (1.0 - s) * (ref[0] - gen[0]) - s * (ref[-1] - gen[-1])
     names = list(tool.face_names)
-    frames = [FaceFrame.build(tool, f, platform) for f in names]
+    frames = [FaceFrame.build(tool, f, platform, scene) for f in names]
     v_ref = np.gradient(ref, tt, axis=0)
     lab = _labels(ref, v_ref, frames, opts.min_push)
     x = np.empty_like(ref)
@@ -161,17 +169,17 @@ def condense_mapping(
     x = x + ramp[:, None] * (target - x[-1])
     v = np.gradient(x, tt, axis=0)
     ends = np.append(starts[1:], tt.size - 1)
-    pushes = []
-    for s, e in zip(starts, ends, strict=True):
-        idx = np.arange(s, e + 1)
-        vv = v[idx].sum(axis=0)
-        fr = frames[lab[s]]
-        pushes.append(Push(names[lab[s]], float(tt[s]), float(tt[e]), float(np.arctan2(vv[1], vv[0])), idx,
-                           fr.tool_pose(x[idx])))
-    plan = PushPlan("mapping", "solved", tt, x, v, gen, pushes=tuple(pushes))
-    metrics = plan_metrics(plan, dict(zip(names, frames, strict=True)), target, obstacles, margin=opts.margin)
+    spans = [(names[lab[s]], np.arange(s, e + 1)) for s, e in zip(starts, ends, strict=True)]
+    try:
+        pushes = realise_pushes(tool, spans, tt, x, scene, platform)
+    except PushRefused as exc:
+        return PushPlan("mapping", "infeasible", np.zeros(0), np.zeros((0, 2)), np.zeros((0, 2)), gen,
+                        reason=f"the mapped path cannot be pushed: {exc}",
+                        metrics={"compute_time": time.perf_counter() - start_time})
+    plan = PushPlan("mapping", "solved", tt, x, v, gen, pushes=pushes)
+    metrics = plan_metrics(plan, dict(zip(names, frames, strict=True)), target, scene)
     metrics["compute_time"] = time.perf_counter() - start_time
-    return PushPlan("mapping", "solved", tt, x, v, gen, pushes=tuple(pushes), metrics=metrics)
+    return PushPlan("mapping", "solved", tt, x, v, gen, pushes=pushes, metrics=metrics)
 
 
 __all__ = ["MappingOptions", "avoid_obstacles", "condense_mapping"]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 
 import numpy as np
 import shapely
@@ -12,7 +12,8 @@ from planner.oe.constraints import HeadingCone
 from planner.oe.face_frame import FaceFrame
 from planner.oe.push_plan import PushPlan
 from planner.oe.sequence_proxy import reach_distance
-from tools.objects import OBJECT_RADIUS, Disc, Obstacle
+from planner.scene import Scene
+from tools.objects import Disc
 
 
 def _deviation(x: NDArray[np.float64], t: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -27,15 +28,17 @@ def plan_metrics(
     plan: PushPlan,
     frames: Mapping[str, FaceFrame],
     target: NDArray[np.float64],
-    obstacles: Sequence[Obstacle] = (),
+    scene: Scene,
     *,
-    margin: float = 0.0,
     speed_tol: float = 1e-6,
 ) -> dict[str, float]:
     """The shared metrics of a solved plan.
 
     Returns a dict with: ``cone_violation_max`` [rad] (largest angle by which the object's motion
-    leaves the active face's cone, over samples moving faster than ``speed_tol`` [m/s]);
+    leaves the active face's admissible cone, over samples moving faster than ``speed_tol`` [m/s]);
+    ``friction_cone_margin_min`` [rad] (least ``atan(mu) - |phi_c|`` over the pushes: negative means
+    a contact that would slide); ``contact_edge_margin_min`` [m] (least distance of the contact from
+    the ends of its face's usable range: negative means it leaves the face); ``n_recontacts``;
     ``obstacle_clearance_min`` [m] (object edge to obstacle edge, inf without obstacles; below
     ``margin`` means the safety margin is not kept); ``reach_violation_max`` [m] (distance outside
     the active face's exact reach region); ``goal_error`` [m]; ``deviation_mean``,
@@ -49,17 +52,20 @@ def plan_metrics(
         cone = max(cone, HeadingCone(fr).angle_violation(x[p.samples], v[p.samples], speed_tol))
         reach = max(reach, float(reach_distance(fr, x[p.samples]).max(initial=0.0)))
     clear = np.inf
-    for o in obstacles:
+    for o in scene.obstacles:
         if isinstance(o, Disc):
             gap = np.linalg.norm(x - o.centre, axis=1) - o.radius
         else:
             gap = shapely.distance(o, shapely.points(x))
-        clear = min(clear, float(gap.min()) - OBJECT_RADIUS)
+        clear = min(clear, float(gap.min()) - scene.radius)
     dev = _deviation(x, t, plan.universal)
     return {
         "cone_violation_max": cone,
+        "friction_cone_margin_min": min((p.cone_margin for p in plan.pushes), default=float("nan")),
+        "contact_edge_margin_min": min((p.edge_margin for p in plan.pushes), default=float("nan")),
+        "n_recontacts": float(sum(p.recontact for p in plan.pushes)),
         "obstacle_clearance_min": clear,
-        "margin": margin,
+        "margin": scene.margin,
         "reach_violation_max": reach,
         "goal_error": float(np.linalg.norm(x[-1] - target)),
         "deviation_mean": float(dev.mean()),

@@ -21,7 +21,12 @@ class Push:
         direction: mean world direction [rad] of the object's motion during the push.
         samples: indices (K,) into the plan's samples covered by the push.
         tool_pose: shape (K, 3), the tool pose realising it: x, y [m] of the tool centre point and
-            yaw [rad], heading as the Omni imposes it.
+            yaw [rad], heading as the Omni imposes it, from the inverse push model.
+        contact_s: shape (K,), arc length [m] of the contact along the face (from its start).
+        recontact: whether the push continues the previous push's face after a re-contact.
+        cone_margin: least ``atan(mu) - |phi_c|`` [rad] over the push (how far inside the friction
+            cone the object's motion stays).
+        edge_margin: least distance [m] of the contact from the ends of the face's usable range.
     """
 
     face: str
@@ -30,6 +35,10 @@ class Push:
     direction: float
     samples: NDArray[np.intp]
     tool_pose: NDArray[np.float64]
+    contact_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    recontact: bool = False
+    cone_margin: float = float("nan")
+    edge_margin: float = float("nan")
 
 
 @dataclass(frozen=True)

@@ -3,9 +3,13 @@
 For a new tool, the generalized universal object path is condensed into pushes the tool can make
 on the Omni. A candidate push sequence (faces in order, switch times) is scored by the constrained
 DMP fit of :mod:`dmp.qp`: track the universal path, with, during each push, the object's velocity in
-the active face's cone (turning with the tool heading, re-linearised until it settles) and the
-object where the Omni can push it from with that face (:func:`planner.oe.constraints.reach_constraints`),
-obstacles kept out with a margin, and the target reached with zero velocity. At a switch instant
+the active face's admissible cone (its friction cone about the normal, narrowed to the scene's
+fraction and intersected with the tool file's cone, turning with the tool heading, re-linearised
+until it settles; :mod:`planner.oe.face_frame`), the contact on the face's usable segment as it
+rolls (:class:`planner.oe.constraints.ContactOnFace`), the object where the Omni can push it from
+with that face wherever the contact is on it (:func:`planner.oe.constraints.reach_constraints` at
+both ends of the segment), obstacles kept out with the scene's margin beyond its radius, and the
+target reached with zero velocity. At a switch instant
 both faces' rows hold, so the object stops there when their cones do not overlap (the tool moves
 round it while it stands still). Cost: the fit's objective (half the mean squared deviation from
 the universal path [m^2]) plus ``switch_price`` per face change.
@@ -20,7 +24,8 @@ Search (:func:`condense_qp`), bounded and pruned, not exhaustive:
 4. the best feasible one has each switch moved by one segment either way, kept when it lowers
    the cost (one pass);
 5. the cheapest screened candidates are solved again on the full grid; the first feasible one
-   is the plan.
+   whose pushes the inverse push model realises (:mod:`planner.oe.contacts`: tool poses, the
+   contact's start, re-contacts where one contact cannot carry the travel) is the plan.
 
 What it guarantees: the returned plan satisfies every constraint family on the dense grid (the
 measured violations are in its metrics), and it is the cheapest of the sequences scored; it does
@@ -31,7 +36,6 @@ pre-checks failed or no scored candidate was feasible; the reason names which an
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -52,13 +56,20 @@ from dmp.qp import (
 )
 from dmp.qp.constraints.base import Constraint
 from dmp.validation import check_array, check_positive
-from planner.oe.constraints import HeadingCone, reach_constraints
+from planner.oe.constraints import ContactOnFace, HeadingCone, reach_constraints
+from planner.oe.contacts import PushRefused, realise_pushes, usable_range
 from planner.oe.face_frame import FaceFrame
 from planner.oe.push_plan import Push, PushPlan
 from planner.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
+from planner.scene import Scene
 from tools.model import Tool
-from tools.objects import OBJECT_RADIUS, Disc, Obstacle
+from tools.objects import Disc
 from tools.omni.platform import OmniPlatform
+from tools.pushing.inverse import FaceGeometry
+
+SCREEN_RTOL = 1e-3
+"""Relative objective change at which a screening fit stops re-linearising (the ranking is not
+changed by the last per-mille; the final fit runs to ``QPOptions.scp_rtol``)."""
 
 
 @dataclass(frozen=True)
@@ -76,7 +87,6 @@ class QPOptions:
         switch_price: cost of one face change [m^2], in the units of the objective (half the mean
             squared deviation): 2e-7 weighs a face change like 0.63 mm of RMS deviation. On the
             transfer case the push count turns on it: 4 pushes up to 2e-7, 3 at 5e-7 (near tie).
-        margin: safety margin delta kept from obstacles [m] (beyond the object's radius).
         ridge: weight of a ridge on the weights [m^2 per weight^2]; 0 by default (tracking on more
             samples than basis functions is already well posed; weights are O(100), so even 1e-10
             outweighs a millimetre of deviation).
@@ -84,6 +94,11 @@ class QPOptions:
         accept: largest true violation [m, m/s] of a candidate still counted feasible (the heading
             cone is exact only where it was linearised, so rounds stop a little short of ``tol``);
         max_scp: sequential-convex rounds per candidate.
+        scp_rtol: the sequential-convex loop stops when the objective changes by less than this
+            (relative) and the path meets every linearised row (screening fits use
+            ``SCREEN_RTOL``: ranking needs no more);
+        max_contacts: most contacts one push may use (re-contacts of the same face in between, when
+            one contact cannot carry the push's sideways travel and heading turn).
     """
 
     n_samples: int = 120
@@ -93,20 +108,22 @@ class QPOptions:
     max_pushes: int = 4
     candidates: int = 3
     switch_price: float = 2e-7
-    margin: float = 0.005
     ridge: float = 0.0
     tol: float = 1e-8
     accept: float = 1e-6
     max_scp: int = 12
+    max_contacts: int = 3
+    scp_rtol: float = 1e-6
 
     def __post_init__(self) -> None:
-        for name in ("n_samples", "screen_samples", "n_basis", "segments", "max_pushes", "candidates", "max_scp"):
+        for name in ("n_samples", "screen_samples", "n_basis", "segments", "max_pushes", "candidates", "max_scp",
+                     "max_contacts"):
             v = getattr(self, name)
             if not isinstance(v, int) or v < 1:
                 raise InputError(f"oe.{name}", "a positive integer", repr(v))
         if self.n_samples < 10:
             raise InputError("oe.n_samples", "at least 10", repr(self.n_samples))
-        for name in ("switch_price", "margin", "ridge"):
+        for name in ("switch_price", "ridge"):
             v = getattr(self, name)
             if not np.isfinite(v) or v < 0:
                 raise InputError(f"oe.{name}", "a finite number >= 0", repr(v))
@@ -133,18 +150,26 @@ class _Scene:
 
     def __init__(
         self, t: NDArray[np.float64], universal: NDArray[np.float64], tool: Tool, platform: OmniPlatform,
-        target: NDArray[np.float64], obstacles: Sequence[Obstacle], opts: QPOptions,
+        target: NDArray[np.float64], scene: Scene, opts: QPOptions,
     ) -> None:
-        self.t, self.universal, self.target, self.opts = t, universal, target, opts
-        self.frames = {f: FaceFrame.build(tool, f, platform) for f in tool.face_names}
+        self.t, self.universal, self.target, self.opts, self.scene = t, universal, target, opts, scene
+        self.tool, self.platform = tool, platform
+        self.frames = {f: FaceFrame.build(tool, f, platform, scene) for f in tool.face_names}
+        self._face_rows: dict[str, tuple[FaceGeometry, tuple[float, float], list[FaceFrame]]] = {}
+        for f in tool.face_names:
+            g = FaceGeometry.of(tool, f)
+            lo, hi = usable_range(tool, f, scene)
+            ends = [FaceFrame.build(tool, f, platform, scene, s=s / g.length) for s in sorted({lo, hi})]
+            self._face_rows[f] = (g, (lo, hi), ends)
         self.dmp = DMP(2, n_basis=opts.n_basis)
         self.fixed: list[Constraint] = [FixedEndPoint(target), ZeroEndVelocity()]
-        for o in obstacles:
+        grow = scene.radius + scene.margin
+        for o in scene.obstacles:
             if isinstance(o, Disc):
-                self.fixed.append(OutsideDisc(o.centre, o.radius + OBJECT_RADIUS + opts.margin, family="obstacle"))
+                self.fixed.append(OutsideDisc(o.centre, o.radius + grow, family="obstacle"))
             else:
                 ring = np.asarray(o.exterior.coords)[:-1]
-                self.fixed.append(OutsidePolygon(ring, OBJECT_RADIUS + opts.margin, family="obstacle"))
+                self.fixed.append(OutsidePolygon(ring, grow, family="obstacle"))
         self._const: float | None = None
 
     def problem(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> FitProblem:
@@ -152,8 +177,13 @@ class _Scene:
         cons = list(self.fixed)
         for face, lo, hi in zip(faces, edges[:-1], edges[1:], strict=True):
             fr = self.frames[face]
+            g, (s_lo, s_hi), ends = self._face_rows[face]
             cons.append(HeadingCone(fr, window=(lo, hi)))
-            cons += reach_constraints(fr, window=(lo, hi))
+            for end in ends:  # the Omni reaches the tool wherever the contact is on the face
+                cons += reach_constraints(end, window=(lo, hi))
+            if s_hi > s_lo:
+                cons.append(ContactOnFace(fr, g, self.scene.mechanics, self.scene.radius, s_lo, s_hi,
+                                          max_contacts=self.opts.max_contacts, window=(lo, hi)))
         return FitProblem(
             self.dmp, self.t, x0=self.universal[0], g=self.target,
             objectives=[TrackPath(self.universal)] + ([Ridge(self.opts.ridge)] if self.opts.ridge > 0 else []),
@@ -161,7 +191,8 @@ class _Scene:
         )
 
     def score(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> _Scored:
-        res = solve_fit(self.problem(faces, switches), tol=self.opts.tol, max_scp=self.opts.max_scp)
+        res = solve_fit(self.problem(faces, switches), tol=self.opts.tol, max_scp=self.opts.max_scp,
+                        scp_rtol=self.opts.scp_rtol)
         return _Scored(faces, switches, res, self.opts.accept)
 
     def cost(self, s: _Scored) -> float:
@@ -189,16 +220,12 @@ def _precheck(scene: _Scene) -> str:
     return ""
 
 
-def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64],
-            v: NDArray[np.float64]) -> tuple[Push, ...]:
+def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64]) -> tuple[Push, ...]:
+    """The pushes of the fitted path, realised by the inverse push model (raises PushRefused)."""
     edges = (t[0], *best.switches, t[-1])
-    out = []
-    for face, lo, hi in zip(best.faces, edges[:-1], edges[1:], strict=True):
-        idx = np.flatnonzero((t >= lo - 1e-12) & (t <= hi + 1e-12))
-        vv = v[idx].sum(axis=0)
-        out.append(Push(face, float(lo), float(hi), float(np.arctan2(vv[1], vv[0])), idx,
-                        scene.frames[face].tool_pose(x[idx])))
-    return tuple(out)
+    spans = [(face, np.flatnonzero((t >= lo - 1e-12) & (t <= hi + 1e-12)))
+             for face, lo, hi in zip(best.faces, edges[:-1], edges[1:], strict=True)]
+    return realise_pushes(scene.tool, spans, t, x, scene.scene, scene.platform)
 
 
 def condense_qp(
@@ -206,8 +233,8 @@ def condense_qp(
     universal: NDArray[np.float64],
     tool: Tool,
     platform: OmniPlatform,
+    scene: Scene,
     target: NDArray[np.float64] | None = None,
-    obstacles: Sequence[Obstacle] = (),
     options: QPOptions | None = None,
 ) -> PushPlan:
     """Condense the generalized universal path for ``tool`` on ``platform`` (the ``qp`` variant).
@@ -216,8 +243,9 @@ def condense_qp(
         t: times (T,) [s] of the generalized universal path, increasing.
         universal: the path (T, 2) [m]; it starts at the object's start.
         tool: the new tool; platform: the Omni carrying it.
+        scene: the object (radius, push mechanics), the obstacles (discs and convex shapely
+            polygons, kept ``scene.margin`` away from beyond the radius) and the friction-cone share.
         target: where the object must end [m] (default the path's end).
-        obstacles: discs and convex polygons (shapely) the object keeps ``options.margin`` away from.
     Returns:
         a :class:`PushPlan` (``status == "infeasible"`` with the reason when no plan is found).
     """
@@ -231,30 +259,33 @@ def condense_qp(
         return g, np.column_stack([np.interp(g, t, universal[:, j]) for j in range(2)])
 
     grid, ref = resample(opts.n_samples)
-    fine = _Scene(grid, ref, tool, platform, target, obstacles, opts)
-    # ranking needs no 1e-8 accuracy: the screening fits stop at 1e-6 (the final one at ``tol``)
-    screen_opts = replace(opts, tol=max(opts.tol, 1e-6), accept=max(opts.accept, 1e-5))
-    scene = _Scene(*resample(min(opts.screen_samples, opts.n_samples)), tool, platform, target, obstacles,
-                   screen_opts)
+    if not isinstance(scene, Scene):
+        raise InputError("scene", "a planner.scene.Scene", type(scene).__name__)
+    fine = _Scene(grid, ref, tool, platform, target, scene, opts)
+    # ranking needs no 1e-8 accuracy: the screening fits stop at 1e-5 (the final one at ``tol``)
+    screen_opts = replace(opts, tol=max(opts.tol, 1e-5), accept=max(opts.accept, 1e-5),
+                          scp_rtol=max(opts.scp_rtol, SCREEN_RTOL))
+    screen = _Scene(*resample(min(opts.screen_samples, opts.n_samples)), tool, platform, target, scene,
+                    screen_opts)
 
     def infeasible(reason: str, n_qp: int = 0, cands: tuple = ()) -> PushPlan:
         empty = np.zeros((0, 2))
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=reason, n_qp=n_qp,
                         candidates=cands, metrics={"compute_time": time.perf_counter() - start_time})
 
-    why = _precheck(scene)
+    why = _precheck(screen)
     if why:
         return infeasible(why)
-    v_ref = np.gradient(scene.universal, scene.t, axis=0)
-    names = list(scene.frames)
-    frames = [scene.frames[n] for n in names]
-    costs = segment_costs(scene.t, scene.universal, v_ref, frames, opts.segments)
+    v_ref = np.gradient(screen.universal, screen.t, axis=0)
+    names = list(screen.frames)
+    frames = [screen.frames[n] for n in names]
+    costs = segment_costs(screen.t, screen.universal, v_ref, frames, opts.segments)
     bounds = np.linspace(grid[0], grid[-1], opts.segments + 1)
     ranked = ranked_sequences(costs, names, opts.max_pushes, opts.switch_price)[: opts.candidates]
-    scored = [scene.score(faces, tuple(float(bounds[c]) for c in cuts)) for faces, cuts, _ in ranked]
+    scored = [screen.score(faces, tuple(float(bounds[c]) for c in cuts)) for faces, cuts, _ in ranked]
     feasible = [s for s in scored if s.feasible]
     if feasible:
-        best = min(feasible, key=scene.cost)
+        best = min(feasible, key=screen.cost)
         cuts = [int(np.argmin(np.abs(bounds - s))) for s in best.switches]
         for i in range(len(cuts)):
             for step in (-1, 1):
@@ -264,14 +295,14 @@ def condense_qp(
                 hi = trial[i + 1] if i + 1 < len(trial) else opts.segments
                 if not lo < trial[i] < hi:
                     continue
-                s = scene.score(best.faces, tuple(float(bounds[c]) for c in trial))
+                s = screen.score(best.faces, tuple(float(bounds[c]) for c in trial))
                 scored.append(s)
-                if scene.cost(s) < scene.cost(best):
+                if screen.cost(s) < screen.cost(best):
                     best, cuts = s, trial
     # the screening grid ranked the candidates: the best ones are solved again on the full grid
     final = None
     if feasible:
-        order = sorted({(s.faces, s.switches): s for s in scored if s.feasible}.values(), key=scene.cost)
+        order = sorted({(s.faces, s.switches): s for s in scored if s.feasible}.values(), key=screen.cost)
         for s in order[:3]:
             final = fine.score(s.faces, s.switches)
             scored.append(final)
@@ -279,7 +310,7 @@ def condense_qp(
                 break
         feasible = [final] if final is not None and final.feasible else []
     n_qp = sum(s.result.scp_iterations for s in scored)
-    cands = tuple((s.faces, s.switches, None if not s.feasible else scene.cost(s)) for s in scored)
+    cands = tuple((s.faces, s.switches, None if not s.feasible else screen.cost(s)) for s in scored)
     if not feasible:
         fams = sorted({f for s in scored for f in (s.result.families or tuple(
             k for k, val in s.result.violations.items() if val > opts.tol))})
@@ -291,11 +322,14 @@ def condense_qp(
     roll = best.result.rollout
     assert roll is not None  # a feasible fit always has its rollout
     dense_t, x, v = roll.t + grid[0], roll.x, roll.v
-    pushes = _pushes(scene, best, dense_t, x, v)
+    try:
+        pushes = _pushes(fine, best, dense_t, x)
+    except PushRefused as exc:
+        return infeasible(f"the push sequence {' -> '.join(best.faces)} cannot be realised: {exc}", n_qp, cands)
     plan = PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, n_qp=n_qp, candidates=cands)
     from planner.oe.metrics import plan_metrics  # local: metrics import the plan types
 
-    metrics = plan_metrics(plan, scene.frames, target, obstacles, margin=opts.margin)
+    metrics = plan_metrics(plan, fine.frames, target, scene)
     metrics["compute_time"] = time.perf_counter() - start_time
     metrics.update({f"violation_{k}": v for k, v in best.result.violations.items()})
     per_qp = [sc.result.solve_time / max(sc.result.scp_iterations, 1) for sc in scored]

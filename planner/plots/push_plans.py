@@ -12,7 +12,7 @@ import numpy as np
 from planner.oe.push_plan import PushPlan
 from planner.plots.save import save_figure
 from tools.model import Tool
-from tools.objects import OBJECT_RADIUS, Disc, Obstacle
+from tools.objects import Disc, Obstacle
 from tools.pose import rotation
 
 
@@ -21,12 +21,13 @@ def plot_push_plans(
     tool: Tool,
     out: str | Path,
     *,
+    radius: float,
     obstacles: Sequence[Obstacle] = (),
     margin: float = 0.0,
     target: np.ndarray | None = None,
     title: str = "",
 ) -> Path:
-    """Write one panel per plan to ``out`` (PNG or PDF); returns the path."""
+    """Write one panel per plan to ``out`` (PNG or PDF); returns the path. ``radius`` [m]: the object's."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -46,13 +47,13 @@ def plot_push_plans(
             ring = outline @ rotation(yaw).T + [x, y]
             ax.fill(*ring.T, color=colours[p.face], alpha=0.35, lw=0.6)
             c = seg[0]
-            ax.add_patch(plt.Circle(tuple(c), OBJECT_RADIUS, fill=False, color=colours[p.face], lw=0.7))
+            ax.add_patch(plt.Circle(tuple(c), radius, fill=False, color=colours[p.face], lw=0.7))
             ax.plot(*seg[0], "k.", ms=5)
         for o in obstacles:
             shape = o.polygon() if isinstance(o, Disc) else o
             ax.fill(*np.asarray(shape.exterior.coords).T, color="tab:red", alpha=0.4)
             if margin > 0:
-                ax.plot(*np.asarray(shape.buffer(OBJECT_RADIUS + margin).exterior.coords).T, ":", color="tab:red",
+                ax.plot(*np.asarray(shape.buffer(radius + margin).exterior.coords).T, ":", color="tab:red",
                         lw=0.8)
         if target is not None:
             ax.plot(*target, "k*", ms=10, label="target")

@@ -16,7 +16,7 @@ import numpy as np
 from planner.oe.mapping_variant import avoid_obstacles
 from planner.oe.push_plan import PushPlan
 from planner.plots.save import save_figure
-from tools.objects import OBJECT_RADIUS, Disc
+from tools.objects import Disc
 
 
 def plot_safety_margin(
@@ -25,10 +25,12 @@ def plot_safety_margin(
     plans: Mapping[str, PushPlan],
     out: str | Path,
     *,
+    radius: float,
     margins: Sequence[float] = (0.0, 0.005, 0.01),
     k: float = 0.5,
 ) -> Path:
-    """Write the figure to ``out``; ``universal`` (T, 2) [m] is the generalized universal path."""
+    """Write the figure to ``out``; ``universal`` (T, 2) [m] is the generalized universal path of an
+    object of ``radius`` [m]."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -42,12 +44,12 @@ def plot_safety_margin(
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
     for delta in margins:
-        mapped = avoid_obstacles(universal, [obstacle], k, delta)
+        mapped = avoid_obstacles(universal, [obstacle], k, delta, radius)
         line = ax0.plot(*mapped.T, lw=1.4, label=f"outer (7), delta = {1e3 * delta:.0f} mm")[0]
-        ax0.add_patch(plt.Circle(tuple(obstacle.centre), obstacle.radius + OBJECT_RADIUS + delta, fill=False,
+        ax0.add_patch(plt.Circle(tuple(obstacle.centre), obstacle.radius + radius + delta, fill=False,
                                  ls=":", color=line.get_color(), lw=0.8))
-    shift = np.linalg.norm(avoid_obstacles(universal, [obstacle], k, margins[-1]) - universal, axis=1)
-    far = np.linalg.norm(universal - obstacle.centre, axis=1) > 3 * (obstacle.radius + OBJECT_RADIUS)
+    shift = np.linalg.norm(avoid_obstacles(universal, [obstacle], k, margins[-1], radius) - universal, axis=1)
+    far = np.linalg.norm(universal - obstacle.centre, axis=1) > 3 * (obstacle.radius + radius)
     ax0.set_title(f"tail effect: points beyond 3 r_b still move up to {1e3 * shift[far].max(initial=0):.1f} mm",
                   fontsize=9)
     ax0.legend(fontsize=7)

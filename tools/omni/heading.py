@@ -52,13 +52,14 @@ def point_path(platform: OmniPlatform, xy: ArrayLike, p: ArrayLike) -> NDArray[n
 
 
 def centre_path(
-    platform: OmniPlatform, x: ArrayLike, p: ArrayLike, iters: int = 30, tol: float = 1e-13
+    platform: OmniPlatform, x: ArrayLike, p: ArrayLike, iters: int = 30, tol: float = 1e-13,
+    guess: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """Inverse of :func:`point_path`: tool centre points (K, 2) [m] whose tool-frame point ``p`` (2,)
     (or one point per sample, (K, 2)) is at ``x`` (K, 2): Newton's method on
     ``c + R(heading(c)) p - x = 0`` per point (the 2 x 2 Jacobian ``I + R'(h) p grad(h)^T`` in closed
     form), from ``c = x - p``; 3-4 steps where the fixed-point iteration on the heading took 15-20 (it
-    contracts by about ``|p| / |x - b|``)."""
+    contracts by about ``|p| / |x - b|``), or from ``guess`` (K, 2) when given."""
     x = np.atleast_2d(np.asarray(x, dtype=np.float64))
     pa = np.asarray(p, dtype=np.float64)
     if pa.ndim == 1:
@@ -66,7 +67,7 @@ def centre_path(
     else:
         px, py = pa[:, 0], pa[:, 1]
     bx, by = (float(v) for v in np.asarray(platform.base_xy, dtype=np.float64))
-    c = x - pa
+    c = x - pa if guess is None else np.array(guess, dtype=np.float64)
     for _ in range(iters):
         dx, dy = c[:, 0] - bx, c[:, 1] - by
         r2 = dx * dx + dy * dy

@@ -35,6 +35,10 @@ from tools.omni.heading import centre_path, heading
 from tools.omni.platform import OmniPlatform
 from tools.pushing.mechanics import PushMechanics, cone_margin, perp
 
+#: Steps of the object shorter than this [m] are not judged against the friction cone (a path
+#: standing still at a switch has steps of nanometres in arbitrary directions).
+STILL = 1e-7
+
 
 @dataclass(frozen=True)
 class FaceGeometry:
@@ -101,10 +105,11 @@ class FacePush:
 
 
 def _poses(face: FaceGeometry, c: NDArray[np.float64], s: NDArray[np.float64], radius: float,
-           platform: OmniPlatform | None, yaw: NDArray[np.float64] | None) -> NDArray[np.float64]:
+           platform: OmniPlatform | None, yaw: NDArray[np.float64] | None,
+           guess: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
     ct = face.centre_in_tool(s, radius)
     if platform is not None:
-        xy = centre_path(platform, c, ct)
+        xy = centre_path(platform, c, ct, guess=guess)
         psi = heading(platform, xy)
     else:
         assert yaw is not None
@@ -134,24 +139,25 @@ def push_tool_path(
     yaw_a = None if yaw is None else check_array(yaw, "yaw", shape=(c.shape[0],))
     dc = np.diff(c, axis=0)
     s = np.full(c.shape[0], float(s0))
+    pose = None
     for _ in range(iters):
-        pose = _poses(g, c, s, r, platform, yaw_a)
+        pose = _poses(g, c, s, r, platform, yaw_a, None if pose is None else pose[:, :2])
         psi = pose[:, 2]
         mid = 0.5 * (psi[:-1] + psi[1:])
         e_w = np.column_stack([np.cos(mid) * g.direction[0] - np.sin(mid) * g.direction[1],
                                np.sin(mid) * g.direction[0] + np.cos(mid) * g.direction[1]])
         step = -mech.rolling * np.einsum("ij,ij->i", dc, e_w) - g.sigma * r * np.diff(psi)
         new = float(s0) + np.concatenate([[0.0], np.cumsum(step)])
-        done = float(np.max(np.abs(new - s))) < 1e-13
+        done = float(np.max(np.abs(new - s))) < 1e-11
         s = new
         if done:
             break
-    pose = _poses(g, c, s, r, platform, yaw_a)
+    pose = _poses(g, c, s, r, platform, yaw_a, None if pose is None else pose[:, :2])
     psi = pose[:, 2]
     n_w = np.column_stack([np.cos(psi) * g.normal[0] - np.sin(psi) * g.normal[1],
                            np.sin(psi) * g.normal[0] + np.cos(psi) * g.normal[1]])
     n_mid = 0.5 * (n_w[:-1] + n_w[1:])
     n_mid /= np.linalg.norm(n_mid, axis=1)[:, None]
     margin = cone_margin(dc, n_mid, mech)
-    still = np.hypot(dc[:, 0], dc[:, 1]) < 1e-12
+    still = np.hypot(dc[:, 0], dc[:, 1]) < STILL
     return FacePush(g, pose, s, n_w, np.where(still, mech.friction_angle, margin))

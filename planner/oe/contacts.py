@@ -1,0 +1,110 @@
+"""From a condensed object path and its face spans to pushes the mechanics deliver (both OE variants).
+
+Each span (a face and the samples it pushes) gets its tool path from the inverse push model
+(:func:`tools.pushing.inverse.push_tool_path`): the contact sticks, rolls along the face as the
+object moves sideways and the heading turns, and the tool poses follow. Where the contact starts
+is a rule: its excursion over the push is centred in the face's usable range (the range shrunk by
+the scene's ``contact_margin``), which is the start that leaves the most room at both ends. When
+one contact cannot carry the span's sideways travel, the span is split into several contacts of the
+same face: the longest stretch whose excursion fits, then a *re-contact* (the tool backs off,
+shifts along the object and approaches again while the object rests, planned like a switch by
+:mod:`planner.recontact`), and so on. A stretch shorter than ``MIN_PIECE`` of object travel means
+the face cannot carry that motion at all: the pushes are refused with the reason.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from planner.oe.push_plan import Push
+from planner.scene import Scene
+from tools.model import Tool
+from tools.omni.platform import OmniPlatform
+from tools.pushing.inverse import FaceGeometry, FacePush, push_tool_path
+
+#: Shortest object travel [m] one contact must carry before a re-contact.
+MIN_PIECE = 0.001
+
+
+class PushRefused(Exception):
+    """A span cannot be pushed by its face under the mechanics (the reason says where and why)."""
+
+
+def usable_range(tool: Tool, face: str, scene: Scene) -> tuple[float, float]:
+    """Arc lengths ``[lo, hi]`` [m] along ``face`` the contact may use (contact range less the margin)."""
+    g = FaceGeometry.of(tool, face)
+    lo, hi = g.lo + scene.contact_margin, g.hi - scene.contact_margin
+    if hi <= lo:  # a face shorter than twice the margin: its middle only
+        mid = 0.5 * (g.lo + g.hi)
+        return mid, mid
+    return lo, hi
+
+
+def _inverse(tool: Tool, face: str, x: NDArray[np.float64], scene: Scene, platform: OmniPlatform,
+             s0: float) -> FacePush:
+    return push_tool_path(tool, face, x, scene.radius, scene.mechanics, s0, platform=platform)
+
+
+def _longest_fit(travel: NDArray[np.float64], width: float) -> int:
+    """Largest ``j`` such that ``travel[:j + 1]`` spans at most ``width``."""
+    lo_run = np.minimum.accumulate(travel)
+    hi_run = np.maximum.accumulate(travel)
+    fits = np.flatnonzero(hi_run - lo_run <= width + 1e-12)
+    return int(fits[-1])
+
+
+def realise_span(tool: Tool, face: str, t: NDArray[np.float64], x: NDArray[np.float64],
+                 idx: NDArray[np.intp], scene: Scene, platform: OmniPlatform) -> list[Push]:
+    """Pushes (one, or several with re-contacts) realising samples ``idx`` of the object path ``x``
+    (T, 2) [m] at times ``t`` (T,) [s] with ``face``.
+
+    Raises:
+        PushRefused: a contact would have to change within less than :data:`MIN_PIECE` of travel.
+    """
+    lo, hi = usable_range(tool, face, scene)
+    width, mid = hi - lo, 0.5 * (lo + hi)
+    out: list[Push] = []
+    a = 0
+    while True:
+        piece = idx[a:]
+        s0, part = mid, piece
+        for _ in range(4):  # where the contact starts moves the tool, hence the heading: a fixed point
+            travel = _inverse(tool, face, x[piece], scene, platform, s0).s - s0
+            j = _longest_fit(travel, width)
+            part = piece[: j + 1]
+            new = mid - 0.5 * (travel[: j + 1].max() + travel[: j + 1].min())
+            if abs(new - s0) < 1e-7:
+                break
+            s0 = new
+        fp = _inverse(tool, face, x[part], scene, platform, s0)
+        off = np.flatnonzero((fp.s < lo - 1e-6) | (fp.s > hi + 1e-6))
+        if off.size and off[0] >= 2:  # the fixed point left a sliver outside: end the contact before it
+            part = part[: off[0]]
+            fp = _inverse(tool, face, x[part], scene, platform, s0)
+        last = part[-1] == idx[-1]
+        length = float(np.sum(np.linalg.norm(np.diff(x[part], axis=0), axis=1)))
+        if not last and length < MIN_PIECE:
+            raise PushRefused(
+                f"face {face!r} cannot carry the object's motion from t = {t[part[0]]:.2f} s (object at "
+                f"{np.round(x[part[0]], 4).tolist()} m): its contact would leave the face within "
+                f"{1e3 * length:.2f} mm of travel (sideways motion or heading turn too fast for the "
+                f"{1e3 * width:.1f} mm of usable face)")
+        v = np.diff(x[part], axis=0).sum(axis=0)
+        out.append(Push(face, float(t[part[0]]), float(t[part[-1]]), float(np.arctan2(v[1], v[0])), part,
+                        fp.tool_pose, contact_s=fp.s, recontact=bool(out),
+                        cone_margin=float(fp.cone_margin.min(initial=np.pi)), edge_margin=fp.edge_margin))
+        if last:
+            return out
+        a += part.size - 1
+
+
+def realise_pushes(tool: Tool, spans: Sequence[tuple[str, NDArray[np.intp]]], t: NDArray[np.float64],
+                   x: NDArray[np.float64], scene: Scene, platform: OmniPlatform) -> tuple[Push, ...]:
+    """Every span's pushes, in order (see :func:`realise_span`); raises :class:`PushRefused`."""
+    pushes: list[Push] = []
+    for face, idx in spans:
+        pushes += realise_span(tool, face, t, x, idx, scene, platform)
+    return tuple(pushes)
