@@ -73,16 +73,19 @@ class Motion:
 
 def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: float,
                     distance: float) -> NDArray[np.float64]:
-    """Offset (2,) backing off from ``at`` against ``direction`` by ``distance`` [m], halved until
-    the whole straight move stays within the Omni's reach (at least 2 mm)."""
-    u = -np.array([np.cos(direction), np.sin(direction)])
-    d = distance
-    while d > 0.002:
-        line = at + np.linspace(0.0, d, 20)[:, None] * u
-        if np.all(joint_path(platform, line).violation == 0.0):
-            return d * u
-        d /= 2
-    return d * u
+    """Offset (2,) backing off from ``at`` against ``direction`` [rad] by ``distance`` [m], halved
+    until the whole straight move stays within the Omni's reach (at least 2 mm); when no length
+    along ``direction`` stays within it, directions 20 and 40 degrees to either side are tried (the
+    tool still meets the object where the push starts, a little obliquely)."""
+    for turn in np.radians([0.0, 20.0, -20.0, 40.0, -40.0]):
+        u = -np.array([np.cos(direction + turn), np.sin(direction + turn)])
+        d = distance
+        while d >= 0.002:
+            line = at + np.linspace(0.0, d, 20)[:, None] * u
+            if np.all(joint_path(platform, line).violation == 0.0):
+                return d * u
+            d /= 2
+    return -0.002 * np.array([np.cos(direction), np.sin(direction)])
 
 
 def _line(a: NDArray[np.float64], b: NDArray[np.float64], v_max: float, a_max: float,

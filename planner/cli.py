@@ -106,9 +106,18 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 def _cmd_demos(args: argparse.Namespace) -> int:
     import time
 
+    t0 = time.perf_counter()
+    if args.calibration:
+        from problems.dataset import load_meta
+        from tools.operator.calibration import generate_calibration
+
+        out = generate_calibration(args.out, seed=args.seed, tool=args.tool)
+        n = len(load_meta(out).demonstrations)
+        print(f"wrote a calibration recording ({n} trials of straight pushes) to {out} in "
+              f"{time.perf_counter() - t0:.1f} s")
+        return EXIT_OK
     from tools.operator.generate import generate_demonstrations
 
-    t0 = time.perf_counter()
     out = generate_demonstrations(args.out, n=args.n, seed=args.seed, tool=args.tool)
     print(f"wrote {args.n} demonstrations to {out} in {time.perf_counter() - t0:.1f} s")
     return EXIT_OK
@@ -120,13 +129,20 @@ def _cmd_learn(args: argparse.Namespace) -> int:
     from planner.skills import learn_skills
 
     t0 = time.perf_counter()
-    skills = learn_skills(args.dataset, k=args.k, virtual=args.virtual)
+    skills = learn_skills(args.dataset, k=args.k, virtual=args.virtual, calibration=args.calibration)
     path = skills.save(args.out)
     ss = skills.ss
     assert ss is not None  # learn_skills(with_ss=True)
     print(f"learned from {args.dataset} in {time.perf_counter() - t0:.1f} s: OE skill (k = {skills.oe.k}, "
           f"{len(skills.oe.recovered)} recovered demonstrations), SS skill ({ss.faces[0]} -> {ss.faces[1]}, "
           f"{ss.n_demos} switches, virtual motion {ss.virtual!r}); wrote {path}")
+    m, info = skills.mechanics, skills.identification
+    if m is not None and info is not None:
+        print(f"push mechanics from {info['n_pushes']} pushes of {info['dataset']} ({info['kind']}): "
+              f"mu = {m.mu:.3f} +- {m.mu_std:.3f}, c = {m.c:.3f} +- {m.c_std:.3f}; predicted end positions "
+              f"within {1e3 * info['end_error_median']:.2f} mm (median), {1e3 * info['end_error_p90']:.2f} mm (p90)")
+        if info["message"]:
+            print(f"note: {info['message']}")
     return EXIT_OK
 
 
@@ -277,18 +293,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("task", type=Path, help="task file (YAML)")
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     p.add_argument("--json", action="store_true", help="print every plan's status and metrics as JSON")
-    p = _add(sub, "demos", "generate demonstrations with the scripted operator on the simulated Omni",
-             "tooltransfer demos --tool finger --n 8 --seed 0 --out problems/data/finger_demos", _cmd_demos)
+    p = _add(sub, "demos", "generate demonstrations (or a calibration recording) with the scripted operator on the "
+             "simulated Omni", "tooltransfer demos --tool finger --n 8 --seed 0 --out problems/data/finger_demos\n"
+             "  tooltransfer demos --calibration --out out/calibration", _cmd_demos)
     p.add_argument("--tool", default="finger", help="demonstration tool (tool 1)")
-    p.add_argument("--n", type=int, default=8, help="number of demonstrations")
+    p.add_argument("--n", type=int, default=8, help="number of demonstrations (not used with --calibration)")
+    p.add_argument("--calibration", action="store_true",
+                   help="record a calibration instead: straight pushes at 0, +-15, +-30, +-45 deg off each face's "
+                   "normal and +-80 deg on the longest face, for identifying the push mechanics (README)")
     p.add_argument("--seed", type=int, default=0, help="seed (generation is deterministic for it)")
     p.add_argument("--out", type=Path, required=True, help="dataset folder to write")
     p = _add(sub, "learn", "learn the OE and SS skills from a demonstration dataset into one skills file",
-             "tooltransfer learn problems/data/finger_demos -o out/skills.json", _cmd_learn)
+             "tooltransfer learn problems/data/finger_demos -o out/skills.json\n"
+             "  tooltransfer learn problems/data/finger_demos --calibration out/calibration -o out/skills.json",
+             _cmd_learn)
     p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs)")
     p.add_argument("-o", "--out", type=Path, required=True, help="skills file to write (JSON)")
     p.add_argument("--k", type=float, default=0.5, help="adjusting factor of the mappings (6)-(7), in (0, 1)")
     p.add_argument("--virtual", choices=("arch", "line"), default="arch", help="virtual object motion of the SS skill")
+    p.add_argument("--calibration", type=Path, default=None,
+                   help="identify the push mechanics from this calibration recording (tooltransfer demos "
+                   "--calibration) instead of the dataset's pushes")
     p = _add(sub, "segment", "segment a dataset into pushes and switches (and draw it)",
              "tooltransfer segment problems/data/finger_demos --figure out/demos.png", _cmd_segment)
     p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs, see the README)")

@@ -20,6 +20,8 @@ from tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
 CONE_FRACTION = 0.5
 #: Default distance [m] the contact keeps from the ends of a face's usable range (``oe.contact_margin``).
 CONTACT_MARGIN = 0.0005
+#: Default longest stretch [m] of a face the contact may use, about its middle (``oe.contact_span``).
+CONTACT_SPAN = 0.012
 
 
 @dataclass(frozen=True)
@@ -36,6 +38,8 @@ class Scene:
             object directions may use about a face's normal, so that the plan survives an error in
             ``mu`` (a fraction 0.5 still sticks with a true ``mu`` of ``tan(atan(mu) / 2)``).
         contact_margin: distance [m] the contact keeps from the ends of a face's usable range.
+        contact_span: longest stretch [m] of a face the contact may use, about its middle: the
+            Omni's reach is planned for the tool poses of contacts at both ends of that stretch.
     """
 
     radius: float
@@ -44,9 +48,10 @@ class Scene:
     margin: float = 0.005
     cone_fraction: float = CONE_FRACTION
     contact_margin: float = CONTACT_MARGIN
+    contact_span: float = CONTACT_SPAN
 
     def __post_init__(self) -> None:
-        for name in ("radius", "margin", "contact_margin"):
+        for name in ("radius", "margin", "contact_margin", "contact_span"):
             v = getattr(self, name)
             if not isinstance(v, int | float | np.floating) or not np.isfinite(v) or v < 0 or \
                     (name == "radius" and v <= 0):
@@ -67,4 +72,4 @@ class Scene:
     def with_obstacles(self, obstacles: Sequence[Obstacle]) -> Scene:
         """The same scene with other obstacles."""
         return Scene(self.radius, self.mechanics, tuple(obstacles), self.margin, self.cone_fraction,
-                     self.contact_margin)
+                     self.contact_margin, self.contact_span)

@@ -1,4 +1,5 @@
-"""The learned skills a plan needs: the universal OE skill and the SS (switch) skill.
+"""The learned skills a plan needs: the universal OE skill, the SS (switch) skill, and the push
+mechanics identified from the recordings.
 
 They come from a demonstration dataset (learned once, then cached by the dataset's content hash in
 memory and as skill files in :func:`cache_dir`) or from a saved skills file written by
@@ -6,7 +7,13 @@ memory and as skill files in :func:`cache_dir`) or from a saved skills file writ
 
     {"format": "tooltransfer.skills/1",
      "dataset": "<folder it was learned from>", "dataset_sha256": "<content hash>",
-     "oe": <a tooltransfer.oe/1 skill>, "ss": <a tooltransfer.ss/1 skill>}
+     "oe": <a tooltransfer.oe/1 skill>, "ss": <a tooltransfer.ss/1 skill>,
+     "mechanics": {"mu", "c", "source", "mu_std", "c_std"},      (optional)
+     "identification": {<what the mechanics were identified from and how well they fit>}}  (optional)
+
+The mechanics (``mu``, ``c`` of DESIGN section 10) are identified by :mod:`planner.identify` from
+the dataset's pushes, or from a calibration recording (``tooltransfer demos --calibration``) when
+one is given; a file without them (written before they existed) loads with ``mechanics`` None.
 """
 
 from __future__ import annotations
@@ -17,14 +24,20 @@ import os
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from dmp.errors import InputError, SkillFileError
 from dmp.skill_file import read_json
 from planner.oe.learn import OESkill
 from planner.ss.learn import SwitchSkill
+from tools.pushing.mechanics import PushMechanics
+
+if TYPE_CHECKING:
+    from tools.pushing.identify import Identification
 
 SKILLS_FORMAT = "tooltransfer.skills/1"
+MECHANICS_FORMAT = "tooltransfer.mechanics/1"
+"""Format of the cached identification of a dataset (in :func:`cache_dir`)."""
 SS_DEFAULT_CLEARANCE = 0.01
 """Offset [m] of the arch-shaped virtual object motion from the object's outline when learning."""
 
@@ -40,12 +53,19 @@ class Skills:
         ss: the switch skill (the virtual object motion it was learned with: ``ss.virtual``); None
             when not asked for (the ``arch`` switches need none).
         dataset: the dataset folder they were learned from; dataset_sha256: its content hash.
+        mechanics: the push mechanics identified from the recordings (``source="identified"``), or
+            None (not identified, or an older skills file). A planner takes the task's override if
+            given, else these, else :data:`tools.pushing.mechanics.PLATFORM_MECHANICS`.
+        identification: what the mechanics were identified from and how well they fit (the
+            :meth:`tools.pushing.identify.Identification.summary` and the recording's hash), or None.
     """
 
     oe: OESkill
     ss: SwitchSkill | None
     dataset: str
     dataset_sha256: str
+    mechanics: PushMechanics | None = None
+    identification: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data description, format ``tooltransfer.skills/1``."""
@@ -53,8 +73,14 @@ class Skills:
 
         if self.ss is None:
             raise InputError("skills.ss", "an SS skill to save (learn_skills(..., with_ss=True))", None)
-        return {"format": SKILLS_FORMAT, "dataset": self.dataset, "dataset_sha256": self.dataset_sha256,
-                "oe": self.oe.to_dict(), "ss": switch_skill_to_dict(self.ss)}
+        doc: dict[str, Any] = {"format": SKILLS_FORMAT, "dataset": self.dataset,
+                               "dataset_sha256": self.dataset_sha256, "oe": self.oe.to_dict(),
+                               "ss": switch_skill_to_dict(self.ss)}
+        if self.mechanics is not None:
+            doc["mechanics"] = self.mechanics.to_dict()
+            if self.identification is not None:
+                doc["identification"] = self.identification
+        return doc
 
     def save(self, path: str | Path) -> Path:
         """Write the skills file (JSON); returns its path."""
@@ -77,8 +103,17 @@ class Skills:
         for key in ("oe", "ss", "dataset", "dataset_sha256"):
             if key not in doc:
                 raise SkillFileError(src, f"missing field {key!r}")
+        mechanics, ident = None, None
+        if doc.get("mechanics") is not None:
+            try:
+                mechanics = PushMechanics.from_dict(doc["mechanics"])
+            except InputError as exc:
+                raise SkillFileError(src, str(exc)) from None
+            ident = doc.get("identification")
+            if ident is not None and not isinstance(ident, dict):
+                raise SkillFileError(src, f"identification: expected a mapping, got {type(ident).__name__}")
         return cls(OESkill.from_dict(doc["oe"], f"{src}:oe"), switch_skill_from_dict(doc["ss"], f"{src}:ss"),
-                   str(doc["dataset"]), str(doc["dataset_sha256"]))
+                   str(doc["dataset"]), str(doc["dataset_sha256"]), mechanics, ident)
 
 
 def dataset_hash(folder: Path) -> str:
@@ -171,12 +206,53 @@ def ss_skill_from_dataset(folder: Path, virtual: str = "arch") -> SwitchSkill:
                    lambda: learn_ss_from_dataset(folder, virtual))
 
 
-def learn_skills(folder: str | Path, k: float = 0.5, virtual: str = "arch", *, with_ss: bool = True) -> Skills:
+def _load_identification(path: Path) -> Identification:
+    from tools.pushing.identify import Identification
+
+    doc = read_json(path)
+    if not isinstance(doc, dict) or doc.get("format") != MECHANICS_FORMAT:
+        raise SkillFileError(str(path), f"expected format {MECHANICS_FORMAT!r}")
+    try:
+        return Identification.from_dict(doc.get("identification"), f"{path}:identification")
+    except InputError as exc:
+        raise SkillFileError(str(path), str(exc)) from None
+
+
+def _save_identification(ident: Identification, path: Path) -> None:
+    path.write_text(json.dumps({"format": MECHANICS_FORMAT, "identification": ident.to_dict()}, allow_nan=False))
+
+
+def identification_from_dataset(folder: str | Path) -> Identification:
+    """The push mechanics identified from every push of a dataset (demonstrations or a calibration
+    recording), cached by the dataset's content hash (:func:`planner.identify.identify_dataset`)."""
+    from planner.identify import identify_dataset
+
+    folder = _check_dataset(Path(folder))
+    return _cached(f"mech-{dataset_hash(folder)}.json", _load_identification, _save_identification,
+                   lambda: identify_dataset(folder))
+
+
+def learn_skills(folder: str | Path, k: float = 0.5, virtual: str = "arch", *, with_ss: bool = True,
+                 calibration: str | Path | None = None, with_mechanics: bool = True) -> Skills:
     """The skills of a dataset (through the cache): the OE skill learned with ``k``, the SS skill with
-    the ``virtual`` object motion (``"arch"`` or ``"line"``) unless ``with_ss`` is False."""
+    the ``virtual`` object motion (``"arch"`` or ``"line"``) unless ``with_ss`` is False, and the push
+    mechanics identified from the ``calibration`` recording's pushes if one is given (a dataset
+    folder), else from the dataset's own pushes (unless ``with_mechanics`` is False)."""
     folder = _check_dataset(Path(folder))
     ss = ss_skill_from_dataset(folder, virtual) if with_ss else None
-    return Skills(oe_skill_from_dataset(folder, k), ss, str(folder), dataset_hash(folder))
+    mechanics, summary = None, None
+    if calibration is not None and not with_mechanics:
+        raise InputError("calibration", "no calibration when with_mechanics is False", str(calibration))
+    if with_mechanics:
+        source = folder if calibration is None else Path(calibration)
+        if calibration is not None and not source.is_dir():
+            raise InputError("calibration", "a calibration dataset folder (tooltransfer demos --calibration)",
+                             str(source))
+        ident = identification_from_dataset(source)
+        mechanics = ident.mechanics
+        summary = {**ident.summary(), "dataset": str(source), "dataset_sha256": dataset_hash(source),
+                   "kind": "demonstrations" if calibration is None else "calibration"}
+    return Skills(oe_skill_from_dataset(folder, k), ss, str(folder), dataset_hash(folder), mechanics, summary)
 
 
 def load_skills_file(path: str | Path) -> Skills:

@@ -35,7 +35,7 @@ from planner.plan import Plan, Segment
 from planner.recontact import recontact_planner
 from planner.scene import Scene
 from planner.skills import Skills, learn_skills, load_skills_file
-from planner.switches import arch_planner, skill_planner
+from planner.switches import arch_planner, skill_planner, with_fallback
 from planner.tool_clearance import tool_obstacle_clearance
 from problems.task import Task, resolve, task_obstacles, task_platform, task_tool
 from tools.objects import Disc
@@ -147,7 +147,7 @@ def effective_margin(task: Task, obstacles: list) -> float:
 def solve(task: Task, task_path: str | Path = ".") -> Plan:
     """Plan ``task`` (relative paths in it are relative to ``task_path``'s folder)."""
     stages: dict[str, float] = {}
-    clock = time.perf_counter()
+    start = clock = time.perf_counter()
 
     def lap(name: str) -> None:
         nonlocal clock
@@ -183,14 +183,41 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
             raise InputError("skills", "an SS skill for the switch variant " + repr(task.variants.ss), "none")
         switch = skill_planner(task.variants.ss, skills.ss, tool, platform, radius, obstacles, task.ss.clearance,
                                task.ss.n_knots)
-    recontact = recontact_planner(tool, platform, radius, obstacles)
+        if task.variants.ss == "opt":  # the NLP is local: where it finds no path, the geometric arch
+            switch = with_fallback(switch, arch_planner(tool, platform, radius, obstacles, task.ss.clearance),
+                                   "arch")
+    recontact = with_fallback(recontact_planner(tool, platform, radius, obstacles), switch, "switch")
+    reasons: list[str] = []
+    while True:  # the push plan, then the next candidates it hands out while a later stage fails
+        plan = _complete(task, tool, platform, scene, push_plan, switch, recontact, stages, base)
+        if plan.status == "solved" or push_plan.next_best is None:
+            break
+        reasons.append(plan.reason)
+        push_plan = push_plan.next_best()
+        if push_plan.status != "solved":
+            break
+    if plan.status != "solved" and reasons:
+        more = f" (and {len(reasons)} other push sequence(s) before it: {reasons[0]})" if reasons else ""
+        why = plan.reason if plan.reason else push_plan.reason
+        return Plan(status="infeasible", reason=why + more, metrics=plan.metrics or stages, **base)
+    plan.metrics["time_total"] = time.perf_counter() - start
+    plan.metrics["alternatives_tried"] = float(len(reasons))
+    return plan
+
+
+def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any, switch: Any, recontact: Any,
+              stages: dict[str, float], base: dict[str, Any]) -> Plan:
+    """A solved push plan made a whole plan (switches, timing, joints) and checked (module docstring)."""
+    clock = time.perf_counter()
+    radius = scene.radius
+    obstacles = list(scene.obstacles)
     try:
         motion = assemble(push_plan, tool, platform, switch, recontact, v_max=task.timing.max_tool_speed,
                           a_max=task.timing.max_tool_accel, approach_distance=task.timing.approach_distance)
     except SwitchFailed as exc:
         return Plan(status="infeasible", reason=str(exc), metrics={**push_plan.metrics, **stages}, **base)
-    lap("switches_and_timing")
-    metrics = {**push_plan.metrics, **stages, "safety_margin_used": margin,
+    stages = {**stages, "time_switches_and_timing": time.perf_counter() - clock}
+    metrics = {**push_plan.metrics, **stages, "safety_margin_used": scene.margin,
                "mechanics_mu": scene.mechanics.mu, "mechanics_c": scene.mechanics.c}
     sws = [sw for *_, sw in motion.switches]
     metrics["switch_clearance_min"] = min((sw.min_clearance for sw in sws), default=float("inf"))
@@ -211,6 +238,12 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
         why = ("the tool path leaves the Omni's reach" if not np.isfinite(motion.joint_violation[bad])
                else f"the tool path leaves the Omni's joint limits by {motion.joint_violation[bad]:.3g} rad")
         return Plan(status="infeasible", metrics=metrics, **base, reason=f"joint limits: {why} {where}")
+    if near.distance <= 0.0:
+        k = near.sample
+        return Plan(status="infeasible", metrics=metrics, **base,
+                    reason=f"tool-obstacle collision: the tool outline overlaps obstacles[{near.obstacle}] at "
+                           f"t = {motion.t[k]:.2f} s ({motion.phase[k]}; tool at "
+                           f"{np.round(motion.tool_pose[k, :2], 4).tolist()} m)")
     t_replay = time.perf_counter()
     replay = simulate(tool, motion.tool_pose, np.array(task.start), radius, scene.mechanics)
     off = np.linalg.norm(replay.object_xy - motion.object_xy, axis=1)
@@ -222,12 +255,6 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
                     reason=f"self-consistency: replayed through the push model, the planned tool path moves the "
                            f"object {1e3 * off.max():.2f} mm off the planned path (from t = {motion.t[k]:.2f} s, "
                            f"{motion.phase[k]}; object planned at {np.round(motion.object_xy[k], 4).tolist()} m)")
-    if near.distance <= 0.0:
-        k = near.sample
-        return Plan(status="infeasible", metrics=metrics, **base,
-                    reason=f"tool-obstacle collision: the tool outline overlaps obstacles[{near.obstacle}] at "
-                           f"t = {motion.t[k]:.2f} s ({motion.phase[k]}; tool at "
-                           f"{np.round(motion.tool_pose[k, :2], 4).tolist()} m)")
     pushes = tuple(Segment("push", a, b, (f,), {"direction": d}) for f, a, b, d in motion.pushes)
     switches = tuple(Segment("switch", a, b, (fa, fb), {"min_clearance": sw.min_clearance,
                                                          "penetration": sw.info.get("object_penetration", 0.0)})

@@ -122,3 +122,22 @@ def skill_planner(variant: str, skill: SwitchSkill, tool: Tool, platform: OmniPl
         return SwitchPath(res.xy, min_clearance=float(res.object_clearance), info=info)
 
     return plan
+
+
+def with_fallback(primary: SwitchPlanner, fallback: SwitchPlanner, name: str) -> SwitchPlanner:
+    """``primary``, and where it finds no path, ``fallback`` (the path's ``info["fallback"]`` is 1 and
+    ``info["primary_reason"]`` says why; the reason of a failure names both)."""
+
+    def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
+             pose_b: NDArray[np.float64]) -> SwitchPath:
+        first = primary(obj, face_a, pose_a, face_b, pose_b)
+        if first.status == "solved":
+            return first
+        second = fallback(obj, face_a, pose_a, face_b, pose_b)
+        if second.status == "solved":
+            return SwitchPath(second.xy, min_clearance=second.min_clearance,
+                              info={**second.info, "fallback": 1.0})
+        return SwitchPath(second.xy, "infeasible", f"{first.reason}; the {name} fallback: {second.reason}",
+                          info=first.info)
+
+    return plan

@@ -63,8 +63,10 @@ class HeadingCone(Constraint):
         return float(max(0.0, (off - self.frame.theta_b).max()))
 
 
-def _chords(frame: FaceFrame, tol: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Half-planes of chords inside the outer arc (radius ``hypot(u_out, offset)``) within ``tol``."""
+def _chords(frame: FaceFrame, tol: float,
+            near: tuple[float, float] | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Half-planes of chords inside the outer arc (radius ``hypot(u_out, offset)``) within ``tol``;
+    with ``near`` (polar angles [rad] about the base), only the chords within 0.5 rad of that range."""
     u_out = frame.reach[1]
     r_out = float(np.hypot(u_out, frame.offset))
     g = float(np.arctan2(frame.offset, u_out))
@@ -72,21 +74,28 @@ def _chords(frame: FaceFrame, tol: float) -> tuple[NDArray[np.float64], NDArray[
     half = float(np.arccos(r_out / (r_out + tol)))
     n = max(1, int(np.ceil((hi - lo) / (2.0 * half))))
     mids = lo + (np.arange(n) + 0.5) * (hi - lo) / n
+    if near is not None:
+        keep = (mids >= near[0] - 0.5) & (mids <= near[1] + 0.5)
+        mids = mids[keep] if keep.any() else mids
     g_rows = np.stack([np.cos(mids), np.sin(mids)], axis=1)
     return g_rows, r_out * np.cos(0.5 * (hi - lo) / n) + g_rows @ frame.base
 
 
 def reach_constraints(
-    frame: FaceFrame, *, window: tuple[float, float] | None = None, tol: float = 2e-4, family: str = "reach"
+    frame: FaceFrame, *, window: tuple[float, float] | None = None, tol: float = 2e-4, family: str = "reach",
+    near: tuple[float, float] | None = None,
 ) -> list[Constraint]:
     """Constraints keeping the object where ``frame``'s face can push it from (inner approximation
-    within ``tol`` [m] of the exact sector on the outer arc)."""
+    within ``tol`` [m] of the exact sector on the outer arc). ``near``: the polar angles [rad] about
+    the base the path is expected to span in the window; the outer arc's chords farther than 0.5 rad
+    from them are left out (they cannot be reached from there within a fit; the plan's exact
+    joint-limit check stands behind)."""
     rows_g, rows_h = [], []
     for a, sign in ((frame.waist[0], -1.0), (frame.waist[1], 1.0)):
         n = np.array([-np.sin(a), np.cos(a)])  # direction of increasing waist angle at that side
         rows_g.append(sign * n)
         rows_h.append(sign * (frame.offset + n @ frame.base))
-    cg, ch = _chords(frame, tol)
+    cg, ch = _chords(frame, tol, near)
     polygon = PositionPolygon(np.vstack([np.array(rows_g), cg]), np.concatenate([rows_h, ch]), family=family,
                               window=window)
     r_in = float(np.hypot(frame.reach[0], frame.offset))
@@ -108,20 +117,19 @@ class ContactOnFace(Constraint):
     While the contact sticks it rolls along the face at ``ds/dt = a(x) . v`` with
     ``a(x) = -(1/c^2) e_w(x) - sigma R grad psi(x)`` (:mod:`tools.pushing.inverse`: the object's
     sideways travel in the face frame and the heading's turn, ``e_w`` the face's world direction at
-    the heading ``psi`` the Omni imposes with the object at ``x``). The push may use ``n`` contacts
-    (re-contacts in between, :mod:`planner.oe.contacts`); the rows bound the rolling *rate* by a share
-    of the forward speed,
+    the heading ``psi`` the Omni imposes with the object at ``x``). A push may use up to
+    ``max_contacts`` contacts (re-contacts in between, placed by :mod:`planner.oe.contacts`), so the
+    contact's total travel ``int |ds|`` must stay within that many usable lengths. The rows bound the
+    rolling *rate* sample by sample,
 
-        |a(x_k) . v_k| <= beta n(x_k) . v_k,      beta = n (hi - lo) / L,
+        |a(x_k) . v_k| <= g_k,
 
-    with ``n(x)`` the face's world normal and ``L`` the object's travel along it over the window, so
-    the contact's total travel ``int |ds|`` stays within ``n`` usable lengths and ``n`` contacts
-    carry the push (the greedy split of :func:`planner.oe.contacts.realise_span` then needs at most
-    ``n``). ``n`` and ``L`` come from the first linearisation path (the unconstrained fit, close to
-    the universal path): ``n`` is the least number of contacts it would need, at most
-    ``max_contacts``. Velocity rows linearised at the current path like the cone's (``a`` and the
-    normal from it): exact on that path, non-conservative. The contacts are then placed exactly on
-    the fitted path by :func:`planner.oe.contacts.realise_span`.
+    with the budget ``g`` shared out along the push as the first linearisation path rolls (that
+    path, the fit without these rows, is the reference), scaled so that ``int g dt`` is
+    ``max_contacts`` usable lengths: a path that needs fewer contacts meets the rows as it is (then
+    the fit need not run with them at all: :meth:`need`), one that needs more is bent where it rolls
+    most. Velocity rows linearised at the current path like the cone's (``a`` from it): exact on that
+    path, non-conservative.
     """
 
     linearised = True
@@ -135,28 +143,24 @@ class ContactOnFace(Constraint):
             raise InputError("contact range", f"hi > lo [m] on face {face.name!r}", f"[{lo}, {hi}]")
         self.frame, self.face, self.mech, self.radius, self.lo, self.hi = frame, face, mech, radius, lo, hi
         self.max_contacts = max_contacts
-        self.contacts: int | None = None
-        self.beta = 1e3
+        self._budget: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
-    def rolling_rate(self, x: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``a(x)`` (K, 2) (contact speed along the face per object velocity) and the world normals
-        (K, 2) with the object at ``x`` (K, 2) [m]."""
+    def rolling_rate(self, x: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``a(x)`` (K, 2): the contact's speed along the face per object velocity, object at ``x`` (K, 2) [m]."""
         psi = self.frame.heading(x)
-        e, n = self.face.direction, self.face.normal
+        e = self.face.direction
         c, s = np.cos(psi), np.sin(psi)
         e_w = np.stack([c * e[0] - s * e[1], s * e[0] + c * e[1]], axis=1)
-        n_w = np.stack([c * n[0] - s * n[1], s * n[0] + c * n[1]], axis=1)
-        a = -self.mech.rolling * e_w - self.face.sigma * self.radius * heading_gradient(self.frame, x)
-        return a, n_w
+        return -self.mech.rolling * e_w - self.face.sigma * self.radius * heading_gradient(self.frame, x)
 
-    def travel(self, t: NDArray[np.float64], x: NDArray[np.float64], v: NDArray[np.float64]) -> tuple[float, float]:
-        """The contact's total travel ``int |ds|`` [m] and the object's travel along the normal [m]
-        over samples ``t`` (K,) [s] of the path ``x``, ``v`` (K, 2)."""
-        a, n_w = self.rolling_rate(x)
-        dt = np.diff(t)
-        rate, fwd = np.einsum("ij,ij->i", a, v), np.einsum("ij,ij->i", n_w, v)
-        mid = lambda f: 0.5 * (f[:-1] + f[1:])  # noqa: E731 - trapezoidal rule
-        return float(np.sum(np.abs(mid(rate)) * dt)), float(np.sum(mid(fwd) * dt))
+    def need(self, t: NDArray[np.float64], x: NDArray[np.float64], v: NDArray[np.float64]) -> float:
+        """The contact's total travel ``int |ds|`` [m] over the window along the path ``x``, ``v``
+        (T, 2) at times ``t`` (T,) [s]: one contact carries the push when it is at most ``hi - lo``."""
+        k = self.samples(t)
+        if k.size < 2:
+            return 0.0
+        rate = np.abs(np.einsum("ij,ij->i", self.rolling_rate(x[k]), v[k]))
+        return float(np.sum(0.5 * (rate[:-1] + rate[1:]) * np.diff(t[k])))
 
     def _coefficients(self, k: NDArray[np.intp], t: NDArray[np.float64], x_lin: NDArray[np.float64]) -> Coefficients:
         if x_lin.shape[1] != 2:
@@ -164,13 +168,17 @@ class ContactOnFace(Constraint):
         if k.size < 3:
             return Coefficients(k[:0], None, np.zeros((0, 2, 2)), np.zeros((0, 2)))
         x = x_lin[k]
-        v = np.gradient(x, t[k], axis=0)
-        if self.contacts is None:  # the first linearisation (the unconstrained fit) fixes n and beta
-            need, forward = self.travel(t[k], x, v)
-            width = self.hi - self.lo
-            self.contacts = int(min(self.max_contacts, max(1, np.ceil(need / width - 1e-9))))
-            self.beta = self.contacts * width / forward if forward > 1e-9 else 1e3
-        beta = self.beta
-        a, n_w = self.rolling_rate(x)
-        rows = np.stack([a - beta * n_w, -a - beta * n_w], axis=1)
-        return Coefficients(k, None, rows, np.zeros((k.size, 2)))
+        a = self.rolling_rate(x)
+        if self._budget is None:  # the first linearisation (the fit without these rows) shares out the budget
+            v = np.gradient(x, t[k], axis=0)
+            rate = np.abs(np.einsum("ij,ij->i", a, v))
+            total = float(np.sum(0.5 * (rate[:-1] + rate[1:]) * np.diff(t[k])))
+            span = float(t[k][-1] - t[k][0])
+            allowed = self.max_contacts * (self.hi - self.lo)
+            # 90 % where the reference rolls, 10 % spread evenly (room to roll where it did not)
+            share = 0.9 * rate / total + 0.1 / span if total > 0 else np.full(k.size, 1.0 / span)
+            self._budget = (t[k].copy(), allowed * share)
+        tb, g = self._budget
+        bound = np.interp(t[k], tb, g)
+        rows = np.stack([a, -a], axis=1)
+        return Coefficients(k, None, rows, np.stack([bound, bound], axis=1))

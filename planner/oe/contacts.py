@@ -4,7 +4,9 @@ Each span (a face and the samples it pushes) gets its tool path from the inverse
 (:func:`tools.pushing.inverse.push_tool_path`): the contact sticks, rolls along the face as the
 object moves sideways and the heading turns, and the tool poses follow. Where the contact starts
 is a rule: its excursion over the push is centred in the face's usable range (the range shrunk by
-the scene's ``contact_margin``), which is the start that leaves the most room at both ends. When
+the scene's ``contact_margin``), which is the start that leaves the most room at both ends, unless
+the tool's body then comes within ``CLEAR`` of an obstacle: then, among the starts that keep the
+excursion on the face, the one that keeps the tool farthest from the obstacles. When
 one contact cannot carry the span's sideways travel, the span is split into several contacts of the
 same face: the longest stretch whose excursion fits, then a *re-contact* (the tool backs off,
 shifts along the object and approaches again while the object rests, planned like a switch by
@@ -17,16 +19,22 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+import shapely
 from numpy.typing import NDArray
 
 from planner.oe.push_plan import Push
 from planner.scene import Scene
 from tools.model import Tool
+from tools.objects import Disc
 from tools.omni.platform import OmniPlatform
+from tools.pose import rotation
 from tools.pushing.inverse import FaceGeometry, FacePush, push_tool_path
 
 #: Shortest object travel [m] one contact must carry before a re-contact.
 MIN_PIECE = 0.001
+#: Clearance [m] of the tool's body from the obstacles below which the contact's start is chosen
+#: to keep the tool farther away (:func:`_clear_start`).
+CLEAR = 0.003
 
 
 class PushRefused(Exception):
@@ -34,13 +42,16 @@ class PushRefused(Exception):
 
 
 def usable_range(tool: Tool, face: str, scene: Scene) -> tuple[float, float]:
-    """Arc lengths ``[lo, hi]`` [m] along ``face`` the contact may use (contact range less the margin)."""
+    """Arc lengths ``[lo, hi]`` [m] along ``face`` the contact may use: the face's contact range less
+    the scene's ``contact_margin`` at both ends, at most ``contact_span`` about its middle (a long
+    face keeps the contact near its middle, where the planner's reach rows hold)."""
     g = FaceGeometry.of(tool, face)
     lo, hi = g.lo + scene.contact_margin, g.hi - scene.contact_margin
+    mid = 0.5 * (g.lo + g.hi)
     if hi <= lo:  # a face shorter than twice the margin: its middle only
-        mid = 0.5 * (g.lo + g.hi)
         return mid, mid
-    return lo, hi
+    half = 0.5 * scene.contact_span
+    return max(lo, mid - half), min(hi, mid + half)
 
 
 def _inverse(tool: Tool, face: str, x: NDArray[np.float64], scene: Scene, platform: OmniPlatform,
@@ -54,6 +65,33 @@ def _longest_fit(travel: NDArray[np.float64], width: float) -> int:
     hi_run = np.maximum.accumulate(travel)
     fits = np.flatnonzero(hi_run - lo_run <= width + 1e-12)
     return int(fits[-1])
+
+
+def _tool_clearance(tool: Tool, poses: NDArray[np.float64], shapes: list[shapely.Geometry]) -> float:
+    """Least distance [m] of the tool outline at ``poses`` (K, 3) (every 10th and the last) from ``shapes``."""
+    ring = np.asarray(tool.outline.exterior.coords)
+    pick = np.unique(np.append(np.arange(0, len(poses), 10), len(poses) - 1))
+    polys = [shapely.Polygon(ring @ rotation(float(p[2])).T + p[:2]) for p in poses[pick]]
+    return float(min(shapely.distance(shapely.GeometryCollection(polys), s) for s in shapes))
+
+
+def _clear_start(tool: Tool, face: str, x: NDArray[np.float64], scene: Scene, platform: OmniPlatform,
+                 fp: FacePush, s0: float, lo: float, hi: float) -> tuple[FacePush, float]:
+    """The contact start ``s0`` [m] of a piece: the centred one while the tool keeps ``CLEAR`` from
+    every obstacle, else, among starts that keep the excursion on ``[lo, hi]``, the one that keeps the
+    tool farthest from them (a long face slides the tool along it by up to its length)."""
+    shapes = [o.polygon() if isinstance(o, Disc) else o for o in scene.obstacles]
+    best = (_tool_clearance(tool, fp.tool_pose, shapes), fp, s0)
+    if best[0] >= CLEAR:
+        return fp, s0
+    travel = fp.s - s0
+    first, last = lo - float(travel.min()), hi - float(travel.max())
+    for s in np.linspace(first, last, 5) if last > first + 1e-6 else ():
+        cand = _inverse(tool, face, x, scene, platform, float(s))
+        c = _tool_clearance(tool, cand.tool_pose, shapes)
+        if c > best[0]:
+            best = (c, cand, float(s))
+    return best[1], best[2]
 
 
 def realise_span(tool: Tool, face: str, t: NDArray[np.float64], x: NDArray[np.float64],
@@ -80,6 +118,8 @@ def realise_span(tool: Tool, face: str, t: NDArray[np.float64], x: NDArray[np.fl
                 break
             s0 = new
         fp = _inverse(tool, face, x[part], scene, platform, s0)
+        if scene.obstacles:  # the tool's body is not in the fit: a start that keeps it off the obstacles
+            fp, s0 = _clear_start(tool, face, x[part], scene, platform, fp, s0, lo, hi)
         off = np.flatnonzero((fp.s < lo - 1e-6) | (fp.s > hi + 1e-6))
         if off.size and off[0] >= 2:  # the fixed point left a sliver outside: end the contact before it
             part = part[: off[0]]

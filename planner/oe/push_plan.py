@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -55,6 +56,8 @@ class PushPlan:
         metrics: see :func:`planner.oe.metrics.plan_metrics`.
         n_qp: constrained fits solved (``qp`` variant).
         candidates: push sequences scored, each ``(faces, switch times [s], cost or None)``.
+        next_best: when set, computes the plan of the next candidate in order of cost (``qp``
+            variant), for the planner to fall back on when a later stage fails on this one.
     """
 
     variant: str
@@ -68,6 +71,7 @@ class PushPlan:
     metrics: dict[str, float] = field(default_factory=dict)
     n_qp: int = 0
     candidates: tuple[tuple[tuple[str, ...], tuple[float, ...], float | None], ...] = ()
+    next_best: Callable[[], PushPlan] | None = field(default=None, compare=False, repr=False)
 
     @property
     def faces(self) -> tuple[str, ...]:

@@ -67,6 +67,9 @@ from tools.objects import Disc
 from tools.omni.platform import OmniPlatform
 from tools.pushing.inverse import FaceGeometry
 
+FINAL_TRIES = 3
+"""Screened candidates solved on the full grid, in order of cost, before the search gives up."""
+
 SCREEN_RTOL = 1e-3
 """Relative objective change at which a screening fit stops re-linearising (the ranking is not
 changed by the last per-mille; the final fit runs to ``QPOptions.scp_rtol``)."""
@@ -90,13 +93,20 @@ class QPOptions:
         ridge: weight of a ridge on the weights [m^2 per weight^2]; 0 by default (tracking on more
             samples than basis functions is already well posed; weights are O(100), so even 1e-10
             outweighs a millimetre of deviation).
-        tol: violation [m, m/s] the fit aims at (rows violated by more are added);
+        tol: violation [m, m/s] the fit aims at (rows violated by more are added). 1e-6 (1 um/s,
+            10 um over a 10 s push): at 1e-8 the linearised cone and contact rows of a later
+            sequential round were measured to admit spurious infeasibility proofs (the demonstration
+            task with tool 1: feasible at 1e-6, "infeasible" at 1e-7 and 1e-8);
         accept: largest true violation [m, m/s] of a candidate still counted feasible (the heading
             cone is exact only where it was linearised, so rounds stop a little short of ``tol``);
         max_scp: sequential-convex rounds per candidate.
         scp_rtol: the sequential-convex loop stops when the objective changes by less than this
             (relative) and the path meets every linearised row (screening fits use
             ``SCREEN_RTOL``: ranking needs no more);
+        recontact_price: cost of one re-contact [m^2] (half a face change by default: a short move
+            of the same face, no switch round the object);
+        alternatives: further screened candidates a plan may hand out (``PushPlan.next_best``) when a
+            later stage fails on it (a switch that finds no path, a check that fails);
         max_contacts: most contacts one push may use (re-contacts of the same face in between, when
             one contact cannot carry the push's sideways travel and heading turn).
     """
@@ -109,21 +119,23 @@ class QPOptions:
     candidates: int = 3
     switch_price: float = 2e-7
     ridge: float = 0.0
-    tol: float = 1e-8
+    tol: float = 1e-6
     accept: float = 1e-6
     max_scp: int = 12
-    max_contacts: int = 3
+    max_contacts: int = 6
+    alternatives: int = 4
+    recontact_price: float = 1e-7
     scp_rtol: float = 1e-6
 
     def __post_init__(self) -> None:
         for name in ("n_samples", "screen_samples", "n_basis", "segments", "max_pushes", "candidates", "max_scp",
-                     "max_contacts"):
+                     "max_contacts", "alternatives"):
             v = getattr(self, name)
             if not isinstance(v, int) or v < 1:
                 raise InputError(f"oe.{name}", "a positive integer", repr(v))
         if self.n_samples < 10:
             raise InputError("oe.n_samples", "at least 10", repr(self.n_samples))
-        for name in ("switch_price", "ridge"):
+        for name in ("switch_price", "ridge", "recontact_price"):
             v = getattr(self, name)
             if not np.isfinite(v) or v < 0:
                 raise InputError(f"oe.{name}", "a finite number >= 0", repr(v))
@@ -138,6 +150,10 @@ class _Scored:
     result: FitResult
 
     accept: float
+    contacts: int = 0
+    """contacts the pushes of the fitted path need (one per push plus the re-contacts)."""
+    excess: float = 0.0
+    """contact travel [m] beyond what ``max_contacts`` contacts per push carry (screening fits)."""
 
     @property
     def feasible(self) -> bool:
@@ -179,8 +195,11 @@ class _Scene:
             fr = self.frames[face]
             g, (s_lo, s_hi), ends = self._face_rows[face]
             cons.append(HeadingCone(fr, window=(lo, hi)))
+            ref = self.universal[(self.t >= lo - 1e-12) & (self.t <= hi + 1e-12)] - fr.base
+            ang = np.arctan2(ref[:, 1], ref[:, 0])
+            near = (float(ang.min()), float(ang.max())) if ang.size else None
             for end in ends:  # the Omni reaches the tool wherever the contact is on the face
-                cons += reach_constraints(end, window=(lo, hi))
+                cons += reach_constraints(end, window=(lo, hi), near=near)
             if s_hi > s_lo:
                 cons.append(ContactOnFace(fr, g, self.scene.mechanics, self.scene.radius, s_lo, s_hi,
                                           max_contacts=self.opts.max_contacts, window=(lo, hi)))
@@ -190,15 +209,43 @@ class _Scene:
             constraints=cons,
         )
 
-    def score(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> _Scored:
-        res = solve_fit(self.problem(faces, switches), tol=self.opts.tol, max_scp=self.opts.max_scp,
-                        scp_rtol=self.opts.scp_rtol)
-        return _Scored(faces, switches, res, self.opts.accept)
+    def score(self, faces: tuple[str, ...], switches: tuple[float, ...], *, contact_rows: bool = True) -> _Scored:
+        """The candidate's fit: first without the contact rows (cone, reach, obstacles and the ends);
+        then, with ``contact_rows`` and when a push of that path would need more than
+        ``max_contacts`` contacts, again with them, first linearised at that path
+        (:class:`ContactOnFace`). Without ``contact_rows`` (screening) the excess contact travel is
+        only measured, for the cost. A candidate the first stage finds infeasible is so for the second."""
+        problem = self.problem(faces, switches)
+        kw = {"tol": self.opts.tol, "max_scp": self.opts.max_scp, "scp_rtol": self.opts.scp_rtol}
+        contact = [c for c in problem.constraints if isinstance(c, ContactOnFace)]
+        first = replace(problem, constraints=[c for c in problem.constraints if not isinstance(c, ContactOnFace)])
+        res = solve_fit(first, **kw)
+        scored = _Scored(faces, switches, res, self.opts.accept)
+        if not contact or res.rollout is None or not scored.feasible:
+            return scored
+        roll = res.rollout
+        t = roll.t + self.t[0]
+        needs = [(c.need(t, roll.x, roll.v), c.hi - c.lo, c.max_contacts) for c in contact]
+        n = sum(max(1, int(np.ceil(need / w - 1e-9))) for need, w, _ in needs) + len(faces) - len(contact)
+        excess = sum(max(0.0, need - cap * w) for need, w, cap in needs)
+        if excess == 0.0 or not contact_rows:
+            return replace(scored, contacts=n, excess=excess)
+        res2 = solve_fit(problem, x_start=roll.x, **kw)
+        roll2 = res2.rollout
+        if roll2 is not None:
+            needs = [(c.need(t, roll2.x, roll2.v), c.hi - c.lo) for c in contact]
+            n = sum(max(1, int(np.ceil(need / w - 1e-9))) for need, w in needs) + len(faces) - len(contact)
+        return _Scored(faces, switches, res2, self.opts.accept, n, 0.0)
 
     def cost(self, s: _Scored) -> float:
+        """Half the mean squared deviation [m^2], plus the prices of the face changes and the
+        re-contacts, plus the squared excess contact travel of a screening fit [m^2] (what the
+        contact rows would have to bend away)."""
         if not s.feasible:
             return np.inf
-        return s.result.objective + self._offset + self.opts.switch_price * (len(s.faces) - 1)
+        recontacts = max(0, s.contacts - len(s.faces))
+        return (s.result.objective + self._offset + self.opts.switch_price * (len(s.faces) - 1)
+                + self.opts.recontact_price * recontacts + s.excess**2)
 
     @property
     def _offset(self) -> float:
@@ -282,7 +329,8 @@ def condense_qp(
     costs = segment_costs(screen.t, screen.universal, v_ref, frames, opts.segments)
     bounds = np.linspace(grid[0], grid[-1], opts.segments + 1)
     ranked = ranked_sequences(costs, names, opts.max_pushes, opts.switch_price)[: opts.candidates]
-    scored = [screen.score(faces, tuple(float(bounds[c]) for c in cuts)) for faces, cuts, _ in ranked]
+    scored = [screen.score(faces, tuple(float(bounds[c]) for c in cuts), contact_rows=False)
+              for faces, cuts, _ in ranked]
     feasible = [s for s in scored if s.feasible]
     if feasible:
         best = min(feasible, key=screen.cost)
@@ -295,44 +343,57 @@ def condense_qp(
                 hi = trial[i + 1] if i + 1 < len(trial) else opts.segments
                 if not lo < trial[i] < hi:
                     continue
-                s = screen.score(best.faces, tuple(float(bounds[c]) for c in trial))
+                s = screen.score(best.faces, tuple(float(bounds[c]) for c in trial), contact_rows=False)
                 scored.append(s)
                 if screen.cost(s) < screen.cost(best):
                     best, cuts = s, trial
-    # the screening grid ranked the candidates: the best ones are solved again on the full grid
-    final = None
-    if feasible:
-        order = sorted({(s.faces, s.switches): s for s in scored if s.feasible}.values(), key=screen.cost)
-        for s in order[:3]:
+    # the screening grid ranked the candidates: the best ones are solved again on the full grid, in
+    # order; the first feasible one that the push model realises is the plan, and the plan can hand
+    # out the next one (``PushPlan.next_best``) when a later stage (a switch) fails on it
+    order = sorted({(s.faces, s.switches): s for s in scored if s.feasible}.values(), key=screen.cost)
+
+    def finalise(start: int, tried: int) -> PushPlan:
+        why = ""
+        for i in range(start, min(len(order), start + FINAL_TRIES)):
+            s = order[i]
             final = fine.score(s.faces, s.switches)
             scored.append(final)
-            if final.feasible:
-                break
-        feasible = [final] if final is not None and final.feasible else []
-    n_qp = sum(s.result.scp_iterations for s in scored)
-    cands = tuple((s.faces, s.switches, None if not s.feasible else screen.cost(s)) for s in scored)
-    if not feasible:
-        fams = sorted({f for s in scored for f in (s.result.families or tuple(
-            k for k, val in s.result.violations.items() if val > opts.tol))})
+            if not final.feasible or final.result.rollout is None:
+                continue
+            roll = final.result.rollout
+            dense_t, x, v = roll.t + grid[0], roll.x, roll.v
+            try:
+                pushes = _pushes(fine, final, dense_t, x)
+            except PushRefused as exc:
+                why = f"the push sequence {' -> '.join(final.faces)} cannot be realised: {exc}"
+                continue
+            return _solved(final, dense_t, x, v, pushes, i + 1, tried + i + 1 - start)
+        n_qp = sum(sc.result.scp_iterations for sc in scored)
+        cands = tuple((sc.faces, sc.switches, None if not sc.feasible else screen.cost(sc)) for sc in scored)
+        if why:
+            return infeasible(why, n_qp, cands)
+        fams = sorted({f for sc in scored for f in (sc.result.families or tuple(
+            k for k, val in sc.result.violations.items() if val > opts.tol))})
         return infeasible(
             f"none of the {len(scored)} push sequences scored is feasible "
             f"(constraint families in conflict: {', '.join(fams) or 'unknown'})", n_qp, cands,
         )
-    best = feasible[0]
-    roll = best.result.rollout
-    assert roll is not None  # a feasible fit always has its rollout
-    dense_t, x, v = roll.t + grid[0], roll.x, roll.v
-    try:
-        pushes = _pushes(fine, best, dense_t, x)
-    except PushRefused as exc:
-        return infeasible(f"the push sequence {' -> '.join(best.faces)} cannot be realised: {exc}", n_qp, cands)
-    plan = PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, n_qp=n_qp, candidates=cands)
-    from planner.oe.metrics import plan_metrics  # local: metrics import the plan types
 
-    metrics = plan_metrics(plan, fine.frames, target, scene)
-    metrics["compute_time"] = time.perf_counter() - start_time
-    metrics.update({f"violation_{k}": v for k, v in best.result.violations.items()})
-    per_qp = [sc.result.solve_time / max(sc.result.scp_iterations, 1) for sc in scored]
-    metrics.update({"n_qp": float(n_qp), "qp_time_median": float(np.median(per_qp)), "qp_time_max": max(per_qp)})
-    return PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, metrics=metrics, n_qp=n_qp,
-                    candidates=cands)
+    def _solved(best: _Scored, dense_t: NDArray[np.float64], x: NDArray[np.float64], v: NDArray[np.float64],
+                pushes: tuple[Push, ...], after: int, tried: int) -> PushPlan:
+        n_qp = sum(sc.result.scp_iterations for sc in scored)
+        cands = tuple((sc.faces, sc.switches, None if not sc.feasible else screen.cost(sc)) for sc in scored)
+        plan = PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, n_qp=n_qp, candidates=cands)
+        from planner.oe.metrics import plan_metrics  # local: metrics import the plan types
+
+        metrics = plan_metrics(plan, fine.frames, target, scene)
+        metrics["compute_time"] = time.perf_counter() - start_time
+        metrics.update({f"violation_{k}": val for k, val in best.result.violations.items()})
+        per_qp = [sc.result.solve_time / max(sc.result.scp_iterations, 1) for sc in scored]
+        metrics.update({"n_qp": float(n_qp), "qp_time_median": float(np.median(per_qp)),
+                        "qp_time_max": max(per_qp), "final_candidates": float(tried)})
+        more = after < len(order) and tried < opts.alternatives + FINAL_TRIES
+        return PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, metrics=metrics, n_qp=n_qp,
+                        candidates=cands, next_best=(lambda: finalise(after, tried)) if more else None)
+
+    return finalise(0, 0)
