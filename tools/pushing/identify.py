@@ -32,7 +32,8 @@ identification methods"; here they are fitted by least squares of the forward mo
   puck's motion across the contact normal, so pushes along the normal do not excite it; ``mu``
   enters only when the contact slides (``|tan phi_p| > mu (1 + 1/c^2)``, about 72 degrees off the
   normal with the platform's values), so pushes that stick do not excite it. A parameter not
-  excited is reported through a large standard deviation (the prior's) and a message, not an error.
+  excited keeps its initial value exactly (the prior holds it within noise of it anyway) and is
+  reported through a large standard deviation (the prior's) and a message, not an error.
 
 Speed: all pushes run in one :func:`tools.pushing.forward.simulate_batch` call (shorter ones padded
 by repeating their last pose, which moves nothing) with substeps of at most ``max_step`` = 0.2 mm
@@ -285,17 +286,16 @@ def _marginal_std(info: NDArray[np.float64]) -> NDArray[np.float64]:
     return out
 
 
-def _not_excited_message(mu_ok: bool, c_ok: bool, data_std: NDArray[np.float64], mech: PushMechanics,
-                         initial: PushMechanics) -> str:
+def _not_excited_message(mu_ok: bool, c_ok: bool, data_std: NDArray[np.float64], mech: PushMechanics) -> str:
     parts = []
     if not c_ok:
         parts.append(f"c is not excited by these pushes (the data alone give log c +- {data_std[1]:.3g}: pushes "
-                     f"near the face's normal do not move the puck across it); it stays near its initial "
-                     f"{initial.c:.3g} (c = {mech.c:.3g} +- {mech.c_std:.3g})")
+                     f"near the face's normal do not move the puck across it); it keeps its initial value "
+                     f"c = {mech.c:.3g} (+- {mech.c_std:.3g})")
     if not mu_ok:
         parts.append(f"mu is not excited by these pushes (the data alone give log mu +- {data_std[0]:.3g}: the "
-                     f"contacts stick, and mu only acts when they slide, |tan phi_p| > mu (1 + 1/c^2)); it stays "
-                     f"near its initial {initial.mu:.3g} (mu = {mech.mu:.3g} +- {mech.mu_std:.3g})")
+                     f"contacts stick, and mu only acts when they slide, |tan phi_p| > mu (1 + 1/c^2)); it keeps "
+                     f"its initial value mu = {mech.mu:.3g} (+- {mech.mu_std:.3g})")
     if parts:
         parts.append("record a calibration (tooltransfer demos --calibration, README) to identify it")
     return "; ".join(parts)
@@ -370,10 +370,13 @@ def identify_mechanics(
         g = jac[m].T @ res[m] / s2
         meat += np.outer(g, g)
     robust = post @ meat @ post
-    mu, c = (float(v) for v in np.exp(sol.x))
+    mu_ok, c_ok = bool(data_std[0] < tol), bool(data_std[1] < tol)
+    x = np.where([mu_ok, c_ok], sol.x, x0)  # a parameter not excited keeps its initial value exactly
+    if not np.array_equal(x, sol.x):
+        res, xy = run(x)
+    mu, c = (float(v) for v in np.exp(x))
     plain_std = np.array([mu, c]) * post_std
     robust_std = np.array([mu, c]) * np.sqrt(np.clip(np.diag(robust), 0.0, None))
-    mu_ok, c_ok = bool(data_std[0] < tol), bool(data_std[1] < tol)
     std = np.maximum(plain_std, robust_std)
     mech = PushMechanics(mu, c, "identified", float(std[0]), float(std[1]))
     d = (batch.predict(xy) - batch.observed)
@@ -388,5 +391,5 @@ def identify_mechanics(
         end_error_initial=np.hypot(*(xy0[rows_b, batch.last] - ends).T),
         n_samples=n_obs, cost=0.5 * float(res @ res), sigma=float(np.sqrt(s2)), data_std=data_std,
         plain_std=plain_std, robust_std=robust_std,
-        mu_excited=mu_ok, c_excited=c_ok, message=_not_excited_message(mu_ok, c_ok, data_std, mech, initial),
+        mu_excited=mu_ok, c_excited=c_ok, message=_not_excited_message(mu_ok, c_ok, data_std, mech),
         n_evaluations=counter[0], wall_time=time.perf_counter() - t_wall)
