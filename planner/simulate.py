@@ -8,8 +8,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.plan import Plan
-from problems.task import task_from_dict, task_obstacles, task_platform, task_tool
+from problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
 from tools.sim import Execution, SimPlatform
+from tools.sim.config import SimConfig
+
+
+def task_sim_config(task: Task, **overrides: float) -> SimConfig:
+    """The simulated platform's settings for ``task``'s object (radius, mass, table friction), with
+    ``overrides`` of any :class:`SimConfig` field (e.g. ``tool_friction=0.5`` for a mismatched plant)."""
+    o = task.object
+    return SimConfig(**{"puck_radius": o.radius, "puck_mass": o.mass, "table_friction": o.friction, **overrides})
 
 
 @dataclass(frozen=True)
@@ -24,13 +32,14 @@ class SimulationReport:
     execution: Execution
 
 
-def simulate_plan(plan: Plan) -> SimulationReport:
-    """Execute a solved plan in MuJoCo (open loop)."""
+def simulate_plan(plan: Plan, config: SimConfig | None = None) -> SimulationReport:
+    """Execute a solved plan in MuJoCo (open loop) with the physical settings ``config`` (default:
+    the task's object, :func:`task_sim_config`)."""
     import time
 
     task = task_from_dict(plan.task, "plan.task")
     tool = task_tool(task)
-    sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task))
+    sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task), config or task_sim_config(task))
     start = time.perf_counter()
     sim.reset(np.array(task.start), q0=plan.joints[0])
     ex = sim.execute(plan.t, plan.joints)

@@ -59,6 +59,7 @@ from dmp.validation import check_array, check_positive
 from planner.oe.constraints import ContactOnFace, HeadingCone, reach_constraints
 from planner.oe.contacts import PushRefused, realise_pushes, usable_range
 from planner.oe.face_frame import FaceFrame
+from planner.oe.objectives import RollingPenalty
 from planner.oe.push_plan import Push, PushPlan
 from planner.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
 from planner.scene import Scene
@@ -203,18 +204,28 @@ class _Scene:
             if s_hi > s_lo:
                 cons.append(ContactOnFace(fr, g, self.scene.mechanics, self.scene.radius, s_lo, s_hi,
                                           max_contacts=self.opts.max_contacts, window=(lo, hi)))
-        return FitProblem(
-            self.dmp, self.t, x0=self.universal[0], g=self.target,
-            objectives=[TrackPath(self.universal)] + ([Ridge(self.opts.ridge)] if self.opts.ridge > 0 else []),
-            constraints=cons,
-        )
+        objectives: list = [TrackPath(self.universal)]
+        if self.opts.ridge > 0:
+            objectives.append(Ridge(self.opts.ridge))
+        if self.opts.recontact_price > 0:
+            objectives.append(RollingPenalty(
+                [(self._face_rows[f][0], self.frames[f], lo, hi, self._face_rows[f][1])
+                 for f, lo, hi in zip(faces, edges[:-1], edges[1:], strict=True)],
+                self.universal, self.scene, self.opts.recontact_price))
+        return FitProblem(self.dmp, self.t, x0=self.universal[0], g=self.target, objectives=objectives,
+                          constraints=cons)
 
     def score(self, faces: tuple[str, ...], switches: tuple[float, ...], *, contact_rows: bool = True) -> _Scored:
-        """The candidate's fit: first without the contact rows (cone, reach, obstacles and the ends);
-        then, with ``contact_rows`` and when a push of that path would need more than
-        ``max_contacts`` contacts, again with them, first linearised at that path
-        (:class:`ContactOnFace`). Without ``contact_rows`` (screening) the excess contact travel is
-        only measured, for the cost. A candidate the first stage finds infeasible is so for the second."""
+        """The candidate's fit: first without the contact rows (cone, reach, obstacles and the ends).
+
+        Without ``contact_rows`` (screening) the contacts that path needs and the excess contact
+        travel beyond ``max_contacts`` contacts per push are only measured, for the cost. With them
+        (the final fit), the fit is repeated with the contact rows (:class:`ContactOnFace`, first
+        linearised at that path) when a push needs more than ``max_contacts`` contacts. Every fit
+        carries the rolling penalty (:class:`planner.oe.objectives.RollingPenalty`), so the number of
+        contacts is priced, not only bounded. A candidate the first stage finds infeasible is so for
+        the second.
+        """
         problem = self.problem(faces, switches)
         kw = {"tol": self.opts.tol, "max_scp": self.opts.max_scp, "scp_rtol": self.opts.scp_rtol}
         contact = [c for c in problem.constraints if isinstance(c, ContactOnFace)]
@@ -225,17 +236,25 @@ class _Scene:
             return scored
         roll = res.rollout
         t = roll.t + self.t[0]
-        needs = [(c.need(t, roll.x, roll.v), c.hi - c.lo, c.max_contacts) for c in contact]
-        n = sum(max(1, int(np.ceil(need / w - 1e-9))) for need, w, _ in needs) + len(faces) - len(contact)
-        excess = sum(max(0.0, need - cap * w) for need, w, cap in needs)
-        if excess == 0.0 or not contact_rows:
+
+        def counts(r: FitResult) -> list[int]:
+            assert r.rollout is not None
+            return [max(1, int(np.ceil(c.need(t, r.rollout.x, r.rollout.v) / (c.hi - c.lo) - 1e-9))) for c in contact]
+
+        need = counts(res)
+        excess = sum(max(0.0, c.need(t, roll.x, roll.v) - c.max_contacts * (c.hi - c.lo)) for c in contact)
+        n = sum(need) + len(faces) - len(contact)
+        if not contact_rows:
             return replace(scored, contacts=n, excess=excess)
-        res2 = solve_fit(problem, x_start=roll.x, **kw)
-        roll2 = res2.rollout
-        if roll2 is not None:
-            needs = [(c.need(t, roll2.x, roll2.v), c.hi - c.lo) for c in contact]
-            n = sum(max(1, int(np.ceil(need / w - 1e-9))) for need, w in needs) + len(faces) - len(contact)
-        return _Scored(faces, switches, res2, self.opts.accept, n, 0.0)
+        if excess > 0.0:
+            res = solve_fit(problem, x_start=roll.x, **kw)
+            scored = _Scored(faces, switches, res, self.opts.accept)
+            if res.rollout is None or not scored.feasible:
+                return scored
+            need = counts(res)
+            n = sum(need) + len(faces) - len(contact)
+            scored = replace(scored, contacts=n)
+        return scored
 
     def cost(self, s: _Scored) -> float:
         """Half the mean squared deviation [m^2], plus the prices of the face changes and the

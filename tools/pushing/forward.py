@@ -53,8 +53,8 @@ class PushTrace:
         object_xy: (K, 2) the puck's centre [m] (``object_xy[0]`` the start).
         mode: (K,) contact mode codes over the interval ending at the sample (0 free, 1 stick, 2 slide;
             the last substep's).
-        edge: (K,) outline edge of the contact (-1 when free).
-        contact_tool: (K, 2) contact point in the tool frame [m] (NaN when free).
+        edge: (K,) outline edge of the contact (-1 when free), at the sample.
+        contact_tool: (K, 2) contact point in the tool frame [m] at the sample (NaN when free).
         face: (K,) the named face holding the contact, or None (free, or a contact off the faces).
         face_s: (K,) fraction along that face (NaN when not on a face).
         events: the contact changes, in order.
@@ -246,12 +246,12 @@ def _run_scalar(
                     lat, last_mode = math.copysign(mu * a, slip), SLIDE
                 cx += a * nx - lat * ny
                 cy += a * ny + lat * nx
-                last_edge, lqx, lqy = m, qx, qy
                 for _ in range(3):  # a sliver of overlap left by a turning normal: out along the new one
-                    g2, _, _, nx2, ny2, _, _, _ = nearest(x, y, yaw)
+                    g2, qx, qy, nx2, ny2, m, _, _ = nearest(x, y, yaw)
                     if g2 >= -1e-13:
                         break
                     cx, cy = cx - g2 * nx2, cy - g2 * ny2
+                last_edge, lqx, lqy = m, qx, qy  # where the contact is once the object has moved
             px, py, pyaw = x, y, yaw
         xy[k + 1] = cx, cy
         mode[k + 1], edge[k + 1] = last_mode, last_edge

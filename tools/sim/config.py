@@ -17,7 +17,8 @@ class SimConfig:
     Attributes:
         timestep: physics step [s]; 1-2 ms were measured to give the same push.
         puck_mass: mass of the puck [kg].
-        puck_height: height of the puck [m] (its radius is ``tools.OBJECT_RADIUS``).
+        puck_radius: radius of the puck [m] (Table II: 17.5 mm).
+        puck_height: height of the puck [m].
         table_friction: sliding friction coefficient between the puck and the table (and the
             obstacles).
         tool_friction: sliding friction coefficient between the tool and the puck. 0.8 keeps the
@@ -37,6 +38,7 @@ class SimConfig:
 
     timestep: float = 0.001
     puck_mass: float = 0.02
+    puck_radius: float = 0.0175
     puck_height: float = 0.010
     table_friction: float = 0.3
     tool_friction: float = 0.8

@@ -62,7 +62,7 @@ from numpy.typing import NDArray
 
 from tools.decompose import convex_decomposition
 from tools.model import Tool
-from tools.objects import OBJECT_RADIUS, Disc, Obstacle
+from tools.objects import Disc, Obstacle
 from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
 from tools.omni.platform import OmniPlatform
 from tools.sim.config import SimConfig
@@ -207,7 +207,7 @@ def build_mjcf(
     {nl.join(obstacle_geoms)}
     <body name="{PUCK}" pos="0 0 {_num(c.puck_height / 2)}">
       <freejoint name="{PUCK}"/>
-      <geom name="{PUCK}" type="cylinder" size="{_num(OBJECT_RADIUS)} {_num(c.puck_height / 2)}"
+      <geom name="{PUCK}" type="cylinder" size="{_num(c.puck_radius)} {_num(c.puck_height / 2)}"
             mass="{_num(c.puck_mass)}" friction="{table_fric}" rgba="0.2 0.2 0.2 1" {_PUCK_BITS}/>
     </body>
     <body name="base" pos="{_num(bx)} {_num(by)} {_num(-platform.table_height)}" quat="{_quat_z(platform.base_yaw)}">
