@@ -218,6 +218,11 @@ def _load_identification(path: Path) -> Identification:
         raise SkillFileError(str(path), str(exc)) from None
 
 
+IDENTIFICATION_VERSION = 2
+"""Bumped when the identification's method changes, so cached results of an older one are not reused
+(the cache is keyed by the dataset's content)."""
+
+
 def _save_identification(ident: Identification, path: Path) -> None:
     path.write_text(json.dumps({"format": MECHANICS_FORMAT, "identification": ident.to_dict()}, allow_nan=False))
 
@@ -228,8 +233,8 @@ def identification_from_dataset(folder: str | Path) -> Identification:
     from planner.identify import identify_dataset
 
     folder = _check_dataset(Path(folder))
-    return _cached(f"mech-{dataset_hash(folder)}.json", _load_identification, _save_identification,
-                   lambda: identify_dataset(folder))
+    return _cached(f"mech{IDENTIFICATION_VERSION}-{dataset_hash(folder)}.json", _load_identification,
+                   _save_identification, lambda: identify_dataset(folder))
 
 
 def learn_skills(folder: str | Path, k: float = 0.5, virtual: str = "arch", *, with_ss: bool = True,

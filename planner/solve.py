@@ -116,7 +116,7 @@ def task_mechanics(task: Task, skills: Skills | None = None) -> PushMechanics:
 def task_scene(task: Task, obstacles: list, margin: float, skills: Skills | None = None) -> Scene:
     """The :class:`Scene` of ``task``: its object, mechanics, obstacles and the ``margin`` [m] used."""
     return Scene(task.object.radius, task_mechanics(task, skills), tuple(obstacles), margin,
-                 task.oe.friction_cone_fraction, task.oe.contact_margin)
+                 task.oe.friction_cone_fraction, task.oe.contact_margin, task.oe.contact_span)
 
 
 def effective_margin(task: Task, obstacles: list) -> float:
@@ -219,8 +219,12 @@ def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any
     stages = {**stages, "time_switches_and_timing": time.perf_counter() - clock}
     metrics = {**push_plan.metrics, **stages, "safety_margin_used": scene.margin,
                "mechanics_mu": scene.mechanics.mu, "mechanics_c": scene.mechanics.c}
-    sws = [sw for *_, sw in motion.switches]
+    sws = [sw for fa, fb, *_, sw in motion.switches if fa != fb]
+    recs = [sw for fa, fb, *_, sw in motion.switches if fa == fb]
     metrics["switch_clearance_min"] = min((sw.min_clearance for sw in sws), default=float("inf"))
+    metrics["recontact_clearance_min"] = min((sw.min_clearance for sw in recs), default=float("inf"))
+    metrics["n_switch_fallbacks"] = float(sum(sw.info.get("fallback", 0.0) for *_, sw in motion.switches))
+    sws = [sw for *_, sw in motion.switches]
     metrics["switch_obstacle_clearance_min"] = min(
         (sw.info.get("obstacle_clearance", np.inf) for sw in sws), default=float("inf"))
     metrics["switch_penetration_max"] = max(

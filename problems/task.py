@@ -169,6 +169,9 @@ class OEOptions(_Model):
         description="share of the friction cone's half-angle atan(mu) the planned object directions may use")
     contact_margin: NonNegative = Field(
         0.0005, description="distance the contact keeps from the ends of a face's usable range [m]")
+    contact_span: Positive = Field(
+        0.012, description="longest stretch of a face the contact may use, about its middle [m] (the reach "
+                           "is planned for the tool at both ends of it)")
     max_contacts: int = Field(6, ge=1, le=10, description="most contacts (re-contacts + 1) one push may use")
     self_consistency_tol: Positive = Field(
         1e-4, description="largest distance between the planned object path and the push model's replay "

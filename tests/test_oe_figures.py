@@ -11,6 +11,7 @@ from planner.oe import QPOptions, condense_qp
 from planner.oe.mapping_variant import condense_mapping
 from planner.plots.push_plans import plot_push_plans
 from planner.plots.safety_margin import plot_safety_margin
+from planner.scene import Scene
 from problems.fit_cases import minimum_jerk
 from tools import Disc, load_tool
 from tools.omni.platform import OmniPlatform
@@ -21,14 +22,17 @@ def test_push_plan_and_safety_margin_figures(tmp_path: Path) -> None:
     plat = OmniPlatform(a_t=tool.a_t)
     n = 160
     t = np.linspace(0, 6, n)
-    x = np.vstack([minimum_jerk(np.array([0.05, 0.12]), np.array([-0.02, 0.12]), n // 2),
-                   minimum_jerk(np.array([-0.02, 0.12]), np.array([-0.07, 0.18]), n - n // 2)])
+    x = np.vstack([minimum_jerk(np.array([0.05, 0.12]), np.array([-0.014, 0.146]), n // 2),
+                   minimum_jerk(np.array([-0.014, 0.146]), np.array([-0.068, 0.173]), n - n // 2)])
     obs = Disc(np.array([0.01, 0.095]), 0.006)
-    plans = {"mapping": condense_mapping(t, x, tool, plat, obstacles=[obs]),
-             "qp": condense_qp(t, x, tool, plat, obstacles=[obs], options=QPOptions(candidates=3))}
+    scene = Scene(0.0175, obstacles=(obs,))
+    plans = {"mapping": condense_mapping(t, x, tool, plat, scene),
+             "qp": condense_qp(t, x, tool, plat, scene, options=QPOptions(candidates=3))}
+    assert plans["qp"].status == "solved", plans["qp"].reason
     assert plans["qp"].metrics["obstacle_clearance_min"] >= 0.005 - 1e-6
-    for path in (plot_push_plans(plans, tool, tmp_path / "fig10.png", obstacles=[obs], margin=0.005, target=x[-1]),
-                 plot_safety_margin(x, obs, plans, tmp_path / "fig14.png")):
+    for path in (plot_push_plans(plans, tool, tmp_path / "fig10.png", radius=0.0175, obstacles=[obs], margin=0.005,
+                                 target=x[-1]),
+                 plot_safety_margin(x, obs, plans, tmp_path / "fig14.png", radius=0.0175)):
         img = mpimg.imread(path)
         assert img.shape[0] > 300 and img.shape[1] > 600
         assert img[..., :3].std() > 0.05  # something was drawn

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from planner.oe.face_frame import FaceFrame
+from planner.scene import Scene
 from planner.oe.learn import DemoPush, condense_recovered, learn_oe_skill, recover
 from problems.fit_cases import minimum_jerk
 from tools import load_tool
@@ -25,7 +26,7 @@ def demo(rng: np.random.Generator, noise: float = 0.0015) -> list[DemoPush]:
     a = START.copy()
     out = []
     for face, length in zip(FACES, LENGTHS, strict=True):
-        fr = FaceFrame.build(tool, face, plat)
+        fr = FaceFrame.build(tool, face, plat, Scene(0.0175))
         ang = float(fr.push_direction(a)[0]) + rng.uniform(-0.25, 0.25)
         b = a + length * rng.uniform(0.9, 1.1) * np.array([np.cos(ang), np.sin(ang)])
         t = np.arange(0.0, rng.uniform(1.5, 2.5), 1 / 30)

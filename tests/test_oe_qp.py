@@ -99,7 +99,7 @@ def test_heading_cone_rows_follow_the_heading() -> None:
 def test_qp_variant_condenses_an_l_path_for_the_slope_tool() -> None:
     tool = load_tool("slope")
     t, x = l_scene()
-    obstacle = Disc(np.array([0.01, 0.165]), 0.008)
+    obstacle = Disc(np.array([0.02, 0.1]), 0.006)
     plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), Scene(R, obstacles=(obstacle,)))
     assert plan.status == "solved", plan.reason
     m = plan.metrics
@@ -163,7 +163,7 @@ def test_mapping_variant_runs_from_start_to_target_and_reports_what_it_violates(
 
     tool = load_tool("slope")
     t, x = l_scene()
-    obstacle = Disc(np.array([0.01, 0.165]), 0.008)
+    obstacle = Disc(np.array([0.02, 0.1]), 0.006)
     plan = condense_mapping(t, x, tool, OmniPlatform(a_t=tool.a_t), Scene(R, obstacles=(obstacle,)),
                             options=MappingOptions(tube=0.015))
     assert plan.status == "solved"
@@ -184,7 +184,7 @@ def test_the_scene_radius_is_the_one_planned_for() -> None:
 
     tool = load_tool("slope")
     t, x = l_scene()
-    obstacle = Disc(np.array([0.01, 0.165]), 0.008)
+    obstacle = Disc(np.array([0.02, 0.1]), 0.006)
     big = 0.024
     plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), Scene(big, obstacles=(obstacle,)))
     assert plan.status == "solved", plan.reason

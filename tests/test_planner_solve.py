@@ -19,7 +19,9 @@ def test_solve_transfer_task_writes_a_checkable_plan(tmp_path: Path, capsys) -> 
     assert main(["solve", str(PAPER / "transfer_tool2.yaml"), "-o", str(out), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert summary["status"] == "solved"
-    assert sorted(summary["pushes"].split()) == ["inclined", "inclined", "left", "left"]
+    faces = summary["pushes"].split()
+    changes = [f for i, f in enumerate(faces) if i == 0 or faces[i - 1] != f]  # re-contacts merged
+    assert set(changes) == {"inclined", "left"} and len(changes) >= 3
     plan = read_plan(out)
     doc = json.loads(out.read_text())
     assert doc["format"] == "tooltransfer.plan/1"
@@ -28,6 +30,8 @@ def test_solve_transfer_task_writes_a_checkable_plan(tmp_path: Path, capsys) -> 
     assert set(plan.phase) == {"approach", "push", "switch", "retreat"}
     assert plan.metrics["joint_limit_violation_max"] == 0.0
     assert plan.metrics["switch_clearance_min"] >= 0.002 - 1e-6  # task.ss.clearance (opt switches)
+    assert plan.metrics["recontact_clearance_min"] > 0.0  # re-contacts back off and shift clear of the puck
+    assert plan.metrics["self_consistency_max"] <= 1e-4  # the push model replays the plan
     assert plan.metrics["goal_error"] <= 1e-3
     # the object stands still outside the pushes
     between = (plan.t > plan.pushes[0].t_end) & (plan.t < plan.pushes[1].t_start)
@@ -70,4 +74,7 @@ def test_mapping_plan_out_of_reach_is_infeasible_not_a_crash(tmp_path: Path, cap
         "target: [0.005465, 0.174809]\nobstacles:\n  - {kind: disc, centre: [0.071121, 0.139549], radius: 0.005904}\n"
         f"skills: {{dataset: {ROOT / 'problems' / 'data' / 'finger_demos'}}}\nvariants: {{oe: mapping, ss: dmp}}\n")
     assert main(["solve", str(task), "--json"]) == 1
-    assert "reach" in json.loads(capsys.readouterr().out)["reason"]
+    reason = json.loads(capsys.readouterr().out)["reason"]
+    # with the push mechanics the mapped path fails earlier: the finger's 3.2 mm upper face cannot
+    # carry its sideways motion (before, the dmp switch left the reach)
+    assert "cannot carry" in reason or "reach" in reason

@@ -36,7 +36,7 @@ def switch_depths(doc: dict) -> list[tuple[np.ndarray, np.ndarray]]:
                 d.append(-np.inf)
             else:
                 d.append(shapely.distance(poly, centre) - r)
-        out.append((np.array(d), arc / arc[-1]))
+        out.append((np.array(d), arc / arc[-1], tuple(sw["faces"])))
     return out
 
 
@@ -46,38 +46,36 @@ def plans(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict]:
 
     folder = tmp_path_factory.mktemp("plans")
     docs = {}
-    for ss in ("dmp", "opt"):
+    for ss, code in (("dmp", 1), ("opt", 0)):
         out = folder / f"{ss}.json"
-        assert main(["solve", str(PAPER / "transfer_tool2.yaml"), "--ss", ss, "-o", str(out), "--json"]) == 0
+        assert main(["solve", str(PAPER / "transfer_tool2.yaml"), "--ss", ss, "-o", str(out), "--json"]) == code
         docs[ss] = json.loads(out.read_text())
-        read_plan(out)  # a valid plan file
+        read_plan(out)  # a valid plan file, solved or not
     return docs
 
 
 def test_opt_switches_never_penetrate_and_keep_the_clearance(plans: dict[str, dict]) -> None:
     doc = plans["opt"]
-    assert doc["status"] == "solved" and doc["variant"]["ss"] == "opt" and len(doc["switches"]) == 3
+    assert doc["status"] == "solved" and doc["variant"]["ss"] == "opt"
     clearance = doc["task"]["ss"]["clearance"]
-    for d, u in switch_depths(doc):
+    depths = switch_depths(doc)
+    assert sum(a != b for *_, (a, b) in depths) == 3  # three changes of face; the rest re-contacts
+    for d, u, (a, b) in depths:
         assert d.min() >= -5e-6  # touching at the two contacts (touch tolerance 5 um), never deeper
         middle = d[(u > 0.3) & (u < 0.7)]  # the margin ramps up over the first and last knots
-        assert middle.min() >= clearance - 1e-5
+        if a != b:
+            assert middle.min() >= clearance - 1e-5
+        else:  # a re-contact backs off along the face's normal and shifts
+            assert middle.min() > 0.0
     assert doc["metrics"]["switch_penetration_max"] <= 5e-6
     assert doc["metrics"]["switch_obstacle_clearance_min"] >= clearance - 1e-6
 
 
-def test_dmp_switch_penetration_is_reported_not_hidden(plans: dict[str, dict]) -> None:
+def test_dmp_switch_that_knocks_the_puck_makes_the_plan_infeasible(plans: dict[str, dict]) -> None:
+    """The paper's recombined switch penetrates the puck; replayed through the push model it moves
+    the puck off the plan, so the plan is refused with the place, and the penetration is reported."""
     doc = plans["dmp"]
-    assert doc["status"] == "solved"
-    measured = max(-d.min() for d, _ in switch_depths(doc))
-    reported = doc["metrics"]["switch_penetration_max"]
-    # the plan's exact (continuous) figure is at least what the samples show, and it is a real finding here
-    assert reported >= measured - 1e-7
-    assert measured > 1e-4
-    assert any(sw["penetration"] > 1e-4 for sw in doc["switches"])
-
-
-def test_switch_variants_share_the_pushes(plans: dict[str, dict]) -> None:
-    a, b = plans["dmp"], plans["opt"]
-    assert [p["faces"] for p in a["pushes"]] == [p["faces"] for p in b["pushes"]]
-    assert a["metrics"]["goal_error"] == pytest.approx(b["metrics"]["goal_error"], abs=1e-9)
+    assert doc["status"] == "infeasible"
+    assert "self-consistency" in doc["reason"] and "switch" in doc["reason"]
+    assert doc["metrics"]["switch_penetration_max"] > 1e-4
+    assert doc["metrics"]["self_consistency_max"] > doc["task"]["oe"]["self_consistency_tol"]

@@ -20,7 +20,9 @@ EXPECTED = {
     "paper/fig11_trapezoid.yaml": "solved",
     "paper/fig14_safety_margin.yaml": "solved",
     "hard/target_behind_obstacle.yaml": "solved",
-    "hard/target_at_edge_of_reach.yaml": "solved",
+    # with the push mechanics the faces' cones narrow to their friction cones about the normals:
+    # the last push cannot end at this target within the reach (the plan before ended 100 mm off)
+    "hard/target_at_edge_of_reach.yaml": "infeasible",
     "hard/start_touching_obstacle.yaml": "solved",
     "hard/only_face_pushes_away.yaml": "infeasible",
     "hard/target_out_of_reach.yaml": "infeasible",
@@ -44,10 +46,14 @@ def test_task_file_outcome(name: str) -> None:
     assert m["goal_error"] <= 1e-6
     assert m["joint_limit_violation_max"] == 0.0
     assert m["reach_violation_max"] <= 1e-9
-    assert m["cone_violation_max"] <= 1e-5
+    # over samples moving faster than 1 mm/s (the fit's tolerance, 1e-6 m/s, is 1e-3 rad there); the
+    # physical check is the friction-cone margin below
+    assert m["cone_violation_max"] <= 1e-3
     assert m["tool_obstacle_clearance_min"] > 0.0
     assert m["switch_penetration_max"] <= 5e-6  # opt switches touch at the contacts only
     assert m["obstacle_clearance_min"] >= m["safety_margin_used"] - 1e-6
+    assert m["self_consistency_max"] <= 1e-4  # the push model replays the plan
+    assert m["friction_cone_margin_min"] > 0.0 and m["contact_edge_margin_min"] >= -1e-9
 
 
 def test_start_touching_keeps_the_starting_clearance() -> None:

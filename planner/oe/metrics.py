@@ -30,12 +30,14 @@ def plan_metrics(
     target: NDArray[np.float64],
     scene: Scene,
     *,
-    speed_tol: float = 1e-6,
+    speed_tol: float = 1e-3,
 ) -> dict[str, float]:
     """The shared metrics of a solved plan.
 
     Returns a dict with: ``cone_violation_max`` [rad] (largest angle by which the object's motion
-    leaves the active face's admissible cone, over samples moving faster than ``speed_tol`` [m/s]);
+    leaves the active face's admissible cone, over samples moving faster than ``speed_tol`` [m/s]:
+    1 mm/s by default, where the fit's tolerance of 1e-6 m/s bounds the angle by 1e-3 rad; slower,
+    a path coming to a stop points anywhere);
     ``friction_cone_margin_min`` [rad] (least ``atan(mu) - |phi_c|`` over the pushes: negative means
     a contact that would slide); ``contact_edge_margin_min`` [m] (least distance of the contact from
     the ends of its face's usable range: negative means it leaves the face); ``n_recontacts``;
