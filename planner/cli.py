@@ -53,6 +53,8 @@ def _print_summary(summary: dict[str, object], title: str) -> None:
 def _execute(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str, object], dict[str, object]]:
     """Execute a solved plan on the simulated platform open loop (and closed loop on request): the
     summary fields and the executions by mode."""
+    import numpy as np
+
     from planner.simulate import simulate_plan
 
     with _spinner("simulating open loop", quiet=quiet):
@@ -70,7 +72,10 @@ def _execute(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str,
         executions["closed loop"] = cl.execution
         summary.update({"closed_loop_final_error": cl.final_error, "closed_loop_status": cl.status,
                         "closed_loop_reason": cl.reason, "closed_loop_pushes": cl.n_pushes,
-                        "closed_loop_switches": cl.n_switches, "closed_loop_wall_time": cl.wall_time})
+                        "closed_loop_switches": cl.n_switches, "closed_loop_recontacts": cl.n_recontacts,
+                        "closed_loop_replans": cl.n_replans,
+                        "closed_loop_replan_time_median": float(np.median(cl.replan_times)) if cl.replan_times
+                        else 0.0, "closed_loop_wall_time": cl.wall_time})
     return summary, executions
 
 

@@ -1,58 +1,47 @@
-"""Closed-loop execution of a plan on the simulated platform (beyond the paper, which ran open loop).
+"""Closed-loop execution as receding-horizon re-planning with the planner itself (model predictive control).
 
-What the platform shows (measured, ``tools.sim``): a round puck pushed by a flat face moves close to
-the face's normal whatever the tool's direction inside the cone (tool 2's inclined face, tool moving
--30..30 degrees off the normal: the puck goes 2..15 degrees off it), and the normal turns with the
-heading the Omni imposes (q1). The plan's pushes at the edge of the cone therefore drift: open loop,
-the transfer plan ends about 30 mm from the target. Steering happens through *where* the faces
-change, so the loop re-plans the corners from the observed puck:
+The plan's pushes are executed a chunk at a time through a :class:`planner.execution.Plant` (the
+MuJoCo platform by default, a mismatched quasi-static model in tests, a real Omni with a camera).
+After each chunk the loop observes the resting object (the mean of ``frames`` camera frames) and
+re-solves the rest of the task from there with the same condensing as the plan:
 
-1. the approach, as planned;
-2. every push but the last two: re-anchored at the observed puck (the planned object path of the push
-   translated to start there), the tool at the face's contact poses along it;
-3. the last two faces ``f1``, ``f2``, in rounds. The puck is observed as the camera gives it (noisy,
-   averaged over a few frames of the resting puck). The remaining displacement is split along the
-   two faces' expected push directions (``r = a u1 + b u2``; a direction is the face's normal at
-   the heading there plus a bias learned online from the puck's motion in earlier straight pushes
-   of that face), and each face pushes its share in chunks of at most ``chunk`` [m], observed and
-   split again after each chunk. The last chunk of a share stops short (``undershoot``): these
-   faces cannot pull the puck back. The first round aims ``stage`` short of the target along the
-   middle of the two directions, so that what is left lies inside the span of the two pushes; when
-   the straight corner would hit an obstacle, or the directions cannot split the way there, ``f1``
-   follows its planned push instead (re-anchored). Later rounds push only what brings the puck
-   closer; the loop ends when the puck is measured within ``tolerance``, when no push of the pair
-   can bring it closer, or after ``max_rounds``;
-4. between faces, the plan's switch variant at the observed puck (the geometric arch when that
-   fails); a re-contact with the same face backs off 3 mm, slides and approaches; a re-anchored
-   push that would leave the Omni's reach is cut where it does.
+1. the rest of the plan's object path, shifted to start at the observed object and blended back to
+   the target (a reference from here), with the rest of the plan's face sequence and switch times:
+   one fit of that sequence (:func:`planner.oe.qp_variant.condense_sequence`, the contact starting
+   where the face already touches the object), and when it fails a new sequence search
+   (:func:`planner.oe.qp_variant.condense_qp`) from here; ``mapping`` plans re-plan with the mapping;
+2. the next chunk: the first push of that re-plan, at most ``chunk`` of object travel (and at most
+   ``approach`` of what is left once the target is near, so the object comes at it from short of it:
+   faces cannot pull back), its tool path from the push model (the re-plan's tool poses); a change of
+   face is a switch planned at the observed object with the plan's SS variant, another contact point
+   of the same face a re-contact;
+3. when the plan's path is used up and the object is not within ``tolerance``: correction rounds
+   from the observed object straight to the target (a new search each), at most ``max_rounds``.
 
-Measured on the paper's transfer task (qp/opt plan, 10 camera-noise seeds): open loop 30 mm, closed
-loop median 0.7 mm, at most 1.3 mm, 5-8 pushes and 2-6 switches.
-
-Every move is tracked by the platform's PD loop (:meth:`tools.sim.SimPlatform.execute_tool_path`).
+It ends ``"reached"`` (the measured object within ``tolerance``; the true error may differ by the
+camera's noise), ``"closest"`` (no push sequence brings it closer from where it is), ``"rounds"``
+(``max_rounds`` used up) or ``"failed"`` (a move the planner or the plant refused: the reason says
+which); no exception escapes.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from dmp.errors import InputError
-from planner.assemble import SwitchPath
-from planner.oe.face_frame import FaceFrame
+from planner.oe.push_plan import Push, PushPlan
 from planner.plan import Plan
+from planner.scene import Scene
 from planner.timing import min_jerk_along, min_jerk_duration
 from problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
-from tools.objects import Disc
 from tools.omni.ik import joint_path
-from tools.sim import Execution, SimPlatform
 
-BACK_OFF = 0.003
-"""Distance [m] the tool backs off from the puck to re-contact it with the same face."""
+#: Tool moves shorter than this [m] between a chunk's end and the next chunk's start are skipped.
+SAME_POSE = 3e-4
 
 
 @dataclass(frozen=True)
@@ -60,15 +49,14 @@ class ClosedLoopReport:
     """Outcome of a closed-loop execution.
 
     Attributes:
-        status: ``"reached"`` (the measured puck within ``tolerance``; the true error can be larger by
-            the camera's noise), ``"closest"`` (the last pair of faces cannot
-            bring the puck closer: their observed directions do not span the rest), ``"rounds"``
-            (``max_rounds`` used up) or ``"failed"`` (no admissible switch; ``reason`` says why).
-        final_error: object centre to target at the end [m].
-        n_pushes: pushes (chunks) executed; n_switches: face changes.
-        bias: learned offset [rad] of the puck's direction from each face's normal.
-        errors: object-to-target distance [m] after each push.
-        wall_time: [s]; execution: the whole recording.
+        status: ``"reached"``, ``"closest"``, ``"rounds"`` or ``"failed"`` (module docstring).
+        reason: why it did not reach the target (empty when it did).
+        final_error: object centre to target at the end [m] (the true one when the plant tells it,
+            else the measured one).
+        n_pushes: chunks pushed; n_switches: changes of face; n_recontacts: re-contacts of a face.
+        n_replans: re-plans solved; replan_times: their wall times [s].
+        errors: object-to-target distance [m] after each chunk.
+        wall_time: [s]; execution: the plant's recording when it keeps one (the MuJoCo platform).
     """
 
     status: str
@@ -76,319 +64,324 @@ class ClosedLoopReport:
     final_error: float
     n_pushes: int
     n_switches: int
-    bias: dict[str, float]
+    n_recontacts: int
+    n_replans: int
+    replan_times: list[float]
     errors: list[float]
     wall_time: float
-    execution: Execution
+    execution: object = None
     log: list[str] = field(default_factory=list)
 
 
+@dataclass(frozen=True)
+class _Reference:
+    """The plan's pushes on their own time axis (``tau`` [s], switches and approach taken out), as a
+    push plan whose pushes carry the plan's tool poses."""
+
+    plan: PushPlan
+    spans: tuple[tuple[str, float, float], ...]
+
+    @classmethod
+    def of(cls, plan: Plan) -> _Reference:
+        taus, xys, poses, spans, pushes = [], [], [], [], []
+        now, n = 0.0, 0
+        phase = np.asarray(plan.phase)
+        for seg in plan.pushes:
+            m = np.flatnonzero((plan.t >= seg.t_start - 1e-9) & (plan.t <= seg.t_end + 1e-9) & (phase == "push"))
+            tt = plan.t[m] - seg.t_start + now
+            first = 1 if taus else 0  # consecutive pushes share the object's position at the switch
+            idx = np.arange(n - first, n - first + m.size)
+            taus.append(tt[first:])
+            xys.append(plan.object_xy[m][first:])
+            poses.append(plan.tool_pose[m])
+            face = seg.faces[0]
+            end = now + seg.t_end - seg.t_start
+            pushes.append(Push(face, now, end, 0.0, idx, plan.tool_pose[m],
+                               recontact=bool(pushes) and pushes[-1].face == face))
+            if spans and spans[-1][0] == face:  # a re-contact: a re-plan places its own contacts
+                spans[-1] = (face, spans[-1][1], end)
+            else:
+                spans.append((face, now, end))
+            now, n = end, n + m.size - first
+        tau, xy = np.concatenate(taus), np.vstack(xys)
+        v = np.gradient(xy, tau, axis=0) if tau.size > 2 else np.zeros_like(xy)
+        return cls(PushPlan(plan.variant.get("oe", "qp"), "solved", tau, xy, v, xy, pushes=tuple(pushes)),
+                   tuple(spans))
+
+    @property
+    def tau(self) -> NDArray[np.float64]:
+        return self.plan.t
+
+    @property
+    def xy(self) -> NDArray[np.float64]:
+        return self.plan.object_xy
+
+    def rest(self, tau0: float, start: NDArray[np.float64], target: NDArray[np.float64]) -> tuple:
+        """Times (K,) from 0, the reference (K, 2) from ``start`` blended back to the plan by the end
+        (and exactly to ``target``), and the faces with their switch times after ``tau0``."""
+        keep = self.tau > tau0 + 1e-9
+        tt = np.concatenate([[tau0], self.tau[keep]])
+        here = [np.interp(tau0, self.tau, self.xy[:, j]) for j in range(2)]
+        xy = np.vstack([here, self.xy[keep]])
+        u = (tt - tt[0]) / max(tt[-1] - tt[0], 1e-9)
+        ref = xy + (1.0 - u)[:, None] * (start - xy[0]) + u[:, None] * (target - xy[-1])
+        spans = [(f, max(a, tau0) - tau0, b - tau0) for f, a, b in self.spans if b > tau0 + 1e-9]
+        faces = tuple(f for f, _, _ in spans)
+        switches = tuple(b for _, _, b in spans[:-1])
+        return tt - tau0, ref, faces, switches
+
+    @property
+    def end(self) -> float:
+        return float(self.tau[-1])
+
+
 class _Loop:
-    """State of one closed-loop run."""
+    """One closed-loop run (see :func:`execute_closed_loop`)."""
 
-    def __init__(self, plan: Plan, task: Task, noise: float, frames: int, seed: int) -> None:
-        from planner.solve import task_skills
-        from planner.switches import arch_planner, skill_planner
+    def __init__(self, plan: Plan, task: Task, plant: object, frames: int, tolerance: float) -> None:
+        from planner.recontact import recontact_planner
+        from planner.solve import effective_margin, qp_options, task_scene, task_skills
+        from planner.switches import arch_planner, skill_planner, with_fallback
 
-        self.plan, self.task = plan, task
+        self.plan, self.task, self.plant, self.frames, self.tolerance = plan, task, plant, frames, tolerance
         self.tool = task_tool(task)
         self.platform = task_platform(task, self.tool)
-        self.obstacles = task_obstacles(task)
-        self.sim = SimPlatform(self.tool, self.platform, self.obstacles)
-        from planner.solve import effective_margin, task_scene
-
-        self.scene = task_scene(task, self.obstacles, effective_margin(task, self.obstacles))
-        self.frames = {f: FaceFrame.build(self.tool, f, self.platform, self.scene) for f in self.tool.face_names}
-        self.bias = dict.fromkeys(self.tool.face_names, 0.0)
-        self.parts: list[Execution] = []
-        self.log: list[str] = []
-        self.errors: list[float] = []
-        self.n_pushes = self.n_switches = 0
-        self.v, self.a = task.timing.max_tool_speed, task.timing.max_tool_accel
+        obstacles = task_obstacles(task)
+        self.skills = task_skills(task, need_ss=plan.variant.get("ss") in ("dmp", "opt"))
+        self.scene = task_scene(task, obstacles, effective_margin(task, obstacles), self.skills)
         r, clear = task.object.radius, task.ss.clearance
-        self.arch = arch_planner(self.tool, self.platform, r, self.obstacles, clear)
-        self.switch = self.arch
-        if plan.variant.get("ss") in ("dmp", "opt"):
-            ss = task_skills(task).ss
-            if ss is not None:
-                self.switch = skill_planner(plan.variant["ss"], ss, self.tool, self.platform, r, self.obstacles,
-                                            clear, task.ss.n_knots)
+        arch = arch_planner(self.tool, self.platform, r, obstacles, clear)
+        self.switch = arch
+        if plan.variant.get("ss") in ("dmp", "opt") and self.skills.ss is not None:
+            self.switch = with_fallback(skill_planner(plan.variant["ss"], self.skills.ss, self.tool, self.platform, r,
+                                                      obstacles, clear, task.ss.n_knots), arch, "arch")
+        self.recontact = with_fallback(recontact_planner(self.tool, self.platform, r, obstacles), self.switch, "switch")
+        self.target = np.array(task.target)
+        self.variant = plan.variant.get("oe", "qp")
+        self.options = replace(qp_options(task), n_samples=40, screen_samples=30, n_basis=15, candidates=2,
+                               alternatives=0)
+        self.v, self.a = task.timing.max_tool_speed, task.timing.max_tool_accel
         self.face: str | None = None
-        self.noise, self.n_frames, self.rng = noise, frames, np.random.default_rng(seed)
-        from planner.solve import effective_margin
+        self.n_pushes = self.n_switches = self.n_recontacts = 0
+        self.replan_times: list[float] = []
+        self.errors: list[float] = []
+        self.log: list[str] = []
 
-        self.margin = effective_margin(task, self.obstacles)
-        self.obstacle_shapes = [ob.polygon() if isinstance(ob, Disc) else ob for ob in self.obstacles]
-        self.seen: dict[str, int] = {}
+    # ---------------------------------------------------------------- sensing and moving
+    def observe(self) -> NDArray[np.float64]:
+        """The resting object as the camera measures it: the mean of ``frames`` frames."""
+        return np.mean([self.plant.observe_object() for _ in range(self.frames)], axis=0)  # type: ignore[attr-defined]
 
-    def observe(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The puck as the camera measures it while it rests (the mean of ``frames`` noisy frames)
-        and the tool pose from the encoders."""
-        o, pose = self.sim.observe()
-        return o + self.rng.normal(0.0, self.noise / np.sqrt(self.n_frames), 2), pose
+    def true_error(self) -> float:
+        here = getattr(self.plant, "true_object", None)
+        o = here() if callable(here) else self.observe()
+        return float(np.hypot(*(self.target - o)))
 
     def move(self, xy: NDArray[np.float64]) -> None:
-        """Track the polyline ``xy`` (K, 2) [m] with a minimum-jerk profile within the limits."""
+        """Track the tool path ``xy`` (K, 2) [m] (heading from the Omni) with a minimum-jerk profile."""
         length = float(np.sum(np.linalg.norm(np.diff(xy, axis=0), axis=1)))
-        if length < 1e-5:
+        if length < 1e-6:
             return
         dur = min_jerk_duration(length, self.v, self.a)
         n = max(3, int(np.ceil(dur / 0.01)) + 1)
         t, path = min_jerk_along(xy, dur, n)
-        self.parts.append(self.sim.execute_tool_path(t, path))
+        jp = joint_path(self.platform, path)
+        if np.any(~np.isfinite(jp.heading)) or np.any(jp.violation > 0):
+            k = int(np.argmax(~np.isfinite(jp.heading) | (jp.violation > 0)))
+            raise InputError("tool path", "a move within the Omni's reach and joint limits",
+                             f"{np.round(path[k], 4).tolist()} m")
+        self.plant.move_tool(t, np.column_stack([path, jp.heading]))  # type: ignore[attr-defined]
 
-    def direction(self, face: str, o: NDArray[np.float64]) -> float:
-        """The puck's expected world direction [rad] pushed by ``face`` at ``o``: normal + bias."""
-        return float(self.frames[face].push_direction(o[None])[0]) + self.bias[face]
+    # ---------------------------------------------------------------- planning
+    def scene_at(self, o: NDArray[np.float64]) -> Scene:
+        """The scene for a re-plan from ``o``: the safety margin at most the object's clearance there
+        (an object pushed closer to an obstacle than the margin keeps that clearance, as a start
+        touching one does: :func:`planner.solve.effective_margin`)."""
+        import shapely
 
-    def unit(self, face: str, o: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Unit vector (2,) of :meth:`direction`."""
-        return _heading_unit(self.direction(face, o))
+        from tools.objects import Disc
 
-    def contact(self, face: str) -> str | None:
-        """Bring ``face`` into contact with the observed puck; the reason when impossible."""
-        o, pose = self.observe()
-        target = self.frames[face].tool_pose(o[None])[0]
-        if self.face == face:
-            if np.hypot(*(target[:2] - pose[:2])) < 5e-4:
-                return None
-            u_a, u_b = (_heading_unit(p[2] + self.tool.face(face).push_angle) for p in (pose, target))
-            self.move(np.vstack([pose[:2], pose[:2] - BACK_OFF * u_a, target[:2] - BACK_OFF * u_b, target[:2]]))
+        disc = shapely.Point(o).buffer(self.scene.radius, quad_segs=64)
+        gap = min((float(shapely.distance(disc, ob.polygon() if isinstance(ob, Disc) else ob))
+                   for ob in self.scene.obstacles), default=np.inf)
+        if gap >= self.scene.margin:
+            return self.scene
+        return replace(self.scene, margin=max(0.0, gap - 1e-4))
+
+    def contact_s(self, o: NDArray[np.float64]) -> float | None:
+        """Where the face in contact touches the object at ``o`` [m along the face], if it does."""
+        if self.face is None:
             return None
-        assert self.face is not None  # the approach put a face in contact
-        here = self.frames[self.face].tool_pose(o[None])[0]
-        sw: SwitchPath = self.switch(o, self.face, here, face, target)
-        if sw.status != "solved":
-            self.log.append(f"switch {self.face} -> {face} at {np.round(o, 4).tolist()}: {sw.reason}; trying the arch")
-            sw = self.arch(o, self.face, pose, face, target)
-            if sw.status != "solved":
-                return f"no switch {self.face} -> {face} at {np.round(o, 4).tolist()} m: {sw.reason}"
-        self.move(np.vstack([pose[:2], sw.xy]))
-        self.face = face
-        self.n_switches += 1
-        return None
+        from planner.switches import contact_fraction
 
-    def push(self, face: str, path_from: Callable[[NDArray[np.float64]], NDArray[np.float64]],
-             learn: bool = True) -> str | None:
-        """Bring ``face`` into contact, then push the puck along the object path ``path_from(o)``
-        (K, 2) [m] from the observed puck ``o`` (the tool at the face's contact poses), and learn the
-        face's bias from where the puck went (when ``learn``: pushes along the expected direction;
-        the puck's offset depends on the tool's, so planned pushes at the cone's edge would mislead).
-        Returns the reason when no contact or push is possible."""
-        why = self.contact(face)
-        if why:
-            return why
-        before, pose = self.observe()
-        path = path_from(before)
-        tool = self.frames[face].tool_pose(path)
-        out = np.flatnonzero(joint_path(self.platform, tool[:, :2]).violation > 0)
-        if out.size:  # a re-anchored path can leave the reach: push as far as the Omni reaches
-            if out[0] < 2:
-                return f"push {face} from {np.round(before, 4).tolist()} m leaves the Omni's reach at once"
-            tool, path = tool[: out[0]], path[: out[0]]
-            self.log.append(f"push {face} cut at the Omni's reach after {len(path)} samples")
-        try:
-            self.move(np.vstack([pose[:2], tool[:, :2]]))
-        except InputError as exc:  # the push would leave the Omni's reach
-            return f"push {face} from {np.round(before, 4).tolist()} m: {exc}"
-        after = self.observe()[0]
+        pose = self.plant.tool_pose()  # type: ignore[attr-defined]
+        return contact_fraction(self.tool, self.face, o, pose, self.scene.radius) * self.tool.face(self.face).length
+
+    def replan(self, t: NDArray[np.float64], ref: NDArray[np.float64], faces: tuple[str, ...],
+               switches: tuple[float, ...], o: NDArray[np.float64]) -> PushPlan:
+        """The rest of the task from the observed object ``o``: the sequence, else a new search."""
+        from planner.oe.mapping_variant import MappingOptions, condense_mapping
+        from planner.oe.qp_variant import condense_qp, condense_sequence
+
+        start = time.perf_counter()
+        s_first = self.contact_s(o) if faces and faces[0] == self.face else None
+        scene = self.scene_at(o)
+        if self.variant == "mapping":
+            pp = condense_mapping(t, ref, self.tool, self.platform, scene, self.target,
+                                  MappingOptions(k=self.task.oe.k, tube=self.task.oe.tube))
+        elif faces:
+            pp = condense_sequence(t, ref, self.tool, self.platform, scene, self.target, faces, switches,
+                                   self.options, s_first=s_first)
+            if pp.status != "solved":
+                self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
+                                "new search")
+                pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options)
+        else:
+            pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options)
+        self.replan_times.append(time.perf_counter() - start)
+        return pp
+
+    # ---------------------------------------------------------------- executing
+    def push(self, p: Push, pp: PushPlan, o: NDArray[np.float64], k0: int, length: float) -> int:
+        """Bring ``p``'s face to its contact pose at sample ``k0`` of the push (switch, re-contact or
+        none), then push along ``p`` for at most ``length`` [m] of object travel; returns the push
+        sample reached."""
+        pose = self.plant.tool_pose()  # type: ignore[attr-defined]
+        start = p.tool_pose[k0]
+        if self.face != p.face:
+            sw = self.switch(o, self.face, pose, p.face, start) if self.face is not None else None
+            if sw is None or sw.status != "solved":
+                raise _Stop("failed", f"no switch {self.face} -> {p.face} at {np.round(o, 4).tolist()} m"
+                            + (f": {sw.reason}" if sw is not None else ""))
+            self.move(np.vstack([pose[:2], sw.xy]))
+            self.n_switches += 1
+        elif np.hypot(*(pose[:2] - start[:2])) > SAME_POSE:
+            rc = self.recontact(o, p.face, pose, p.face, start)
+            if rc.status != "solved":
+                raise _Stop("failed", f"no re-contact of {p.face} at {np.round(o, 4).tolist()} m: {rc.reason}")
+            self.move(np.vstack([pose[:2], rc.xy]))
+            self.n_recontacts += 1
+        self.face = p.face
+        xy = pp.object_xy[p.samples[k0:]]
+        travel = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
+        k = int(np.searchsorted(travel, length, side="right")) - 1
+        k = k0 + max(1, min(k, len(xy) - 1))
+        here = self.plant.tool_pose()  # type: ignore[attr-defined]
+        self.move(np.vstack([here[:2], p.tool_pose[k0: k + 1, :2]]))
         self.n_pushes += 1
-        moved = after - before
-        planned = path[-1] - path[0]
-        if learn and np.hypot(*moved) > 2e-3:
-            # the puck's direction off the face's normal (at the middle of its move): the face's bias
-            normal = float(self.frames[face].push_direction((0.5 * (before + after))[None])[0])
-            off = float((np.arctan2(moved[1], moved[0]) - normal + np.pi) % (2 * np.pi) - np.pi)
-            n = self.seen[face] = self.seen.get(face, 0) + 1
-            self.bias[face] += (off - self.bias[face]) * max(0.5, 1.0 / n)
-        err = float(np.hypot(*(np.array(self.task.target) - self.sim.observe()[0])))  # the true error
-        self.errors.append(err)
-        self.log.append(f"push {face}: planned {1e3 * np.hypot(*planned):.1f} mm, moved {1e3 * np.hypot(*moved):.1f} "
-                        f"mm, bias {np.degrees(self.bias[face]):.1f} deg, error {1e3 * err:.1f} mm")
-        return None
+        return k
 
 
-def execute_closed_loop(plan: Plan, *, chunk: float = 0.015, tolerance: float = 0.001, max_rounds: int = 6,
-                        undershoot: float = 0.85, stage: float = 0.008,
-                        camera_noise: float = 0.0015, frames: int = 10, seed: int = 0) -> ClosedLoopReport:
-    """Execute a solved plan closed loop (module docstring) on the simulated platform.
+class _Stop(Exception):
+    def __init__(self, status: str, reason: str) -> None:
+        self.status, self.reason = status, reason
+        super().__init__(reason)
+
+
+def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, config: object | None) -> object:
+    from planner.execution import SimPlant
+    from planner.simulate import task_sim_config
+    from tools.sim import SimPlatform
+
+    tool = task_tool(task)
+    sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task), config or task_sim_config(task))
+    sim.reset(np.array(task.start), q0=plan.joints[0])
+    return SimPlant(sim, camera_noise, seed)
+
+
+def execute_closed_loop(
+    plan: Plan, plant: object | None = None, *, tolerance: float = 0.001, chunk: float = 0.015,
+    approach: float = 0.6, max_rounds: int = 4, max_chunks: int = 120, frames: int = 10,
+    replan_threshold: float = 0.001, camera_noise: float = 0.0015, seed: int = 0, config: object | None = None,
+) -> ClosedLoopReport:
+    """Execute a solved plan closed loop (module docstring).
 
     Args:
         plan: a solved plan (its task names the skills by absolute path, as :func:`planner.solve`
             writes it).
-        chunk: longest push [m] of the last two faces before the puck is observed again.
-        tolerance: the puck counts as at the target within this distance [m].
-        max_rounds: how often the last pair of faces may be repeated.
-        stage: the first round aims this far [m] short of the target along the middle of the last two
-            faces' directions (the later rounds then start inside the span of their pushes).
-        undershoot: share of the remaining push a face's last chunk makes (below 1: the faces cannot
-            pull the puck back, so the loop approaches the target from short of it).
-        camera_noise: standard deviation [m] per axis of one camera frame of the puck (the dataset's
-            depth camera: 1.5 mm); the loop averages ``frames`` frames of the resting puck (noise
-            drawn from ``numpy.random.default_rng(seed)``). The reported errors are the true ones.
+        plant: a :class:`planner.execution.Plant` with the object at the task's start and the tool
+            at the plan's first pose; default the MuJoCo platform (``config``: its
+            :class:`tools.sim.SimConfig`, default the task's object) with a camera of
+            ``camera_noise`` [m] per frame (seed ``seed``).
+        tolerance: the object counts as at the target within this distance [m] (as measured).
+        chunk: longest object travel [m] of one chunk before the object is observed again.
+        approach: share of the remaining path a chunk may push once less than two chunks remain.
+        max_rounds: correction rounds once the plan's path is used up; max_chunks: chunks in all.
+        frames: camera frames averaged per observation.
+        replan_threshold: the rest is re-planned when the observed object is farther than this [m]
+            (or three times the averaged camera noise, if more) from where the plan in force puts it;
+            closer, the plan in force goes on (re-planning on the camera's noise would only add it).
     """
-    if plan.status != "solved":
-        raise InputError("plan", "a solved plan", plan.status)
+    if not isinstance(plan, Plan) or plan.status != "solved":
+        raise InputError("plan", "a solved plan", getattr(plan, "status", type(plan).__name__))
     start = time.perf_counter()
     task = task_from_dict(plan.task, "plan.task")
-    loop = _Loop(plan, task, camera_noise, frames, seed)
-    target = np.array(task.target)
-    loop.sim.reset(np.array(task.start), q0=plan.joints[0])
-    approach = np.array([p == "approach" for p in plan.phase])
-    loop.parts.append(loop.sim.execute(plan.t[approach], plan.joints[approach]))
-    faces = [p.faces[0] for p in plan.pushes]
-    loop.face = faces[0]
     status, reason = "rounds", ""
-    # every push but the last two: the planned object path, re-anchored at the observed puck
-    for seg in plan.pushes[:-2]:
-        m = (plan.t >= seg.t_start) & (plan.t <= seg.t_end)
-        planned = plan.object_xy[m]
-        why = loop.push(seg.faces[0], lambda o, p=planned: p + (o - p[0]), learn=False)
-        if why:
-            status, reason = "failed", why
-            break
-    pair = faces[-2:] if len(faces) >= 2 else faces[-1:]
-
-    def planned_xy(i: int) -> NDArray[np.float64]:
-        seg = plan.pushes[i]
-        return plan.object_xy[(plan.t >= seg.t_start) & (plan.t <= seg.t_end)]
-
-    rounds = 0
-    while status != "failed" and rounds < max_rounds:
-        o = loop.observe()[0]
-        if np.hypot(*(target - o)) <= tolerance:
-            status = "reached"
-            break
-        if _pair_plan(loop, pair, o, target)[1] > np.hypot(*(target - o)) - 5e-4:
-            status = "closest"
-            reason = (f"the faces {' and '.join(pair)} cannot bring the puck closer than "
-                      f"{1e3 * np.hypot(*(target - o)):.1f} mm (their observed push directions)")
-            break
-        rounds += 1
-        # the first round pushes both faces as planned, aiming ``stage`` short of the target along the
-        # middle of the two faces' directions, so the rest lies inside the span of the faces' pushes
-        # whatever the first round's errors; later rounds only what brings the puck closer
-        todo = list(pair) if rounds == 1 else _pair_plan(loop, pair, o, target)[0]
-        aim = target
-        if rounds == 1 and len(pair) == 2:
-            mid = sum(loop.unit(f, o) for f in pair)
-            aim = target - stage * mid / np.linalg.norm(mid)
-        if rounds == 1 and len(pair) == 2 and _share(loop, todo, 0, o, aim) <= 2e-4:
-            # the faces' expected directions do not split the way to the aim from here: when the last
-            # face alone gets close, it pushes alone; else (the plan pushes at the cone's edge) the
-            # first face follows its planned push, re-anchored at the puck
-            u = loop.unit(pair[1], o)
-            r = aim - o
-            alone = o + max(0.0, r @ u) * u
-            if np.hypot(*(aim - alone)) > 0.3 * np.hypot(*r) or _hits(loop, [o, alone]):
-                prev = planned_xy(-2)
-                why = loop.push(pair[0], lambda o, p=prev: p + (o - p[0]), learn=False)
-                if why:
-                    status, reason = "failed", why
+    loop: _Loop | None = None
+    try:
+        plant = plant if plant is not None else _default_plant(plan, task, camera_noise, seed, config)
+        loop = _Loop(plan, task, plant, frames, tolerance)
+        approach_m = np.asarray(plan.phase) == "approach"
+        loop.move(plan.tool_pose[approach_m, :2])
+        loop.face = plan.pushes[0].faces[0]
+        ref = _Reference.of(plan)
+        # the plan in force (first the plan itself, on its push-time axis), the push and sample reached
+        current, base, i, k = ref.plan, 0.0, 0, 0
+        threshold = max(replan_threshold, 3.0 * camera_noise / np.sqrt(frames))
+        rounds = 0
+        for _ in range(max_chunks):
+            if i >= len(current.pushes):  # the plan in force is done: is the object there?
+                o = np.mean([loop.observe() for _ in range(3)], axis=0)
+                if np.hypot(*(loop.target - o)) <= tolerance:
+                    status = "reached"
                     break
-            todo = [pair[1]]
-        for k, face in enumerate(todo):
-            o = loop.observe()[0]
-            left = _share(loop, todo, k, o, aim)
-            while left > 2e-4:
-                # the last chunk stops short (``undershoot``): a puck pushed too far cannot be pushed
-                # back by these faces, one not far enough is pushed on in the next round
-                step = chunk if left > chunk else undershoot * left
-                if k == 0 and len(todo) == 2 and rounds == 1 and _blocked(loop, todo, o, aim):
-                    # the straight corner would take the puck into an obstacle: follow the plan's path
-                    # of this push (re-anchored at the puck) for one more chunk
-                    prev = planned_xy(-2)
-                    why = loop.push(face, lambda o, p=prev: _along(p, o, chunk), learn=False)
-                else:
-                    why = loop.push(face, lambda o, f=face, step=step: _straight(loop, f, o, step))
-                if why:
-                    status, reason = "failed", why
+                rounds += 1
+                if rounds > max_rounds:
+                    status, reason = "rounds", f"{max_rounds} correction rounds did not reach the target"
                     break
-                o = loop.observe()[0]
-                left = _share(loop, todo, k, o, aim)
-                if step < chunk:
+                d = float(np.hypot(*(loop.target - o)))
+                t = np.linspace(0.0, max(1.0, d / 0.01), 30)
+                r = o + np.linspace(0.0, 1.0, t.size)[:, None] * (loop.target - o)
+                pp = loop.replan(t, r, (), (), o)
+                if pp.status != "solved":
+                    status, reason = "closest", f"no push brings the object closer from {np.round(o, 4).tolist()} m " \
+                        f"({1e3 * d:.1f} mm from the target): {pp.reason}"
                     break
-            if status == "failed":
+                current, base, i, k = pp, ref.end, 0, 0
+                continue
+            p = current.pushes[i]
+            o = loop.observe()
+            if np.hypot(*(loop.target - o)) <= tolerance:
+                status = "reached"
                 break
-    ex = Execution.concat(loop.parts)
-    err = float(np.hypot(*(target - loop.sim.observe()[0])))
-    if err <= tolerance:
+            expected = current.object_xy[p.samples[k]]
+            tau = base + float(current.t[p.samples[k]] - current.t[0])
+            if np.hypot(*(o - expected)) > threshold and tau < ref.end - 0.05:
+                t, r, faces, switches = ref.rest(tau, o, loop.target)
+                pp = loop.replan(t, r, faces, switches, o)
+                if pp.status == "solved":
+                    current, base, i, k = pp, tau, 0, 0
+                    p = current.pushes[0]
+                else:  # nothing better from here: the plan in force goes on
+                    loop.log.append(f"no re-plan from {np.round(o, 4).tolist()} m ({pp.reason}); the plan goes on")
+            left = float(np.sum(np.linalg.norm(np.diff(current.object_xy[p.samples[k]:], axis=0), axis=1)))
+            length = chunk if left > 2 * chunk else max(approach * left, 2e-4)
+            k = loop.push(p, current, o, k, length)
+            loop.errors.append(loop.true_error())
+            if k >= len(p.samples) - 1:
+                i, k = i + 1, 0
+        else:
+            status, reason = "rounds", f"{max_chunks} chunks did not reach the target"
+    except _Stop as stop:
+        status, reason = stop.status, stop.reason
+    except Exception as exc:  # no exception escapes: a refused move ends the run with its reason
+        status, reason = "failed", f"{type(exc).__name__}: {exc}"
+    err = loop.true_error() if loop is not None else float("nan")
+    if loop is not None and status != "reached" and np.hypot(*(loop.target - loop.observe())) <= tolerance:
         status, reason = "reached", ""
-    return ClosedLoopReport(status, reason, err, loop.n_pushes, loop.n_switches, dict(loop.bias), loop.errors,
-                            time.perf_counter() - start, ex, loop.log)
-
-
-def _heading_unit(angle: float) -> NDArray[np.float64]:
-    return np.array([np.cos(angle), np.sin(angle)])
-
-
-def _straight(loop: _Loop, face: str, o: NDArray[np.float64], length: float) -> NDArray[np.float64]:
-    """Object path (K, 2) [m]: ``length`` from ``o`` along the face's expected direction."""
-    s = np.linspace(0.0, length, max(3, int(length / 5e-4)))
-    return o + s[:, None] * loop.unit(face, o)
-
-
-def _blocked(loop: _Loop, pair: list[str], o: NDArray[np.float64], target: NDArray[np.float64]) -> bool:
-    """Whether the two straight pushes of ``pair`` from ``o`` to ``target`` (corner where the
-    expected directions meet) bring the puck within the safety margin of an obstacle."""
-    u = [loop.unit(f, o) for f in pair]
-    a = np.column_stack(u)
-    if abs(np.linalg.det(a)) < 1e-6:
-        return False
-    coef = np.maximum(np.linalg.solve(a, target - o), 0.0)
-    return _hits(loop, [o, o + coef[0] * u[0], target])
-
-
-def _hits(loop: _Loop, points: list[NDArray[np.float64]]) -> bool:
-    """Whether the puck moved along the polyline ``points`` [m] comes within the safety margin of an
-    obstacle (away from where it is now: it may start close, e.g. touching)."""
-    import shapely
-
-    if not loop.obstacles:
-        return False
-    grow = loop.task.object.radius + loop.margin
-    swept = shapely.LineString(points).buffer(grow)
-    near = shapely.Point(points[0]).buffer(grow + 1e-3)
-    return any(swept.difference(near).intersects(sh) for sh in loop.obstacle_shapes)
-
-
-def _along(planned: NDArray[np.float64], o: NDArray[np.float64], length: float) -> NDArray[np.float64]:
-    """Object path (K, 2) [m]: the next ``length`` of the planned path ``planned`` (K, 2) after the
-    point nearest to ``o``, translated to start at ``o``."""
-    j = int(np.argmin(np.linalg.norm(planned - o, axis=1)))
-    rest = planned[j:]
-    if len(rest) < 2:
-        return np.vstack([o, o])
-    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(rest, axis=0), axis=1))])
-    keep = rest[s <= length]
-    return keep - keep[0] + o if len(keep) >= 2 else np.vstack([o, o + rest[1] - rest[0]])
-
-
-def _pair_plan(loop: _Loop, pair: list[str], o: NDArray[np.float64],
-               target: NDArray[np.float64]) -> tuple[list[str], float]:
-    """The faces of ``pair`` to push this round, and the distance [m] to ``target`` they would leave
-    along their expected directions: both faces with 0 left when the rest splits into positive
-    shares, else the one face whose push alone comes closest (a single face: its projection)."""
-    r = target - o
-    us = [loop.unit(f, o) for f in pair]
-    rest = [float(np.hypot(*(r - max(0.0, r @ u) * u))) for u in us]
-    if len(us) == 2 and abs(np.linalg.det(np.column_stack(us))) >= 1e-6:
-        if np.all(np.linalg.solve(np.column_stack(us), r) > 0):
-            return list(pair), 0.0
-        best = int(np.argmin(rest))
-        return [pair[best]], rest[best]
-    return [pair[int(np.argmin(rest))]], rest[-1]
-
-
-def _share(loop: _Loop, pair: list[str], k: int, o: NDArray[np.float64], target: NDArray[np.float64]) -> float:
-    """How far [m] face ``pair[k]`` should still push: the remaining displacement split along the
-    pair's expected directions at ``o`` (for a single face: the projection on its direction)."""
-    r = target - o
-    us = [loop.unit(f, o) for f in pair[k:]]
-    if len(us) == 1:
-        return max(0.0, float(r @ us[0]))
-    a = np.column_stack(us)
-    if abs(np.linalg.det(a)) < 1e-6:
-        return max(0.0, float(r @ us[0]))
-    coef = np.linalg.solve(a, r)
-    return max(0.0, float(coef[0]))
+    execution = getattr(plant, "execution", None) if plant is not None else None
+    return ClosedLoopReport(
+        status, reason, err, loop.n_pushes if loop else 0, loop.n_switches if loop else 0,
+        loop.n_recontacts if loop else 0, len(loop.replan_times) if loop else 0,
+        loop.replan_times if loop else [], loop.errors if loop else [], time.perf_counter() - start,
+        execution, loop.log if loop else [])

@@ -1,6 +1,7 @@
-"""Executing plans on the simulated platform: open loop (as the paper) drifts; the closed loop
-re-plans the corners from the observed puck and brings it within 5 mm of the target on the paper's
-transfer task. Through the CLI, with the figure and the GIF."""
+"""Executing plans: open loop on the simulated platform the push mechanics deliver the plan; the
+closed loop re-plans from the observed puck through the Plant protocol (the MuJoCo platform, a
+quasi-static plant with other mechanics) and ends within the tolerance or says why. Through the
+CLI, with the figure and the GIF."""
 
 from __future__ import annotations
 
@@ -28,10 +29,10 @@ def test_closed_loop_reaches_the_target_where_open_loop_drifts(plan_file: Path, 
     fig, gif = tmp_path / "fig12.png", tmp_path / "run.gif"
     assert main(["simulate", str(plan_file), "--closed-loop", "--figure", str(fig), "--gif", str(gif), "--json"]) == 0
     s = json.loads(capsys.readouterr().out)
-    assert s["open_loop_final_error"] > 0.01  # the puck drifts along the faces (measured ~30 mm)
+    assert s["open_loop_final_error"] < 0.005  # the push mechanics deliver the plan (it drifted ~30 mm before)
     assert s["open_loop_tool_deviation"] < 1e-3  # while the tool tracks its plan
-    assert s["closed_loop_final_error"] <= 0.005
-    assert s["closed_loop_status"] in ("reached", "closest")
+    assert s["closed_loop_final_error"] <= 0.002
+    assert s["closed_loop_status"] == "reached"
     assert s["real_time_factor"] >= 10.0
     assert fig.stat().st_size > 10_000 and gif.read_bytes()[:6] in (b"GIF87a", b"GIF89a")
 
@@ -43,9 +44,9 @@ def test_closed_loop_report_is_consistent(plan_file: Path) -> None:
     rep = execute_closed_loop(plan)
     target = np.array(plan.object["goal"])
     assert rep.final_error == pytest.approx(float(np.hypot(*(rep.execution.object_xy[-1] - target))), abs=2e-3)
-    assert rep.n_pushes >= len(plan.pushes) - 1 and rep.n_switches >= 1
+    assert rep.n_pushes >= 1 and rep.n_switches >= 1
     assert rep.errors[-1] == pytest.approx(rep.final_error, abs=1e-9)
-    assert max(np.degrees(abs(b)) for b in rep.bias.values()) < 45.0  # learned offsets stay physical
+    assert len(rep.replan_times) == rep.n_replans
     assert rep.execution.max_penetration < 0.003
 
 
@@ -54,8 +55,8 @@ def test_closed_loop_within_5_mm_whatever_the_camera_noise(plan_file: Path, seed
     from planner.closed_loop import execute_closed_loop
 
     rep = execute_closed_loop(read_plan(plan_file), seed=seed)
-    assert rep.status != "failed", rep.reason
-    assert rep.final_error <= 0.005
+    assert rep.status == "reached", rep.reason
+    assert rep.final_error <= 0.002
 
 
 def test_unsolved_plan_is_not_executed(tmp_path: Path, capsys) -> None:
@@ -64,3 +65,48 @@ def test_unsolved_plan_is_not_executed(tmp_path: Path, capsys) -> None:
     assert main(["solve", str(hard), "-o", str(out), "--json"]) == 1
     capsys.readouterr()
     assert main(["simulate", str(out), "--closed-loop"]) == 1
+
+
+@pytest.mark.parametrize(("mu", "c"), [(1.0, 1.0), (0.6, 1.0), (1.0, 1.4), (0.6, 1.4)])
+def test_closed_loop_on_a_mismatched_quasi_static_plant(plan_file: Path, mu: float, c: float) -> None:
+    """The same loop through the Plant protocol on the push model with mu and c off the planner's
+    (factors of the identified values): it ends within 3 mm, no exception."""
+    from planner.closed_loop import execute_closed_loop
+    from planner.execution import ModelPlant, Plant
+    from planner.solve import task_mechanics, task_skills
+    from problems.task import task_from_dict, task_platform, task_tool
+    from tools.pushing.mechanics import PushMechanics
+
+    plan = read_plan(plan_file)
+    task = task_from_dict(plan.task)
+    tool = task_tool(task)
+    m = task_mechanics(task, task_skills(task))
+    plant = ModelPlant(tool, task.object.radius, PushMechanics(m.mu * mu, m.c * c), task.start, plan.tool_pose[0],
+                       platform=task_platform(task, tool), camera_noise=0.0015, seed=3)
+    assert isinstance(plant, Plant)
+    rep = execute_closed_loop(plan, plant)
+    assert rep.status in ("reached", "closest", "rounds", "failed")
+    assert rep.final_error <= 0.003, (rep.status, rep.reason)
+    assert rep.final_error == pytest.approx(float(np.hypot(*(plant.true_object() - task.target))), abs=1e-12)
+
+
+def test_a_plant_that_refuses_a_move_ends_the_run_with_its_reason(plan_file: Path) -> None:
+    from planner.closed_loop import execute_closed_loop
+
+    class Jammed:
+        """A plant whose arm refuses to move (e.g. a driver fault)."""
+
+        def observe_object(self) -> np.ndarray:
+            return np.array(plan.object["start"])
+
+        def tool_pose(self) -> np.ndarray:
+            return plan.tool_pose[0]
+
+        def move_tool(self, t: np.ndarray, tool_pose: np.ndarray) -> None:
+            from dmp.errors import InputError
+
+            raise InputError("tool_pose", "a reachable path", "the arm is jammed")
+
+    plan = read_plan(plan_file)
+    rep = execute_closed_loop(plan, Jammed())
+    assert rep.status == "failed" and "jammed" in rep.reason

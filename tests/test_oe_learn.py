@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from planner.oe.face_frame import FaceFrame
-from planner.scene import Scene
 from planner.oe.learn import DemoPush, condense_recovered, learn_oe_skill, recover
+from planner.scene import Scene
 from problems.fit_cases import minimum_jerk
 from tools import load_tool
 from tools.omni.platform import OmniPlatform

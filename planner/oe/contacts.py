@@ -95,9 +95,12 @@ def _clear_start(tool: Tool, face: str, x: NDArray[np.float64], scene: Scene, pl
 
 
 def realise_span(tool: Tool, face: str, t: NDArray[np.float64], x: NDArray[np.float64],
-                 idx: NDArray[np.intp], scene: Scene, platform: OmniPlatform) -> list[Push]:
+                 idx: NDArray[np.intp], scene: Scene, platform: OmniPlatform,
+                 s_first: float | None = None) -> list[Push]:
     """Pushes (one, or several with re-contacts) realising samples ``idx`` of the object path ``x``
-    (T, 2) [m] at times ``t`` (T,) [s] with ``face``.
+    (T, 2) [m] at times ``t`` (T,) [s] with ``face``. With ``s_first`` [m] (where the face already
+    touches the object, e.g. in the closed loop), the first contact starts there as long as it stays
+    on the face for at least :data:`MIN_PIECE` of travel (else the rule applies).
 
     Raises:
         PushRefused: a contact would have to change within less than :data:`MIN_PIECE` of travel.
@@ -108,7 +111,25 @@ def realise_span(tool: Tool, face: str, t: NDArray[np.float64], x: NDArray[np.fl
     a = 0
     while True:
         piece = idx[a:]
+        if piece.size < 2:  # nothing left to push (a span of one sample)
+            return out
         s0, part = mid, piece
+        if s_first is not None and a == 0:
+            fp = _inverse(tool, face, x[piece], scene, platform, float(s_first))
+            inside = (fp.s >= lo - 1e-6) & (fp.s <= hi + 1e-6)
+            j = int(np.argmin(inside)) - 1 if not inside.all() else piece.size - 1
+            length = float(np.sum(np.linalg.norm(np.diff(x[piece[: j + 1]], axis=0), axis=1))) if j > 0 else 0.0
+            if j >= 1 and (j == piece.size - 1 or length >= MIN_PIECE):
+                part = piece[: j + 1]
+                fp = _inverse(tool, face, x[part], scene, platform, float(s_first))
+                v = np.diff(x[part], axis=0).sum(axis=0)
+                out.append(Push(face, float(t[part[0]]), float(t[part[-1]]), float(np.arctan2(v[1], v[0])), part,
+                                fp.tool_pose, contact_s=fp.s, recontact=False,
+                                cone_margin=float(fp.cone_margin.min(initial=np.pi)), edge_margin=fp.edge_margin))
+                if part[-1] == idx[-1]:
+                    return out
+                a += part.size - 1
+                continue
         for _ in range(4):  # where the contact starts moves the tool, hence the heading: a fixed point
             travel = _inverse(tool, face, x[piece], scene, platform, s0).s - s0
             j = _longest_fit(travel, width)
@@ -142,9 +163,11 @@ def realise_span(tool: Tool, face: str, t: NDArray[np.float64], x: NDArray[np.fl
 
 
 def realise_pushes(tool: Tool, spans: Sequence[tuple[str, NDArray[np.intp]]], t: NDArray[np.float64],
-                   x: NDArray[np.float64], scene: Scene, platform: OmniPlatform) -> tuple[Push, ...]:
-    """Every span's pushes, in order (see :func:`realise_span`); raises :class:`PushRefused`."""
+                   x: NDArray[np.float64], scene: Scene, platform: OmniPlatform,
+                   s_first: float | None = None) -> tuple[Push, ...]:
+    """Every span's pushes, in order (see :func:`realise_span`; ``s_first`` for the first span);
+    raises :class:`PushRefused`."""
     pushes: list[Push] = []
-    for face, idx in spans:
-        pushes += realise_span(tool, face, t, x, idx, scene, platform)
+    for i, (face, idx) in enumerate(spans):
+        pushes += realise_span(tool, face, t, x, idx, scene, platform, s_first if i == 0 else None)
     return tuple(pushes)

@@ -130,10 +130,12 @@ class QPOptions:
 
     def __post_init__(self) -> None:
         for name in ("n_samples", "screen_samples", "n_basis", "segments", "max_pushes", "candidates", "max_scp",
-                     "max_contacts", "alternatives"):
+                     "max_contacts"):
             v = getattr(self, name)
             if not isinstance(v, int) or v < 1:
                 raise InputError(f"oe.{name}", "a positive integer", repr(v))
+        if not isinstance(self.alternatives, int) or self.alternatives < 0:
+            raise InputError("oe.alternatives", "an integer >= 0", repr(self.alternatives))
         if self.n_samples < 10:
             raise InputError("oe.n_samples", "at least 10", repr(self.n_samples))
         for name in ("switch_price", "ridge", "recontact_price"):
@@ -286,12 +288,49 @@ def _precheck(scene: _Scene) -> str:
     return ""
 
 
-def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64]) -> tuple[Push, ...]:
+def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64],
+            s_first: float | None = None) -> tuple[Push, ...]:
     """The pushes of the fitted path, realised by the inverse push model (raises PushRefused)."""
     edges = (t[0], *best.switches, t[-1])
     spans = [(face, np.flatnonzero((t >= lo - 1e-12) & (t <= hi + 1e-12)))
              for face, lo, hi in zip(best.faces, edges[:-1], edges[1:], strict=True)]
-    return realise_pushes(scene.tool, spans, t, x, scene.scene, scene.platform)
+    return realise_pushes(scene.tool, spans, t, x, scene.scene, scene.platform, s_first)
+
+
+def condense_sequence(
+    t: NDArray[np.float64], universal: NDArray[np.float64], tool: Tool, platform: OmniPlatform, scene: Scene,
+    target: NDArray[np.float64], faces: tuple[str, ...], switches: tuple[float, ...],
+    options: QPOptions | None = None, *, s_first: float | None = None,
+) -> PushPlan:
+    """One push sequence (``faces`` with switches at times ``switches`` [s]) fitted to the path
+    ``universal`` (T, 2) [m] on times ``t`` (T,) [s] and realised, without the search: the closed
+    loop's re-plan of the rest of a task from the observed object (``universal`` then runs from it).
+    ``s_first`` [m]: where the first face already touches the object. ``infeasible`` with the reason
+    when the fit or the realisation fails."""
+    start_time = time.perf_counter()
+    opts = options or QPOptions()
+    t = check_array(t, "t", ndim=1)
+    universal = check_array(universal, "universal", shape=(t.size, 2))
+    target = check_array(target, "target", shape=(2,))
+    grid = np.linspace(t[0], t[-1], opts.n_samples)
+    ref = np.column_stack([np.interp(grid, t, universal[:, j]) for j in range(2)])
+    fine = _Scene(grid, ref, tool, platform, target, scene, opts)
+    empty = np.zeros((0, 2))
+    s = fine.score(tuple(faces), tuple(float(v) for v in switches))
+    if not s.feasible or s.result.rollout is None:
+        fams = ", ".join(s.result.families or tuple(k for k, v in s.result.violations.items() if v > opts.tol))
+        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, n_qp=s.result.scp_iterations,
+                        reason=f"the sequence {' -> '.join(faces)} is infeasible from here ({fams or 'unknown'})",
+                        metrics={"compute_time": time.perf_counter() - start_time})
+    roll = s.result.rollout
+    dense_t, x, v = roll.t + grid[0], roll.x, roll.v
+    try:
+        pushes = _pushes(fine, s, dense_t, x, s_first)
+    except PushRefused as exc:
+        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=str(exc),
+                        metrics={"compute_time": time.perf_counter() - start_time})
+    return PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, n_qp=s.result.scp_iterations,
+                    metrics={"compute_time": time.perf_counter() - start_time})
 
 
 def condense_qp(
