@@ -77,7 +77,8 @@ def arch_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: S
         da = pose_a[2] + tool.face(face_a).push_angle
         db = pose_b[2] + tool.face(face_b).push_angle
         try:
-            xy = switch_path(tool, platform, obj, pose_a, da, pose_b, db, clearance=clearance, obstacles=discs)
+            xy = switch_path(tool, platform, obj, pose_a, da, pose_b, db, clearance=clearance, obstacles=discs,
+                             radius=radius)
         except NoArch as exc:
             return SwitchPath(np.zeros((0, 2)), "infeasible", str(exc))
         dense = densify(xy, 0.0005)

@@ -39,6 +39,7 @@ def swept_clearance(tool: Tool, platform: OmniPlatform, xy: NDArray[np.float64],
 def arch_path(
     tool: Tool, platform: OmniPlatform, a: NDArray[np.float64], b: NDArray[np.float64], obj: NDArray[np.float64],
     clearance: float, *, n: int = 60, max_bulge: float = 0.06, obstacles: Sequence[Disc] = (),
+    radius: float = OBJECT_RADIUS,
 ) -> NDArray[np.float64]:
     """Tool centre point path (n, 2) [m] from ``a`` to ``b`` round the object at ``obj``: polar
     interpolation about the object, the short way round first, hugging the object by up to 9 mm or
@@ -46,7 +47,7 @@ def arch_path(
     until every point is reachable and the tool keeps ``clearance`` [m] (or 90% of the clearance
     at the ends, when an end is closer) from the object and from the disc ``obstacles`` (the tool's
     body reaches behind its head, so clearing the object is not enough). Raises :class:`NoArch`."""
-    ends = swept_clearance(tool, platform, np.vstack([a, b]), obj)
+    ends = swept_clearance(tool, platform, np.vstack([a, b]), obj, radius)
     clearance = min(clearance, 0.9 * ends)  # an end closer than that cannot be left or reached otherwise
     da, db = a - obj, b - obj
     ta, tb = np.arctan2(da[1], da[0]), np.arctan2(db[1], db[0])
@@ -61,7 +62,7 @@ def arch_path(
             path = obj + r[:, None] * np.column_stack([np.cos(th), np.sin(th)])
             if (
                 np.all(joint_path(platform, path).violation == 0.0)
-                and swept_clearance(tool, platform, path, obj) >= clearance
+                and swept_clearance(tool, platform, path, obj, radius) >= clearance
                 and all(swept_clearance(tool, platform, path, o.centre, o.radius) >= clearance for o in obstacles)
             ):
                 return path
@@ -71,13 +72,13 @@ def arch_path(
 def switch_path(
     tool: Tool, platform: OmniPlatform, obj: NDArray[np.float64], pose_a: NDArray[np.float64], dir_a: float,
     pose_b: NDArray[np.float64], dir_b: float, *, back_off: float = 0.012, clearance: float = 0.004,
-    obstacles: Sequence[Disc] = (),
+    obstacles: Sequence[Disc] = (), radius: float = OBJECT_RADIUS,
 ) -> NDArray[np.float64]:
     """Whole switch (K, 2): back off ``back_off`` [m] from contact pose ``pose_a`` against its push
     direction ``dir_a`` [rad], arch round the object, approach ``pose_b`` along ``dir_b``."""
     ua, ub = np.array([np.cos(dir_a), np.sin(dir_a)]), np.array([np.cos(dir_b), np.sin(dir_b)])
     a0, b0 = np.asarray(pose_a[:2], float), np.asarray(pose_b[:2], float)
     a1, b1 = a0 - back_off * ua, b0 - back_off * ub
-    arch = arch_path(tool, platform, a1, b1, obj, clearance, obstacles=obstacles)
+    arch = arch_path(tool, platform, a1, b1, obj, clearance, obstacles=obstacles, radius=radius)
     lin = np.linspace(0.0, 1.0, 8)[:, None]
     return np.vstack([a0 + lin * (a1 - a0), arch[1:-1], b1 + lin * (b0 - b1)])

@@ -148,7 +148,7 @@ def push_tool_path(
                                np.sin(mid) * g.direction[0] + np.cos(mid) * g.direction[1]])
         step = -mech.rolling * np.einsum("ij,ij->i", dc, e_w) - g.sigma * r * np.diff(psi)
         new = float(s0) + np.concatenate([[0.0], np.cumsum(step)])
-        done = float(np.max(np.abs(new - s))) < 1e-11
+        done = float(np.max(np.abs(new - s))) < 1e-9
         s = new
         if done:
             break
