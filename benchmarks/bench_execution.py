@@ -5,8 +5,18 @@ Run with `python benchmarks/bench_execution.py` (or `make bench-exec`). For ever
 1. plan it (:func:`planner.solve.solve`): status, reason, planning wall and CPU time;
 2. a solved plan is executed open loop (:func:`planner.simulate.simulate_plan`) and closed loop
    (:func:`planner.closed_loop.execute_closed_loop`, a fixed camera-noise seed): the puck's final
-   distance to the target [m] and the closed loop's status. An exception in either (or in the
-   planner) is recorded as ``"exception: <type>: <message>"`` and counted; the benchmark goes on.
+   distance to the target [m], the closed loop's status, re-plans (count and wall times) and
+   re-contacts. An exception in either (or in the planner) is recorded as
+   ``"exception: <type>: <message>"`` and counted; the benchmark goes on;
+3. the model prediction error: the tool poses MuJoCo executed open loop (its recorded track)
+   replayed through the push model (:func:`tools.pushing.forward.simulate`, the plan's
+   ``mechanics_mu``, ``mechanics_c``) from the start, the predicted final puck against the recorded
+   one (the recording's object track is the true pose) [m]; with the plan's self-consistency and
+   planned re-contacts;
+4. unless ``--no-mismatch``, the plan on mismatched plants (:data:`MISMATCH_PLANTS`), open and closed
+   loop: MuJoCo with tool friction 0.5 and table friction 0.2, and the quasi-static
+   :class:`planner.execution.ModelPlant` with mu and c 0.6 and 1.4 times the plan's (camera noise
+   1.5 mm; open loop there is the push model run on the plan's tool poses).
 
 Tasks: the generated batch ``problems/batch/execution_60.yaml`` (60 tasks, five library tools in
 turn, up to one obstacle) and the paper's tasks ``problems/paper/transfer_tool2.yaml`` and
@@ -14,14 +24,18 @@ turn, up to one obstacle) and the paper's tasks ``problems/paper/transfer_tool2.
 (``oe/ss`` pairs; default the planner's default ``qp/opt``). Tasks run in a process pool
 (``--workers``, default 2); each worker learns (or loads) the skills once, before its first task.
 
-Report: the solve rate with the infeasible reasons grouped, the open- and closed-loop final errors
-over solved plans (median, p90, max, share within 2 mm and 5 mm; the shares count every solved plan,
-an execution that raised counts as a miss), the closed loop's statuses, a per-tool table, the paper
-tasks, the slowest tasks and the total time. ``--json PATH`` writes every per-task row (and the run's
-settings) for comparing runs.
+Report: the plans' push mechanics, the solve rate with the infeasible reasons grouped, the open- and
+closed-loop final errors over solved plans (median, p90, max, share within 2 mm and 5 mm; the shares
+count every solved plan, an execution that raised counts as a miss), the model prediction error
+(median, p90, max) and the largest self-consistency, the closed loop's statuses and re-plan times
+(median, p90, max over every re-plan), a table of the plants (nominal and mismatched: within 3 mm
+open and closed loop, closed-loop median, statuses) with the issue's targets (closed loop nominal
+>= 95 % within 2 mm without exception, mismatched >= 90 % within 3 mm, re-plan median <= 30 ms), a
+per-tool table, the paper tasks, the slowest tasks and the total time. ``--json PATH`` writes every
+per-task row (and the run's settings) for comparing runs.
 
     python benchmarks/bench_execution.py                                  # 60 + 2 tasks, qp/opt
-    python benchmarks/bench_execution.py --count 10 --no-closed-loop      # a quick look
+    python benchmarks/bench_execution.py --count 10 --no-closed-loop --no-mismatch  # a quick look
     python benchmarks/bench_execution.py --variants qp/opt,mapping/opt --json out/exec.json
 
 Single-threaded BLAS (``OPENBLAS_NUM_THREADS=1``); planning times vary by some percent on a shared
@@ -83,6 +97,7 @@ class Job:
         source: the path relative paths in ``data`` are relative to.
         oe, ss: the variant.
         closed_loop: also execute closed loop.
+        mismatch: also execute on the mismatched plants (:data:`MISMATCH_PLANTS`).
         seed: camera-noise seed of the closed loop.
         timeout: [s] per stage (planning, open loop, closed loop); 0 for none.
     """
@@ -97,6 +112,7 @@ class Job:
     oe: str
     ss: str
     closed_loop: bool = True
+    mismatch: bool = True
     seed: int = 0
     timeout: float = 0.0
 
@@ -153,17 +169,136 @@ def _task(job: Job) -> Any:
     return task.model_copy(update={"variants": Variants(oe=job.oe, ss=job.ss)})
 
 
+def _mechanics(plan: Any, task: Any, source: str) -> Any:
+    """The push mechanics the plan was made with (its metrics; the task's, for a plan without them)."""
+    from tools.pushing.mechanics import PushMechanics
+
+    mu, c = _finite(plan.metrics.get("mechanics_mu")), _finite(plan.metrics.get("mechanics_c"))
+    if mu is not None and c is not None:
+        return PushMechanics(mu, c, "given")
+    from planner.solve import task_mechanics, task_skills
+
+    return task_mechanics(task, task_skills(task, source, need_ss=False))
+
+
+def _mechanics_source(job: Job) -> str | None:
+    """Where the planner's mechanics for the job's task come from (``identified``, ``task``,
+    ``default``; :func:`planner.solve.task_mechanics`), None when that cannot be told."""
+    try:
+        from planner.solve import task_mechanics, task_skills
+
+        task = _task(job)
+        return task_mechanics(task, task_skills(task, job.source, need_ss=task.variants.ss != "arch")).source
+    except Exception:
+        return None
+
+
+def model_prediction(plan: Any, execution: Any, mech: Any) -> tuple[float, float]:
+    """The push model's prediction of an open-loop run: the tool poses MuJoCo executed (its recorded
+    track) replayed through :func:`tools.pushing.forward.simulate` with ``mech`` from the task's
+    start. Returns the predicted final puck's distance to the recorded final puck [m] (the
+    recording's object track is the true pose: the platform adds no camera noise) and the largest
+    distance along the run (the prediction at the object's sample times)."""
+    from problems.task import task_from_dict, task_tool
+    from tools.pushing.forward import simulate
+
+    task = task_from_dict(plan.task, "plan.task")
+    ex = execution
+    trace = simulate(task_tool(task), ex.tool_pose, np.array(task.start), task.object.radius, mech)
+    final = float(np.linalg.norm(trace.final - ex.object_xy[-1]))
+    pred = np.column_stack([np.interp(ex.t_object, ex.t_tool, trace.object_xy[:, j]) for j in range(2)])
+    return final, float(np.linalg.norm(pred - ex.object_xy, axis=1).max())
+
+
+MISMATCH_PLANTS = ("sim friction", "model 0.6x", "model 1.4x")
+"""The mismatched plants: the MuJoCo platform with tool friction 0.5 and table friction 0.2
+(:data:`SIM_FRICTION`), the quasi-static push model with mu and c 0.6 and 1.4 times the plan's."""
+SIM_FRICTION = {"tool_friction": 0.5, "table_friction": 0.2}
+MODEL_SCALE = {"model 0.6x": 0.6, "model 1.4x": 1.4}
+CAMERA_NOISE = 0.0015
+"""Camera noise [m] per frame of the model plants (the MuJoCo plant's default)."""
+
+
+def run_mismatch(plan: Any, job: Job, mech: Any) -> dict[str, Row]:
+    """Execute a solved plan on each of :data:`MISMATCH_PLANTS`: open loop, and closed loop when the
+    job runs it. Per plant: ``open_loop_status`` (``"ok"`` or the exception), ``open_loop_error``,
+    ``closed_loop_status``, ``closed_loop_reason``, ``closed_loop_error``, ``closed_loop_n_replans``,
+    ``closed_loop_replan_times``, ``mechanics`` ([mu, c] of the model plants) and ``wall`` [s]."""
+    from planner.closed_loop import execute_closed_loop
+    from planner.execution import ModelPlant
+    from planner.simulate import simulate_plan, task_sim_config
+    from problems.task import task_from_dict, task_platform, task_tool
+    from tools.pushing.forward import simulate
+    from tools.pushing.mechanics import PushMechanics
+
+    task = task_from_dict(plan.task, "plan.task")
+    tool = task_tool(task)
+    start, target, radius = np.array(task.start), np.array(task.target), task.object.radius
+    out: dict[str, Row] = {}
+    for name in MISMATCH_PLANTS:
+        res: Row = {"open_loop_status": None, "open_loop_error": None, "closed_loop_status": None,
+                    "closed_loop_reason": "", "closed_loop_error": None, "closed_loop_n_replans": None,
+                    "closed_loop_replan_times": None, "mechanics": None}
+        t0 = time.perf_counter()
+        plant_mech = config = None
+        try:
+            if name == "sim friction":
+                config = task_sim_config(task, **SIM_FRICTION)
+            else:
+                f = MODEL_SCALE[name]
+                plant_mech = PushMechanics(f * mech.mu, f * mech.c, "given")
+                res["mechanics"] = [plant_mech.mu, plant_mech.c]
+        except Exception as exc:
+            res["open_loop_status"] = res["closed_loop_status"] = _exception(exc)
+            res["wall"] = time.perf_counter() - t0
+            out[name] = res
+            continue
+        try:
+            with _deadline(job.timeout, f"open loop on {name}"):
+                if plant_mech is None:
+                    err = simulate_plan(plan, config).final_error
+                else:
+                    final = simulate(tool, plan.tool_pose, start, radius, plant_mech).final
+                    err = float(np.linalg.norm(final - target))
+            res.update(open_loop_status="ok", open_loop_error=err)
+        except Exception as exc:
+            res["open_loop_status"] = _exception(exc)
+        if job.closed_loop:
+            try:
+                with _deadline(job.timeout, f"closed loop on {name}"):
+                    if plant_mech is None:
+                        cl = execute_closed_loop(plan, seed=job.seed, config=config)
+                    else:
+                        plant = ModelPlant(tool, radius, plant_mech, start, plan.tool_pose[0],
+                                           platform=task_platform(task, tool), camera_noise=CAMERA_NOISE,
+                                           seed=job.seed)
+                        cl = execute_closed_loop(plan, plant, seed=job.seed)
+                res.update(closed_loop_status=cl.status, closed_loop_reason=cl.reason, closed_loop_error=cl.final_error,
+                           closed_loop_n_replans=cl.n_replans, closed_loop_replan_times=list(cl.replan_times))
+            except Exception as exc:
+                res["closed_loop_status"] = _exception(exc)
+        res["wall"] = time.perf_counter() - t0
+        out[name] = res
+    return out
+
+
 def run_task(job: Job) -> Row:
-    """Plan one task and execute a solved plan open and closed loop; the row of its measures
-    (never raises for the task's own failures). Errors in m, times in s; absent measures are None."""
+    """Plan one task and execute a solved plan open and closed loop (and on the mismatched plants);
+    the row of its measures (never raises for the task's own failures). Errors in m, times in s;
+    absent measures are None."""
     started = time.perf_counter()
     row: Row = {"task_id": job.task_id, "kind": job.kind, "index": job.index, "tool": job.tool,
                 "variant": job.variant, "n_obstacles": job.n_obstacles, "status": None, "reason": "",
                 "plan_wall": None, "plan_cpu": None, "n_pushes": None, "n_switches": None, "duration": None,
+                "n_recontacts": None, "self_consistency": None, "mechanics_mu": None, "mechanics_c": None,
+                "mechanics_source": None,
+                "friction_cone_margin_min": None, "contact_edge_margin_min": None,
                 "open_loop_status": None, "open_loop_error": None, "open_loop_wall": None,
+                "model_prediction_status": None, "model_prediction_error": None, "model_prediction_track_max": None,
                 "closed_loop_status": None, "closed_loop_reason": "", "closed_loop_error": None,
                 "closed_loop_wall": None, "closed_loop_n_pushes": None, "closed_loop_n_switches": None,
-                "worker": os.getpid()}
+                "closed_loop_n_recontacts": None, "closed_loop_n_replans": None, "closed_loop_replan_times": None,
+                "mismatch": None, "mismatch_wall": None, "worker": os.getpid()}
     from planner.solve import solve
 
     wall, cpu = time.perf_counter(), time.process_time()
@@ -177,6 +312,11 @@ def run_task(job: Job) -> Row:
     m = plan.metrics
     row.update(status=plan.status, reason=plan.reason or "", plan_wall=time.perf_counter() - wall,
                plan_cpu=time.process_time() - cpu, n_pushes=_count(m.get("n_pushes")),
+               n_recontacts=_count(m.get("n_recontacts")), self_consistency=_finite(m.get("self_consistency_max")),
+               mechanics_mu=_finite(m.get("mechanics_mu")), mechanics_c=_finite(m.get("mechanics_c")),
+               friction_cone_margin_min=_finite(m.get("friction_cone_margin_min")),
+               contact_edge_margin_min=_finite(m.get("contact_edge_margin_min")),
+               mechanics_source=_mechanics_source(job),
                time_skills=_finite(m.get("time_skills")), time_oe=_finite(m.get("time_oe")),
                time_switches_and_timing=_finite(m.get("time_switches_and_timing")))
     if plan.status == "solved":
@@ -184,7 +324,14 @@ def run_task(job: Job) -> Row:
         from planner.simulate import simulate_plan
 
         row.update(n_switches=len(plan.switches), duration=_finite(m.get("duration")))
+        mech = None
+        try:
+            mech = _mechanics(plan, _task(job), job.source)
+            row.update(mechanics_mu=mech.mu, mechanics_c=mech.c)
+        except Exception as exc:
+            row["model_prediction_status"] = _exception(exc)
         t0 = time.perf_counter()
+        rep = None
         try:
             with _deadline(job.timeout, "open loop"):
                 rep = simulate_plan(plan)
@@ -192,16 +339,34 @@ def run_task(job: Job) -> Row:
         except Exception as exc:
             row["open_loop_status"] = _exception(exc)
         row["open_loop_wall"] = time.perf_counter() - t0
+        if rep is not None and mech is not None:
+            try:
+                with _deadline(job.timeout, "model prediction"):
+                    final, track = model_prediction(plan, rep.execution, mech)
+                row.update(model_prediction_status="ok", model_prediction_error=final, model_prediction_track_max=track)
+            except Exception as exc:
+                row["model_prediction_status"] = _exception(exc)
         if job.closed_loop:
             t0 = time.perf_counter()
             try:
                 with _deadline(job.timeout, "closed loop"):
                     cl = execute_closed_loop(plan, seed=job.seed)
                 row.update(closed_loop_status=cl.status, closed_loop_reason=cl.reason, closed_loop_error=cl.final_error,
-                           closed_loop_n_pushes=cl.n_pushes, closed_loop_n_switches=cl.n_switches)
+                           closed_loop_n_pushes=cl.n_pushes, closed_loop_n_switches=cl.n_switches,
+                           closed_loop_n_recontacts=cl.n_recontacts, closed_loop_n_replans=cl.n_replans,
+                           closed_loop_replan_times=list(cl.replan_times))
             except Exception as exc:
                 row["closed_loop_status"] = _exception(exc)
             row["closed_loop_wall"] = time.perf_counter() - t0
+        if job.mismatch:
+            t0 = time.perf_counter()
+            if mech is None:
+                row["mismatch"] = {name: {"open_loop_status": row["model_prediction_status"],
+                                          "closed_loop_status": row["model_prediction_status"] if job.closed_loop
+                                          else None} for name in MISMATCH_PLANTS}
+            else:
+                row["mismatch"] = run_mismatch(plan, job, mech)
+            row["mismatch_wall"] = time.perf_counter() - t0
     row["task_wall"] = time.perf_counter() - started
     return row
 
@@ -238,7 +403,7 @@ def parse_variants(text: str) -> list[tuple[str, str]]:
 
 
 def make_jobs(batch: Path, count: int | None, variants: Sequence[tuple[str, str]], paper: bool,
-              closed_loop: bool, seed: int, timeout: float) -> list[Job]:
+              closed_loop: bool, seed: int, timeout: float, mismatch: bool = True) -> list[Job]:
     """The jobs: the paper tasks first (their closed loops are the longest), then the generated
     tasks in order, each with every variant."""
     import yaml
@@ -253,7 +418,8 @@ def make_jobs(batch: Path, count: int | None, variants: Sequence[tuple[str, str]
         tasks = tasks[:count]
     jobs = []
     for oe, ss in variants:
-        common = {"oe": oe, "ss": ss, "closed_loop": closed_loop, "seed": seed, "timeout": timeout}
+        common = {"oe": oe, "ss": ss, "closed_loop": closed_loop, "mismatch": mismatch, "seed": seed,
+                  "timeout": timeout}
         for p in PAPER if paper else ():
             task = load_task(p)
             tool = task.tool if isinstance(task.tool, str) else task.tool.name
@@ -273,8 +439,15 @@ def _progress_line(done: int, total: int, r: Row) -> str:
         s += f" plan {r['plan_wall']:.2f} s | open {mm(r['open_loop_error'])}"
         if r["open_loop_status"] != "ok":
             s += f" ({r['open_loop_status']})"
+        if r.get("model_prediction_error") is not None:
+            s += f" | model {mm(r['model_prediction_error'])}"
         if r["closed_loop_status"] is not None:
             s += f" | closed {r['closed_loop_status']} {mm(r['closed_loop_error'])}"
+        for name, res in (r.get("mismatch") or {}).items():
+            cl = res.get("closed_loop_status")
+            s += f" | {name} open {mm(res.get('open_loop_error'))}"
+            if cl is not None:
+                s += f" closed {cl if _is_exc(cl) else cl + ' ' + mm(res.get('closed_loop_error'))}"
     s += f" | {r.get('task_wall') or 0.0:.1f} s"
     return s
 
@@ -330,7 +503,7 @@ def _crash_row(job: Job, why: str) -> Row:
     return {"task_id": job.task_id, "kind": job.kind, "index": job.index, "tool": job.tool, "variant": job.variant,
             "n_obstacles": job.n_obstacles, "status": f"crash: {why}", "reason": "", "plan_wall": None,
             "plan_cpu": None, "n_pushes": None, "open_loop_status": None, "open_loop_error": None,
-            "closed_loop_status": None, "closed_loop_error": None, "task_wall": None}
+            "closed_loop_status": None, "closed_loop_error": None, "task_wall": None, "mismatch": None}
 
 
 # ---------------------------------------------------------------------------------------------- report
@@ -357,12 +530,130 @@ def _mm(v: float | None) -> str:
     return "-" if v is None else f"{1e3 * v:.1f}"
 
 
+def _share(errors: Sequence[float | None], n: int, within: float) -> float | None:
+    """The share of ``n`` runs with an error within ``within`` [m] (an unmeasured one a miss)."""
+    return sum(e is not None and e <= within for e in errors) / n if n else None
+
+
+def _quantiles(values: Sequence[float]) -> tuple[float, float, float] | None:
+    """Median, p90 and max of ``values`` (None when empty)."""
+    if not values:
+        return None
+    v = np.asarray(values, dtype=float)
+    return float(np.median(v)), float(np.percentile(v, 90)), float(v.max())
+
+
+def _statuses(statuses: Sequence[str | None]) -> str:
+    c = Counter("exception" if _is_exc(s) else s for s in statuses if s is not None)
+    return ", ".join(f"{s} {n}" for s, n in c.most_common()) or "-"
+
+
+def _met(ok: bool) -> str:
+    return "met" if ok else "MISSED"
+
+
+MISMATCH_WITHIN = 0.003
+"""Final-error threshold [m] of the mismatched plants' shares."""
+
+
 def _pct(v: float | None) -> str:
     return "-" if v is None else f"{100 * v:.0f} %"
 
 
 def _is_exc(status: str | None) -> bool:
     return bool(status) and status.startswith(("exception:", "crash:"))
+
+
+def _plant_runs(solved: Sequence[Row], name: str | None) -> list[Row]:
+    """Per solved plan, its runs on one plant (None: the nominal platform) with the keys of
+    :func:`run_mismatch`; plans that did not run on it are left out."""
+    if name is None:
+        return [{k: r.get(k) for k in ("open_loop_status", "open_loop_error", "closed_loop_status",
+                                       "closed_loop_reason", "closed_loop_error", "closed_loop_n_replans",
+                                       "closed_loop_replan_times")} for r in solved]
+    return [r["mismatch"][name] for r in solved if r.get("mismatch") and name in r["mismatch"]]
+
+
+def _mismatch_table(con: Any, solved: Sequence[Row]) -> None:
+    """The plants table (the nominal platform and :data:`MISMATCH_PLANTS`) and the issue's targets."""
+    from rich import box
+    from rich.table import Table
+
+    w = MISMATCH_WITHIN
+    t = Table("plant", "plans", f"open {1e3 * w:.0f}mm", f"closed {1e3 * w:.0f}mm", "closed 2mm",
+              "median mm", "max mm", "re-plans", "re-plan ms", "closed-loop statuses",
+              title=f"plants (open/closed Nmm: share within N mm of the solved plans, an exception a miss; median, "
+                    f"max: closed loop; MuJoCo mu: tool/table friction; "
+                    f"model fx: the push model with the plan's mu/c times f, camera {1e3 * CAMERA_NOISE:.1f} mm; "
+                    f"re-plan ms: median/p90)",
+              box=box.SIMPLE_HEAD, title_justify="left")
+    shares: dict[str, tuple[float | None, float | None]] = {}
+    times_all: dict[str, list[float]] = {}
+    exc = {}
+    notes: list[str] = []
+    for name in (None, *MISMATCH_PLANTS):
+        res = _plant_runs(solved, name)
+        if not res:
+            continue
+        key = name or "nominal"
+        cl_res = [x for x in res if x.get("closed_loop_status") is not None]
+        cl = [None if _is_exc(x.get("closed_loop_status")) else x.get("closed_loop_error") for x in cl_res]
+        st = error_stats(cl, len(cl_res))
+        times = [v for x in cl_res for v in (x.get("closed_loop_replan_times") or [])]
+        q = _quantiles(times)
+        times_all[key] = times
+        exc[key] = sum(_is_exc(x.get(f"{s}_status")) for x in res for s in ("open_loop", "closed_loop"))
+        if name is None:
+            label = "MuJoCo nominal"
+        elif name == "sim friction":
+            label = f"MuJoCo mu {SIM_FRICTION['tool_friction']}/{SIM_FRICTION['table_friction']}"
+        else:
+            label = f"model {name[6:]}"
+            mechs = {tuple(x.get("mechanics") or ()) for x in res}
+            if len(mechs) == 1 and len(m := next(iter(mechs))) == 2:
+                notes.append(f"{label}: mu {m[0]:.3g}, c {m[1]:.3g}")
+        misses = [f"{r['task_id']} {x.get('closed_loop_status')} {_mm(x.get('closed_loop_error'))}"
+                  for r in solved for x in _plant_runs([r], name)
+                  if x.get("closed_loop_status") is not None
+                  and (x.get("closed_loop_error") is None or x["closed_loop_error"] > w)]
+        if misses:
+            notes.append(f"closed loop beyond {1e3 * w:.0f} mm on {label} (mm): " + ", ".join(misses))
+        shares[key] = (_share(cl, len(cl_res), w) if cl_res else None,
+                       _share(cl, len(cl_res), 0.002) if cl_res else None)
+        t.add_row(label, str(len(res)), _pct(_share([x.get("open_loop_error") for x in res], len(res), w)),
+                  _pct(shares[key][0]), _pct(shares[key][1]), _mm(st["median"]), _mm(st["max"]),
+                  str(sum(x.get("closed_loop_n_replans") or 0 for x in cl_res)) if cl_res else "-",
+                  "-" if q is None else f"{1e3 * q[0]:.0f}/{1e3 * q[1]:.0f}",
+                  _statuses([x.get("closed_loop_status") for x in cl_res]))
+    con.print(t)
+    for note in notes:
+        con.print("  " + note)
+    for r in solved:
+        for name, x in (r.get("mismatch") or {}).items():
+            for stage in ("open_loop", "closed_loop"):
+                if _is_exc(x.get(f"{stage}_status")):
+                    con.print(f"  {stage.replace('_', ' ')} on {name} of {r['task_id']}: {x[f'{stage}_status']}")
+    fails = Counter(f"{name}: {_reason_group(x.get('closed_loop_reason', ''))}" for r in solved
+                    for name, x in (r.get("mismatch") or {}).items() if x.get("closed_loop_status") == "failed")
+    for reason, n in fails.most_common(5):
+        con.print(f"  failed x{n} on {reason}")
+    nom = shares.get("nominal", (None, None))[1]
+    if nom is None:
+        return
+    con.print("targets:")
+    con.print(f"  closed loop on the nominal platform >= 95 % within 2 mm: {_pct(nom)} {_met(nom >= 0.95)}; "
+              f"exceptions (open and closed loop) {exc['nominal']} {_met(exc['nominal'] == 0)}")
+    for name in MISMATCH_PLANTS:
+        v = shares.get(name, (None, None))[0]
+        if v is not None:
+            con.print(f"  closed loop on {name} >= 90 % within {1e3 * w:.0f} mm: {_pct(v)} {_met(v >= 0.9)}; "
+                      f"exceptions {exc[name]}")
+    for what, times in (("nominal platform", times_all.get("nominal", [])),
+                        ("all plants", [v for ts in times_all.values() for v in ts])):
+        q = _quantiles(times)
+        if q is not None:
+            con.print(f"  re-plan median <= 30 ms ({what}, {len(times)} re-plans): {1e3 * q[0]:.1f} ms "
+                      f"{_met(q[0] <= 0.03)} (p90 {1e3 * q[1]:.1f} ms, max {1e3 * q[2]:.1f} ms)")
 
 
 def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None:
@@ -372,6 +663,16 @@ def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None
     from rich.table import Table
 
     con = console or Console(markup=False, highlight=False)
+    mechs = Counter((r["mechanics_mu"], r["mechanics_c"], r.get("mechanics_source") or "?") for r in rows
+                    if r.get("mechanics_mu") is not None and r.get("mechanics_c") is not None)
+    if mechs:
+        def n_solved(key: tuple[float, float, str]) -> int:
+            return sum((r.get("mechanics_mu"), r.get("mechanics_c"), r.get("mechanics_source") or "?") == key
+                       and r["status"] == "solved" for r in rows)
+
+        con.print("push mechanics of the plans (mu, c, source): " + "; ".join(
+            f"({mu:.4g}, {c:.4g}, {src}) in {n} plans with metrics, {n_solved((mu, c, src))} solved"
+            for (mu, c, src), n in mechs.most_common()))
     for variant in dict.fromkeys(r["variant"] for r in rows):
         vrows = [r for r in rows if r["variant"] == variant]
         gen = [r for r in vrows if r["kind"] == "generated"]
@@ -415,10 +716,36 @@ def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None
                           _pct(cl["within_2mm"]), _pct(cl["within_5mm"]),
                           str(sum(_is_exc(r["closed_loop_status"]) for r in ran_cl)))
             con.print(t)
+            pred = [r["model_prediction_error"] for r in solved if r.get("model_prediction_error") is not None]
+            q = _quantiles(pred)
+            sc = [r["self_consistency"] for r in solved if r.get("self_consistency") is not None]
+            if q is not None:
+                track = [r["model_prediction_track_max"] for r in solved
+                         if r.get("model_prediction_track_max") is not None]
+                con.print(f"model prediction error (the push model replaying the tool poses MuJoCo executed open "
+                          f"loop, final puck vs recorded) over {len(pred)} plans: median {_mm(q[0])} mm, "
+                          f"p90 {_mm(q[1])} mm, max {_mm(q[2])} mm; "
+                          f"largest along a run {_mm(max(track) if track else None)} mm")
+            if sc:
+                con.print(f"self-consistency of the plans: max {_mm(max(sc))} mm, "
+                          f"median {_mm(float(np.median(sc)))} mm; "
+                          f"re-contacts planned {sum(r.get('n_recontacts') or 0 for r in solved)} "
+                          f"(in {sum((r.get('n_recontacts') or 0) > 0 for r in solved)} plans)")
+            for r in solved:
+                if _is_exc(r.get("model_prediction_status")):
+                    con.print(f"  model prediction of {r['task_id']}: {r['model_prediction_status']}")
             if ran_cl:
                 statuses = Counter("exception" if _is_exc(r["closed_loop_status"]) else r["closed_loop_status"]
                                    for r in ran_cl)
                 con.print("closed-loop statuses: " + ", ".join(f"{s} {n}" for s, n in statuses.most_common()))
+                times = [t for r in ran_cl for t in (r.get("closed_loop_replan_times") or [])]
+                q = _quantiles(times)
+                n_rp = [r.get("closed_loop_n_replans") or 0 for r in ran_cl]
+                con.print(f"closed-loop re-plans: {sum(n_rp)} in {sum(n > 0 for n in n_rp)} of {len(ran_cl)} runs"
+                          + ("" if q is None else f"; re-plan time median {1e3 * q[0]:.1f} ms, "
+                             f"p90 {1e3 * q[1]:.1f} ms, max {1e3 * q[2]:.1f} ms")
+                          + f"; re-contacts {sum(r.get('closed_loop_n_recontacts') or 0 for r in ran_cl)}, "
+                          f"switches {sum(r.get('closed_loop_n_switches') or 0 for r in ran_cl)}")
                 exec_t = [r["closed_loop_wall"] for r in ran_cl if r["closed_loop_wall"] is not None]
                 con.print(f"closed-loop wall time per plan: median {np.median(exec_t):.1f} s, max {max(exec_t):.1f} s; "
                           f"open loop median {np.median([r['open_loop_wall'] for r in solved]):.1f} s")
@@ -430,41 +757,48 @@ def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None
                 for stage in ("open_loop", "closed_loop"):
                     if _is_exc(r[f"{stage}_status"]):
                         con.print(f"  {stage.replace('_', ' ')} of {r['task_id']}: {r[f'{stage}_status']}")
+            _mismatch_table(con, solved)
         if gen:
-            t = Table("tool", "tasks", "solved", "open median mm", "open <= 5 mm", "closed median mm",
-                      "closed <= 2 mm", title="per tool (shares of the tool's solved plans)", box=box.SIMPLE_HEAD,
-                      title_justify="left")
+            t = Table("tool", "tasks", "solved", "open median mm", "open <= 5 mm", "model pred. median mm",
+                      "closed median mm", "closed <= 2 mm", title="per tool (shares of the tool's solved plans)",
+                      box=box.SIMPLE_HEAD, title_justify="left")
             for tool in dict.fromkeys(r["tool"] for r in gen):
                 tr = [r for r in gen if r["tool"] == tool]
                 ts = [r for r in tr if r["status"] == "solved"]
                 ol = error_stats([r["open_loop_error"] for r in ts], len(ts))
                 cl_rows = [r for r in ts if r["closed_loop_status"] is not None]
                 cl = error_stats([r["closed_loop_error"] for r in cl_rows], len(cl_rows))
+                mp = [r["model_prediction_error"] for r in ts if r.get("model_prediction_error") is not None]
                 t.add_row(tool, str(len(tr)), str(len(ts)), _mm(ol["median"]), _pct(ol["within_5mm"]),
-                          _mm(cl["median"]), _pct(cl["within_2mm"]))
+                          _mm(float(np.median(mp)) if mp else None), _mm(cl["median"]), _pct(cl["within_2mm"]))
             con.print(t)
         paper = [r for r in vrows if r["kind"] == "paper"]
         if paper:
-            t = Table("paper task", "tool", "status", "plan s", "pushes", "open loop mm", "closed loop mm",
-                      "closed-loop status", title="paper tasks", box=box.SIMPLE_HEAD, title_justify="left")
+            t = Table("paper task", "tool", "status", "plan s", "pushes", "open loop mm", "model pred. mm",
+                      "closed loop mm", "closed-loop status", "closed mm mismatched",
+                      title="paper tasks (closed mm mismatched: " + " / ".join(MISMATCH_PLANTS) + ")",
+                      box=box.SIMPLE_HEAD, title_justify="left")
             for r in paper:
                 plan_s = "-" if r["plan_wall"] is None else f"{r['plan_wall']:.2f}"
                 ol = _mm(r["open_loop_error"]) if not _is_exc(r["open_loop_status"]) else r["open_loop_status"]
                 t.add_row(r["task_id"], r["tool"], r["status"] if r["status"] == "solved" else
                           f"{r['status']}: {r['reason']}", plan_s, "-" if r["n_pushes"] is None else
-                          str(r["n_pushes"]), ol, _mm(r["closed_loop_error"]), r["closed_loop_status"] or "-")
+                          str(r["n_pushes"]), ol, _mm(r.get("model_prediction_error")), _mm(r["closed_loop_error"]),
+                          r["closed_loop_status"] or "-", " / ".join(
+                              _mm(res.get("closed_loop_error")) if not _is_exc(res.get("closed_loop_status"))
+                              else "exc" for res in (r.get("mismatch") or {}).values()) or "-")
             con.print(t)
     slow = sorted((r for r in rows if r.get("task_wall") is not None), key=lambda r: -r["task_wall"])[:5]
     if slow:
-        t = Table("task", "variant", "status", "task s", "plan s", "open s", "closed s", title="slowest tasks",
-                  box=box.SIMPLE_HEAD, title_justify="left")
+        t = Table("task", "variant", "status", "task s", "plan s", "open s", "closed s", "mismatch s",
+                  title="slowest tasks", box=box.SIMPLE_HEAD, title_justify="left")
 
         def sec(v: float | None) -> str:
             return "-" if v is None else f"{v:.1f}"
 
         for r in slow:
             t.add_row(r["task_id"], r["variant"], r["status"], sec(r["task_wall"]), sec(r["plan_wall"]),
-                      sec(r.get("open_loop_wall")), sec(r.get("closed_loop_wall")))
+                      sec(r.get("open_loop_wall")), sec(r.get("closed_loop_wall")), sec(r.get("mismatch_wall")))
         con.print(t)
     busy = sum(r.get("task_wall") or 0.0 for r in rows)
     con.print(f"total: {len(rows)} task runs in {wall:.1f} s wall ({wall / 60:.1f} min); "
@@ -508,6 +842,8 @@ def main(argv: Sequence[str] | None = None) -> None:
                     help="oe/ss pairs, comma-separated (default qp/opt), e.g. qp/opt,mapping/opt")
     ap.add_argument("--workers", type=int, default=2, help="worker processes (1: in this process)")
     ap.add_argument("--no-closed-loop", dest="closed_loop", action="store_false", help="skip the closed loop")
+    ap.add_argument("--no-mismatch", dest="mismatch", action="store_false",
+                    help="skip the mismatched plants (MuJoCo with other frictions, the push model with mu, c off)")
     ap.add_argument("--no-paper", dest="paper", action="store_false", help="skip the two paper tasks")
     ap.add_argument("--seed", type=int, default=0, help="camera-noise seed of the closed loop")
     ap.add_argument("--timeout", type=float, default=600.0,
@@ -520,12 +856,14 @@ def main(argv: Sequence[str] | None = None) -> None:
 
     con = Console(width=None if sys.stdout.isatty() else 150, markup=False, highlight=False)
     t0 = time.perf_counter()
-    jobs = make_jobs(args.batch, args.count, args.variants, args.paper, args.closed_loop, args.seed, args.timeout)
+    jobs = make_jobs(args.batch, args.count, args.variants, args.paper, args.closed_loop, args.seed, args.timeout,
+                     args.mismatch)
     variants = ",".join(f"{o}/{s}" for o, s in args.variants)
     commit = _commit()
     con.print(f"execution benchmark: {len(jobs)} task runs ({args.batch.name}"
               f"{'' if args.count is None else f', first {args.count}'}{' + paper tasks' if args.paper else ''}; "
-              f"variants {variants}; closed loop {'on, seed ' + str(args.seed) if args.closed_loop else 'off'}); "
+              f"variants {variants}; closed loop {'on, seed ' + str(args.seed) if args.closed_loop else 'off'}; "
+              f"mismatched plants {'on' if args.mismatch else 'off'}); "
               f"{args.workers} workers")
     from planner.skills import cache_dir
 
@@ -543,7 +881,8 @@ def main(argv: Sequence[str] | None = None) -> None:
     report(rows, wall, con)
     if args.json is not None:
         meta = {"commit": commit, "batch": str(args.batch), "count": args.count, "variants": variants,
-                "closed_loop": args.closed_loop, "seed": args.seed, "workers": args.workers, "timeout": args.timeout,
+                "closed_loop": args.closed_loop, "mismatch": args.mismatch, "seed": args.seed,
+                "workers": args.workers, "timeout": args.timeout,
                 "wall": wall, "python": sys.version.split()[0], "argv": sys.argv[1:],
                 "finished": time.strftime("%Y-%m-%d %H:%M:%S")}
         write_json(args.json, rows, meta)
