@@ -19,7 +19,7 @@ from tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
 #: Default share of the friction cone's half-angle a plan may use (``oe.friction_cone_fraction``).
 CONE_FRACTION = 0.5
 #: Default distance [m] the contact keeps from the ends of a face's usable range (``oe.contact_margin``).
-CONTACT_MARGIN = 0.0005
+CONTACT_MARGIN = 0.0002
 #: Default longest stretch [m] of a face the contact may use, about its middle (``oe.contact_span``).
 CONTACT_SPAN = 0.012
 

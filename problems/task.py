@@ -168,7 +168,7 @@ class OEOptions(_Model):
         0.5, gt=0, le=1, allow_inf_nan=False,
         description="share of the friction cone's half-angle atan(mu) the planned object directions may use")
     contact_margin: NonNegative = Field(
-        0.0005, description="distance the contact keeps from the ends of a face's usable range [m]")
+        0.0002, description="distance the contact keeps from the ends of a face's usable range [m]")
     contact_span: Positive = Field(
         0.012, description="longest stretch of a face the contact may use, about its middle [m] (the reach "
                            "is planned for the tool at both ends of it)")
