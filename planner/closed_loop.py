@@ -38,10 +38,14 @@ from planner.plan import Plan
 from planner.scene import Scene
 from planner.timing import min_jerk_along, min_jerk_duration
 from problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
+from tools.arch import swept_clearance
 from tools.omni.ik import joint_path
+from tools.pose import rotation
 
 #: Tool moves shorter than this [m] between a chunk's end and the next chunk's start are skipped.
 SAME_POSE = 3e-4
+#: How far [m] the tool first backs off along the contact's normal before a switch or a re-contact.
+BACK_OFF = 0.002
 
 
 @dataclass(frozen=True)
@@ -239,28 +243,46 @@ class _Loop:
         else:
             pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options)
         self.replan_times.append(time.perf_counter() - start)
+        if pp.status == "solved" and not pp.pushes:
+            return replace(pp, status="infeasible", reason="the re-plan has no push left")
         return pp
 
     # ---------------------------------------------------------------- executing
+    def leave(self, o: NDArray[np.float64], pose: NDArray[np.float64], face: str, start: NDArray[np.float64],
+              change: bool) -> None:
+        """From the contact at ``pose`` to ``face``'s contact pose ``start``: first straight back along
+        the contact's normal from where the tool really is (a path planned from the observed object
+        starts a camera error away, and a tool that moves sideways while touching drags the object
+        along), then the switch (``change``) or the re-contact planned at the object observed again,
+        joined where that path is clear of the object."""
+        assert self.face is not None
+        back = pose[:2] - BACK_OFF * (rotation(float(pose[2])) @ self.tool.face(self.face).normal)
+        self.move(np.vstack([pose[:2], back]))
+        o = self.observe()
+        planner = self.switch if change else self.recontact
+        sw = planner(o, self.face, pose, face, start)
+        if sw.status != "solved":
+            what = f"switch {self.face} -> {face}" if change else f"re-contact of {face}"
+            raise _Stop("failed", f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
+        xy = sw.xy
+        clear = [swept_clearance(self.tool, self.platform, xy[j:j + 1], o, self.scene.radius) for j in range(len(xy))]
+        j = next((j for j, c in enumerate(clear) if c >= 0.5 * BACK_OFF), 0)
+        self.move(np.vstack([back, xy[j:]]))
+        if change:
+            self.n_switches += 1
+        else:
+            self.n_recontacts += 1
+
     def push(self, p: Push, pp: PushPlan, o: NDArray[np.float64], k0: int, length: float) -> int:
         """Bring ``p``'s face to its contact pose at sample ``k0`` of the push (switch, re-contact or
         none), then push along ``p`` for at most ``length`` [m] of object travel; returns the push
         sample reached."""
         pose = self.plant.tool_pose()  # type: ignore[attr-defined]
         start = p.tool_pose[k0]
-        if self.face != p.face:
-            sw = self.switch(o, self.face, pose, p.face, start) if self.face is not None else None
-            if sw is None or sw.status != "solved":
-                raise _Stop("failed", f"no switch {self.face} -> {p.face} at {np.round(o, 4).tolist()} m"
-                            + (f": {sw.reason}" if sw is not None else ""))
-            self.move(np.vstack([pose[:2], sw.xy]))
-            self.n_switches += 1
-        elif np.hypot(*(pose[:2] - start[:2])) > SAME_POSE:
-            rc = self.recontact(o, p.face, pose, p.face, start)
-            if rc.status != "solved":
-                raise _Stop("failed", f"no re-contact of {p.face} at {np.round(o, 4).tolist()} m: {rc.reason}")
-            self.move(np.vstack([pose[:2], rc.xy]))
-            self.n_recontacts += 1
+        change = self.face is not None and self.face != p.face
+        if change or np.hypot(*(pose[:2] - start[:2])) > SAME_POSE:
+            self.leave(o, pose, p.face, start, change)
+        self.face = p.face
         self.face = p.face
         xy = pp.object_xy[p.samples[k0:]]
         travel = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
@@ -330,6 +352,17 @@ def execute_closed_loop(
         threshold = max(replan_threshold, 3.0 * camera_noise / np.sqrt(frames))
         rounds = 0
         for _ in range(max_chunks):
+            partial = (i >= len(current.pushes) and bool(current.pushes)
+                       and current.pushes[-1].samples[-1] < current.t.size - 1)
+            if partial:  # a re-plan realised its first face only: plan the rest from here
+                o = loop.observe()
+                tau = base + float(current.t[current.pushes[-1].samples[-1]] - current.t[0])
+                if tau < ref.end - 0.05:
+                    t, r, faces, switches = ref.rest(tau, o, loop.target)
+                    pp = loop.replan(t, r, faces, switches, o)
+                    if pp.status == "solved":
+                        current, base, i, k = pp, tau, 0, 0
+                        continue
             if i >= len(current.pushes):  # the plan in force is done: is the object there?
                 o = np.mean([loop.observe() for _ in range(3)], axis=0)
                 if np.hypot(*(loop.target - o)) <= tolerance:

@@ -24,6 +24,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from dmp.errors import InputError
 from planner.assemble import SwitchPath, SwitchPlanner
 from planner.ss import SwitchSkill, SwitchTask, optimize, recombine
 from tools.arch import NoArch, swept_clearance, switch_path
@@ -104,8 +105,11 @@ def skill_planner(variant: str, skill: SwitchSkill, tool: Tool, platform: OmniPl
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
              pose_b: NDArray[np.float64]) -> SwitchPath:
         s_a, s_b = (contact_fraction(tool, f, obj, p, radius) for f, p in ((face_a, pose_a), (face_b, pose_b)))
-        task = SwitchTask(tool, face_a, face_b, np.asarray(obj, float), s_from=s_a, s_to=s_b,
-                          obj=DiscObject(radius), obstacles=obs, platform=platform)
+        try:
+            task = SwitchTask(tool, face_a, face_b, np.asarray(obj, float), s_from=s_a, s_to=s_b,
+                              obj=DiscObject(radius), obstacles=obs, platform=platform)
+        except InputError as exc:  # e.g. a "switch" of one face to where it already touches
+            return SwitchPath(np.zeros((0, 2)), "infeasible", f"{variant} switch: {exc}")
         if variant == "dmp":
             res = recombine(skill, task)
         else:

@@ -199,6 +199,15 @@ def _run_scalar(
     xy[0] = cx, cy
     rows = p.tolist()
 
+    def inside(lx: float, ly: float) -> bool:
+        """Whether the tool-frame point lies inside the outline (crossing number; a nearest point at a
+        vertex says nothing about the side by one edge's normal)."""
+        odd = False
+        for ax, ay, dx, dy, _, _, _ in edges:
+            if (ay > ly) != (ay + dy > ly) and lx < ax + (ly - ay) * dx / dy:
+                odd = not odd
+        return odd
+
     def nearest(px: float, py: float, yaw: float) -> tuple[float, float, float, float, float, int, float, float]:
         """(gap, qx, qy (tool frame), nx, ny (world), edge, cos, sin) of the centre at the pose."""
         co, si = math.cos(yaw), math.sin(yaw)
@@ -215,7 +224,7 @@ def _run_scalar(
         enx, eny = edges[bm][5], edges[bm][6]
         if dist > 1e-15:
             nx, ny = (lx - bqx) / dist, (ly - bqy) / dist
-            if nx * enx + ny * eny < 0.0:  # the centre is inside the outline
+            if dist < r and inside(lx, ly):  # the centre inside the outline: out along the edge's normal
                 nx, ny, dist = enx, eny, -dist
         else:
             nx, ny = enx, eny
