@@ -33,7 +33,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
         raise InputError("--retry", "a comma-separated list of error, timeout, infeasible", bad[0])
     s = run_batch(args.batch, args.db, workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local,
-                  timeout=args.timeout, simulate=True if args.simulate else None, resume=args.resume, retry=retry,
+                  timeout=args.timeout, simulate=args.simulate, resume=args.resume, retry=retry,
                   progress=not args.quiet)
     counts = ", ".join(f"{k} {v}" for k, v in sorted(s.counts.items())) or "nothing to do"
     print(f"{s.stored} results stored ({counts}), {s.skipped} already done, of {s.total}; "
@@ -74,7 +74,7 @@ def add_batch_parser(sub: argparse._SubParsersAction,
     p.add_argument("batch", type=Path, help="batch file (YAML)")
     p.add_argument("--out", type=Path, required=True, help="folder for the task files")
     p = add(bsub, "run", "run every task of a batch with every variant, storing each result as it finishes",
-            "tooltransfer batch run problems/batch/small.yaml --db out/small.sqlite --workers 2\n"
+            "tooltransfer batch run problems/batch/small.yaml --db out/small.sqlite --workers 2 --simulate\n"
             "  tooltransfer batch run problems/batch/small.yaml --db out/small.sqlite --dask-local 2 --resume\n"
             "  tooltransfer batch run problems/batch/small.yaml --db out/small.sqlite --scheduler tcp://host:8786",
             _cmd_run)
@@ -86,7 +86,10 @@ def add_batch_parser(sub: argparse._SubParsersAction,
     where.add_argument("--dask-local", type=int, default=None, metavar="N", help="start a local Dask cluster of N "
                        "worker processes")
     p.add_argument("--timeout", type=float, default=None, help="per task and variant [s] (default: the batch file's)")
-    p.add_argument("--simulate", action="store_true", help="also execute solved plans on the simulated platform")
+    p.add_argument("--simulate", action=argparse.BooleanOptionalAction, default=None,
+                   help="execute every solved plan on the simulated platform open loop and closed loop (default: the "
+                   "batch file's simulate.enabled); part of the store's settings: a resume with the other setting is "
+                   "refused")
     p.add_argument("--resume", action="store_true", help="carry on a store of this batch, skipping stored results")
     p.add_argument("--retry", default=None, metavar="STATUSES",
                    help="with --resume, run these statuses again (comma-separated: error,timeout,infeasible)")

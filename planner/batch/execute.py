@@ -1,10 +1,19 @@
-"""One task with one variant, planned (and simulated) inside a sandbox process: the measures of a
-result row (see :data:`planner.batch.store.RESULT_COLUMNS`)."""
+"""One task with one variant, planned (and executed) inside a sandbox process: the measures of a
+result row (see :data:`planner.batch.store.RESULT_COLUMNS`).
+
+Planning (:func:`execute_job`) and each execution of a solved plan (:func:`open_loop`,
+:func:`closed_loop`) are separate sandbox calls (:class:`planner.batch.worker.Stage`), each with its
+own timeout: an execution that raises, hangs or crashes the interpreter becomes that stage's
+status and reason in the row, and the plan's own measures are kept. The plan goes from one call to
+the next pickled (bytes), so the executor slots never unpickle planner objects.
+"""
 
 from __future__ import annotations
 
 import json
 import math
+import pickle
+import statistics
 import time
 from typing import Any
 
@@ -24,13 +33,12 @@ def _finite(v: Any) -> float | None:
     return f if math.isfinite(f) else None
 
 
-def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, simulate: bool = False,
-                tolerance: float = 0.01) -> dict[str, Any]:
+def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: bool = False) -> dict[str, Any]:
     """Plan ``task`` (task-file fields; relative paths are relative to ``source``'s folder) with the
-    variants ``oe`` and ``ss``; simulate a solved plan when ``simulate``. Returns the row's measures:
-    status, reason, times [s], the plan's metrics (SI units; infinities stored as NULL and kept in
-    ``metrics_json``), switch count, penetration and, if simulated, the final error [m] and success
-    (final error within ``tolerance`` [m])."""
+    variants ``oe`` and ``ss``. Returns the row's measures: status, reason, times [s], the plan's
+    metrics (SI units; infinities stored as NULL and kept in ``metrics_json``), switch count and
+    penetration; with ``keep_plan`` a solved plan also comes back pickled under ``"plan"`` (for the
+    execution stages; not a column)."""
     from planner.solve import solve
     from problems.task import Variants, task_from_dict
 
@@ -52,18 +60,47 @@ def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, simulate: b
         depth.append(float(m["switch_penetration_max"]))
     row["penetration_max"] = max(0.0, *depth) if depth else None
     row["metrics_json"] = json.dumps({k: (v if _finite(v) is not None else str(v)) for k, v in m.items()})
-    if simulate and plan.status == "solved":
-        from planner.simulate import simulate_plan
-
-        rep = simulate_plan(plan)
-        row.update({"sim_final_error": rep.final_error, "sim_tool_deviation": rep.tool_deviation,
-                    "sim_wall_time": rep.wall_time, "sim_success": int(rep.final_error <= tolerance)})
+    if keep_plan and plan.status == "solved":
+        row["plan"] = pickle.dumps(plan, protocol=pickle.HIGHEST_PROTOCOL)
     return row
 
 
+def open_loop(plan: bytes, tolerance: float = 0.01) -> dict[str, Any]:
+    """Execute the pickled solved plan open loop on the simulated platform: ``open_loop_error`` [m]
+    (object to target at the end), ``open_loop_status`` ``"done"``, and the same under the schema-1
+    names ``sim_final_error``, ``sim_tool_deviation`` [m], ``sim_wall_time`` [s] and ``sim_success``
+    (within ``tolerance`` [m])."""
+    from planner.simulate import simulate_plan
+
+    rep = simulate_plan(pickle.loads(plan))
+    err = _finite(rep.final_error)
+    return {"open_loop_status": "done", "open_loop_error": err, "sim_final_error": err,
+            "sim_tool_deviation": _finite(rep.tool_deviation), "sim_wall_time": rep.wall_time,
+            "sim_success": None if err is None else int(err <= tolerance)}
+
+
+def closed_loop(plan: bytes, seed: int, tolerance: float = 0.001, camera_noise: float = 0.0015) -> dict[str, Any]:
+    """Execute the pickled solved plan closed loop on the simulated platform (camera noise
+    ``camera_noise`` [m] per frame, seed ``seed``; stops within ``tolerance`` [m] as measured): the
+    ``closed_loop_*`` columns (status ``reached|closest|rounds|failed`` and its reason, the true final
+    error [m], pushes, switches, re-contacts, re-plans and their median time [s])."""
+    from planner.closed_loop import execute_closed_loop
+
+    rep = execute_closed_loop(pickle.loads(plan), tolerance=tolerance, camera_noise=camera_noise, seed=seed)
+    times = [float(x) for x in rep.replan_times]
+    return {"closed_loop_status": rep.status, "closed_loop_reason": rep.reason, "closed_loop_seed": seed,
+            "closed_loop_error": _finite(rep.final_error), "closed_loop_pushes": rep.n_pushes,
+            "closed_loop_switches": rep.n_switches, "closed_loop_recontacts": rep.n_recontacts,
+            "closed_loop_replans": rep.n_replans,
+            "closed_loop_replan_time_median": statistics.median(times) if times else None,
+            "closed_loop_replan_time_max": max(times) if times else None}
+
+
 def warm_up(simulate: bool = False) -> None:
-    """Import what :func:`execute_job` needs (run once when a sandbox starts)."""
+    """Import what :func:`execute_job` (and with ``simulate`` the executions) need (run once when a
+    sandbox starts)."""
     import planner.solve
 
     if simulate:
+        import planner.closed_loop
         import planner.simulate  # noqa: F401

@@ -1,5 +1,8 @@
 """Figures of a batch: success rate against difficulty (obstacle count; distance of start or target
-to the reach boundary) with 95% Wilson intervals, and planning-time distributions per variant."""
+to the reach boundary) with 95% Wilson intervals, planning-time distributions per variant and, when
+plans were executed (``batch run --simulate``), executed success per variant (planned, open and
+closed loop within 2 and 5 mm, as shares of all tasks with Wilson intervals) beside the final-error
+distributions."""
 
 from __future__ import annotations
 
@@ -26,7 +29,8 @@ def _rates(rows: Sequence[dict[str, Any]], key: Any) -> tuple[list, list, list, 
 
 
 def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
-    """Write ``success_vs_difficulty.png`` and ``time_distributions.png`` into ``out``."""
+    """Write ``success_vs_difficulty.png``, ``time_distributions.png`` and, when plans were executed,
+    ``executed_success.png`` into ``out``."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -75,4 +79,50 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
     ax.set(ylabel="planning time [ms] (log)", title="planning time per variant (whiskers: 1st-99th percentile)")
     ax.grid(alpha=0.3, axis="y")
     written.append(save_figure(fig, out / "time_distributions.png"))
+    if any(r.get("open_loop_status") is not None or r.get("closed_loop_status") is not None for r in rows):
+        written.append(plot_execution(by_var, out / "executed_success.png"))
     return written
+
+
+def plot_execution(by_var: dict[str, list[dict[str, Any]]], path: Path) -> Path:
+    """Executed success per variant (shares of all tasks, 95% Wilson) and the final errors' CDFs."""
+    import matplotlib.pyplot as plt
+
+    from planner.batch.report import EXEC_TOLS
+
+    bars = [("planned", None, None)] + [(f"{name} <= {1e3 * tol:g} mm", key, tol)
+                                        for name, key in (("OL", "open_loop"), ("CL", "closed_loop"))
+                                        for tol in EXEC_TOLS]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.4))
+    width = 0.8 / max(1, len(bars))
+    for k, v in enumerate(by_var):
+        rows = by_var[v]
+        n = len(rows)
+        for j, (label, key, tol) in enumerate(bars):
+            if key is None:
+                hit = sum(r["status"] == "solved" for r in rows)
+            else:
+                hit = sum(r["status"] == "solved" and r.get(f"{key}_error") is not None
+                          and r[f"{key}_error"] <= tol for r in rows)
+            rate = hit / n if n else float("nan")
+            lo, hi = wilson(hit, n)
+            a1.bar(k + (j - (len(bars) - 1) / 2) * width, rate, width, yerr=[[rate - lo], [hi - rate]], capsize=2,
+                   color=f"C{j}", label=label if k == 0 else None)
+        for key, style in (("open_loop", "--"), ("closed_loop", "-")):
+            err = np.sort([r[f"{key}_error"] * 1e3 for r in rows if r.get(f"{key}_error") is not None])
+            if err.size:
+                a2.step(np.maximum(err, 1e-2), np.arange(1, err.size + 1) / err.size, where="post", ls=style,
+                        color=f"C{k}", label=f"{v} {'OL' if key == 'open_loop' else 'CL'} ({err.size})")
+    a1.set_xticks(range(len(by_var)), list(by_var), fontsize=8)
+    a1.set(ylabel="share of all tasks", ylim=(0, 1.05), title="planned and executed success (95% Wilson)")
+    a1.legend(fontsize=7)
+    for tol in EXEC_TOLS:
+        a2.axvline(tol * 1e3, color="0.6", lw=0.8)
+    a2.set_xscale("log")
+    a2.set(xlabel="final object-to-target error [mm] (log)", ylabel="share of executed plans",
+           ylim=(0, 1.02), title="final error, open loop (dashed) and closed loop")
+    if a2.get_legend_handles_labels()[0]:
+        a2.legend(fontsize=7)
+    for a in (a1, a2):
+        a.grid(alpha=0.3)
+    return save_figure(fig, path)

@@ -1,6 +1,12 @@
 """Statistics of a batch's results: per tool and variant, success rate with a Wilson interval,
 infeasible, error and timeout counts with the top reasons, planning-time percentiles, violation
-maxima and simulated success; rich tables and CSV files.
+maxima and, for a batch run with ``--simulate``, executed success; rich tables and CSV files.
+
+Executed success: a solved plan executed on the simulated platform succeeds within 2 mm (5 mm)
+when the object ends within 2 mm (5 mm) of the target (:data:`EXEC_TOLS`), open loop and closed
+loop; given as a share of the executed solved plans (every solved plan is executed; an execution
+that raised or timed out counts as a miss) and of all tasks (planned and executed: the end-to-end
+rate), beside the closed loop's statuses and the median final errors.
 
 A solved row is also checked: ``valid`` counts solved plans whose measured cone violation is at
 most :data:`CONE_TOL` [rad], reach violation at most :data:`REACH_TOL` [m], penetration (the
@@ -21,6 +27,7 @@ from typing import Any
 
 import numpy as np
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 from scipy.stats import binomtest
 
@@ -28,6 +35,8 @@ CONE_TOL = 0.01
 REACH_TOL = 1e-3
 PENETRATION_TOL = 1e-6
 CONFIDENCE = 0.95
+#: Executed success thresholds [m] (final object-to-target distance).
+EXEC_TOLS = (0.002, 0.005)
 
 
 def wilson(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float]:
@@ -80,6 +89,67 @@ class GroupStats:
     sim_ci_low: float
     sim_ci_high: float
     sim_final_error_median: float
+    ol_n: int = 0
+    ol_2mm: int = 0
+    ol_5mm: int = 0
+    ol_2mm_of_solved: float = float("nan")
+    ol_5mm_of_solved: float = float("nan")
+    ol_2mm_of_all: float = float("nan")
+    ol_5mm_of_all: float = float("nan")
+    ol_error_median: float = float("nan")
+    ol_error_p90: float = float("nan")
+    ol_failed: int = 0
+    ol_wall_median: float = float("nan")
+    cl_n: int = 0
+    cl_2mm: int = 0
+    cl_5mm: int = 0
+    cl_2mm_of_solved: float = float("nan")
+    cl_5mm_of_solved: float = float("nan")
+    cl_2mm_of_all: float = float("nan")
+    cl_5mm_of_all: float = float("nan")
+    cl_2mm_all_ci_low: float = float("nan")
+    cl_2mm_all_ci_high: float = float("nan")
+    cl_error_median: float = float("nan")
+    cl_error_p90: float = float("nan")
+    cl_statuses: str = ""
+    cl_replans_median: float = float("nan")
+    cl_replan_time_max: float = float("nan")
+    cl_wall_median: float = float("nan")
+
+
+def _pct(a: np.ndarray, q: float) -> float:
+    return float(np.percentile(a, q)) if a.size else float("nan")
+
+
+def _share(k: int, n: int) -> float:
+    return k / n if n else float("nan")
+
+
+def execution_stats(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """The executed-success fields of :class:`GroupStats` for one group's ``rows`` (module docstring)."""
+    n = len(rows)
+    ok = [r for r in rows if r["status"] == "solved"]
+    out: dict[str, Any] = {}
+    for tag, key in (("ol", "open_loop"), ("cl", "closed_loop")):
+        ran = [r for r in ok if r.get(f"{key}_status") is not None]
+        err = _vals(ran, f"{key}_error")
+        k2, k5 = (int(np.sum(err <= tol)) for tol in EXEC_TOLS)
+        out.update({f"{tag}_n": len(ran), f"{tag}_2mm": k2, f"{tag}_5mm": k5,
+                    f"{tag}_2mm_of_solved": _share(k2, len(ran)), f"{tag}_5mm_of_solved": _share(k5, len(ran)),
+                    f"{tag}_2mm_of_all": _share(k2, n) if ran else float("nan"),
+                    f"{tag}_5mm_of_all": _share(k5, n) if ran else float("nan"),
+                    f"{tag}_error_median": _agg(err, "median"), f"{tag}_error_p90": _pct(err, 90),
+                    f"{tag}_wall_median": _agg(_vals(ran, f"{key}_wall_time"), "median")})
+        if tag == "ol":
+            out["ol_failed"] = sum(r.get("open_loop_status") != "done" for r in ran)
+        else:
+            lo, hi = wilson(k2, n) if ran else (float("nan"), float("nan"))
+            st = Counter(r["closed_loop_status"] for r in ran)
+            out.update(cl_2mm_all_ci_low=lo, cl_2mm_all_ci_high=hi,
+                       cl_statuses=", ".join(f"{k} {v}" for k, v in st.most_common()),
+                       cl_replans_median=_agg(_vals(ran, "closed_loop_replans"), "median"),
+                       cl_replan_time_max=_agg(_vals(ran, "closed_loop_replan_time_max"), "max"))
+    return out
 
 
 def _vals(rows: Iterable[dict[str, Any]], key: str) -> np.ndarray:
@@ -110,7 +180,7 @@ def group_stats(tool: str, variant: str, rows: Sequence[dict[str, Any]]) -> Grou
         _agg(_vals(ok, "penetration_max"), "max"), _agg(_vals(ok, "joint_limit_violation_max"), "max"),
         _agg(_vals(ok, "obstacle_clearance_min"), "min"), _agg(_vals(ok, "goal_error"), "max"),
         len(sim), k, k / len(sim) if sim else float("nan"), slo, shi,
-        _agg(_vals(sim, "sim_final_error"), "median"),
+        _agg(_vals(sim, "sim_final_error"), "median"), **execution_stats(rows),
     )
 
 
@@ -134,11 +204,17 @@ def reason_class(reason: str) -> str:
 
 
 def top_reasons(rows: Sequence[dict[str, Any]], k: int = 3) -> list[dict[str, Any]]:
-    """The ``k`` most frequent reason classes per variant and failing status."""
+    """The ``k`` most frequent reason classes per variant and failing status (of planning, and of
+    the executions of solved plans: ``open loop error``, ``closed loop closest``, ...)."""
     groups: dict[tuple[str, str], Counter] = defaultdict(Counter)
     for r in rows:
         if r["status"] != "solved":
             groups[(r["variant"], r["status"])][reason_class(r.get("reason") or "")] += 1
+            continue
+        for key, label in (("open_loop", "open loop"), ("closed_loop", "closed loop")):
+            st = r.get(f"{key}_status")
+            if st not in (None, "done", "reached"):
+                groups[(r["variant"], f"{label} {st}")][reason_class(r.get(f"{key}_reason") or "")] += 1
     return [{"variant": v, "status": s, "count": n, "reason": text}
             for (v, s), cnt in sorted(groups.items()) for text, n in cnt.most_common(k)]
 
@@ -148,35 +224,63 @@ def _fmt(v: float, scale: float = 1.0, digits: int = 2) -> str:
 
 
 def print_report(stats: Sequence[GroupStats], reasons: Sequence[dict[str, Any]], console: Console) -> None:
-    """The tables: outcomes and times, violations and simulation, top reasons."""
+    """The tables: outcomes and times, violations, executed success (when plans were executed), top
+    reasons."""
     t = Table(title="outcomes per tool and variant (success: solved; 95% Wilson interval)")
     for col in ("tool", "variant", "n", "solved", "rate [%]", "95% CI [%]", "valid", "infeas.", "error",
                 "timeout", "t50 [ms]", "t90 [ms]", "t99 [ms]"):
-        t.add_column(col, justify="left" if col in ("tool", "variant") else "right")
+        t.add_column(escape(col), justify="left" if col in ("tool", "variant") else "right")
     for s in stats:
         t.add_row(s.tool, s.variant, str(s.n), str(s.solved), _fmt(s.rate, 100, 1),
                   f"{_fmt(s.ci_low, 100, 1)}-{_fmt(s.ci_high, 100, 1)}", str(s.valid), str(s.infeasible),
                   str(s.error), str(s.timeout), _fmt(s.time_p50, 1e3, 0), _fmt(s.time_p90, 1e3, 0),
                   _fmt(s.time_p99, 1e3, 0), end_section=s.tool == "all" and s is stats[-1])
     console.print(t)
-    v = Table(title="solved plans: violation maxima, clearance, simulated success")
+    v = Table(title="solved plans: violation maxima, clearance")
     for col in ("tool", "variant", "cone [rad]", "reach [mm]", "penetr. [mm]", "joints [rad]", "clear. min [mm]",
-                "goal err [mm]", "sim n", "sim ok [%]", "sim 95% CI [%]", "sim err med [mm]"):
-        v.add_column(col, justify="left" if col in ("tool", "variant") else "right")
+                "goal err [mm]"):
+        v.add_column(escape(col), justify="left" if col in ("tool", "variant") else "right")
     for s in stats:
         v.add_row(s.tool, s.variant, _fmt(s.cone_violation_max, 1, 3), _fmt(s.reach_violation_max, 1e3),
                   _fmt(s.penetration_max, 1e3), _fmt(s.joint_limit_violation_max, 1, 3),
-                  _fmt(s.obstacle_clearance_min, 1e3), _fmt(s.goal_error_max, 1e3), str(s.sim_n),
-                  _fmt(s.sim_rate, 100, 1), f"{_fmt(s.sim_ci_low, 100, 1)}-{_fmt(s.sim_ci_high, 100, 1)}",
-                  _fmt(s.sim_final_error_median, 1e3, 1))
+                  _fmt(s.obstacle_clearance_min, 1e3), _fmt(s.goal_error_max, 1e3))
     console.print(v)
+    if any(s.ol_n or s.cl_n for s in stats):
+        print_execution(stats, console)
     if reasons:
         r = Table(title="top reasons (numbers shown as #)")
         for col in ("variant", "status", "count", "reason"):
             r.add_column(col, justify="right" if col == "count" else "left")
         for e in reasons:
-            r.add_row(e["variant"], e["status"], str(e["count"]), e["reason"])
+            r.add_row(e["variant"], e["status"], str(e["count"]), escape(e["reason"]))
         console.print(r)
+
+
+def _cell(s: GroupStats, which: str) -> str:
+    """``which`` (e.g. ``cl_2mm``) as ``count: % of executed solved plans / % of all tasks``."""
+    if not getattr(s, f"{which[:2]}_n"):
+        return "-"
+    k, solved, every = (getattr(s, f"{which}{x}") for x in ("", "_of_solved", "_of_all"))
+    return f"{k}: {_fmt(solved, 100, 0)} / {_fmt(every, 100, 0)}"
+
+
+def print_execution(stats: Sequence[GroupStats], console: Console) -> None:
+    """The executed-success table (module docstring)."""
+    e = Table(title="executed success on the simulated platform: open loop (OL) and closed loop (CL)",
+              caption="OL/CL <=2 mm (5 mm): the object ends within 2 mm (5 mm) of the target; cells: count: % of the "
+              "executed solved plans / % of all tasks; CI: Wilson, of all tasks; err: median final error; t: median "
+              "wall time of one execution")
+    for col in ("tool", "variant", "solved", "exec.", "OL <=2 mm", "OL <=5 mm", "CL <=2 mm", "CL <=5 mm",
+                "CL <=2 mm 95% CI [%]", "OL err [mm]", "CL err [mm]", "CL statuses", "CL replans (med)",
+                "t OL/CL [s]"):
+        e.add_column(escape(col), justify="left" if col in ("tool", "variant", "CL statuses") else "right")
+    for s in stats:
+        e.add_row(s.tool, s.variant, str(s.solved), str(max(s.ol_n, s.cl_n)),
+                  *(_cell(s, w) for w in ("ol_2mm", "ol_5mm", "cl_2mm", "cl_5mm")),
+                  f"{_fmt(s.cl_2mm_all_ci_low, 100, 1)}-{_fmt(s.cl_2mm_all_ci_high, 100, 1)}" if s.cl_n else "-",
+                  _fmt(s.ol_error_median, 1e3), _fmt(s.cl_error_median, 1e3), s.cl_statuses or "-",
+                  _fmt(s.cl_replans_median, 1, 0), f"{_fmt(s.ol_wall_median, 1, 1)}/{_fmt(s.cl_wall_median, 1, 1)}")
+    console.print(e)
 
 
 def write_csv(path: Path, rows: Sequence[dict[str, Any]], columns: Sequence[str] | None = None) -> Path:

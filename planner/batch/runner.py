@@ -8,7 +8,10 @@ first Ctrl-C (SIGINT) stops submitting, cancels what has not started, waits for 
 store holds only whole rows and ``--resume`` carries on. A broken process pool (a worker killed
 from outside) is replaced and its running jobs are run again once, each alone (so that the job
 that breaks it again is the culprit, and the others are not charged for it); a job that breaks the
-pool running alone, or whose Dask worker died, becomes an ``error`` row.
+pool running alone, or whose Dask worker died, becomes an ``error`` row. With simulation
+(``--simulate`` or ``simulate.enabled``) each solved plan is also executed open and closed loop in
+the same slot's sandbox, each execution with its own timeout; whether plans are executed is
+recorded in the store and a resume with the other setting is refused.
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ from planner.batch.executors import Slots
 from planner.batch.generate import GeneratedTask, generate_tasks
 from planner.batch.spec import BatchSpec
 from planner.batch.store import ResultStore
-from planner.batch.worker import Job, run_job
+from planner.batch.worker import Job, Stage, run_job
 
 STATUSES = ("solved", "infeasible", "error", "timeout")
 
@@ -86,20 +89,36 @@ class _Rate(ProgressColumn):
         return Text(f"{speed:.2f}/s" if speed else "-/s", style="progress.data.speed")
 
 
+def simulate_setting(spec: BatchSpec, simulate: bool | None = None) -> bool:
+    """Whether solved plans are executed: ``simulate`` (``--simulate``/``--no-simulate``), else the
+    batch file's ``simulate.enabled``."""
+    return spec.simulate.enabled if simulate is None else bool(simulate)
+
+
 def batch_jobs(spec: BatchSpec, batch_path: str | Path, tasks: Sequence[GeneratedTask] | None = None,
                timeout: float | None = None, simulate: bool | None = None) -> tuple[list[GeneratedTask], list[Job]]:
-    """The batch's tasks and its jobs (every task with every variant), in task order."""
+    """The batch's tasks and its jobs (every task with every variant), in task order. With
+    simulation, each job executes its solved plan open loop and closed loop in two more sandbox
+    calls (:class:`planner.batch.worker.Stage`, ``simulate.timeout`` each), the closed loop with task
+    ``i``'s camera-noise seed (:meth:`planner.batch.spec.Simulation.closed_loop_seed`)."""
     tasks = list(tasks) if tasks is not None else generate_tasks(spec, batch_path)
-    sim = spec.simulate.enabled if simulate is None else simulate
-    tol = spec.simulate.tolerance
+    sim = simulate_setting(spec, simulate)
+    cfg = spec.simulate
     limit = spec.timeout if timeout is None else timeout
     source = str(Path(batch_path).resolve())
     pairs = spec.variants.pairs()
     warm: list[tuple[str, tuple]] = [("planner.batch.execute:warm_up", (sim,))]
     if tasks:
-        warm += [("planner.batch.execute:execute_job", (tasks[0].data, source, oe, ss, False, tol)) for oe, ss in pairs]
-    jobs = [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim, tol), timeout=limit, warmup=tuple(warm))
-            for t in tasks for oe, ss in pairs]
+        warm += [("planner.batch.execute:execute_job", (tasks[0].data, source, oe, ss, False)) for oe, ss in pairs]
+    jobs = []
+    for t in tasks:
+        stages: tuple[Stage, ...] = ()
+        if sim:
+            stages = (Stage("open_loop", "planner.batch.execute:open_loop", (cfg.tolerance,), cfg.timeout),
+                      Stage("closed_loop", "planner.batch.execute:closed_loop",
+                            (cfg.closed_loop_seed(t.index), cfg.closed_loop_tolerance, cfg.camera_noise), cfg.timeout))
+        jobs += [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim), timeout=limit, warmup=tuple(warm),
+                     stages=stages) for oe, ss in pairs]
     return tasks, jobs
 
 
@@ -110,8 +129,21 @@ def task_records(tasks: Sequence[GeneratedTask]) -> list[dict[str, Any]]:
              "distance": t.distance, "task_json": json.dumps(t.data)} for t in tasks]
 
 
-def open_batch_store(store: ResultStore, spec: BatchSpec, tasks: Sequence[GeneratedTask], resume: bool) -> None:
-    """Tie ``store`` to the batch (refusing another batch's store, or a filled one without ``resume``)."""
+def _on_off(v: bool) -> str:
+    return "on" if v else "off"
+
+
+def open_batch_store(store: ResultStore, spec: BatchSpec, tasks: Sequence[GeneratedTask], resume: bool,
+                     simulate: bool | None = None) -> None:
+    """Tie ``store`` to the batch and its settings, refusing: a file of an older schema, another
+    batch's store, a filled one without ``resume``, and one filled with the other execution setting
+    (``simulate``, default the batch file's: see :func:`simulate_setting`)."""
+    from planner.batch.store import SCHEMA_VERSION
+
+    if store.schema != SCHEMA_VERSION:
+        raise InputError("--db", f"a results file of schema {SCHEMA_VERSION} to resume, or a new file",
+                         f"{store.path} of schema {store.schema} (written before executions were stored; "
+                         "`tooltransfer batch report` still reads it)")
     meta = store.meta()
     digest = spec.digest()
     if meta.get("batch_digest") not in (None, digest):
@@ -121,7 +153,14 @@ def open_batch_store(store: ResultStore, spec: BatchSpec, tasks: Sequence[Genera
     if n and not resume:
         raise InputError("--resume", f"--resume to carry on ({store.path} already holds {n} results) "
                          "or a new --db", "neither")
-    store.set_meta(batch_name=spec.name, batch_digest=digest, batch=spec.model_dump_json())
+    sim = _on_off(simulate_setting(spec, simulate))
+    was = meta.get("simulate")
+    if n and was not in (None, sim):
+        how = {"on": "--simulate, or simulate.enabled: true in the batch file",
+               "off": "--no-simulate, or simulate.enabled: false in the batch file without --simulate"}
+        raise InputError("--simulate", f"the setting {store.path} was run with, simulate {was} ({how[was]})",
+                         f"simulate {sim}: resume with the same setting, or run into a new --db")
+    store.set_meta(batch_name=spec.name, batch_digest=digest, batch=spec.model_dump_json(), simulate=sim)
     store.add_tasks(task_records(tasks))
 
 
@@ -242,7 +281,8 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
         workers: process-pool size (default: the CPU count).
         scheduler, dask_local: run on a Dask cluster instead (see :func:`planner.batch.executors.open_executor`).
         timeout: per job [s] (default: the batch file's).
-        simulate: override the batch file's ``simulate.enabled``.
+        simulate: override the batch file's ``simulate.enabled`` (part of the store's settings: a resume
+            with the other setting is refused).
         resume: carry on a store that already holds rows of this batch.
         retry: statuses to run again on resume (e.g. ``("error", "timeout")``).
     """
@@ -255,7 +295,7 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
     tasks, jobs = batch_jobs(spec, batch_path, timeout=timeout, simulate=simulate)
     console = console or Console(stderr=True)
     with ResultStore(db) as store:
-        open_batch_store(store, spec, tasks, resume)
+        open_batch_store(store, spec, tasks, resume, simulate)
         if retry:
             store.forget(retry)
         if len(store.done()) < len(jobs):
@@ -264,7 +304,8 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
         info = {j.key: {"tool": tool[j.task_id], "oe": j.args[2], "ss": j.args[3]} for j in jobs}
         with open_executor(workers, scheduler, dask_local) as slots:
             if progress:
-                console.print(f"batch {spec.name}: {len(tasks)} tasks x {len(spec.variants.pairs())} variants "
+                ex = ", solved plans executed open and closed loop" if simulate_setting(spec, simulate) else ""
+                console.print(f"batch {spec.name}: {len(tasks)} tasks x {len(spec.variants.pairs())} variants{ex} "
                               f"on a {slots.kind} ({slots.where}), results in {store.path}")
             return run_jobs(jobs, store, slots, info=info, progress=progress, console=console)
 

@@ -17,7 +17,7 @@ shape, which variants to run, the timeout and whether to simulate. Example::
     heading: [1.9, 3.1]                  # optional: direction from start to target [rad]
     obstacles: {count: [0, 3], radius: [0.003, 0.008], kinds: [disc, polygon]}
     variants: {oe: [qp, mapping], ss: [arch]}
-    simulate: {enabled: false, tolerance: 0.01}
+    simulate: {enabled: false, seed: 0}       # execute solved plans open and closed loop
     timeout: 60
     task: {safety_margin: 0.005}         # extra task fields, the same in every task
 
@@ -100,11 +100,27 @@ class VariantGrid(_Model):
 
 
 class Simulation(_Model):
-    """Executing solved plans on the simulated platform (MuJoCo)."""
+    """Executing solved plans on the simulated platform (MuJoCo): each one open loop (the planned
+    joints tracked, :func:`planner.simulate.simulate_plan`) and closed loop (re-planning from the
+    observed object, :func:`planner.closed_loop.execute_closed_loop`)."""
 
-    enabled: bool = False
-    tolerance: Positive = Field(0.01, description="a simulated run succeeds if the object ends within this of "
-                                "the target [m] (the half side of the demonstrations' target square)")
+    enabled: bool = Field(False, description="execute solved plans (``batch run --simulate`` / ``--no-simulate`` "
+                          "overrides it)")
+    tolerance: Positive = Field(0.01, description="``sim_success``: the open-loop run ends with the object within "
+                                "this of the target [m] (the half side of the demonstrations' target square)")
+    closed_loop_tolerance: Positive = Field(0.001, description="the closed loop stops once the object is measured "
+                                            "within this of the target [m]")
+    camera_noise: NonNegative = Field(0.0015, description="standard deviation of one camera frame per axis in the "
+                                      "closed loop [m]")
+    seed: Annotated[int, Field(ge=0)] = Field(0, description="camera-noise seed: task i's closed loop uses a seed "
+                                              "drawn from [seed, i] (the same for every variant of the task)")
+    timeout: Positive = Field(120.0, description="per execution (open loop, closed loop) of a plan [s]")
+
+    def closed_loop_seed(self, index: int) -> int:
+        """The closed loop's camera-noise seed of task ``index`` (deterministic, independent of ``count``)."""
+        import numpy as np
+
+        return int(np.random.SeedSequence([self.seed, index]).generate_state(1)[0])
 
 
 class BatchSpec(_Model):
@@ -151,8 +167,12 @@ class BatchSpec(_Model):
         return self
 
     def digest(self) -> str:
-        """Hash of the batch's content (a store refuses to resume a different batch)."""
-        return hashlib.sha256(self.model_dump_json().encode()).hexdigest()[:16]
+        """Hash of the batch's content without ``simulate.enabled`` (a store refuses to resume a different
+        batch; whether plans are executed is a setting of its own, checked by name:
+        :func:`planner.batch.runner.open_batch_store`)."""
+        data = self.model_dump(mode="json")
+        data["simulate"].pop("enabled")
+        return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 
 def batch_from_dict(data: Any, source: str = "<dict>") -> BatchSpec:

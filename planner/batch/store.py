@@ -3,11 +3,17 @@
 Tables: ``meta`` (batch name, digest, batch file as JSON), ``tasks`` (one row per generated task
 with its difficulty measures and task JSON) and ``results`` (OMPL-like: task id, tool, variant,
 status ``solved|infeasible|error|timeout``, reason, per-stage planning times [s], number of QPs,
-violation maxima, clearances [m], goal error [m], path length [m], pushes, switches, simulated final
-error [m] and success, worker, start and finish times (Unix seconds); every plan metric is kept in
-``metrics_json``). The journal is WAL; each row is committed on its own, so a process killed at
-any point loses at most the rows not yet written, and ``(task_id, variant)`` is the primary key:
-a row can never be stored twice.
+violation maxima, clearances [m], goal error [m], path length [m], pushes, switches, worker, start
+and finish times (Unix seconds); every plan metric is kept in ``metrics_json``; with ``--simulate``
+the executions of a solved plan: open loop (``open_loop_*``, also under the schema-1 names
+``sim_*``) and closed loop (``closed_loop_*``), each with a status, a reason and a wall time). The
+journal is WAL; each row is committed on its own, so a process killed at any point loses at most
+the rows not yet written, and ``(task_id, variant)`` is the primary key: a row can never be stored
+twice.
+
+Schema 2 added the execution columns. A schema-1 file (no ``open_loop_*``/``closed_loop_*``
+columns) still opens for reading (:meth:`ResultStore.rows` gives its ``sim_final_error`` as
+``open_loop_error``); :func:`planner.batch.runner.open_batch_store` refuses to resume it.
 """
 
 from __future__ import annotations
@@ -20,7 +26,9 @@ from typing import Any
 
 from dmp.errors import InputError
 
-SCHEMA_VERSION = "1"
+SCHEMA_VERSION = "2"
+#: Schemas :class:`ResultStore` can read (only the current one is resumed).
+READABLE_SCHEMAS = ("1", "2")
 
 #: Columns of ``results`` and their SQL types.
 RESULT_COLUMNS: dict[str, str] = {
@@ -33,6 +41,11 @@ RESULT_COLUMNS: dict[str, str] = {
     "switch_obstacle_clearance_min": "REAL", "goal_error": "REAL", "path_length": "REAL", "n_pushes": "REAL",
     "n_switches": "INTEGER", "duration": "REAL",
     "sim_final_error": "REAL", "sim_tool_deviation": "REAL", "sim_wall_time": "REAL", "sim_success": "INTEGER",
+    "open_loop_status": "TEXT", "open_loop_reason": "TEXT", "open_loop_error": "REAL", "open_loop_wall_time": "REAL",
+    "closed_loop_status": "TEXT", "closed_loop_reason": "TEXT", "closed_loop_error": "REAL",
+    "closed_loop_pushes": "INTEGER", "closed_loop_switches": "INTEGER", "closed_loop_recontacts": "INTEGER",
+    "closed_loop_replans": "INTEGER", "closed_loop_replan_time_median": "REAL", "closed_loop_replan_time_max": "REAL",
+    "closed_loop_wall_time": "REAL", "closed_loop_seed": "INTEGER",
     "wall_time": "REAL", "worker": "TEXT", "started_at": "REAL", "finished_at": "REAL",
     "metrics_json": "TEXT", "detail": "TEXT",
 }
@@ -68,8 +81,11 @@ class ResultStore:
         version = self.meta().get("schema")
         if version is None:
             self.set_meta(schema=SCHEMA_VERSION)
-        elif version != SCHEMA_VERSION:
-            raise InputError("--db", f"a results file of schema {SCHEMA_VERSION}", f"schema {version}")
+            version = SCHEMA_VERSION
+        elif version not in READABLE_SCHEMAS:
+            raise InputError("--db", f"a results file of schema {' or '.join(READABLE_SCHEMAS)}", f"schema {version}")
+        #: the file's schema (see the module docstring)
+        self.schema = version
 
     def close(self) -> None:
         self.db.close()
@@ -118,7 +134,13 @@ class ResultStore:
             "SELECT r.*, t.n_obstacles, t.start_reach, t.target_reach, t.reach_margin, t.distance, t.idx "
             "FROM results r LEFT JOIN tasks t USING (task_id) ORDER BY t.idx, r.task_id, r.variant")
         names = [d[0] for d in cur.description]
-        return [dict(zip(names, r, strict=True)) for r in cur.fetchall()]
+        rows = [dict(zip(names, r, strict=True)) for r in cur.fetchall()]
+        if "open_loop_error" not in names:  # schema 1: its simulation was open loop
+            for r in rows:
+                if r.get("sim_final_error") is not None:
+                    r.update(open_loop_status="done", open_loop_error=r["sim_final_error"],
+                             open_loop_wall_time=r.get("sim_wall_time"))
+        return rows
 
     def count(self) -> int:
         return int(self.db.execute("SELECT COUNT(*) FROM results").fetchone()[0])

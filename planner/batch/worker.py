@@ -4,6 +4,11 @@ The same function runs in a process-pool worker and in a Dask worker thread; eac
 keeps its own :class:`~planner.batch.sandbox.Sandbox`, so skills are loaded once per slot and a
 hang or crash costs only that job. Every way a job can end becomes a row: the job's own measures,
 an ``error`` (exception or crash, with the message), or a ``timeout``.
+
+A job may have stages (:class:`Stage`, e.g. executing the plan open and closed loop) run after a
+``solved`` call, each a sandbox call of its own with its own timeout, given what the job returned
+under ``"plan"``: its columns join the row, and a stage that raises, hangs or crashes sets only its
+``<stage>_status`` (``error`` or ``timeout``) and ``<stage>_reason``; the row keeps its status.
 """
 
 from __future__ import annotations
@@ -22,6 +27,22 @@ _LOCAL = threading.local()
 
 
 @dataclass(frozen=True)
+class Stage:
+    """A call run after a job solved: ``entry(plan, *args)`` returning columns (a dict).
+
+    Attributes:
+        name: column prefix: ``<name>_status``, ``<name>_reason``, ``<name>_wall_time`` [s].
+        entry: ``"module:function"``; args: after the job's ``"plan"`` value (picklable).
+        timeout: [s] for the call.
+    """
+
+    name: str
+    entry: str
+    args: tuple = ()
+    timeout: float = 120.0
+
+
+@dataclass(frozen=True)
 class Job:
     """One (task, variant) to run.
 
@@ -31,6 +52,7 @@ class Job:
         args: its arguments (picklable).
         timeout: [s] for the call.
         warmup: calls a new sandbox runs first, untimed (imports, skills).
+        stages: run in turn when the call returns a ``solved`` row (module docstring).
     """
 
     task_id: str
@@ -39,6 +61,7 @@ class Job:
     args: tuple = ()
     timeout: float = 60.0
     warmup: tuple[tuple[str, tuple], ...] = field(default=(), repr=False)
+    stages: tuple[Stage, ...] = ()
 
     @property
     def key(self) -> tuple[str, str]:
@@ -53,9 +76,11 @@ def _sandbox(warmup: tuple[tuple[str, tuple], ...]) -> Sandbox:
 
 
 def run_job(job: Job) -> dict[str, Any]:
-    """Run ``job`` in this slot's sandbox; the result row (never raises for the job's own failures)."""
+    """Run ``job`` (and its stages) in this slot's sandbox; the result row (never raises for the
+    job's own failures)."""
     started = time.time()
-    out = _sandbox(job.warmup).call(job.entry, job.args, job.timeout)
+    box = _sandbox(job.warmup)
+    out = box.call(job.entry, job.args, job.timeout)
     row: dict[str, Any] = {"task_id": job.task_id, "variant": job.variant, "started_at": started,
                            "worker": f"{socket.gethostname()}:{os.getpid()}", "wall_time": out.wall}
     if out.kind == "ok" and isinstance(out.value, dict) and "status" in out.value:
@@ -66,8 +91,35 @@ def run_job(job: Job) -> dict[str, Any]:
         row.update(status="timeout", reason=out.message)
     else:
         row.update(status="error", reason=out.message, detail=out.detail[-8000:])
+    plan = row.pop("plan", None)
+    if row["status"] == "solved" and plan is not None:
+        details = []
+        for stage in job.stages:
+            cols = run_stage(box, stage, plan)
+            if cols.get("detail"):
+                details.append(f"{stage.name}: {cols.pop('detail')}")
+            row.update(cols)
+        if details:
+            row["detail"] = "\n".join(details)[-8000:]
     row["finished_at"] = time.time()
     return row
+
+
+def run_stage(box: Sandbox, stage: Stage, plan: Any) -> dict[str, Any]:
+    """One stage in ``box``: its columns, or ``<name>_status`` ``error``/``timeout`` with the reason
+    (and the traceback or the crashed child's stderr under ``detail``)."""
+    out = box.call(stage.entry, (plan, *stage.args), stage.timeout)
+    cols: dict[str, Any] = {f"{stage.name}_wall_time": out.wall}
+    if out.kind == "ok" and isinstance(out.value, dict):
+        cols.update(out.value)
+        cols.setdefault(f"{stage.name}_status", "done")
+    elif out.kind == "ok":
+        cols.update({f"{stage.name}_status": "error",
+                     f"{stage.name}_reason": f"the stage returned {type(out.value).__name__}, not columns"})
+    else:
+        cols.update({f"{stage.name}_status": "timeout" if out.kind == "timeout" else "error",
+                     f"{stage.name}_reason": out.message, "detail": out.detail[-4000:]})
+    return cols
 
 
 def _watch_parent(ppid: int) -> None:
