@@ -16,7 +16,9 @@ re-solves the rest of the task from there with the same condensing as the plan:
    face is a switch planned at the observed object with the plan's SS variant, another contact point
    of the same face a re-contact;
 3. when the plan's path is used up and the object is not within ``tolerance``: correction rounds
-   from the observed object straight to the target (a new search each), at most ``max_rounds``.
+   from the observed object to the target along the faces' normals (one face, or the corner of two
+   faces' normals that splits the way: pushes along a normal go where they are aimed whatever the
+   limit surface is), a new search when none fits, at most ``max_rounds``.
 
 It ends ``"reached"`` (the measured object within ``tolerance``; the true error may differ by the
 camera's noise), ``"closest"`` (no push sequence brings it closer from where it is), ``"rounds"``
@@ -46,6 +48,13 @@ from tools.pose import rotation
 SAME_POSE = 3e-4
 #: How far [m] the tool first backs off along the contact's normal before a switch or a re-contact.
 BACK_OFF = 0.002
+#: A push chunk the model predicted farther off than this [m] triggers the model's adaptation.
+ADAPT_ERROR = 0.001
+#: The adaptation identifies the model from at most this many of the last push chunks.
+ADAPT_CHUNKS = 6
+#: Once the model has mispredicted two chunks, the last this many metres are pushed along the faces'
+#: normals (:meth:`_Loop.correction`).
+STAGE = 0.025
 
 
 @dataclass(frozen=True)
@@ -61,6 +70,8 @@ class ClosedLoopReport:
         n_replans: re-plans solved; replan_times: their wall times [s].
         errors: object-to-target distance [m] after each chunk.
         wall_time: [s]; execution: the plant's recording when it keeps one (the MuJoCo platform).
+        log: what the loop decided along the way; mechanics: the push model in force at the end (the
+        plan's, or the adapted one); adapt_times: wall times [s] of the adaptations.
     """
 
     status: str
@@ -75,6 +86,8 @@ class ClosedLoopReport:
     wall_time: float
     execution: object = None
     log: list[str] = field(default_factory=list)
+    mechanics: object = None
+    adapt_times: list[float] = field(default_factory=list)
 
 
 @dataclass(frozen=True)
@@ -84,13 +97,23 @@ class _Reference:
 
     plan: PushPlan
     spans: tuple[tuple[str, float, float], ...]
+    lead_ins: tuple[NDArray[np.float64] | None, ...]
+    """per push, the plan's own tool path (K, 2) [m] from the previous push's end (its switch or
+    re-contact), None for the first."""
 
     @classmethod
     def of(cls, plan: Plan) -> _Reference:
-        taus, xys, poses, spans, pushes = [], [], [], [], []
+        taus, xys, poses, spans, pushes, leads = [], [], [], [], [], []
         now, n = 0.0, 0
         phase = np.asarray(plan.phase)
+        prev_end: float | None = None
         for seg in plan.pushes:
+            if prev_end is None:
+                leads.append(None)
+            else:
+                between = (plan.t >= prev_end - 1e-9) & (plan.t <= seg.t_start + 1e-9)
+                leads.append(plan.tool_pose[between, :2].copy())
+            prev_end = seg.t_end
             m = np.flatnonzero((plan.t >= seg.t_start - 1e-9) & (plan.t <= seg.t_end + 1e-9) & (phase == "push"))
             tt = plan.t[m] - seg.t_start + now
             first = 1 if taus else 0  # consecutive pushes share the object's position at the switch
@@ -110,7 +133,7 @@ class _Reference:
         tau, xy = np.concatenate(taus), np.vstack(xys)
         v = np.gradient(xy, tau, axis=0) if tau.size > 2 else np.zeros_like(xy)
         return cls(PushPlan(plan.variant.get("oe", "qp"), "solved", tau, xy, v, xy, pushes=tuple(pushes)),
-                   tuple(spans))
+                   tuple(spans), tuple(leads))
 
     @property
     def tau(self) -> NDArray[np.float64]:
@@ -142,7 +165,8 @@ class _Reference:
 class _Loop:
     """One closed-loop run (see :func:`execute_closed_loop`)."""
 
-    def __init__(self, plan: Plan, task: Task, plant: object, frames: int, tolerance: float) -> None:
+    def __init__(self, plan: Plan, task: Task, plant: object, frames: int, tolerance: float,
+                 adapt: bool = True) -> None:
         from planner.recontact import recontact_planner
         from planner.solve import effective_margin, qp_options, task_scene, task_skills
         from planner.switches import arch_planner, skill_planner, with_fallback
@@ -166,6 +190,13 @@ class _Loop:
                                alternatives=0)
         self.v, self.a = task.timing.max_tool_speed, task.timing.max_tool_accel
         self.face: str | None = None
+        self.adapt = adapt
+        self.pending: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+        self.before: NDArray[np.float64] | None = None
+        self.chunks: list = []
+        self.adapt_times: list[float] = []
+        self.mispredicted = 0
+        self.staged = False
         self.n_pushes = self.n_switches = self.n_recontacts = 0
         self.replan_times: list[float] = []
         self.errors: list[float] = []
@@ -181,8 +212,9 @@ class _Loop:
         o = here() if callable(here) else self.observe()
         return float(np.hypot(*(self.target - o)))
 
-    def move(self, xy: NDArray[np.float64]) -> None:
-        """Track the tool path ``xy`` (K, 2) [m] (heading from the Omni) with a minimum-jerk profile."""
+    def move(self, xy: NDArray[np.float64], record: bool = False) -> None:
+        """Track the tool path ``xy`` (K, 2) [m] (heading from the Omni) with a minimum-jerk profile
+        (``record``: keep the commanded poses and times, a push for the adaptation)."""
         length = float(np.sum(np.linalg.norm(np.diff(xy, axis=0), axis=1)))
         if length < 1e-6:
             return
@@ -194,13 +226,18 @@ class _Loop:
             k = int(np.argmax(~np.isfinite(jp.heading) | (jp.violation > 0)))
             raise InputError("tool path", "a move within the Omni's reach and joint limits",
                              f"{np.round(path[k], 4).tolist()} m")
-        self.plant.move_tool(t, np.column_stack([path, jp.heading]))  # type: ignore[attr-defined]
+        poses = np.column_stack([path, jp.heading])
+        self.plant.move_tool(t, poses)  # type: ignore[attr-defined]
+        if record:
+            self.pending = (t, poses)
 
     # ---------------------------------------------------------------- planning
     def scene_at(self, o: NDArray[np.float64]) -> Scene:
         """The scene for a re-plan from ``o``: the safety margin at most the object's clearance there
         (an object pushed closer to an obstacle than the margin keeps that clearance, as a start
-        touching one does: :func:`planner.solve.effective_margin`)."""
+        touching one does: :func:`planner.solve.effective_margin`). (Narrowing the friction cone
+        once the model mispredicts was tried: on the 0.6 x mu, c plant it ended fewer runs within
+        3 mm, the re-plans more often infeasible.)"""
         import shapely
 
         from tools.objects import Disc
@@ -208,9 +245,7 @@ class _Loop:
         disc = shapely.Point(o).buffer(self.scene.radius, quad_segs=64)
         gap = min((float(shapely.distance(disc, ob.polygon() if isinstance(ob, Disc) else ob))
                    for ob in self.scene.obstacles), default=np.inf)
-        if gap >= self.scene.margin:
-            return self.scene
-        return replace(self.scene, margin=max(0.0, gap - 1e-4))
+        return self.scene if gap >= self.scene.margin else replace(self.scene, margin=max(0.0, gap - 1e-4))
 
     def contact_s(self, o: NDArray[np.float64]) -> float | None:
         """Where the face in contact touches the object at ``o`` [m along the face], if it does."""
@@ -247,24 +282,66 @@ class _Loop:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")
         return pp
 
+    def correction(self, o: NDArray[np.float64]) -> PushPlan:
+        """A correction from ``o`` once the plan's path is used up: along the faces' normals (where
+        the object goes whatever ``c`` is): one face whose admissible cone holds the way to the
+        target, else the shortest corner of two faces' normals that splits it (``r = a u1 + b u2``,
+        ``a, b > 0``), each fitted as that sequence; a new search along the straight way when none
+        of them works."""
+        from planner.oe.face_frame import FaceFrame
+
+        r = self.target - o
+        d = float(np.hypot(*r))
+        frames = {f: FaceFrame.build(self.tool, f, self.platform, self.scene) for f in self.tool.face_names}
+        normal = {f: _unit(float(fr.normal_direction(o[None])[0])) for f, fr in frames.items()}
+        legs: list[tuple[float, tuple[str, ...], NDArray[np.float64]]] = []
+        for f, fr in frames.items():
+            off = float((np.arctan2(r[1], r[0]) - fr.push_direction(o[None])[0] + np.pi) % (2 * np.pi) - np.pi)
+            if abs(off) <= fr.theta_b:
+                legs.append((d, (f,), np.vstack([o, self.target])))
+        for f1 in frames:
+            for f2 in frames:
+                m = np.column_stack([normal[f1], normal[f2]])
+                if f1 == f2 or abs(np.linalg.det(m)) < 1e-3:
+                    continue
+                a, b = np.linalg.solve(m, r)
+                if a > 1e-4 and b > 1e-4:
+                    legs.append((float(a + b), (f1, f2), np.vstack([o, o + a * normal[f1], self.target])))
+        for length, faces, corners in sorted(legs, key=lambda leg: leg[0])[:3]:
+            seg = np.linalg.norm(np.diff(corners, axis=0), axis=1)
+            s = np.concatenate([[0.0], np.cumsum(seg)])
+            t = np.linspace(0.0, max(1.0, length / 0.01), 40)
+            u = np.linspace(0.0, s[-1], t.size)
+            ref = np.column_stack([np.interp(u, s, corners[:, j]) for j in range(2)])
+            switches = (float(t[-1] * s[1] / s[-1]),) if len(faces) == 2 else ()
+            pp = self.replan(t, ref, faces, switches, o)
+            if pp.status == "solved":
+                return pp
+        t = np.linspace(0.0, max(1.0, d / 0.01), 30)
+        return self.replan(t, o + np.linspace(0.0, 1.0, t.size)[:, None] * r, (), (), o)
+
     # ---------------------------------------------------------------- executing
     def leave(self, o: NDArray[np.float64], pose: NDArray[np.float64], face: str, start: NDArray[np.float64],
-              change: bool) -> None:
+              change: bool, lead_in: NDArray[np.float64] | None = None) -> None:
         """From the contact at ``pose`` to ``face``'s contact pose ``start``: first straight back along
         the contact's normal from where the tool really is (a path planned from the observed object
         starts a camera error away, and a tool that moves sideways while touching drags the object
         along), then the switch (``change``) or the re-contact planned at the object observed again,
-        joined where that path is clear of the object."""
+        joined where that path is clear of the object; with ``lead_in`` (the plan's own path, for an
+        object where the plan puts it) that path instead."""
         assert self.face is not None
         back = pose[:2] - BACK_OFF * (rotation(float(pose[2])) @ self.tool.face(self.face).normal)
         self.move(np.vstack([pose[:2], back]))
         o = self.observe()
-        planner = self.switch if change else self.recontact
-        sw = planner(o, self.face, pose, face, start)
-        if sw.status != "solved":
-            what = f"switch {self.face} -> {face}" if change else f"re-contact of {face}"
-            raise _Stop("failed", f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
-        xy = sw.xy
+        if lead_in is not None and len(lead_in) >= 2:
+            xy = lead_in
+        else:
+            planner = self.switch if change else self.recontact
+            sw = planner(o, self.face, pose, face, start)
+            if sw.status != "solved":
+                what = f"switch {self.face} -> {face}" if change else f"re-contact of {face}"
+                raise _Stop("failed", f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
+            xy = sw.xy
         clear = [swept_clearance(self.tool, self.platform, xy[j:j + 1], o, self.scene.radius) for j in range(len(xy))]
         j = next((j for j, c in enumerate(clear) if c >= 0.5 * BACK_OFF), 0)
         self.move(np.vstack([back, xy[j:]]))
@@ -273,15 +350,16 @@ class _Loop:
         else:
             self.n_recontacts += 1
 
-    def push(self, p: Push, pp: PushPlan, o: NDArray[np.float64], k0: int, length: float) -> int:
+    def push(self, p: Push, pp: PushPlan, o: NDArray[np.float64], k0: int, length: float,
+             lead_in: NDArray[np.float64] | None = None) -> int:
         """Bring ``p``'s face to its contact pose at sample ``k0`` of the push (switch, re-contact or
-        none), then push along ``p`` for at most ``length`` [m] of object travel; returns the push
-        sample reached."""
+        none; along ``lead_in`` (K, 2) [m], the plan's own path, when given), then push along ``p``
+        for at most ``length`` [m] of object travel; returns the push sample reached."""
         pose = self.plant.tool_pose()  # type: ignore[attr-defined]
         start = p.tool_pose[k0]
         change = self.face is not None and self.face != p.face
         if change or np.hypot(*(pose[:2] - start[:2])) > SAME_POSE:
-            self.leave(o, pose, p.face, start, change)
+            self.leave(o, pose, p.face, start, change, lead_in)
         self.face = p.face
         self.face = p.face
         xy = pp.object_xy[p.samples[k0:]]
@@ -289,9 +367,49 @@ class _Loop:
         k = int(np.searchsorted(travel, length, side="right")) - 1
         k = k0 + max(1, min(k, len(xy) - 1))
         here = self.plant.tool_pose()  # type: ignore[attr-defined]
-        self.move(np.vstack([here[:2], p.tool_pose[k0: k + 1, :2]]))
+        self.before = self.observe() if self.adapt else o
+        self.move(np.vstack([here[:2], p.tool_pose[k0: k + 1, :2]]), record=self.adapt)
         self.n_pushes += 1
         return k
+
+    # ---------------------------------------------------------------- adapting the model
+    def learn(self, o: NDArray[np.float64]) -> None:
+        """The last push chunk observed at its end ``o``: keep it, and when the model predicted it more
+        than ``ADAPT_ERROR`` off, identify ``mu`` and ``c`` again from the last chunks
+        (:func:`tools.pushing.identify.identify_mechanics`, started from and pulled towards the
+        mechanics in force), so the re-plans use the plant's own."""
+        from tools.pushing.forward import simulate
+        from tools.pushing.identify import RecordedPush, identify_mechanics
+
+        if self.pending is None or self.before is None:
+            return
+        t, poses = self.pending
+        self.pending = None
+        self.chunks.append(RecordedPush(t, poses, np.array([t[-1]]), o[None], self.before, o,
+                                        f"chunk {len(self.chunks)}"))
+        predicted = simulate(self.tool, poses, self.before, self.scene.radius, self.scene.mechanics).final
+        if np.hypot(*(predicted - o)) <= ADAPT_ERROR:
+            return
+        self.mispredicted += 1
+        if len(self.chunks) < 2 or self.mispredicted % 2:
+            return  # every second misprediction: the identification takes a few tenths of a second
+        start = time.perf_counter()
+        try:
+            ident = identify_mechanics(self.tool, self.scene.radius, self.chunks[-ADAPT_CHUNKS:],
+                                       initial=self.scene.mechanics, prior_sd=0.5, max_step=5e-4)
+        except Exception as exc:  # an identification that cannot run leaves the model as it is
+            self.log.append(f"no adaptation ({type(exc).__name__}: {exc})")
+            return
+        finally:
+            self.adapt_times.append(time.perf_counter() - start)
+        m = ident.mechanics
+        if ident.c_excited or ident.mu_excited:
+            self.scene = replace(self.scene, mechanics=m)
+            self.log.append(f"adapted the push model to mu {m.mu:.3f}, c {m.c:.3f} from {len(ident.names)} chunks")
+
+
+def _unit(angle: float) -> NDArray[np.float64]:
+    return np.array([np.cos(angle), np.sin(angle)])
 
 
 class _Stop(Exception):
@@ -314,7 +432,8 @@ def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, confi
 def execute_closed_loop(
     plan: Plan, plant: object | None = None, *, tolerance: float = 0.001, chunk: float = 0.015,
     approach: float = 0.6, max_rounds: int = 4, max_chunks: int = 120, frames: int = 10,
-    replan_threshold: float = 0.001, camera_noise: float = 0.0015, seed: int = 0, config: object | None = None,
+    replan_threshold: float = 0.001, adapt: bool = True, camera_noise: float = 0.0015, seed: int = 0,
+    config: object | None = None,
 ) -> ClosedLoopReport:
     """Execute a solved plan closed loop (module docstring).
 
@@ -333,6 +452,9 @@ def execute_closed_loop(
         replan_threshold: the rest is re-planned when the observed object is farther than this [m]
             (or three times the averaged camera noise, if more) from where the plan in force puts it;
             closer, the plan in force goes on (re-planning on the camera's noise would only add it).
+        adapt: identify ``mu`` and ``c`` again from the executed chunks when the model mispredicts one
+            by more than ``ADAPT_ERROR``, so the re-plans use the plant's mechanics (the report's
+            ``mechanics``; the identification's times are ``adapt_times``).
     """
     if not isinstance(plan, Plan) or plan.status != "solved":
         raise InputError("plan", "a solved plan", getattr(plan, "status", type(plan).__name__))
@@ -342,7 +464,7 @@ def execute_closed_loop(
     loop: _Loop | None = None
     try:
         plant = plant if plant is not None else _default_plant(plan, task, camera_noise, seed, config)
-        loop = _Loop(plan, task, plant, frames, tolerance)
+        loop = _Loop(plan, task, plant, frames, tolerance, adapt)
         approach_m = np.asarray(plan.phase) == "approach"
         loop.move(plan.tool_pose[approach_m, :2])
         loop.face = plan.pushes[0].faces[0]
@@ -373,9 +495,7 @@ def execute_closed_loop(
                     status, reason = "rounds", f"{max_rounds} correction rounds did not reach the target"
                     break
                 d = float(np.hypot(*(loop.target - o)))
-                t = np.linspace(0.0, max(1.0, d / 0.01), 30)
-                r = o + np.linspace(0.0, 1.0, t.size)[:, None] * (loop.target - o)
-                pp = loop.replan(t, r, (), (), o)
+                pp = loop.correction(o)
                 if pp.status != "solved":
                     status, reason = "closest", f"no push brings the object closer from {np.round(o, 4).tolist()} m " \
                         f"({1e3 * d:.1f} mm from the target): {pp.reason}"
@@ -384,6 +504,8 @@ def execute_closed_loop(
                 continue
             p = current.pushes[i]
             o = loop.observe()
+            if loop.adapt:
+                loop.learn(o)
             if np.hypot(*(loop.target - o)) <= tolerance:
                 status = "reached"
                 break
@@ -398,8 +520,20 @@ def execute_closed_loop(
                 else:  # nothing better from here: the plan in force goes on
                     loop.log.append(f"no re-plan from {np.round(o, 4).tolist()} m ({pp.reason}); the plan goes on")
             left = float(np.sum(np.linalg.norm(np.diff(current.object_xy[p.samples[k]:], axis=0), axis=1)))
+            if loop.mispredicted >= 2 and not loop.staged and left < STAGE:
+                # a plant the model mispredicts: the last stretch along the faces' normals, where the
+                # object goes where it is aimed whatever its limit surface (an object pushed past the
+                # target by a sideways push that fell short cannot be pushed back)
+                loop.staged = True
+                pp = loop.correction(o)
+                if pp.status == "solved":
+                    current, base, i, k = pp, ref.end, 0, 0
+                    loop.log.append(f"staged the last {1e3 * left:.0f} mm along the faces' normals: "
+                                    f"{' -> '.join(pp.faces)}")
+                    continue
             length = chunk if left > 2 * chunk else max(approach * left, 2e-4)
-            k = loop.push(p, current, o, k, length)
+            lead = ref.lead_ins[i] if current is ref.plan and k == 0 else None
+            k = loop.push(p, current, o, k, length, lead)
             loop.errors.append(loop.true_error())
             if k >= len(p.samples) - 1:
                 i, k = i + 1, 0
@@ -417,4 +551,5 @@ def execute_closed_loop(
         status, reason, err, loop.n_pushes if loop else 0, loop.n_switches if loop else 0,
         loop.n_recontacts if loop else 0, len(loop.replan_times) if loop else 0,
         loop.replan_times if loop else [], loop.errors if loop else [], time.perf_counter() - start,
-        execution, loop.log if loop else [])
+        execution, loop.log if loop else [], loop.scene.mechanics if loop else None,
+        loop.adapt_times if loop else [])
