@@ -130,8 +130,11 @@ def realise_span(tool: Tool, face: str, t: NDArray[np.float64], x: NDArray[np.fl
                     return out
                 a += part.size - 1
                 continue
-        for _ in range(4):  # where the contact starts moves the tool, hence the heading: a fixed point
-            travel = _inverse(tool, face, x[piece], scene, platform, s0).s - s0
+        step = max(1, piece.size // 60)  # the travel profile on every step-th sample (the final inverse is whole)
+        coarse = np.unique(np.append(np.arange(0, piece.size, step), piece.size - 1))
+        for _ in range(3):  # where the contact starts moves the tool, hence the heading: a fixed point
+            travel = np.interp(np.arange(piece.size), coarse,
+                               _inverse(tool, face, x[piece[coarse]], scene, platform, s0).s - s0)
             j = _longest_fit(travel, width)
             part = piece[: j + 1]
             new = mid - 0.5 * (travel[: j + 1].max() + travel[: j + 1].min())

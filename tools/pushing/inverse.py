@@ -121,7 +121,7 @@ def _poses(face: FaceGeometry, c: NDArray[np.float64], s: NDArray[np.float64], r
 
 def push_tool_path(
     tool: Tool, face: str, object_xy: ArrayLike, radius: float, mech: PushMechanics, s0: float, *,
-    platform: OmniPlatform | None = None, yaw: ArrayLike | None = None, iters: int = 8,
+    platform: OmniPlatform | None = None, yaw: ArrayLike | None = None, iters: int = 6,
 ) -> FacePush:
     """The tool poses that push the puck along ``object_xy`` (K, 2) [m] with ``face``, the contact
     starting at arc length ``s0`` [m] along the face, sticking throughout.
