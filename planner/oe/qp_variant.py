@@ -217,7 +217,8 @@ class _Scene:
         return FitProblem(self.dmp, self.t, x0=self.universal[0], g=self.target, objectives=objectives,
                           constraints=cons)
 
-    def score(self, faces: tuple[str, ...], switches: tuple[float, ...], *, contact_rows: bool = True) -> _Scored:
+    def score(self, faces: tuple[str, ...], switches: tuple[float, ...], *, contact_rows: bool = True,
+              warm: bool = False) -> _Scored:
         """The candidate's fit: first without the contact rows (cone, reach, obstacles and the ends).
 
         Without ``contact_rows`` (screening) the contacts that path needs and the excess contact
@@ -232,7 +233,11 @@ class _Scene:
         kw = {"tol": self.opts.tol, "max_scp": self.opts.max_scp, "scp_rtol": self.opts.scp_rtol}
         contact = [c for c in problem.constraints if isinstance(c, ContactOnFace)]
         first = replace(problem, constraints=[c for c in problem.constraints if not isinstance(c, ContactOnFace)])
-        res = solve_fit(first, **kw)
+        x_start = None
+        if warm:
+            td = first.t_dense
+            x_start = np.column_stack([np.interp(td, self.t, self.universal[:, j]) for j in range(2)])
+        res = solve_fit(first, x_start=x_start, **kw)
         scored = _Scored(faces, switches, res, self.opts.accept)
         if not contact or res.rollout is None or not scored.feasible:
             return scored
@@ -289,24 +294,28 @@ def _precheck(scene: _Scene) -> str:
 
 
 def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64],
-            s_first: float | None = None) -> tuple[Push, ...]:
-    """The pushes of the fitted path, realised by the inverse push model (raises PushRefused)."""
+            s_first: float | None = None, spans_wanted: int | None = None) -> tuple[Push, ...]:
+    """The pushes of the fitted path (of its first ``spans_wanted`` faces), realised by the inverse
+    push model (raises PushRefused)."""
     edges = (t[0], *best.switches, t[-1])
     spans = [(face, np.flatnonzero((t >= lo - 1e-12) & (t <= hi + 1e-12)))
              for face, lo, hi in zip(best.faces, edges[:-1], edges[1:], strict=True)]
-    return realise_pushes(scene.tool, spans, t, x, scene.scene, scene.platform, s_first)
+    return realise_pushes(scene.tool, spans[:spans_wanted], t, x, scene.scene, scene.platform, s_first)
 
 
 def condense_sequence(
     t: NDArray[np.float64], universal: NDArray[np.float64], tool: Tool, platform: OmniPlatform, scene: Scene,
     target: NDArray[np.float64], faces: tuple[str, ...], switches: tuple[float, ...],
-    options: QPOptions | None = None, *, s_first: float | None = None,
+    options: QPOptions | None = None, *, s_first: float | None = None, first_face_only: bool = False,
 ) -> PushPlan:
     """One push sequence (``faces`` with switches at times ``switches`` [s]) fitted to the path
     ``universal`` (T, 2) [m] on times ``t`` (T,) [s] and realised, without the search: the closed
     loop's re-plan of the rest of a task from the observed object (``universal`` then runs from it).
-    ``s_first`` [m]: where the first face already touches the object. ``infeasible`` with the reason
-    when the fit or the realisation fails."""
+    The fit's non-convex rows are first linearised at ``universal`` (warm-started from the plan in
+    force, when that is what it is). ``s_first`` [m]: where the first face already touches the
+    object; ``first_face_only``: realise only the first face's pushes (what a receding horizon
+    executes before it re-plans; the pushes then end before the path does). ``infeasible`` with the
+    reason when the fit or the realisation fails."""
     start_time = time.perf_counter()
     opts = options or QPOptions()
     t = check_array(t, "t", ndim=1)
@@ -316,7 +325,7 @@ def condense_sequence(
     ref = np.column_stack([np.interp(grid, t, universal[:, j]) for j in range(2)])
     fine = _Scene(grid, ref, tool, platform, target, scene, opts)
     empty = np.zeros((0, 2))
-    s = fine.score(tuple(faces), tuple(float(v) for v in switches))
+    s = fine.score(tuple(faces), tuple(float(v) for v in switches), warm=True)
     if not s.feasible or s.result.rollout is None:
         fams = ", ".join(s.result.families or tuple(k for k, v in s.result.violations.items() if v > opts.tol))
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, n_qp=s.result.scp_iterations,
@@ -325,7 +334,7 @@ def condense_sequence(
     roll = s.result.rollout
     dense_t, x, v = roll.t + grid[0], roll.x, roll.v
     try:
-        pushes = _pushes(fine, s, dense_t, x, s_first)
+        pushes = _pushes(fine, s, dense_t, x, s_first, 1 if first_face_only else None)
     except PushRefused as exc:
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=str(exc),
                         metrics={"compute_time": time.perf_counter() - start_time})
