@@ -50,7 +50,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import least_squares
 
 from dmp.errors import InputError
 from dmp.validation import check_array, check_positive, check_time
@@ -319,6 +318,8 @@ def identify_mechanics(
     Returns:
         The :class:`Identification`; a parameter the pushes do not excite is flagged, not an error.
     """
+    from scipy.optimize import least_squares  # here: reading a stored identification needs no scipy.optimize
+
     t_wall = time.perf_counter()
     r = _check_inputs(tool, radius, pushes, initial)
     h = check_positive(max_step, "max_step")
