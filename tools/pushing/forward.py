@@ -234,8 +234,8 @@ def _run_scalar(
         ax, ay, ayaw = rows[k]
         bx, by, byaw = rows[k + 1]
         move = math.hypot(bx - ax, by - ay) + abs(byaw - ayaw) * outline.radius
-        if math.hypot(cx - ax, cy - ay) - move > reach:
-            xy[k + 1] = cx, cy
+        if math.hypot(cx - ax, cy - ay) - move > reach or nearest(ax, ay, ayaw)[0] > move + 1e-9:
+            xy[k + 1] = cx, cy  # no outline point moves far enough to reach the puck in this interval
             continue
         n_sub = max(1, math.ceil(move / h))
         last_mode, last_edge, lqx, lqy = FREE, -1, math.nan, math.nan
