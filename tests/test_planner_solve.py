@@ -78,3 +78,20 @@ def test_mapping_plan_out_of_reach_is_infeasible_not_a_crash(tmp_path: Path, cap
     # with the push mechanics the mapped path fails earlier: the finger's 3.2 mm upper face cannot
     # carry its sideways motion (before, the dmp switch left the reach)
     assert "cannot carry" in reason or "reach" in reason
+
+
+def test_a_path_whose_first_step_rolls_off_the_face_is_refused_not_a_crash() -> None:
+    """Generated batch task small-00018 with the mapping variant: one step of the mapped path rolls
+    the contact across more than the finger's usable face (it raised an InputError from the push
+    model's inverse before)."""
+    from planner.batch.generate import generate_task
+    from planner.batch.spec import dataset_folder, load_batch
+    from planner.solve import solve
+    from problems.task import task_from_dict
+
+    batch = ROOT / "problems" / "batch" / "small.yaml"
+    spec = load_batch(batch)
+    data = dict(generate_task(spec, 18, str(dataset_folder(spec, batch))).data)
+    data["variants"] = {"oe": "mapping", "ss": "arch"}
+    plan = solve(task_from_dict(data), batch)
+    assert plan.status == "infeasible" and "cannot carry" in plan.reason

@@ -141,6 +141,11 @@ def realise_span(tool: Tool, face: str, t: NDArray[np.float64], x: NDArray[np.fl
             if abs(new - s0) < 2e-5:  # 20 um: the final inverse below is exact, the margin is 500 um
                 break
             s0 = new
+        if part.size < 2:  # not even one step fits on the face
+            raise PushRefused(
+                f"face {face!r} cannot carry the object's motion from t = {t[part[0]]:.2f} s (object at "
+                f"{np.round(x[part[0]], 4).tolist()} m): one step of the path rolls the contact across more "
+                f"than the {1e3 * width:.1f} mm of usable face")
         fp = _inverse(tool, face, x[part], scene, platform, s0)
         if scene.obstacles:  # the tool's body is not in the fit: a start that keeps it off the obstacles
             fp, s0 = _clear_start(tool, face, x[part], scene, platform, fp, s0, lo, hi)
