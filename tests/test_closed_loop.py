@@ -110,3 +110,27 @@ def test_a_plant_that_refuses_a_move_ends_the_run_with_its_reason(plan_file: Pat
     plan = read_plan(plan_file)
     rep = execute_closed_loop(plan, Jammed())
     assert rep.status == "failed" and "jammed" in rep.reason
+
+
+def test_the_loop_adapts_the_push_model_to_a_mismatched_plant(plan_file: Path) -> None:
+    """On a plant whose limit surface is 0.6 x the identified one, the chunks the model mispredicts
+    identify c again: the model in force ends nearer the plant's c than the plan's."""
+    from planner.closed_loop import execute_closed_loop
+    from planner.execution import ModelPlant
+    from planner.solve import task_mechanics, task_skills
+    from problems.task import task_from_dict, task_platform, task_tool
+    from tools.pushing.mechanics import PushMechanics
+
+    plan = read_plan(plan_file)
+    task = task_from_dict(plan.task)
+    tool = task_tool(task)
+    m = task_mechanics(task, task_skills(task))
+    plant = ModelPlant(tool, task.object.radius, PushMechanics(m.mu, 0.6 * m.c), task.start, plan.tool_pose[0],
+                       platform=task_platform(task, tool), camera_noise=0.0015, seed=1)
+    rep = execute_closed_loop(plan, plant)
+    assert rep.adapt_times, rep.log
+    assert abs(rep.mechanics.c - 0.6 * m.c) < 0.5 * abs(m.c - 0.6 * m.c)
+    off = execute_closed_loop(plan, ModelPlant(tool, task.object.radius, PushMechanics(m.mu, 0.6 * m.c), task.start,
+                                                plan.tool_pose[0], platform=task_platform(task, tool),
+                                                camera_noise=0.0015, seed=1), adapt=False)
+    assert off.mechanics.c == m.c and not off.adapt_times
