@@ -5,7 +5,10 @@ the task as loaded, the platform (DH rows, base pose, table height, joint limits
 the tool (outline in the tool frame, faces with push direction and cone half-angle), obstacles,
 equal-length sample arrays (time, object centre, tool pose, joints, phase, face), the pushes and
 switches, and metrics. Format ``tooltransfer.plan/1``; :func:`read_plan` refuses other versions and
-files that do not hold together (unequal sample arrays, unknown phases, non-increasing time).
+files that do not hold together (an unknown status, unequal sample arrays, values that are not finite
+numbers, unknown phases, non-increasing time), naming the file and the field. A plan's status is
+``solved``, ``infeasible`` (no whole plan: the reason says why) or ``violated`` (a whole plan that
+breaks a hard check, :func:`planner.solve.hard_check_failures`: the reason names the families).
 """
 
 from __future__ import annotations
@@ -57,7 +60,7 @@ class Plan:
     """A plan. ``samples`` arrays: ``t`` (T,) [s], ``object_xy`` (T, 2) [m], ``tool_pose`` (T, 3)
     (x, y [m], yaw [rad]), ``joints`` (T, 3) [rad], ``phase`` (T,) strings, ``face`` (T,) names or None."""
 
-    status: Literal["solved", "infeasible"]
+    status: Literal["solved", "infeasible", "violated"]
     variant: dict[str, str]
     task: dict[str, Any]
     platform: dict[str, Any]
@@ -121,6 +124,8 @@ def _num(d: dict[str, Any]) -> dict[str, float]:
 
 
 def _is_number(v: object) -> bool:
+    if isinstance(v, bool):
+        return False
     try:
         float(v)  # type: ignore[arg-type]
     except (TypeError, ValueError):
@@ -128,53 +133,160 @@ def _is_number(v: object) -> bool:
     return True
 
 
+def _kind(v: object) -> str:
+    """A short description of a JSON value for messages (never the whole value)."""
+    if isinstance(v, str):
+        return repr(v if len(v) <= 40 else v[:37] + "...")
+    if isinstance(v, bool) or v is None or isinstance(v, int | float):
+        return json.dumps(v)
+    return f"a {'list' if isinstance(v, list) else 'mapping' if isinstance(v, dict) else type(v).__name__}"
+
+
+def _numbers(where: str, name: str, value: object, width: int | None, unit: str) -> NDArray[np.float64]:
+    """``value`` as a float array (T,) or (T, width), every entry a finite JSON number (not a bool,
+    a string or null); errors name ``samples.<name>[i][j]``."""
+    field = f"samples.{name}"
+    if not isinstance(value, list):
+        raise PlanFileError(where, field, "a list" + (f" of [{width} numbers] rows" if width else " of numbers"),
+                            _kind(value))
+    for i, row in enumerate(value):
+        cells = row if width is not None else [row]
+        if width is not None and (not isinstance(row, list) or len(row) != width):
+            raise PlanFileError(where, f"{field}[{i}]", f"a row of {width} numbers {unit}", _kind(row))
+        for j, x in enumerate(cells):
+            if type(x) is not float and type(x) is not int:
+                at = f"{field}[{i}]" + (f"[{j}]" if width is not None else "")
+                raise PlanFileError(where, at, f"a number {unit}", _kind(x))
+    arr = np.array(value, dtype=np.float64).reshape((len(value), width) if width else (len(value),))
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        k = np.argwhere(bad)[0]
+        at = f"{field}[{k[0]}]" + (f"[{k[1]}]" if width is not None else "")
+        raise PlanFileError(where, at, f"a finite number {unit}", float(arr[tuple(k)]))
+    return arr
+
+
+#: Largest plan file read [bytes] and largest number of samples (a plan of 2,000 samples takes about
+#: 0.5 MB; the planner's plans sample about 90 Hz, so 500,000 samples are over 1.5 hours).
+MAX_PLAN_BYTES = 256 * 2**20
+MAX_SAMPLES = 500_000
+#: Statuses a plan file may hold: ``violated`` is a whole plan that breaks a hard check
+#: (:func:`planner.solve.hard_check_failures`).
+STATUSES = ("solved", "infeasible", "violated")
+
+
 def read_plan(path: str | Path) -> Plan:
-    """Read and check a plan file."""
+    """Read and check a plan file: the format, a known status, equal-length sample arrays of finite
+    numbers (joints numbers, not booleans), known phases, increasing time, pushes and switches with
+    finite times; errors name the file and the field (e.g. ``samples.joints[12][1]``).
+
+    Raises:
+        PlanFileError: the first problem found.
+    """
     p = Path(path)
     where = str(p)
     try:
-        doc = json.loads(p.read_text())
+        size = p.stat().st_size
+        if size > MAX_PLAN_BYTES:
+            raise PlanFileError(where, "<file>", f"a plan file of at most {MAX_PLAN_BYTES // 2**20} MB",
+                                f"{size / 2**20:.0f} MB")
+        text = p.read_bytes().decode("utf-8-sig")
     except OSError as exc:
         raise PlanFileError(where, "<file>", "a readable plan file", exc.strerror) from None
+    except UnicodeDecodeError as exc:
+        raise PlanFileError(where, "<file>", "a UTF-8 JSON plan file",
+                            f"a byte that is not UTF-8 at offset {exc.start}") from None
+    try:
+        doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise PlanFileError(where, f"line {exc.lineno}, column {exc.colno}", "valid JSON", exc.msg) from None
+    except RecursionError:
+        raise PlanFileError(where, "<file>", "JSON of a plan (not nested thousands of levels deep)") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-        got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
+        got = _kind(doc.get("format")) if isinstance(doc, dict) else _kind(doc)
         raise PlanFileError(where, "format", f"{FORMAT!r}", got)
-    try:
-        s = doc["samples"]
-        t = np.asarray(s["t"], dtype=np.float64)
-        arrays = {
-            "object_xy": np.asarray(s["object_xy"], dtype=np.float64).reshape(-1, 2),
-            "tool_pose": np.asarray(s["tool_pose"], dtype=np.float64).reshape(-1, 3),
-            "joints": np.asarray(s["joints"], dtype=np.float64).reshape(-1, 3),
-        }
-        phase, face = tuple(s["phase"]), tuple(s["face"])
-    except (KeyError, TypeError, ValueError) as exc:
-        raise PlanFileError(where, "samples", "arrays t, object_xy, tool_pose, joints, phase, face", exc) from None
+    status = doc.get("status", "")
+    if status not in STATUSES:
+        raise PlanFileError(where, "status", f"one of {', '.join(STATUSES)}", _kind(status))
+    reason = doc.get("reason", "")
+    if not isinstance(reason, str):
+        raise PlanFileError(where, "reason", "a string", _kind(reason))
+    parts: dict[str, Any] = {}
+    for key, kind in (("variant", dict), ("task", dict), ("platform", dict), ("object", dict), ("tool", dict),
+                      ("obstacles", list), ("metrics", dict)):
+        v = doc.get(key, kind())
+        if not isinstance(v, kind):
+            raise PlanFileError(where, key, f"a {'list' if kind is list else 'mapping'}", _kind(v))
+        parts[key] = v
+    bad_variant = [k for k, v in parts["variant"].items() if not isinstance(v, str)]
+    if bad_variant:
+        k = bad_variant[0]
+        raise PlanFileError(where, f"variant.{k}", "a variant name", _kind(parts["variant"][k]))
+    bad_metric = [k for k, v in parts["metrics"].items() if isinstance(v, bool) or not isinstance(v, int | float | str)]
+    if bad_metric:
+        k = bad_metric[0]
+        raise PlanFileError(where, f"metrics.{k}", "a number", _kind(parts["metrics"][k]))
+    s = doc.get("samples")
+    if not isinstance(s, dict):
+        raise PlanFileError(where, "samples", "a mapping of arrays t, object_xy, tool_pose, joints, phase, face",
+                            _kind(s))
+    missing = [k for k in ("t", "object_xy", "tool_pose", "joints", "phase", "face") if k not in s]
+    if missing:
+        raise PlanFileError(where, f"samples.{missing[0]}", "an array (samples: t, object_xy, tool_pose, joints, "
+                            "phase, face)", "none")
+    for name, v in s.items():
+        if isinstance(v, list) and len(v) > MAX_SAMPLES:
+            raise PlanFileError(where, f"samples.{name}", f"at most {MAX_SAMPLES} samples", len(v))
+    t = _numbers(where, "t", s["t"], None, "[s]")
+    arrays = {
+        "object_xy": _numbers(where, "object_xy", s["object_xy"], 2, "[m]"),
+        "tool_pose": _numbers(where, "tool_pose", s["tool_pose"], 3, "(x, y [m], yaw [rad])"),
+        "joints": _numbers(where, "joints", s["joints"], 3, "[rad]"),
+    }
+    for name in ("phase", "face"):
+        if not isinstance(s[name], list):
+            raise PlanFileError(where, f"samples.{name}", "a list", _kind(s[name]))
+    phase, face = tuple(s["phase"]), tuple(s["face"])
     for name, arr in (*arrays.items(), ("phase", phase), ("face", face)):
         if len(arr) != t.size:
             raise PlanFileError(where, f"samples.{name}", f"{t.size} entries like samples.t", len(arr))
     if t.size > 1 and np.any(np.diff(t) <= 0):
-        raise PlanFileError(where, "samples.t", "increasing times")
-    bad = [x for x in phase if x not in PHASES]
-    if bad:
-        raise PlanFileError(where, "samples.phase", f"one of {', '.join(PHASES)}", bad[0])
+        k = int(np.argmax(np.diff(t) <= 0)) + 1
+        raise PlanFileError(where, f"samples.t[{k}]", f"a time after samples.t[{k - 1}] = {t[k - 1]:.6g} s", t[k])
+    for i, x in enumerate(phase):
+        if x not in PHASES:
+            raise PlanFileError(where, f"samples.phase[{i}]", f"one of {', '.join(PHASES)}", _kind(x))
+    for i, x in enumerate(face):
+        if x is not None and not isinstance(x, str):
+            raise PlanFileError(where, f"samples.face[{i}]", "a face name or null", _kind(x))
+    if status in ("solved", "violated") and t.size < 2:
+        raise PlanFileError(where, "samples.t", f"at least 2 samples in a {status} plan", t.size)
 
     def segs(key: str, kind: str) -> tuple[Segment, ...]:
+        items = doc.get(key, [])
+        if not isinstance(items, list):
+            raise PlanFileError(where, key, "a list of {t_start, t_end, faces}", _kind(items))
         out = []
-        for i, e in enumerate(doc.get(key, [])):
-            try:
-                info = _num({k: v for k, v in e.items() if k not in ("t_start", "t_end", "faces")})
-                out.append(Segment(kind, float(e["t_start"]), float(e["t_end"]), tuple(e["faces"]), info))
-            except (KeyError, TypeError, ValueError) as exc:
-                raise PlanFileError(where, f"{key}[{i}]", "t_start, t_end and faces", exc) from None
+        for i, e in enumerate(items):
+            if not isinstance(e, dict):
+                raise PlanFileError(where, f"{key}[{i}]", "a mapping with t_start, t_end and faces", _kind(e))
+            for k in ("t_start", "t_end"):
+                v = e.get(k)
+                if type(v) not in (int, float) or not np.isfinite(v):
+                    raise PlanFileError(where, f"{key}[{i}].{k}", "a finite time [s]", _kind(v))
+            if e["t_end"] < e["t_start"]:
+                raise PlanFileError(where, f"{key}[{i}].t_end", f"a time not before t_start = {e['t_start']}",
+                                    e["t_end"])
+            faces = e.get("faces")
+            if not isinstance(faces, list) or not all(isinstance(f, str) for f in faces):
+                raise PlanFileError(where, f"{key}[{i}].faces", "a list of face names", _kind(faces))
+            info = _num({k: v for k, v in e.items() if k not in ("t_start", "t_end", "faces")})
+            out.append(Segment(kind, float(e["t_start"]), float(e["t_end"]), tuple(faces), info))
         return tuple(out)
 
     return Plan(
-        status=doc.get("status", ""), variant=doc.get("variant", {}), task=doc.get("task", {}),
-        platform=doc.get("platform", {}), object=doc.get("object", {}), tool=doc.get("tool", {}),
-        obstacles=doc.get("obstacles", []), t=t, phase=phase, face=face, pushes=segs("pushes", "push"),
-        switches=segs("switches", "switch"), metrics=_num(doc.get("metrics", {})), reason=doc.get("reason", ""),
-        **arrays,
+        status=status, variant=parts["variant"], task=parts["task"], platform=parts["platform"],
+        object=parts["object"], tool=parts["tool"], obstacles=parts["obstacles"], t=t, phase=phase, face=face,
+        pushes=segs("pushes", "push"), switches=segs("switches", "switch"), metrics=_num(parts["metrics"]),
+        reason=reason, **arrays,
     )

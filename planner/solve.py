@@ -188,15 +188,20 @@ def solve(task: Task, task_path: str | Path = ".") -> Plan:
                                    "arch")
     recontact = with_fallback(recontact_planner(tool, platform, radius, obstacles), switch, "switch")
     reasons: list[str] = []
+    violated: Plan | None = None  # the first whole plan that breaks a hard check (kept if nothing solves)
     while True:  # the push plan, then the next candidates it hands out while a later stage fails
         plan = _complete(task, tool, platform, scene, push_plan, switch, recontact, stages, base)
+        if plan.status == "violated" and violated is None:
+            violated = plan
         if plan.status == "solved" or push_plan.next_best is None:
             break
         reasons.append(plan.reason)
         push_plan = push_plan.next_best()
         if push_plan.status != "solved":
             break
-    if plan.status != "solved" and reasons:
+    if plan.status != "solved" and violated is not None:
+        plan = violated
+    elif plan.status != "solved" and reasons:
         more = f" (and {len(reasons)} other push sequence(s) before it: {reasons[0]})" if reasons else ""
         why = plan.reason if plan.reason else push_plan.reason
         return Plan(status="infeasible", reason=why + more, metrics=plan.metrics or stages, **base)
@@ -263,6 +268,45 @@ def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any
     switches = tuple(Segment("switch", a, b, (fa, fb), {"min_clearance": sw.min_clearance,
                                                          "penetration": sw.info.get("object_penetration", 0.0)})
                      for fa, fb, a, b, sw in motion.switches)
-    return Plan(status="solved", t=motion.t, object_xy=motion.object_xy, tool_pose=motion.tool_pose,
+    broken = hard_check_failures(metrics, task.oe.self_consistency_tol)
+    status, reason = ("violated", "hard checks violated: " + "; ".join(broken)) if broken else ("solved", "")
+    return Plan(status=status, reason=reason, t=motion.t, object_xy=motion.object_xy, tool_pose=motion.tool_pose,
                 joints=motion.joints, phase=motion.phase, face=motion.face, pushes=pushes, switches=switches,
                 metrics=metrics, **base)
+
+
+#: The hard checks of a whole plan (:func:`hard_check_failures`): family, metric, bound, sense (``"max"``:
+#: the metric may not exceed the bound; ``"min"``: it may not fall below it), unit. A plan that breaks one
+#: is ``violated`` (the paper's mapping variant guarantees none of them), still written and compared.
+HARD_CHECKS: tuple[tuple[str, str, float, str, str], ...] = (
+    ("cone", "cone_violation_max", 0.01, "max", "rad"),
+    ("friction cone", "friction_cone_margin_min", -1e-6, "min", "rad"),
+    ("contact edge", "contact_edge_margin_min", -1e-6, "min", "m"),
+    ("switch penetration", "switch_penetration_max", 1e-5, "max", "m"),
+    ("reach", "reach_violation_max", 1e-3, "max", "m"),
+    ("tool-obstacle clearance", "tool_obstacle_clearance_min", 0.0, "min", "m"),
+    ("switch-obstacle clearance", "switch_obstacle_clearance_min", 0.0, "min", "m"),
+    ("joint limits", "joint_limit_violation_max", 1e-9, "max", "rad"),
+    ("goal", "goal_error", 1e-4, "max", "m"),
+)
+
+
+def hard_check_failures(metrics: dict[str, float], self_consistency_tol: float = 1e-4) -> list[str]:
+    """The hard checks (:data:`HARD_CHECKS`, the safety margin: ``obstacle_clearance_min`` at least
+    ``safety_margin_used``, and ``self_consistency_max`` within ``self_consistency_tol``) that
+    ``metrics`` break, each as ``"family (metric value > bound)"``; empty when every one holds. A
+    missing or NaN metric (e.g. the friction-cone margin of a plan without pushes) is not checked."""
+    checks = [*HARD_CHECKS, ("self-consistency", "self_consistency_max", self_consistency_tol, "max", "m")]
+    margin = metrics.get("safety_margin_used")
+    if margin is not None:
+        checks.append(("safety margin", "obstacle_clearance_min", float(margin) - 1e-5, "min", "m"))
+    out = []
+    for family, key, bound, sense, unit in checks:
+        v = metrics.get(key)
+        if v is None or np.isnan(v):
+            continue
+        v = float(v)
+        ok = v <= bound if sense == "max" else v >= bound
+        if not ok:
+            out.append(f"{family} ({key} {v:.4g} {unit} {'>' if sense == 'max' else '<'} {bound:.4g})")
+    return out
