@@ -45,11 +45,31 @@ ROWS = (
 )
 
 
+#: Plan statuses in the order they are counted (``violated``: a whole plan that breaks a hard check).
+STATUS_ORDER = ("solved", "violated", "infeasible")
+_STATUS_STYLE = {"solved": "", "violated": "yellow", "infeasible": "red"}
+
+
+def status_counts(plans: dict[str, Plan]) -> str:
+    """The plans counted by status, each apart: e.g. ``"solved 2, violated 1, infeasible 1"``; a violated
+    plan names the hard-check families it breaks (its reason)."""
+    from collections import Counter
+
+    c = Counter(p.status for p in plans.values())
+    order = [*STATUS_ORDER, *sorted(set(c) - set(STATUS_ORDER))]
+    return ", ".join(f"{s} {c[s]}" for s in order if c[s] or s in STATUS_ORDER)
+
+
 def metrics_table(plans: dict[str, Plan], title: str = "") -> object:
-    """A rich table of the shared metrics, one column per plan."""
+    """A rich table of the shared metrics, one column per plan; the caption counts the plans by
+    status (:func:`status_counts`) and names what each violated plan breaks."""
+    from rich.markup import escape
     from rich.table import Table
 
-    table = Table(title=title or None, title_justify="left")
+    caption = [f"plans: {status_counts(plans)}"]
+    caption += [f"{name} violated: {escape(p.reason.removeprefix('hard checks violated: '))}"
+                for name, p in plans.items() if p.status == "violated"]
+    table = Table(title=title or None, title_justify="left", caption="\n".join(caption), caption_justify="left")
     table.add_column("metric")
     for name in plans:
         table.add_column(name, justify="right")
@@ -57,7 +77,8 @@ def metrics_table(plans: dict[str, Plan], title: str = "") -> object:
         cells = []
         for p in plans.values():
             if key == "status":
-                cells.append(p.status if p.status == "solved" else f"[red]{p.status}[/red]")
+                style = _STATUS_STYLE.get(p.status, "red")
+                cells.append(f"[{style}]{p.status}[/{style}]" if style else p.status)
                 continue
             v = p.metrics.get(key)
             cells.append("-" if v is None else f"{scale * v:.4g}")
