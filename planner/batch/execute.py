@@ -51,7 +51,7 @@ def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: 
     m = plan.metrics
     for k in METRIC_COLUMNS:
         row[k] = _finite(m.get(k))
-    row["n_switches"] = len(plan.switches) if plan.status == "solved" else None
+    row["n_switches"] = len(plan.switches) if plan.status in ("solved", "violated") else None
     # penetration [m]: the switches' own report (the dmp switch variant may penetrate), or how far a
     # clearance goes below zero
     depth = [-float(v) for v in (m.get("switch_clearance_min"), m.get("switch_obstacle_clearance_min"),

@@ -67,7 +67,7 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
     fig, ax = plt.subplots(figsize=(7, 4.2))
     data, labels = [], []
     for v in variants:
-        for status in ("solved", "infeasible"):
+        for status in ("solved", "violated", "infeasible"):
             t = [r["time_total"] for r in by_var[v] if r["status"] == status and r.get("time_total")]
             if t:
                 data.append(np.array(t) * 1e3)

@@ -1,6 +1,8 @@
 """Statistics of a batch's results: per tool and variant, success rate with a Wilson interval,
-infeasible, error and timeout counts with the top reasons, planning-time percentiles, violation
-maxima and, for a batch run with ``--simulate``, executed success; rich tables and CSV files.
+violated (a whole plan that breaks a hard check: :func:`planner.solve.hard_check_failures`; counted
+apart, never as a success), infeasible, error and timeout counts with the top reasons,
+planning-time percentiles, violation maxima and, for a batch run with ``--simulate``, executed
+success; rich tables and CSV files.
 
 Executed success: a solved plan executed on the simulated platform succeeds within 2 mm (5 mm)
 when the object ends within 2 mm (5 mm) of the target (:data:`EXEC_TOLS`), open loop and closed
@@ -115,6 +117,7 @@ class GroupStats:
     cl_replans_median: float = float("nan")
     cl_replan_time_max: float = float("nan")
     cl_wall_median: float = float("nan")
+    violated: int = 0
 
 
 def _pct(a: np.ndarray, q: float) -> float:
@@ -167,7 +170,7 @@ def group_stats(tool: str, variant: str, rows: Sequence[dict[str, Any]]) -> Grou
     c = Counter(r["status"] for r in rows)
     n = len(rows)
     lo, hi = wilson(c["solved"], n)
-    timed = _vals([r for r in rows if r["status"] in ("solved", "infeasible")], "time_total")
+    timed = _vals([r for r in rows if r["status"] in ("solved", "violated", "infeasible")], "time_total")
     pct = np.percentile(timed, [50, 90, 99]) if timed.size else [float("nan")] * 3
     ok = [r for r in rows if r["status"] == "solved"]
     sim = [r for r in ok if r.get("sim_success") is not None]
@@ -180,7 +183,7 @@ def group_stats(tool: str, variant: str, rows: Sequence[dict[str, Any]]) -> Grou
         _agg(_vals(ok, "penetration_max"), "max"), _agg(_vals(ok, "joint_limit_violation_max"), "max"),
         _agg(_vals(ok, "obstacle_clearance_min"), "min"), _agg(_vals(ok, "goal_error"), "max"),
         len(sim), k, k / len(sim) if sim else float("nan"), slo, shi,
-        _agg(_vals(sim, "sim_final_error"), "median"), **execution_stats(rows),
+        _agg(_vals(sim, "sim_final_error"), "median"), **execution_stats(rows), violated=c["violated"],
     )
 
 
@@ -227,13 +230,13 @@ def print_report(stats: Sequence[GroupStats], reasons: Sequence[dict[str, Any]],
     """The tables: outcomes and times, violations, executed success (when plans were executed), top
     reasons."""
     t = Table(title="outcomes per tool and variant (success: solved; 95% Wilson interval)")
-    for col in ("tool", "variant", "n", "solved", "rate [%]", "95% CI [%]", "valid", "infeas.", "error",
+    for col in ("tool", "variant", "n", "solved", "rate [%]", "95% CI [%]", "valid", "violated", "infeas.", "error",
                 "timeout", "t50 [ms]", "t90 [ms]", "t99 [ms]"):
         t.add_column(escape(col), justify="left" if col in ("tool", "variant") else "right")
     for s in stats:
         t.add_row(s.tool, s.variant, str(s.n), str(s.solved), _fmt(s.rate, 100, 1),
-                  f"{_fmt(s.ci_low, 100, 1)}-{_fmt(s.ci_high, 100, 1)}", str(s.valid), str(s.infeasible),
-                  str(s.error), str(s.timeout), _fmt(s.time_p50, 1e3, 0), _fmt(s.time_p90, 1e3, 0),
+                  f"{_fmt(s.ci_low, 100, 1)}-{_fmt(s.ci_high, 100, 1)}", str(s.valid), str(s.violated),
+                  str(s.infeasible), str(s.error), str(s.timeout), _fmt(s.time_p50, 1e3, 0), _fmt(s.time_p90, 1e3, 0),
                   _fmt(s.time_p99, 1e3, 0), end_section=s.tool == "all" and s is stats[-1])
     console.print(t)
     v = Table(title="solved plans: violation maxima, clearance")

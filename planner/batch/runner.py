@@ -48,7 +48,7 @@ from planner.batch.spec import BatchSpec
 from planner.batch.store import ResultStore
 from planner.batch.worker import Job, Stage, run_job
 
-STATUSES = ("solved", "infeasible", "error", "timeout")
+STATUSES = ("solved", "violated", "infeasible", "error", "timeout")
 
 
 @dataclass

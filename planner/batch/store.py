@@ -2,8 +2,8 @@
 
 Tables: ``meta`` (batch name, digest, batch file as JSON), ``tasks`` (one row per generated task
 with its difficulty measures and task JSON) and ``results`` (OMPL-like: task id, tool, variant,
-status ``solved|infeasible|error|timeout``, reason, per-stage planning times [s], number of QPs,
-violation maxima, clearances [m], goal error [m], path length [m], pushes, switches, worker, start
+status ``solved|violated|infeasible|error|timeout``, reason, per-stage planning times [s], number of
+QPs, violation maxima, clearances [m], goal error [m], path length [m], pushes, switches, worker, start
 and finish times (Unix seconds); every plan metric is kept in ``metrics_json``; with ``--simulate``
 the executions of a solved plan: open loop (``open_loop_*``, also under the schema-1 names
 ``sim_*``) and closed loop (``closed_loop_*``), each with a status, a reason and a wall time). The
