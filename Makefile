@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test bench bench-sim bench-ss bench-batch bench-exec lint clean
+.PHONY: demo test docs bench bench-sim bench-ss bench-batch bench-exec lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -17,6 +17,12 @@ test: $(PY)
 	$(PY) -m pip install -q -e ".[test]"
 	$(PY) -m ruff check .
 	$(PY) -m pytest
+
+# API documentation and the design document (mkdocs + mkdocstrings), offline, warnings are errors;
+# `make test` builds it too (tests/test_docs.py). Open out/docs/index.html.
+docs: $(PY)
+	$(PY) -m pip install -q -e ".[docs]"
+	$(PY) -m mkdocs build --strict --site-dir out/docs
 
 bench: $(PY)
 	$(PY) -m pip install -q -e ".[bench]"

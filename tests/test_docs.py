@@ -1,0 +1,153 @@
+"""The documentation site builds without warnings, offline, and says what the code does; the licence,
+citation and changelog agree with pyproject.toml."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
+VERSION = PYPROJECT["project"]["version"]
+PAPER_TITLE = ("A Novel Dynamic Movement Primitives-based Skill Learning and Transfer Framework for "
+               "Multi-Tool Use")
+
+needs_mkdocs = pytest.mark.skipif(
+    importlib.util.find_spec("mkdocs") is None or importlib.util.find_spec("mkdocstrings_handlers") is None,
+    reason="mkdocs and mkdocstrings[python] are not installed (pip install -e '.[docs]'; the test extra has them)",
+)
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("site")
+    proc = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--config-file", str(ROOT / "mkdocs.yml"),
+         "--site-dir", str(out)],
+        cwd=ROOT, capture_output=True, text=True, timeout=300,
+    )
+    log = proc.stdout + proc.stderr
+    assert proc.returncode == 0, log
+    assert "WARNING" not in log, log
+    return out
+
+
+def _text(path: Path) -> str:
+    return path.read_text(encoding="utf-8")
+
+
+@needs_mkdocs
+def test_every_page_is_built(site: Path) -> None:
+    for page in ("index.html", "design/index.html", "planning/index.html", "mechanics/index.html",
+                 "closed-loop/index.html", "formats/index.html", "examples/index.html", "api/index.html"):
+        assert (site / page).stat().st_size > 5_000, page
+    nav = yaml.safe_load(_text(ROOT / "mkdocs.yml"))["nav"]
+    api = next(item["API reference"] for item in nav if "API reference" in item)
+    modules = {next(iter(entry)) for entry in api} - {"Overview"}
+    assert modules >= {"dmp", "dmp.qp", "tools", "tools.pushing", "tools.omni", "planner.solve", "planner.plan",
+                       "planner.scene", "planner.closed_loop", "planner.execution", "problems.task",
+                       "problems.dataset"}
+    for module in modules:
+        html = _text(site / "api" / module / "index.html")
+        assert f'id="{module}' in html, module
+
+
+@needs_mkdocs
+def test_the_api_reference_documents_the_entry_points(site: Path) -> None:
+    anchors = {
+        "planner.solve": ["planner.solve.solve"],
+        "planner.closed_loop": ["planner.closed_loop.execute_closed_loop", "planner.closed_loop.ClosedLoopReport"],
+        "planner.execution": ["planner.execution.Plant", "planner.execution.ModelPlant", "planner.execution.SimPlant"],
+        "dmp.qp": ["dmp.qp.solve_fit", "dmp.qp.VelocityCone"],
+        "dmp": ["dmp.DMP"],
+        "tools.pushing": ["tools.pushing.mechanics.PushMechanics", "tools.pushing.forward.simulate",
+                          "tools.pushing.inverse.push_tool_path", "tools.pushing.identify"],
+        "problems.task": ["problems.task.load_task", "problems.task.Task"],
+        "problems.dataset": ["problems.dataset.load_dataset"],
+        "planner.plan": ["planner.plan.read_plan", "planner.plan.Plan"],
+        "planner.scene": ["planner.scene.Scene"],
+    }
+    for module, ids in anchors.items():
+        html = _text(site / "api" / module / "index.html")
+        for ident in ids:
+            assert f'id="{ident}"' in html, (module, ident)
+
+
+@needs_mkdocs
+def test_pages_carry_the_repository_text(site: Path) -> None:
+    """The README and batch README sections, the design copy and the schema table are in the pages."""
+    mechanics = _text(site / "mechanics" / "index.html")
+    assert "sticking while" in mechanics and "What to push." in mechanics
+    assert "receding-horizon" in _text(site / "closed-loop" / "index.html")
+    formats = _text(site / "formats" / "index.html")
+    for needle in ("oe.friction_cone_fraction", "tooltransfer.dataset/1", "closed_loop_status",
+                   "tooltransfer.skills/1", "tooltransfer.plan/1"):
+        assert needle in formats, needle
+    design = _text(site / "design" / "index.html")
+    assert "Push mechanics: what the puck really does under a face" in design
+    index = _text(site / "index.html")
+    assert "teaches a robot to use a tool it has never seen" in index and "make demo" in index
+
+
+@needs_mkdocs
+def test_no_sphinx_role_markup_and_no_remote_assets(site: Path) -> None:
+    """Sphinx roles of the docstrings become code (or links); the pages load nothing from the network."""
+    remote = re.compile(r"""<(?:script|link|img)[^>]+(?:src|href)=["']https?://""")
+    for page in site.rglob("*.html"):
+        html = _text(page)
+        assert not re.search(r":(?:func|mod|class|meth|data|attr|exc):<code>", html), page
+        assert not remote.search(html), page
+
+
+def test_docs_pages_in_the_nav_exist() -> None:
+    nav = yaml.safe_load(_text(ROOT / "mkdocs.yml"))["nav"]
+
+    def pages(items: list) -> list[str]:
+        out = []
+        for item in items:
+            value = next(iter(item.values()))
+            out += pages(value) if isinstance(value, list) else [value]
+        return out
+
+    listed = pages(nav)
+    assert all((ROOT / "docs" / p).is_file() for p in listed), listed
+    on_disk = {p.relative_to(ROOT / "docs").as_posix() for p in (ROOT / "docs").rglob("*.md")}
+    assert on_disk == set(listed), on_disk ^ set(listed)
+
+
+def test_license_is_mit_and_ships_with_the_package() -> None:
+    text = _text(ROOT / "LICENSE")
+    assert text.startswith("MIT License") and "Copyright (c) 2026 the tooltransfer authors" in text
+    assert PYPROJECT["project"]["license"] == "MIT"
+    # setuptools (>= 77) puts LICEN[CS]E* into the wheel and the sdist unless license-files says otherwise
+    floor = re.match(r"setuptools>=(\d+)", PYPROJECT["build-system"]["requires"][0])
+    assert floor and int(floor[1]) >= 77
+    files = PYPROJECT["project"].get("license-files")
+    assert files is None or "LICENSE" in files
+
+
+def test_citation_file_describes_the_software_and_the_paper() -> None:
+    cff = yaml.safe_load(_text(ROOT / "CITATION.cff"))
+    assert cff["cff-version"] == "1.2.0"
+    assert cff["title"] == "tooltransfer" and cff["type"] == "software"
+    assert str(cff["version"]) == VERSION, "CITATION.cff's version follows pyproject.toml"
+    assert cff["license"] == "MIT"
+    assert cff["authors"] and all("name" in a or "family-names" in a for a in cff["authors"])
+    for key in ("message", "authors", "title"):
+        assert cff[key]
+    papers = [r for r in [*cff.get("references", []), cff.get("preferred-citation") or {}]
+              if " ".join(str(r.get("title", "")).split()) == PAPER_TITLE]
+    assert papers and all(p["type"] and p["authors"] for p in papers)
+
+
+def test_changelog_has_this_version_and_unreleased() -> None:
+    text = _text(ROOT / "CHANGELOG.md")
+    assert "## [Unreleased]" in text
+    assert re.search(rf"^## \[{re.escape(VERSION)}\] - \d{{4}}-\d{{2}}-\d{{2}}$", text, re.MULTILINE)
