@@ -12,7 +12,9 @@ reached nor made room for proves the problem infeasible (Goldfarb & Idnani 1983)
 The add/drop steps run in a small C core (``_gi_core.c``, built with the package and called
 through ctypes): the DMP fits are degenerate (constraints active along stretches of time, touched
 by the path at isolated instants), so the method takes hundreds of cheap steps, and interpreter
-overhead per step was the cost (about 100 us in NumPy against a few us compiled).
+overhead per step was the cost (about 30-60 us in NumPy against a few us compiled). Without the
+compiled core (an install without a C compiler, or ``TOOLTRANSFER_NO_NATIVE=1``) the same steps run
+in NumPy (:mod:`dmp.qp._gi_numpy`, chosen by :func:`dmp.qp.native.core`), to the same optimum.
 
 A warm start (:meth:`DualActiveSet.warm_start`) takes a guess of the active rows at once and drops
 those with negative multipliers, which gives the dual-feasible start the method needs; the
@@ -24,18 +26,15 @@ quadratic programs", Math. Programming 27 (1983) 1-33.
 
 from __future__ import annotations
 
-import ctypes
 from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.qp.native import addr, core
+from dmp.qp.native import INFEASIBLE, MAX_ITER, GIWork, core
 
 RowSource = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64]]]
 """``oracle(z) -> (G_new, h_new)``: rows violated at ``z`` that the candidates lack (empty if none)."""
-
-_NEED_ROWS, _INFEASIBLE, _MAX_ITER = 0, -1, -2
 
 
 class DualInfeasible(Exception):
@@ -55,88 +54,68 @@ class DualActiveSet:
         G, h: candidate inequality rows (m, n) and (m,), normalised by the caller.
         active: candidate indices of the active inequality rows.
         iterations: add/drop steps taken.
+        core: the dual active-set core the steps run in (:func:`dmp.qp.native.core` at creation).
     """
 
     def __init__(self, z_c: NDArray[np.float64], g: NDArray[np.float64], h: NDArray[np.float64], tol: float = 1e-13):
-        n = z_c.size
-        self.n, self.tol = n, tol
-        self.z = np.array(z_c, dtype=np.float64)
-        self._zc = self.z.copy()
-        self.G = np.ascontiguousarray(g, dtype=np.float64).reshape(-1, n)
+        self._w = w = GIWork(z_c)
+        self.n, self.tol = w.n, tol
+        self.z = w.z
+        self.G = np.ascontiguousarray(g, dtype=np.float64).reshape(-1, w.n)
         self.h = np.ascontiguousarray(h, dtype=np.float64).ravel()
-        self._Q = np.asfortranarray(np.eye(n))
-        self._R = np.zeros((n, n), order="F")
-        self._u = np.zeros(n + 1)
-        self._active = np.zeros(n + 1, dtype=np.int32)
-        self._q = ctypes.c_int(0)
-        self.n_eq = 0
-        self._iters = ctypes.c_int(0)
-        self._work = np.zeros(4 * n)
-        self._info = np.zeros(n + 2, dtype=np.int32)
-        self._p = {
-            "Q": addr(self._Q, np.float64, True), "R": addr(self._R, np.float64, True),
-            "u": addr(self._u, np.float64), "active": addr(self._active, np.int32),
-            "z": addr(self.z, np.float64), "work": addr(self._work, np.float64),
-            "info": addr(self._info, np.int32),
-        }
+        self.core = core()
+
+    @property
+    def n_eq(self) -> int:
+        return self._w.n_eq
 
     @property
     def iterations(self) -> int:
-        return self._iters.value
+        return self._w.iters.value
 
     @property
     def active(self) -> list[int]:
-        return self._active[: self._q.value - self.n_eq].tolist()
+        w = self._w
+        return w.active[: w.q.value - w.n_eq].tolist()
 
     def add_equalities(self, e: NDArray[np.float64], f: NDArray[np.float64]) -> None:
         """Take the equality rows ``e z = f`` (before any inequality); dependent consistent rows
         are skipped, dependent inconsistent ones raise :class:`DualInfeasible`."""
-        lib, p = core(), self._p
+        w = self._w
+        if w.q.value != w.n_eq:
+            raise RuntimeError("equality rows must be taken before any inequality")
         e = np.ascontiguousarray(e, dtype=np.float64).reshape(-1, self.n)
+        f = np.asarray(f, dtype=np.float64).ravel()
         for i in range(f.size):
-            code = lib.gi_equality(
-                self.n, p["Q"], p["R"], p["u"], ctypes.byref(self._q), p["z"], addr(e[i], np.float64),
-                float(f[i]), p["work"],
-            )
+            code = self.core.gi_equality(w, e[i], float(f[i]))
             if code < 0:
                 raise DualInfeasible([], equalities=True)
-            self.n_eq += code == 0
+            w.n_eq += code == 0
 
     def warm_start(self, rows: NDArray[np.intp]) -> int:
         """Take the candidate rows ``rows`` (indices into ``G``, a guess of the active set) as active,
         then drop those with negative multipliers until the point is dual feasible; call after
         :meth:`add_equalities` and before :meth:`solve`. Returns the number of rows kept."""
-        idx = np.ascontiguousarray(rows, dtype=np.int32)
+        idx = np.ascontiguousarray(rows, dtype=np.int32).ravel()
         if idx.size == 0:
             return 0
         if idx.min() < 0 or idx.max() >= self.h.size:
             raise IndexError("warm start rows out of range")
-        p = self._p
-        return int(core().gi_warm(
-            self.n, addr(self.G, np.float64), addr(self.h, np.float64), p["Q"], p["R"], p["u"], p["active"],
-            ctypes.byref(self._q), self.n_eq, p["z"], addr(self._zc, np.float64), addr(idx, np.int32), idx.size,
-            p["work"],
-        ))
+        return self.core.gi_warm(self._w, self.G, self.h, idx)
 
     def add_rows(self, g: NDArray[np.float64], h: NDArray[np.float64]) -> None:
         """Append candidate inequality rows ``g z <= h``."""
         if h.size:
-            self.G = np.ascontiguousarray(np.vstack([self.G, g]))
-            self.h = np.concatenate([self.h, h])
+            self.G = np.ascontiguousarray(np.vstack([self.G, g]), dtype=np.float64)
+            self.h = np.ascontiguousarray(np.concatenate([self.h, h]), dtype=np.float64)
 
     def solve(self, oracle: RowSource, max_iter: int = 10_000) -> NDArray[np.float64]:
         """Iterate until no candidate and no oracle row is violated; returns ``z``."""
-        lib, p, info = core(), self._p, self._info
-        ninfo, eq_involved = ctypes.c_int(0), ctypes.c_int(0)
         while True:
-            code = lib.gi_solve(
-                self.n, self.h.size, addr(self.G, np.float64), addr(self.h, np.float64), p["Q"], p["R"], p["u"],
-                p["active"], ctypes.byref(self._q), self.n_eq, p["z"], self.tol, max_iter,
-                ctypes.byref(self._iters), p["info"], ctypes.byref(ninfo), ctypes.byref(eq_involved), p["work"],
-            )
-            if code == _INFEASIBLE:
-                raise DualInfeasible(info[: ninfo.value].tolist(), equalities=bool(eq_involved.value))
-            if code == _MAX_ITER:
+            code, rows, eq = self.core.gi_solve(self._w, self.G, self.h, self.tol, max_iter)
+            if code == INFEASIBLE:
+                raise DualInfeasible(rows, equalities=eq)
+            if code == MAX_ITER:
                 raise RuntimeError("dual active-set method: iteration limit reached")
             g_new, h_new = oracle(self.z)
             if h_new.size == 0:

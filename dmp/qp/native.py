@@ -1,60 +1,393 @@
-"""The compiled core (``_gi_core.c``, built with the package) loaded through ctypes.
+"""The dual active-set core: the compiled one (``_gi_core.c``, built with the package, loaded through
+ctypes) or, when it is absent, the same steps in NumPy (:mod:`dmp.qp._gi_numpy`).
 
-It carries the Goldfarb-Idnani steps of :mod:`dmp.qp.dual_active_set` and the residual scan of
-:mod:`dmp.qp.pool`. Arrays go in as raw addresses after :func:`addr` checks their dtype and layout
-(NumPy's ``ndpointer`` argument checks cost about 7 us per argument and call, which added up to
-about 1 ms per fit).
+Both offer the five entry points of ``_gi_core.c`` with the same semantics: ``gi_equality``,
+``gi_solve``, ``gi_warm`` (the Goldfarb-Idnani steps of :mod:`dmp.qp.dual_active_set`, on a
+:class:`GIWork`) and ``gi_scan``, ``gi_rows`` (the residual scan and the row builder of
+:mod:`dmp.qp.pool`, on a :class:`PoolArrays`). :func:`core` picks one at first use:
+
+- the compiled core when ``dmp/qp/_gi_core*.so`` (``.pyd`` on Windows) is there and loads;
+- the NumPy core, with one :class:`NativeCoreWarning`, when it is not (an install without a C
+  compiler); the fit is then about 10-20 times slower (``benchmarks/bench_dmp.py``) and reaches
+  the same optimum;
+- the NumPy core, silently, when the environment variable ``TOOLTRANSFER_NO_NATIVE`` is set to
+  anything but ``""`` or ``"0"`` (read once, at first use), e.g. to test the fallback.
+
+The compiled core is called with raw addresses. Its wrapper (:class:`CompiledCore`) checks before
+every call that each array argument has the dtype, layout and shape the dimensions passed imply,
+and that the indices it hands over are in range, so a wrong argument raises :class:`ValueError`
+instead of reading or writing out of bounds. The long-lived arrays (a :class:`GIWork`'s
+factorisation, a pool's coefficient arrays, :class:`PoolArrays`) carry their dimensions: they are
+checked against them once, at creation, cannot be rebound afterwards, and their addresses are
+taken then (taking an address costs 2 us, and NumPy's ``ndpointer`` checks about 7 us per
+argument and call, which added up to about 1 ms per fit).
+
+The library is the extension module ``dmp.qp._gi_core`` built against the stable ABI (``abi3``,
+``Py_LIMITED_API`` 3.11): one file, ``_gi_core.abi3.so``, for every CPython >= 3.11. It carries no
+Python API (only an empty module init) and is never imported, only loaded with ctypes.
 """
 
 from __future__ import annotations
 
 import ctypes
-import importlib.util
+import importlib.machinery
+import os
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import cache
-from typing import Any
+from pathlib import Path
+from typing import Any, Protocol
 
+import numpy as np
 from numpy.typing import NDArray
+
+ENV_VAR = "TOOLTRANSFER_NO_NATIVE"
+"""Set to anything but ``""`` or ``"0"`` to use the NumPy core (read at first use)."""
+
+MODULE = "_gi_core"
+"""File name stem of the compiled core in this folder."""
+
+NEED_ROWS, INFEASIBLE, MAX_ITER = 0, -1, -2
+"""Return codes of ``gi_solve``."""
 
 PTR = ctypes.c_void_p
 PINT = ctypes.POINTER(ctypes.c_int)
+F64, I32, I64 = np.dtype(np.float64), np.dtype(np.int32), np.dtype(np.int64)
+
+
+class NativeCoreWarning(UserWarning):
+    """The compiled core is absent (or failed to load): the NumPy core is used."""
+
+
+class _Pinned:
+    """Attributes named in ``_pinned`` cannot be rebound once set (the compiled core keeps their
+    addresses; in-place updates such as ``w.z += d`` rebind to the same object and are allowed)."""
+
+    _pinned: tuple[str, ...] = ()
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in self._pinned and name in self.__dict__ and self.__dict__[name] is not value:
+            raise AttributeError(f"{type(self).__name__}.{name} is fixed (the compiled core holds its address)")
+        object.__setattr__(self, name, value)
+
+
+class GIWork(_Pinned):
+    """State of one dual active-set solve for ``n`` whitened variables (see ``_gi_core.c``).
+
+    Attributes (the arrays are allocated here with the shapes below and cannot be rebound):
+        z: (n,) current point; zc: (n,) the unconstrained optimum ``z_c``.
+        Q, R: (n, n) Fortran-ordered; the active normals ``N`` (GI convention ``n . z >= b``)
+            satisfy ``N = Q[:, :q] R[:q, :q]``; the first ``n_eq`` are equalities.
+        u: (n + 1,) multipliers of the active rows; active: (n + 1,) int32 candidate index of
+            active inequality ``i`` at ``active[i]``.
+        q, iters: active rows and add/drop steps taken (``ctypes.c_int``, written by either core).
+        work: (4n,) scratch; info: (n + 2,) int32 rows of an infeasibility proof.
+    """
+
+    _pinned = ("n", "z", "zc", "Q", "R", "u", "active", "q", "iters", "work", "info", "ptr")
+
+    def __init__(self, z_c: NDArray[np.float64]) -> None:
+        n = int(np.asarray(z_c).size)
+        self.n = n
+        self.z = np.array(z_c, dtype=np.float64).ravel()
+        self.zc = self.z.copy()
+        self.Q = np.asfortranarray(np.eye(n))
+        self.R = np.zeros((n, n), order="F")
+        self.u = np.zeros(n + 1)
+        self.active = np.zeros(n + 1, dtype=np.int32)
+        self.q = ctypes.c_int(0)
+        self.iters = ctypes.c_int(0)
+        self.n_eq = 0
+        self.work = np.zeros(4 * n)
+        self.info = np.zeros(n + 2, dtype=np.int32)
+        _need(self.z, F64, (n,), "z")
+        _need(self.zc, F64, (n,), "z_c")
+        _need(self.Q, F64, (n, n), "Q", fortran=True)
+        _need(self.R, F64, (n, n), "R", fortran=True)
+        self.ptr = {k: int(getattr(self, k).ctypes.data) for k in ("z", "zc", "Q", "R", "u", "active", "work", "info")}
+        """addresses of the arrays above, for the compiled core."""
+
+
+class PoolArrays(_Pinned):
+    """The arrays of a :class:`dmp.qp.pool.RowPool` that ``gi_scan`` and ``gi_rows`` read (see
+    ``_gi_core.c`` for the layout), with their dimensions, checked here and fixed; refills write
+    into them in place (and call :meth:`check_tables`).
+
+    ``S`` series, ``T`` dense samples, ``n`` dimensions, ``N`` basis functions; series
+    ``[0, npos)`` have position terms, ``[vfrom, S)`` velocity terms.
+    """
+
+    _ARRAYS = ("nb", "apos", "avel", "series_of", "sample_of", "Gx", "Gv", "xf", "vf", "M", "work")
+    _pinned = (*_ARRAYS, "S", "T", "n", "N", "npos", "vfrom", "ptr")
+
+    def __init__(
+        self, nb: NDArray[np.float64], apos: NDArray[np.float64], avel: NDArray[np.float64],
+        series_of: NDArray[np.int64], sample_of: NDArray[np.int64], gx: NDArray[np.float64],
+        gv: NDArray[np.float64], xf: NDArray[np.float64], vf: NDArray[np.float64], m: NDArray[np.float64],
+        vfrom: int,
+    ) -> None:
+        self.S, self.T = nb.shape
+        self.npos, self.n = apos.shape[0], apos.shape[1]
+        self.N = gx.shape[1]
+        self.vfrom = int(vfrom)
+        self.nb, self.apos, self.avel = nb, apos, avel
+        self.series_of, self.sample_of = series_of, sample_of
+        self.Gx, self.Gv, self.xf, self.vf, self.M = gx, gv, xf, vf, m
+        self.work = np.zeros(4 * self.n)
+        S, T, n, N = self.S, self.T, self.n, self.N
+        if not (0 <= self.vfrom <= S and 0 <= self.npos <= S):
+            raise ValueError("compiled core: series ranges out of bounds")
+        _need(nb, F64, (S, T), "nb")
+        _need(apos, F64, (self.npos, n, T), "apos")
+        _need(avel, F64, (S - self.vfrom, n, T), "avel")
+        _need(series_of, I64, series_of.shape, "series_of", ndim=1)
+        _need(sample_of, I64, series_of.shape, "sample_of", ndim=1)
+        _need(gx, F64, (T, N), "Gx")
+        _need(gv, F64, (T, N), "Gv")
+        _need(xf, F64, (T, n), "x_free")
+        _need(vf, F64, (T, n), "v_free")
+        _need(m, F64, (n, n), "M")
+        self.check_tables()
+        self.ptr = {k: int(getattr(self, k).ctypes.data) for k in self._ARRAYS}
+        """addresses of the arrays above, for the compiled core."""
+
+    def check_tables(self) -> None:
+        """Raise :class:`ValueError` unless every row id's series and sample are in range."""
+        _in_range(self.series_of, 0, self.S, "series of the row ids")
+        _in_range(self.sample_of, 0, self.T, "samples of the row ids")
+
+
+class Core(Protocol):
+    """The entry points of ``_gi_core.c`` (see there for their semantics)."""
+
+    name: str
+
+    def gi_equality(self, w: GIWork, e: NDArray[np.float64], f: float) -> int: ...
+
+    def gi_solve(
+        self, w: GIWork, g: NDArray[np.float64], h: NDArray[np.float64], tol: float, max_iter: int
+    ) -> tuple[int, list[int], bool]: ...
+
+    def gi_warm(self, w: GIWork, g: NDArray[np.float64], h: NDArray[np.float64], rows: NDArray[np.int32]) -> int: ...
+
+    def gi_scan(
+        self, pa: PoolArrays, x: NDArray[np.float64], v: NDArray[np.float64], thr: float,
+        res: NDArray[np.float64] | None, out_s: NDArray[np.int32], out_t: NDArray[np.int64],
+        idx: NDArray[np.int64], start: int, step: int, buf: NDArray[np.float64],
+    ) -> int: ...
+
+    def gi_rows(
+        self, pa: PoolArrays, ids: NDArray[np.int64], g: NDArray[np.float64], h: NDArray[np.float64]
+    ) -> None: ...
+
+
+def _need(a: Any, dtype: np.dtype[Any], shape: tuple[int, ...], name: str, fortran: bool = False,
+          ndim: int | None = None) -> None:
+    """Raise :class:`ValueError` unless ``a`` is an ndarray of ``dtype``, ``shape`` and layout."""
+    if not isinstance(a, np.ndarray) or (a.dtype is not dtype and a.dtype != dtype):
+        raise ValueError(f"compiled core: {name} must be a {dtype} array")
+    if a.shape != shape or (ndim is not None and a.ndim != ndim):
+        raise ValueError(f"compiled core: {name} has shape {a.shape}, the dimensions passed need {shape}")
+    if not (a.flags.f_contiguous if fortran else a.flags.c_contiguous):
+        raise ValueError(f"compiled core: {name} must be {'Fortran' if fortran else 'C'}-contiguous")
+
+
+def _in_range(a: NDArray[Any], lo: int, hi: int, name: str) -> None:
+    if a.size and (int(a.min()) < lo or int(a.max()) >= hi):
+        raise ValueError(f"compiled core: {name} out of range [{lo}, {hi})")
+
+
+def _check_work(w: GIWork) -> dict[str, int]:
+    """The state's addresses, after checking its active-row counts (its arrays are fixed at creation)."""
+    if not (0 <= w.n_eq <= w.q.value <= w.n):
+        raise ValueError(f"compiled core: {w.q.value} active rows ({w.n_eq} equalities) for {w.n} variables")
+    return w.ptr
+
+
+def _rows_arg(w: GIWork, g: NDArray[np.float64], h: NDArray[np.float64]) -> int:
+    m = h.shape[0] if h.ndim == 1 else -1
+    _need(h, F64, (m,), "h")
+    _need(g, F64, (m, w.n), "G")
+    return m
+
+
+class CompiledCore:
+    """The compiled core, every entry point behind argument checks."""
+
+    name = "compiled"
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = str(path)
+        lib = ctypes.CDLL(self.path)
+        c_int, c_dbl, c_i64 = ctypes.c_int, ctypes.c_double, ctypes.c_int64
+        lib.gi_equality.argtypes = [c_int, PTR, PTR, PTR, PINT, PTR, PTR, c_dbl, PTR]
+        lib.gi_equality.restype = c_int
+        lib.gi_solve.argtypes = [
+            c_int, c_int, PTR, PTR, PTR, PTR, PTR, PTR, PINT, c_int, PTR, c_dbl, c_int,
+            PINT, PTR, PINT, PINT, PTR,
+        ]
+        lib.gi_solve.restype = c_int
+        lib.gi_warm.argtypes = [c_int, PTR, PTR, PTR, PTR, PTR, PTR, PINT, c_int, PTR, PTR, PTR, c_int, PTR]
+        lib.gi_warm.restype = c_int
+        lib.gi_scan.argtypes = [
+            c_int, c_int, c_int, PTR, c_int, c_int, c_int, PTR, PTR, PTR, PTR, PTR, c_dbl, PTR, PTR, PTR, c_int,
+            c_i64, c_i64, PTR,
+        ]
+        lib.gi_scan.restype = c_int
+        lib.gi_rows.argtypes = [
+            c_int, PTR, PTR, PTR, c_int, c_int, c_int, c_int, c_int, PTR, PTR, PTR, PTR, PTR, PTR, PTR, PTR, PTR,
+            PTR, PTR,
+        ]
+        lib.gi_rows.restype = None
+        self.lib = lib
+
+    def gi_equality(self, w: GIWork, e: NDArray[np.float64], f: float) -> int:
+        p = _check_work(w)
+        _need(e, F64, (w.n,), "e")
+        return int(self.lib.gi_equality(w.n, p["Q"], p["R"], p["u"], ctypes.byref(w.q), p["z"],
+                                        int(e.ctypes.data), float(f), p["work"]))
+
+    def gi_solve(
+        self, w: GIWork, g: NDArray[np.float64], h: NDArray[np.float64], tol: float, max_iter: int
+    ) -> tuple[int, list[int], bool]:
+        p = _check_work(w)
+        m = _rows_arg(w, g, h)
+        if m == 0:
+            return NEED_ROWS, [], False
+        ninfo, eq = ctypes.c_int(0), ctypes.c_int(0)
+        code = self.lib.gi_solve(
+            w.n, m, int(g.ctypes.data), int(h.ctypes.data), p["Q"], p["R"], p["u"], p["active"], ctypes.byref(w.q),
+            w.n_eq, p["z"], float(tol), int(max_iter), ctypes.byref(w.iters), p["info"], ctypes.byref(ninfo),
+            ctypes.byref(eq), p["work"],
+        )
+        if code == INFEASIBLE:
+            return code, w.info[: ninfo.value].tolist(), bool(eq.value)
+        return int(code), [], False
+
+    def gi_warm(self, w: GIWork, g: NDArray[np.float64], h: NDArray[np.float64], rows: NDArray[np.int32]) -> int:
+        p = _check_work(w)
+        m = _rows_arg(w, g, h)
+        _need(rows, I32, (rows.size,), "rows", ndim=1)
+        _in_range(rows, 0, m, "warm-start rows")
+        return int(self.lib.gi_warm(
+            w.n, int(g.ctypes.data), int(h.ctypes.data), p["Q"], p["R"], p["u"], p["active"], ctypes.byref(w.q),
+            w.n_eq, p["z"], p["zc"], int(rows.ctypes.data), rows.size, p["work"],
+        ))
+
+    def gi_scan(
+        self, pa: PoolArrays, x: NDArray[np.float64], v: NDArray[np.float64], thr: float,
+        res: NDArray[np.float64] | None, out_s: NDArray[np.int32], out_t: NDArray[np.int64],
+        idx: NDArray[np.int64], start: int, step: int, buf: NDArray[np.float64],
+    ) -> int:
+        p = pa.ptr
+        L = x.shape[0] if x.ndim == 2 else -1
+        _need(x, F64, (L, pa.n), "x")
+        _need(v, F64, (L, pa.n), "v")
+        if step > 0:
+            if not (0 <= start and (L == 0 or start + (L - 1) * step < pa.T)):
+                raise ValueError("compiled core: sample slice out of range")
+        else:
+            _need(idx, I64, (L,), "idx")
+            _in_range(idx, 0, pa.T, "sample indices")
+        if res is not None:
+            _need(res, F64, (pa.S, L), "res")
+        cap = out_s.shape[0] if out_s.ndim == 1 else -1
+        _need(out_s, I32, (cap,), "out_s")
+        _need(out_t, I64, (cap,), "out_t")
+        if buf.ndim != 1 or buf.shape[0] < L:
+            raise ValueError("compiled core: buf shorter than the samples")
+        _need(buf, F64, buf.shape, "buf")
+        res_p = None if res is None else int(res.ctypes.data)
+        return int(self.lib.gi_scan(
+            pa.S, pa.T, L, int(idx.ctypes.data) if step <= 0 else None, pa.n, pa.npos, pa.vfrom, p["nb"], p["apos"],
+            p["avel"], int(x.ctypes.data), int(v.ctypes.data), float(thr), res_p, int(out_s.ctypes.data),
+            int(out_t.ctypes.data), cap, int(start), int(step) if step > 0 else 0, int(buf.ctypes.data),
+        ))
+
+    def gi_rows(self, pa: PoolArrays, ids: NDArray[np.int64], g: NDArray[np.float64], h: NDArray[np.float64]) -> None:
+        p = pa.ptr
+        m = ids.shape[0] if ids.ndim == 1 else -1
+        _need(ids, I64, (m,), "ids")
+        _need(g, F64, (m, pa.N * pa.n), "G")
+        _need(h, F64, (m,), "h")
+        if m == 0:
+            return
+        _in_range(ids, 0, pa.series_of.size, "row ids")
+        self.lib.gi_rows(
+            m, int(ids.ctypes.data), p["series_of"], p["sample_of"], pa.T, pa.n, pa.N, pa.npos, pa.vfrom, p["nb"],
+            p["apos"], p["avel"], p["Gx"], p["Gv"], p["xf"], p["vf"], p["M"], int(g.ctypes.data), int(h.ctypes.data),
+            p["work"],
+        )
+
+
+def compiled_path() -> Path | None:
+    """The compiled core's file in this folder (``_gi_core`` with an extension-module suffix this
+    interpreter accepts, in its order of preference), or None."""
+    here = Path(__file__).resolve().parent
+    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+        p = here / f"{MODULE}{suffix}"
+        if p.is_file():
+            return p
+    return None
+
+
+def disabled_by_env() -> bool:
+    """Whether ``TOOLTRANSFER_NO_NATIVE`` asks for the NumPy core."""
+    return os.environ.get(ENV_VAR, "").strip() not in ("", "0")
+
+
+def _numpy_core() -> Core:
+    from dmp.qp._gi_numpy import NumpyCore
+
+    return NumpyCore()
 
 
 @cache
-def core() -> ctypes.CDLL:
-    """The loaded library with the argument types of every entry point."""
-    spec = importlib.util.find_spec("dmp.qp._gi_core")
-    if spec is None or spec.origin is None:
-        raise ImportError(
-            "dmp.qp._gi_core is not built: reinstall tooltransfer with a C compiler (pip install -e .)"
-        )
-    lib = ctypes.CDLL(spec.origin)
-    c_int, c_dbl = ctypes.c_int, ctypes.c_double
-    lib.gi_equality.argtypes = [c_int, PTR, PTR, PTR, PINT, PTR, PTR, c_dbl, PTR]
-    lib.gi_equality.restype = c_int
-    lib.gi_solve.argtypes = [
-        c_int, c_int, PTR, PTR, PTR, PTR, PTR, PTR, PINT, c_int, PTR, c_dbl, c_int,
-        PINT, PTR, PINT, PINT, PTR,
-    ]
-    lib.gi_solve.restype = c_int
-    lib.gi_warm.argtypes = [c_int, PTR, PTR, PTR, PTR, PTR, PTR, PINT, c_int, PTR, PTR, PTR, c_int, PTR]
-    lib.gi_warm.restype = c_int
-    c_i64 = ctypes.c_int64
-    lib.gi_scan.argtypes = [
-        c_int, c_int, c_int, PTR, c_int, c_int, c_int, PTR, PTR, PTR, PTR, PTR, c_dbl, PTR, PTR, PTR, c_int,
-        c_i64, c_i64, PTR,
-    ]
-    lib.gi_scan.restype = c_int
-    lib.gi_rows.argtypes = [
-        c_int, PTR, PTR, PTR, c_int, c_int, c_int, c_int, c_int, PTR, PTR, PTR, PTR, PTR, PTR, PTR, PTR, PTR, PTR,
-        PTR,
-    ]
-    lib.gi_rows.restype = None
-    return lib
+def default_core() -> Core:
+    """The core :func:`core` returns unless overridden (chosen at the first call; see the module docstring)."""
+    if disabled_by_env():
+        return _numpy_core()
+    path = compiled_path()
+    why = "is not built"
+    if path is not None:
+        try:
+            return CompiledCore(path)
+        except (OSError, AttributeError) as exc:
+            why = f"failed to load ({exc})"
+    warnings.warn(
+        f"tooltransfer: the compiled dual active-set core (dmp/qp/{MODULE}) {why}; using the NumPy core "
+        "(same optimum, about 10-20x slower fits; install with a C compiler for the fast path)",
+        NativeCoreWarning, stacklevel=3,
+    )
+    return _numpy_core()
 
 
-def addr(a: NDArray[Any], dtype: type, fortran: bool = False) -> int:
-    """Address of ``a``'s data after checking the dtype and layout the C core assumes."""
-    ok = a.flags.f_contiguous if fortran else a.flags.c_contiguous
-    if a.dtype != dtype or not ok:
-        raise TypeError("compiled core: array of unexpected dtype or layout")
-    return int(a.ctypes.data)
+_override: list[Core] = []
+
+
+def core() -> Core:
+    """The core in use: :func:`default_core`, or the innermost :func:`using`."""
+    return _override[-1] if _override else default_core()
+
+
+@contextmanager
+def using(which: str | Core) -> Iterator[Core]:
+    """Use ``which`` (``"compiled"``, ``"numpy"`` or a core) for the solvers created inside the block."""
+    if isinstance(which, str):
+        if which == "numpy":
+            c = _numpy_core()
+        elif which == "compiled":
+            path = compiled_path()
+            if path is None:
+                raise ImportError(f"dmp.qp.{MODULE} is not built: reinstall tooltransfer with a C compiler")
+            c = CompiledCore(path)
+        else:
+            raise ValueError(f"unknown core {which!r}: 'compiled' or 'numpy'")
+    else:
+        c = which
+    _override.append(c)
+    try:
+        yield c
+    finally:
+        _override.pop()

@@ -6,9 +6,10 @@ constraint's samples ``k``) is ``offset[c] + j * K_c + p``. Rows are only materi
 asked for. For residuals, the rows of all constraints are stacked as *series* (one per constraint
 row ``j``) over all dense samples, with neutral entries where a constraint does not apply, so that
 the residuals of every row on any subset of samples (a :class:`Samples`) and their violated local
-maxima take one pass of the compiled core (:meth:`RowPool.scan`; :meth:`RowPool.residuals` and
-:meth:`RowPool.peaks` are the same in NumPy), whatever the number of constraints; the rows of new
-ids are built there too (:meth:`RowPool.rows`).
+maxima take one pass of the dual active-set core (:meth:`RowPool.scan`, compiled or its NumPy
+fallback, :mod:`dmp.qp.native`; :meth:`RowPool.residuals` and :meth:`RowPool.peaks` are the same
+in plain NumPy), whatever the number of constraints; the rows of new ids are built there too
+(:meth:`RowPool.rows`).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from numpy.typing import NDArray
 
 from dmp.affine import AffineRollout
 from dmp.qp.constraints.base import Coefficients, Constraint
-from dmp.qp.native import addr, core
+from dmp.qp.native import PoolArrays, core
 
 Ids = NDArray[np.intp]
 Cols = NDArray[np.intp] | slice
@@ -77,8 +78,7 @@ class RowPool:
     """(ids,) series of each row id."""
     sample_of: NDArray[np.int64]
     """(ids,) dense sample of each row id."""
-    _addr: dict[str, int] | None = None
-    _keep: dict[str, NDArray[np.float64]] | None = None
+    _arrays: PoolArrays | None = None
     _eq: tuple[NDArray[np.float64], NDArray[np.float64], list[str]] | None = None
     _out: tuple[NDArray[np.int32], NDArray[np.int64]] | None = None
 
@@ -99,6 +99,8 @@ class RowPool:
             for ci, c in enumerate(constraints):
                 if c.linearised and not c.equality:
                     pool._fill(ci)
+            if pool._arrays is not None:
+                pool._arrays.check_tables()  # the refill rewrote the row tables the core reads
             return pool
         ineq = [not c.equality for c in constraints]
         sizes = [co.bound.size if q else 0 for co, q in zip(coeffs, ineq, strict=True)]
@@ -175,7 +177,7 @@ class RowPool:
     ) -> tuple[Ids, NDArray[np.float64] | None]:
         """Ids of the local maxima in time (over the samples) of rows violated by more than
         ``threshold``, and with ``keep`` the residuals (as :meth:`residuals`): the same as
-        :meth:`peaks` of :meth:`residuals`, in one pass of the compiled core."""
+        :meth:`peaks` of :meth:`residuals`, in one pass of the core."""
         wm = np.asarray(w).reshape(-1, self.aff.n_dims) @ self.aff.M.T
         x = np.ascontiguousarray(smp.x_free + smp.gx @ wm)
         v = np.ascontiguousarray(smp.v_free + smp.gv @ wm)
@@ -189,17 +191,11 @@ class RowPool:
         if self._out is None:
             cap = max(256, 8 * n_s)
             self._out = (np.empty(cap, dtype=np.int32), np.empty(cap, dtype=np.int64))
+        pa, gi = self._core_arrays(), core()
         while True:
             out_s, out_t = self._out
-            cap = out_s.size
-            p = self._native()
-            count = core().gi_scan(
-                n_s, n_t, idx.size, addr(idx, np.int64), self.aff.n_dims, self.a_pos.shape[0], self.vel_from,
-                p["neg_bound"], p["a_pos"], p["a_vel"], addr(x, np.float64), addr(v, np.float64), threshold,
-                None if res is None else addr(res, np.float64), addr(out_s, np.int32), addr(out_t, np.int64), cap,
-                start, step, addr(buf, np.float64),
-            )
-            if count <= cap:
+            count = gi.gi_scan(pa, x, v, threshold, res, out_s, out_t, idx, start, step, buf)
+            if count <= out_s.size:
                 return self.id_of[out_s[:count], out_t[:count]], res
             self._out = (np.empty(count, dtype=np.int32), np.empty(count, dtype=np.int64))
 
@@ -268,31 +264,25 @@ class RowPool:
         return ci, local // kk, local % kk
 
     def rows(self, ids: Ids) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``G`` (len(ids), N*n) and ``h`` for the given ids, in order (built by the compiled core)."""
-        aff, p = self.aff, self._native()
+        """``G`` (len(ids), N*n) and ``h`` for the given ids, in order (built by the dual active-set core)."""
+        aff = self.aff
         ids = np.ascontiguousarray(ids, dtype=np.int64)
         g, h = np.empty((ids.size, aff.n_weights)), np.empty(ids.size)
         if ids.size:
-            core().gi_rows(
-                ids.size, addr(ids, np.int64), p["series_of"], p["sample_of"], aff.t.size, aff.n_dims,
-                aff.Gx.shape[1], self.a_pos.shape[0], self.vel_from, p["neg_bound"], p["a_pos"], p["a_vel"],
-                p["Gx"], p["Gv"], p["x_free"], p["v_free"], p["M"], addr(g, np.float64), addr(h, np.float64),
-                p["work"],
-            )
+            core().gi_rows(self._core_arrays(), ids, g, h)
         return g, h
 
-    def _native(self) -> dict[str, int]:
-        """Addresses of the arrays the compiled core reads (kept alive on the pool; refills write in place)."""
-        if self._addr is None:
+    def _core_arrays(self) -> PoolArrays:
+        """The arrays the core reads, with their dimensions (kept on the pool; refills write in place)."""
+        if self._arrays is None:
             aff = self.aff
-            names = ("Gx", "Gv", "x_free", "v_free", "M")
-            keep = {k: np.ascontiguousarray(getattr(aff, k), dtype=np.float64) for k in names}
-            keep["work"] = np.zeros(4 * aff.n_dims)
-            self._keep = keep
-            self._addr = {k: addr(a, np.float64) for k, a in keep.items()}
-            self._addr |= {k: addr(getattr(self, k), np.float64) for k in ("neg_bound", "a_pos", "a_vel")}
-            self._addr |= {k: addr(getattr(self, k), np.int64) for k in ("series_of", "sample_of")}
-        return self._addr
+            keep = {k: np.ascontiguousarray(getattr(aff, k), dtype=np.float64)
+                    for k in ("Gx", "Gv", "x_free", "v_free", "M")}
+            self._arrays = PoolArrays(
+                self.neg_bound, self.a_pos, self.a_vel, self.series_of, self.sample_of, keep["Gx"], keep["Gv"],
+                keep["x_free"], keep["v_free"], keep["M"], self.vel_from,
+            )
+        return self._arrays
 
     def equality_rows(self) -> tuple[NDArray[np.float64], NDArray[np.float64], list[str]]:
         """Every equality row ``A w = b`` and its family (kept across refills unless an equality
