@@ -152,25 +152,17 @@ def _cmd_learn(args: argparse.Namespace) -> int:
 
 
 def _cmd_segment(args: argparse.Namespace) -> int:
-    import json
-
     import numpy as np
 
-    from dmp.errors import InputError
-    from planner.segmentation import segment
+    from planner.segmentation import load_fixed_points, segment
     from problems.dataset import load_dataset
 
     ds = load_dataset(args.dataset)
     tool = ds.tool()
-    fixed: dict[str, list] = {}
-    if args.fixed_points is not None:
-        try:
-            fixed = json.loads(args.fixed_points.read_text())
-        except (OSError, ValueError) as exc:
-            raise InputError("--fixed-points", "a JSON file {demo name: [[x, y], ...]} [m]", str(exc)) from None
-        if not isinstance(fixed, dict):
-            raise InputError("--fixed-points", "a JSON object {demo name: [[x, y], ...]} [m]", type(fixed).__name__)
-    segs = [segment(d, tool, fixed_points=fixed.get(d.name)) for d in ds.demonstrations]
+    fixed = {} if args.fixed_points is None else load_fixed_points(args.fixed_points,
+                                                                    [d.name for d in ds.demonstrations])
+    segs = [segment(d, tool, radius=float(ds.meta.object_radius), fixed_points=fixed.get(d.name))
+            for d in ds.demonstrations]
     for d, s in zip(ds.demonstrations, segs, strict=True):
         faces = " ".join(f"{p.face}[{p.t_start:.2f}-{p.t_end:.2f}]" for p in s.pushes)
         corners = ", ".join(f"({x:.4f}, {y:.4f})" for x, y in np.asarray(s.fixed_points))

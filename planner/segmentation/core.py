@@ -64,6 +64,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -71,6 +72,7 @@ from scipy.signal import savgol_filter
 
 from dmp.errors import InputError
 from planner.oe.learn import DemoPush
+from planner.segmentation.checks import check_recording
 from planner.segmentation.geometry import ToolGeometry, nearest_on_segments, to_tool_frame, to_world
 from planner.segmentation.rest import camera_noise, still_tail
 from problems.dataset import Demonstration
@@ -287,6 +289,7 @@ def segment(
     if t.size < 10 or t_o.size < 10:
         raise InputError(f"{demo.name}", "a demonstration with at least 10 tool and 10 object samples",
                          f"{t.size} tool, {t_o.size} object")
+    check_recording(demo, tool)  # loaded from files: the kinematics and the contacts against the declared tool
     raw = demo.tool_pose.copy()
     raw[:, 2] = np.unwrap(raw[:, 2])
     dt = float(np.median(np.diff(t)))
@@ -394,9 +397,7 @@ def segment(
             labels[k] = p.face
     switches = [_switch(p, q, t, pose, geo, radius) for p, q in itertools.pairwise(pushes) if p.face != q.face]
     if fixed_points is not None:
-        fixed = np.asarray(fixed_points, dtype=np.float64)
-        if fixed.ndim != 2 or fixed.shape[1] != 2 or not np.all(np.isfinite(fixed)):
-            raise InputError("fixed_points", "finite points of shape (F, 2) [m]", fixed.shape)
+        fixed = fixed_point_array(fixed_points, f"fixed_points ({demo.name})")
     else:
         fixed = np.array([p.object_after for p, q in itertools.pairwise(pushes) if p.face != q.face]).reshape(-1, 2)
     return Segmentation(tuple(labels), tuple(pushes), tuple(switches), fixed, c)
@@ -414,3 +415,46 @@ def _switch(p: PushSegment, q: PushSegment, t: NDArray[np.float64], pose: NDArra
         obj_point = centre + radius * to_world(u / max(float(np.hypot(*u[0])), 1e-12), at * [0, 0, 1])[0]
         pts.append((near[0], obj_point))
     return SwitchSegment(p.face, q.face, p.t_end, q.t_start, pts[0][0], pts[1][0], pts[0][1], pts[1][1])
+
+
+def fixed_point_array(points: object, field: str = "fixed_points") -> NDArray[np.float64]:
+    """Fixed points as an (F, 2) array [m]: a list of ``[x, y]`` pairs of finite numbers (not booleans
+    or strings); errors name ``field`` and the entry."""
+    if not isinstance(points, list | tuple | np.ndarray):
+        raise InputError(field, "a list of [x, y] points [m]", type(points).__name__)
+    for i, pt in enumerate(points):
+        if not isinstance(pt, list | tuple | np.ndarray) or len(pt) != 2:
+            raise InputError(f"{field}[{i}]", "a point [x, y] [m]", repr(pt)[:60])
+        for j, v in enumerate(pt):
+            if isinstance(v, bool | np.bool_) or not isinstance(v, int | float | np.integer | np.floating) \
+                    or not np.isfinite(v):
+                raise InputError(f"{field}[{i}][{j}]", "a finite number [m]", repr(v)[:60])
+    return np.asarray(points, dtype=np.float64).reshape(-1, 2)
+
+
+def load_fixed_points(path: str | Path, names: Sequence[str] = (), option: str = "--fixed-points"
+                      ) -> dict[str, NDArray[np.float64]]:
+    """A ``--fixed-points`` file: JSON ``{demo name: [[x, y], ...]}`` [m]; every entry checked (and,
+    given ``names``, every key a demonstration's name), errors naming the ``option``, the file and the
+    entry."""
+    import json
+
+    where = f"{option} {path}".strip()
+    try:
+        p = Path(path)
+        if p.stat().st_size > 16 * 2**20:
+            raise InputError(f"{where}", "a fixed-points file of at most 16 MB", f"{p.stat().st_size} bytes")
+        data = json.loads(p.read_bytes().decode("utf-8-sig"))
+    except OSError as exc:
+        raise InputError(f"{where}", "a readable JSON file {demo name: [[x, y], ...]} [m]", exc.strerror) from None
+    except (UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise InputError(f"{where}", "a JSON file {demo name: [[x, y], ...]} [m]",
+                         str(exc)[:120] if not isinstance(exc, RecursionError) else "JSON nested too deep") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{where}", "a JSON object {demo name: [[x, y], ...]} [m]", type(data).__name__)
+    out = {}
+    for name, pts in data.items():
+        if names and name not in names:
+            raise InputError(f"{where}: {name[:60]}", f"a demonstration's name ({', '.join(names)})", repr(name[:60]))
+        out[name] = fixed_point_array(pts, f"{where}: {name[:60]}")
+    return out

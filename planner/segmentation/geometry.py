@@ -78,3 +78,22 @@ def _inside(q: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float6
         slope = (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
         x_cross = a[None, :, 0] + (y - a[None, :, 1]) * slope
     return np.count_nonzero(cond & (q[:, 0:1] < x_cross), axis=1) % 2 == 1
+
+
+def table_poses(q: ArrayLike, a_t: float, base_xy: ArrayLike = (0.0, 0.0), base_yaw: float = np.pi / 2,
+                table_height: float = 0.0) -> NDArray[np.float64]:
+    """Forward kinematics of the Omni (DH Table I, :func:`tools.omni.ik.table_pose`) vectorized: the
+    planar tool poses (N, 3) (x, y [m], heading [rad]) of joints ``q`` (N, 3) [rad] on a platform
+    with tool length ``a_t`` [m], base at ``base_xy`` [m] turned by ``base_yaw`` [rad], and
+    ``table_height`` [m] (it moves the tool up or down, not across)."""
+    from tools.omni.dh import D_TOOL, L1, L2, THETA_TOOL
+
+    del table_height  # the pushing plane's height does not move the tool's projection on it
+    qv = np.asarray(q, dtype=np.float64).reshape(-1, 3)
+    q1, q2, q3 = qv[:, 0], qv[:, 1], qv[:, 2]
+    u = L1 * np.cos(q2) + L2 * np.cos(q2 + q3) + a_t * np.cos(q2 + q3 + THETA_TOOL)  # along the arm
+    bx = u * np.cos(q1) - D_TOOL * np.sin(q1)
+    by = u * np.sin(q1) + D_TOOL * np.cos(q1)
+    c, s = np.cos(base_yaw), np.sin(base_yaw)
+    bxy = np.asarray(base_xy, dtype=np.float64)
+    return np.column_stack([c * bx - s * by + bxy[0], s * bx + c * by + bxy[1], base_yaw + q1 - np.pi / 2])
