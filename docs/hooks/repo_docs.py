@@ -9,7 +9,8 @@
    ``(opening)`` takes the text between the file's title and its first ``##`` heading; no section
    name takes the whole file. Options: ``body`` leaves the heading line out, ``nosub`` ends the
    section at its first sub-heading, ``level=N`` moves the section's heading to level N (and its
-   sub-headings with it). Headings inside code fences do not count. So the site shows what the
+   sub-headings with it), ``code=LANG`` shows the whole file as a code block (a script, a YAML
+   file). Headings inside code fences do not count. So the site shows what the
    README says today rather than a copy that drifts; a section that is not there any more fails
    the build (strict mode) naming the page and the heading.
 
@@ -202,6 +203,9 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Any) -> str:
         if not source.is_file():
             log.warning("%s: include: no file %s", page.file.src_path, rel)
             return ""
+        lang = next((o.split("=", 1)[1] for o in options if o.startswith("code=")), None)
+        if lang is not None:
+            return f"```{lang}\n{source.read_text(encoding='utf-8').rstrip()}\n```\n"
         lines = _section(source.read_text(encoding="utf-8"), name, "nosub" in options)
         if lines is None:
             log.warning("%s: include: %s has no section whose heading starts with %r", page.file.src_path, rel, name)
