@@ -226,12 +226,23 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import json
 
-    from planner.plan import read_plan
+    from planner.plan import PlanFileError, read_plan
+    from planner.simulate import PlanLimitError, check_plan
 
     plan = read_plan(args.plan)
-    if plan.status != "solved":
-        print(f"plan {args.plan} is {plan.status}: {plan.reason}")
+    if plan.status != "solved" and not (args.force and plan.status == "violated"):
+        more = " (--force runs it anyway)" if plan.status == "violated" else ""
+        print(f"plan {args.plan} is {plan.status}: {plan.reason}{more}")
         return EXIT_INFEASIBLE
+    if plan.status == "violated":
+        print(f"tooltransfer: warning: plan {args.plan} is violated ({plan.reason}); running it anyway (--force)",
+              file=sys.stderr)
+    try:  # the plan against itself and its task (a hand-edited plan may lie)
+        check_plan(plan, str(args.plan))
+    except PlanFileError as exc:
+        if not args.force or isinstance(exc, PlanLimitError):
+            raise
+        print(f"tooltransfer: warning: {exc}; running it anyway (--force)", file=sys.stderr)
     summary, executions = _execute(plan, closed_loop=args.closed_loop, quiet=args.json)
     if args.figure:
         from planner.figures import fig12
@@ -339,6 +350,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--figure", type=Path, default=None, help="write planned versus executed paths (Fig. 12) here")
     p.add_argument("--gif", type=Path, default=None, help="write an animated GIF of the (last) execution here")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p.add_argument("--force", action="store_true", help="run a plan that fails its checks against itself and its "
+                   "task (or a violated plan) anyway, with a warning")
     p = _add(sub, "schema", "print the JSON Schema of task files (for editors)",
              "tooltransfer schema > task.schema.json", _cmd_schema)
     p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")

@@ -167,9 +167,9 @@ def _numbers(where: str, name: str, value: object, width: int | None, unit: str)
 
 
 #: Largest plan file read [bytes] and largest number of samples (a plan of 2,000 samples takes about
-#: 0.5 MB; the planner's plans sample about 90 Hz, so 500,000 samples are over 1.5 hours).
-MAX_PLAN_BYTES = 256 * 2**20
-MAX_SAMPLES = 500_000
+#: 0.5 MB; the planner's plans sample about 90 Hz, so 200,000 samples are over half an hour).
+MAX_PLAN_BYTES = 64 * 2**20
+MAX_SAMPLES = 200_000
 #: Statuses a plan file may hold: ``violated`` is a whole plan that breaks a hard check
 #: (:func:`planner.solve.hard_check_failures`).
 STATUSES = ("solved", "infeasible", "violated")

@@ -1,5 +1,11 @@
 """Executing a plan on the simulated platform, open loop as the paper did: PD tracking of the
-planned joints; reports the object's final error and the tracking error."""
+planned joints; reports the object's final error and the tracking error.
+
+Before a plan file is run (``tooltransfer simulate``), :func:`check_plan` checks it against itself
+and its task: a hand-edited plan whose tool sweeps through the puck, that moves faster than the
+tool's limits or whose joints do not give its tool poses is refused naming the file and the field
+(``--force`` runs it anyway, with a warning).
+"""
 
 from __future__ import annotations
 
@@ -7,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.plan import Plan
+from dmp.errors import InputError
+from planner.plan import Plan, PlanFileError
 from problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
 from tools.sim import Execution, SimPlatform
 from tools.sim.config import SimConfig
@@ -34,9 +41,18 @@ class SimulationReport:
 
 def simulate_plan(plan: Plan, config: SimConfig | None = None) -> SimulationReport:
     """Execute a solved plan in MuJoCo (open loop) with the physical settings ``config`` (default:
-    the task's object, :func:`task_sim_config`)."""
+    the task's object, :func:`task_sim_config`).
+
+    Raises:
+        InputError: a plan longer than :data:`MAX_PLAN_DURATION` (a bound on the simulation's time
+            and memory; :func:`check_plan` checks the rest of a plan file).
+    """
     import time
 
+    if plan.t.size < 2 or not plan.t[-1] - plan.t[0] <= MAX_PLAN_DURATION:
+        raise InputError("plan.t", f"a plan of 2 samples or more lasting at most {MAX_PLAN_DURATION:g} s (the "
+                         "simulation's bound, --force or not)",
+                         f"{plan.t.size} samples, {plan.t[-1] - plan.t[0]:.6g} s" if plan.t.size else "no samples")
     task = task_from_dict(plan.task, "plan.task")
     tool = task_tool(task)
     sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task), config or task_sim_config(task))
@@ -50,3 +66,120 @@ def simulate_plan(plan: Plan, config: SimConfig | None = None) -> SimulationRepo
         tool_deviation=float(np.linalg.norm(ex.tool_pose[:, :2] - planned, axis=1).max()),
         tracking_error=ex.tracking_error, wall_time=wall, execution=ex,
     )
+
+
+#: Longest plan :func:`check_plan` lets run [s] (the planner's plans last tens of seconds; the
+#: simulation runs about 10-20 times faster than real time).
+MAX_PLAN_DURATION = 1800.0
+#: Tolerances of :func:`check_plan`: the joints' forward kinematics against the tool poses [m, rad],
+#: joint limits [rad], tool-object overlap [m], the start and the end of the object path [m], the
+#: speed and acceleration limits (finite differences of the samples: the acceleration of a sampled
+#: path with corners is noisy, so it is given a factor; a plan 1000 times too fast is far beyond
+#: either), and the replay through the push model [m].
+FK_TOL, YAW_TOL, LIMIT_TOL, OVERLAP_TOL, END_TOL = 1e-4, 1e-4, 1e-6, 2e-4, 1e-3
+SPEED_FACTOR, ACCEL_FACTOR = 1.2, 50.0
+REPLAY_TOL = 1e-3
+
+
+class PlanLimitError(PlanFileError):
+    """A plan beyond what the simulation runs at all (too long, too few samples): ``--force`` does not
+    override it."""
+
+
+def check_plan(plan: Plan, source: str = "plan") -> None:
+    """Check a solved (or violated) plan against itself and its task before running it: a bounded
+    duration starting at 0 s; the task valid; the object path from the task's start to its target;
+    joints within the Omni's limits whose forward kinematics give the tool poses; the tool never
+    overlapping the planned object (nor at the start) nor an obstacle; tool speeds and accelerations
+    within the task's ``timing`` limits; the planned tool path moving the object as planned through
+    the push model (the mechanics in the plan's metrics).
+
+    Raises:
+        PlanFileError: naming ``source`` (the file) and the field of the first problem
+            (:class:`PlanLimitError` for the bounds ``--force`` does not lift).
+    """
+    from planner.segmentation.geometry import ToolGeometry, table_poses, to_tool_frame
+    from planner.tool_clearance import tool_obstacle_clearance
+    from tools.pushing.forward import simulate
+    from tools.pushing.mechanics import PushMechanics
+
+    def fail(field: str, expected: str, got: object | None = None) -> None:
+        raise PlanFileError(source, field, expected, got)
+
+    t = plan.t
+    if t.size < 2:
+        raise PlanLimitError(source, "samples.t", "at least 2 samples", t.size)
+    if t[-1] - t[0] > MAX_PLAN_DURATION:
+        raise PlanLimitError(source, f"samples.t[{t.size - 1}]", f"a plan of at most {MAX_PLAN_DURATION:g} s (the "
+                             "simulation's bound, --force or not)", f"{t[-1] - t[0]:.6g} s")
+    if not 0.0 <= t[0] <= 1.0:
+        fail("samples.t[0]", "a plan starting at 0 s", f"{t[0]:.6g} s")
+    task = task_from_dict(plan.task, f"{source}: task")
+    tool = task_tool(task)
+    platform = task_platform(task, tool)
+    start, target = np.array(task.start), np.array(task.target)
+    for k, point, name in ((0, start, "start"), (t.size - 1, target, "target")):
+        off = float(np.hypot(*(plan.object_xy[k] - point)))
+        if off > END_TOL:
+            fail(f"samples.object_xy[{k}]", f"the task's {name} {point.round(6).tolist()} m (within "
+                 f"{1e3 * END_TOL:g} mm)", f"{plan.object_xy[k].round(6).tolist()} m, {1e3 * off:.3g} mm off")
+    lo, hi = np.asarray(platform.limits.lower), np.asarray(platform.limits.upper)
+    out = (plan.joints < lo - LIMIT_TOL) | (plan.joints > hi + LIMIT_TOL)
+    if out.any():
+        k, j = (int(v) for v in np.argwhere(out)[0])
+        fail(f"samples.joints[{k}][{j}]", f"q{j + 1} within the Omni's joint limits [{lo[j]:.4g}, {hi[j]:.4g}] rad",
+             f"{plan.joints[k, j]:.6g} rad at t = {t[k]:.3f} s")
+    fk = table_poses(plan.joints, platform.a_t, platform.base_xy, platform.base_yaw, platform.table_height)
+    pos = np.hypot(*(fk[:, :2] - plan.tool_pose[:, :2]).T)
+    yaw = np.abs((fk[:, 2] - plan.tool_pose[:, 2] + np.pi) % (2 * np.pi) - np.pi)
+    if pos.max() > FK_TOL or yaw.max() > YAW_TOL:
+        k = int(np.argmax((pos > FK_TOL) | (yaw > YAW_TOL)))
+        fail(f"samples.tool_pose[{k}]", "the tool pose the joints give (forward kinematics of samples.joints, "
+             f"within {1e3 * FK_TOL:g} mm and {YAW_TOL:g} rad)",
+             f"{1e3 * pos[k]:.4g} mm and {yaw[k]:.3g} rad off at t = {t[k]:.3f} s")
+    geo = ToolGeometry(tool, task.object.radius)
+    gap0 = float(geo.outline_gap(to_tool_frame(start, plan.tool_pose[:1]))[0][0])
+    if gap0 < -OVERLAP_TOL:
+        fail("samples.tool_pose[0]", "a start pose of the tool clear of the object at the task's start",
+             f"the tool outline {1e3 * -gap0:.3g} mm into the object")
+    gap = geo.outline_gap(to_tool_frame(plan.object_xy, plan.tool_pose))[0]
+    if gap.min() < -OVERLAP_TOL:
+        k = int(np.argmax(gap < -OVERLAP_TOL))
+        fail(f"samples.tool_pose[{k}]", "a tool path that never overlaps the planned object (samples.object_xy)",
+             f"the tool outline {1e3 * -gap[k]:.3g} mm into the object at t = {t[k]:.3f} s ({plan.phase[k]})")
+    near = tool_obstacle_clearance(tool, plan.tool_pose, task_obstacles(task))
+    if near.distance <= 0.0:
+        k = near.sample
+        fail(f"samples.tool_pose[{k}]", f"a tool path clear of obstacles[{near.obstacle}]",
+             f"the tool outline overlapping it at t = {t[k]:.3f} s ({plan.phase[k]})")
+    v_max, a_max = task.timing.max_tool_speed, task.timing.max_tool_accel
+    dt = np.diff(t)
+    speed = np.hypot(*np.diff(plan.tool_pose[:, :2], axis=0).T) / dt
+    if speed.max() > SPEED_FACTOR * v_max:
+        k = int(np.argmax(speed))
+        fail(f"samples.t[{k + 1}]", f"tool speeds within timing.max_tool_speed = {v_max:g} m/s",
+             f"{speed[k]:.4g} m/s ({speed[k] / v_max:.3g} times the limit) at t = {t[k]:.3f} s")
+    if t.size >= 3:
+        acc = np.hypot(*np.gradient(np.gradient(plan.tool_pose[:, :2], t, axis=0), t, axis=0).T)
+        if acc.max() > ACCEL_FACTOR * a_max:
+            k = int(np.argmax(acc))
+            fail(f"samples.t[{k}]", f"tool accelerations within timing.max_tool_accel = {a_max:g} m/s^2 (finite "
+                 f"differences, up to {ACCEL_FACTOR:g} times it at the corners of the sampled path)",
+                 f"{acc[k]:.4g} m/s^2 ({acc[k] / a_max:.3g} times the limit) at t = {t[k]:.3f} s")
+    mu, c = plan.metrics.get("mechanics_mu"), plan.metrics.get("mechanics_c")
+    if mu is not None and c is not None:
+        try:
+            mech = PushMechanics(float(mu), float(c), "given")
+        except InputError as exc:
+            fail(f"metrics.{exc.field.replace('mechanics.', 'mechanics_')}", exc.expected, exc.got)
+    else:
+        from planner.solve import task_mechanics
+
+        mech = task_mechanics(task)
+    replay = simulate(tool, plan.tool_pose, start, task.object.radius, mech)
+    off = np.hypot(*(replay.object_xy - plan.object_xy).T)
+    tol = max(REPLAY_TOL, 10 * task.oe.self_consistency_tol)
+    if off.max() > tol:
+        k = int(np.argmax(off > tol))
+        fail("samples.object_xy", f"the object path the planned tool path gives through the push model (within "
+             f"{1e3 * tol:g} mm)", f"{1e3 * off.max():.3g} mm off, from t = {t[k]:.3f} s ({plan.phase[k]})")
