@@ -9,6 +9,8 @@
  *
  * Reference: D. Goldfarb, A. Idnani, Math. Programming 27 (1983) 1-33.
  */
+/* Built against the stable ABI (dmp/qp/_build.py defines Py_LIMITED_API 3.11): the library uses no
+   Python API beyond the empty module init at the end, so one build serves every CPython >= 3.11. */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <math.h>
@@ -24,6 +26,12 @@
 #define GI_CLONES
 #endif
 #define GI_INLINE static inline __attribute__((always_inline))
+/* the entry points ctypes looks up (exported on every platform, whatever the default visibility) */
+#if defined(_WIN32)
+#define GI_EXPORT __declspec(dllexport)
+#else
+#define GI_EXPORT __attribute__((visibility("default")))
+#endif
 
 #define GI_OK 0
 #define GI_NEED_ROWS 0
@@ -126,7 +134,7 @@ GI_INLINE void delete_col(int n, int *q, double *Q, double *R, int k) {
  * Take the equality e . z = f. Returns 0 when taken, 1 when dependent and consistent (skipped),
  * -1 when dependent and inconsistent. work: 3n doubles.
  */
-GI_CLONES int gi_equality(int n, double *Q, double *R, double *u, int *q, double *z, const double *e, double f,
+GI_EXPORT GI_CLONES int gi_equality(int n, double *Q, double *R, double *u, int *q, double *z, const double *e, double f,
                 double *work) {
     double *qt = work, *d = work + n, *r = work + 2 * n;
     directions(n, *q, Q, R, e, qt, d, r);
@@ -146,7 +154,7 @@ GI_CLONES int gi_equality(int n, double *Q, double *R, double *u, int *q, double
  * rows in info[0..*ninfo) and *eq_involved set, or GI_MAX_ITER. active[i] is the candidate index of
  * active inequality i (i < q - neq). work: 4n doubles.
  */
-GI_CLONES int gi_solve(int n, int m, const double *G, const double *h, double *Q, double *R, double *u, int *active,
+GI_EXPORT GI_CLONES int gi_solve(int n, int m, const double *G, const double *h, double *Q, double *R, double *u, int *active,
              int *q, int neq, double *z, double tol, int max_iter, int *iters, int *info, int *ninfo,
              int *eq_involved, double *work) {
     double *qt = work, *d = work + n, *r = work + 2 * n, *np_ = work + 3 * n;
@@ -219,7 +227,7 @@ GI_CLONES int gi_solve(int n, int m, const double *G, const double *h, double *Q
  * reached in about one O(n^2) step per guessed row when the guess is nearly right (the active rows
  * of the previous linearisation). Returns the number of active inequalities. work: 4n doubles.
  */
-GI_CLONES int gi_warm(int n, const double *G, const double *h, double *Q, double *R, double *u, int *active,
+GI_EXPORT GI_CLONES int gi_warm(int n, const double *G, const double *h, double *Q, double *R, double *u, int *active,
                       int *q, int neq, double *z, const double *zc, const int *rows, int nrows, double *work) {
     double *qt = work, *d = work + n, *r = work + 2 * n, *np_ = work + 3 * n;
     for (int a = 0; a < nrows && *q < n; ++a) {
@@ -278,7 +286,7 @@ GI_CLONES int gi_warm(int n, const double *G, const double *h, double *Q, double
  * neighbours (in level order) to out_s, out_t (up to cap). Returns the number of peaks (which may
  * exceed cap: the caller then asks again with room for all).
  */
-int gi_scan(int S, int T, int L, const int64_t *idx, int n, int npos, int vfrom, const double *nb, const double *apos,
+GI_EXPORT int gi_scan(int S, int T, int L, const int64_t *idx, int n, int npos, int vfrom, const double *nb, const double *apos,
             const double *avel, const double *x, const double *v, double thr, double *res, int *out_s, int64_t *out_t,
             int cap, int64_t start, int64_t step, double *buf) {
     /* the level's samples are idx[j] = start + j step when step > 0 (a slice: strided reads the
@@ -328,7 +336,7 @@ int gi_scan(int S, int T, int L, const int64_t *idx, int n, int npos, int vfrom,
  * (w = W.ravel() with W of shape (N, n), dmp/affine.py). Gx, Gv (T x N), xf, vf (T x n), M (n x n),
  * G (m x N n) row-major. work: 4n doubles.
  */
-void gi_rows(int m, const int64_t *ids, const int64_t *series_of, const int64_t *sample_of, int T, int n, int N,
+GI_EXPORT void gi_rows(int m, const int64_t *ids, const int64_t *series_of, const int64_t *sample_of, int T, int n, int N,
              int npos, int vfrom, const double *nb, const double *apos, const double *avel, const double *Gx,
              const double *Gv, const double *xf, const double *vf, const double *M, double *G, double *h,
              double *work) {

@@ -8,8 +8,8 @@ Both offer the five entry points of ``_gi_core.c`` with the same semantics: ``gi
 
 - the compiled core when ``dmp/qp/_gi_core*.so`` (``.pyd`` on Windows) is there and loads;
 - the NumPy core, with one :class:`NativeCoreWarning`, when it is not (an install without a C
-  compiler); the fit is then about 10-20 times slower (``benchmarks/bench_dmp.py``) and reaches
-  the same optimum;
+  compiler, where the build skips the optional extension); the fit reaches the same optimum, more
+  slowly (``benchmarks/bench_dmp.py`` measures both);
 - the NumPy core, silently, when the environment variable ``TOOLTRANSFER_NO_NATIVE`` is set to
   anything but ``""`` or ``"0"`` (read once, at first use), e.g. to test the fallback.
 
@@ -32,6 +32,7 @@ from __future__ import annotations
 import ctypes
 import importlib.machinery
 import os
+import sys
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -323,13 +324,12 @@ class CompiledCore:
 
 def compiled_path() -> Path | None:
     """The compiled core's file in this folder (``_gi_core`` with an extension-module suffix this
-    interpreter accepts, in its order of preference), or None."""
+    interpreter accepts, e.g. ``.abi3.so``), or None; the newest when there are several (a build
+    left over from before, such as ``_gi_core.cpython-311-x86_64-linux-gnu.so``, never shadows a
+    newer one)."""
     here = Path(__file__).resolve().parent
-    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
-        p = here / f"{MODULE}{suffix}"
-        if p.is_file():
-            return p
-    return None
+    found = [p for suffix in importlib.machinery.EXTENSION_SUFFIXES if (p := here / f"{MODULE}{suffix}").is_file()]
+    return max(found, key=lambda p: p.stat().st_mtime) if found else None
 
 
 def disabled_by_env() -> bool:
@@ -341,6 +341,9 @@ def _numpy_core() -> Core:
     from dmp.qp._gi_numpy import NumpyCore
 
     return NumpyCore()
+
+
+_PACKAGE_DIR = str(Path(__file__).resolve().parents[1]) + os.sep
 
 
 @cache
@@ -355,10 +358,13 @@ def default_core() -> Core:
             return CompiledCore(path)
         except (OSError, AttributeError) as exc:
             why = f"failed to load ({exc})"
+    level, frame = 1, sys._getframe()  # point the warning at the first caller outside the dmp package
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame, level = frame.f_back, level + 1
     warnings.warn(
         f"tooltransfer: the compiled dual active-set core (dmp/qp/{MODULE}) {why}; using the NumPy core "
-        "(same optimum, about 10-20x slower fits; install with a C compiler for the fast path)",
-        NativeCoreWarning, stacklevel=3,
+        "(the same optimum, slower fits; reinstall with a C compiler for the fast path)",
+        NativeCoreWarning, stacklevel=level,
     )
     return _numpy_core()
 
