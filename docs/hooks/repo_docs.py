@@ -142,7 +142,10 @@ def _type(prop: dict[str, Any], defs: dict[str, Any]) -> str:
     kind = prop.get("type", "")
     if kind == "array":
         if "prefixItems" in prop:
-            return "(" + ", ".join(_type(p, defs) for p in prop["prefixItems"]) + ")"
+            items = [_type(p, defs) for p in prop["prefixItems"]]
+            if len(set(items)) == 1 and items[0] in ("number", "integer", "2 numbers"):
+                return f"{len(items)} {'points' if items[0] == '2 numbers' else items[0] + 's'}"
+            return "(" + ", ".join(items) + ")"
         return f"list of {_type(prop.get('items', {}), defs)}"
     return kind or "any"
 
