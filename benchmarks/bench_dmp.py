@@ -9,6 +9,9 @@
    grid (10x the constraint grid); also ours re-linearised until the path settles (the default,
    warm-started across linearisations). CPU-time medians of interleaved runs (the machine is
    shared), ratios to quadprog in the same run.
+3. The dual active-set core: the same constrained fits with the compiled core (``_gi_core.c``) and
+   with its NumPy fallback (``dmp/qp/_gi_numpy.py``, what an install without a C compiler runs),
+   interleaved, CPU-time medians, with the largest relative difference of the objectives.
 OPENBLAS_NUM_THREADS=1 is set.
 """
 
@@ -25,7 +28,7 @@ import numpy as np
 
 from dmp import DMP
 from dmp.exact import RESPONSE_CACHE
-from dmp.qp import solve_fit
+from dmp.qp import native, solve_fit
 from problems.fit_cases import l_push_case, minimum_jerk
 
 
@@ -160,14 +163,52 @@ def bench_constrained(reps: int) -> None:
         )
 
 
+def bench_cores(reps: int) -> None:
+    """The constrained fit on the compiled core and on the NumPy core (the fallback without a
+    compiler): CPU-time medians of ``reps`` interleaved runs of the whole ``solve_fit`` call."""
+    print(f"\n== dual active-set core: compiled vs NumPy, CPU-time medians of {reps} interleaved runs ==")
+    if native.compiled_path() is None:
+        print("the compiled core is not built: nothing to compare")
+        return
+    print(f"{'size':<14}{'fit':<36}{'compiled ms':>12}{'NumPy ms':>10}{'NumPy/compiled':>16}{'steps':>7}"
+          f"{'rel. obj. diff':>16}")
+    forms = (
+        ("osqp seed + exact, one linearisation", {"max_scp": 1}),
+        ("exact step alone, one linearisation", {"max_scp": 1, "seed_with_backend": False}),
+        ("re-linearised until settled (default)", {}),
+    )
+    for nb, ns in ((30, 200), (60, 1000)):
+        case = l_push_case(nb, ns)
+        for label, kw in forms:
+            cpu: dict[str, list[float]] = {"compiled": [], "numpy": []}
+            last = {}
+            for which in cpu:  # warm the grid caches
+                with native.using(which):
+                    solve_fit(case.problem, **kw)
+            for _ in range(reps):
+                for which in cpu:
+                    with native.using(which):
+                        c0 = time.process_time()
+                        last[which] = solve_fit(case.problem, **kw)
+                        cpu[which].append(time.process_time() - c0)
+            med = {k: float(np.median(v)) for k, v in cpu.items()}
+            a, b = last["compiled"], last["numpy"]
+            rel = abs(a.objective - b.objective) / abs(a.objective)
+            print(f"2x{nb}/{ns:<8}{label:<36}{1e3 * med['compiled']:12.2f}{1e3 * med['numpy']:10.2f}"
+                  f"{med['numpy'] / med['compiled']:16.2f}{b.n_exact:7d}{rel:16.1e}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="fewer paths and repetitions")
-    ap.add_argument("--constrained", action="store_true", help="only the constrained-fit part")
+    ap.add_argument("--constrained", action="store_true", help="only the constrained-fit parts")
+    ap.add_argument("--cores", action="store_true", help="only the compiled vs NumPy core part")
     a = ap.parse_args()
-    if not a.constrained:
+    if not a.constrained and not a.cores:
         bench_vs_movement_primitives(8 if a.quick else 20, 3 if a.quick else 5)
-    bench_constrained(5 if a.quick else 9)
+    if not a.cores:
+        bench_constrained(5 if a.quick else 9)
+    bench_cores(5 if a.quick else 9)
 
 
 if __name__ == "__main__":
