@@ -1,23 +1,40 @@
 """``tooltransfer batch generate|run|report``: batch feasibility studies from the command line.
 
-Exit codes: 0 done, 2 bad input (a message naming the field), 130 stopped by Ctrl-C (the store can
-be resumed with ``--resume``).
+Exit codes: 0 done, 1 every job this run ran failed (``error`` or ``timeout``: e.g. Dask workers that
+cannot run them), 2 bad input (a message naming the field: a corrupt dataset, a store another run is
+writing, workers without the package), 130 stopped by Ctrl-C (the store can be resumed with
+``--resume``). ``batch generate`` writes at most :data:`MAX_TASK_FILES` task files (``--first N``
+writes the first N of a larger batch).
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
 EXIT_INTERRUPTED = 130
+EXIT_ALL_FAILED = 1
+#: Most task files ``batch generate`` writes in one go (a batch may hold a million tasks: ``batch run``
+#: generates them as it runs; ``--first N`` writes the first N).
+MAX_TASK_FILES = 100_000
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
+    from dmp.errors import InputError
     from planner.batch.generate import write_tasks
     from planner.batch.spec import load_batch
 
     spec = load_batch(args.batch)
+    n = spec.count if args.first is None else args.first
+    if args.first is not None and not 1 <= args.first <= spec.count:
+        raise InputError("--first", f"a number of tasks in [1, count = {spec.count}]", args.first)
+    if n > MAX_TASK_FILES:
+        raise InputError(f"{args.batch}: count", f"at most {MAX_TASK_FILES} task files to write (--first N writes "
+                         "the first N; `batch run` generates every task as it runs)", spec.count)
+    if n < spec.count:
+        spec = spec.model_copy(update={"count": n})  # task i does not depend on count
     paths = write_tasks(spec, args.batch, args.out)
     print(f"wrote {len(paths)} task files to {args.out}/ (each one solves on its own: tooltransfer solve FILE)")
     return 0
@@ -42,6 +59,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if s.interrupted:
         print(f"stopped before the end: carry on with `tooltransfer batch run {args.batch} --db {args.db} --resume`")
         return EXIT_INTERRUPTED
+    if s.stored and set(s.counts) <= {"error", "timeout"}:
+        print(f"tooltransfer: error: every job of this run failed ({counts}): see `tooltransfer batch report "
+              f"{args.db}` for the reasons", file=sys.stderr)
+        return EXIT_ALL_FAILED
     return 0
 
 
@@ -73,6 +94,8 @@ def add_batch_parser(sub: argparse._SubParsersAction,
             "tooltransfer batch generate problems/batch/small.yaml --out out/small_tasks", _cmd_generate)
     p.add_argument("batch", type=Path, help="batch file (YAML)")
     p.add_argument("--out", type=Path, required=True, help="folder for the task files")
+    p.add_argument("--first", type=int, default=None, metavar="N",
+                   help=f"write only the first N tasks (at most {MAX_TASK_FILES} files are written in one go)")
     p = add(bsub, "run", "run every task of a batch with every variant, storing each result as it finishes",
             "tooltransfer batch run problems/batch/small.yaml --db out/small.sqlite --workers 2 --simulate\n"
             "  tooltransfer batch run problems/batch/small.yaml --db out/small.sqlite --dask-local 2 --resume\n"

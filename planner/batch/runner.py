@@ -21,7 +21,7 @@ import signal
 import threading
 import time
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, CancelledError, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
@@ -100,26 +100,72 @@ def batch_jobs(spec: BatchSpec, batch_path: str | Path, tasks: Sequence[Generate
     """The batch's tasks and its jobs (every task with every variant), in task order. With
     simulation, each job executes its solved plan open loop and closed loop in two more sandbox
     calls (:class:`planner.batch.worker.Stage`, ``simulate.timeout`` each), the closed loop with task
-    ``i``'s camera-noise seed (:meth:`planner.batch.spec.Simulation.closed_loop_seed`)."""
+    ``i``'s camera-noise seed (:meth:`planner.batch.spec.Simulation.closed_loop_seed`). (Every task
+    up front: :func:`run_batch` generates them as it runs.)"""
     tasks = list(tasks) if tasks is not None else generate_tasks(spec, batch_path)
+    warm = _warmup(spec, batch_path, tasks[0] if tasks else None, simulate)
+    return tasks, [j for t in tasks for j in task_jobs(spec, batch_path, t, timeout, simulate, warm)]
+
+
+def _warmup(spec: BatchSpec, batch_path: str | Path, first: GeneratedTask | None,
+            simulate: bool | None) -> tuple[tuple[str, tuple], ...]:
+    """The calls a new sandbox runs first: imports, and each variant on the batch's first task (skills)."""
+    source = str(Path(batch_path).resolve())
+    warm: list[tuple[str, tuple]] = [("planner.batch.execute:warm_up", (simulate_setting(spec, simulate),))]
+    if first is not None:
+        warm += [("planner.batch.execute:execute_job", (first.data, source, oe, ss, False))
+                 for oe, ss in spec.variants.pairs()]
+    return tuple(warm)
+
+
+def task_jobs(spec: BatchSpec, batch_path: str | Path, t: GeneratedTask, timeout: float | None = None,
+              simulate: bool | None = None, warm: tuple[tuple[str, tuple], ...] = ()) -> list[Job]:
+    """The jobs of one task: one per variant pair (:func:`batch_jobs`)."""
     sim = simulate_setting(spec, simulate)
     cfg = spec.simulate
     limit = spec.timeout if timeout is None else timeout
     source = str(Path(batch_path).resolve())
-    pairs = spec.variants.pairs()
-    warm: list[tuple[str, tuple]] = [("planner.batch.execute:warm_up", (sim,))]
-    if tasks:
-        warm += [("planner.batch.execute:execute_job", (tasks[0].data, source, oe, ss, False)) for oe, ss in pairs]
-    jobs = []
-    for t in tasks:
-        stages: tuple[Stage, ...] = ()
-        if sim:
-            stages = (Stage("open_loop", "planner.batch.execute:open_loop", (cfg.tolerance,), cfg.timeout),
-                      Stage("closed_loop", "planner.batch.execute:closed_loop",
-                            (cfg.closed_loop_seed(t.index), cfg.closed_loop_tolerance, cfg.camera_noise), cfg.timeout))
-        jobs += [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim), timeout=limit, warmup=tuple(warm),
-                     stages=stages) for oe, ss in pairs]
-    return tasks, jobs
+    stages: tuple[Stage, ...] = ()
+    if sim:
+        stages = (Stage("open_loop", "planner.batch.execute:open_loop", (cfg.tolerance,), cfg.timeout),
+                  Stage("closed_loop", "planner.batch.execute:closed_loop",
+                        (cfg.closed_loop_seed(t.index), cfg.closed_loop_tolerance, cfg.camera_noise), cfg.timeout))
+    return [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim), timeout=limit, warmup=warm,
+                stages=stages) for oe, ss in spec.variants.pairs()]
+
+
+#: Tasks generated (and recorded in the store) at a time while a batch runs.
+CHUNK = 64
+
+
+def _lazy_jobs(spec: BatchSpec, batch_path: str | Path, store: ResultStore, first: GeneratedTask,
+               timeout: float | None, simulate: bool | None,
+               warm: tuple[tuple[str, tuple], ...]) -> Iterator[Job]:
+    """The jobs not yet stored, task by task: tasks generated :data:`CHUNK` at a time and recorded in
+    the store's ``tasks`` table before their jobs are handed out. A task that cannot be generated
+    (its ranges leave no room) becomes an ``error`` row per variant, and the batch goes on."""
+    from planner.batch.generate import GenerationError, generate_task
+    from planner.batch.spec import dataset_folder
+
+    dataset = str(dataset_folder(spec, batch_path))
+    for lo in range(0, spec.count, CHUNK):
+        chunk: list[GeneratedTask] = []
+        failed: list[tuple[int, str]] = []
+        for i in range(lo, min(spec.count, lo + CHUNK)):
+            try:
+                chunk.append(first if i == 0 else generate_task(spec, i, dataset))
+            except GenerationError as exc:
+                failed.append((i, str(exc)))
+        store.add_tasks(task_records(chunk))
+        done = store.done_for([t.task_id for t in chunk] + [f"{spec.name}-{i:05d}" for i, _ in failed])
+        for t in chunk:
+            yield from (j for j in task_jobs(spec, batch_path, t, timeout, simulate, warm) if j.key not in done)
+        for i, why in failed:
+            for oe, ss in spec.variants.pairs():
+                job = Job(f"{spec.name}-{i:05d}", f"{oe}/{ss}", entry="builtins:dict",
+                          args=({"status": "error", "reason": f"task generation: {why}"},), timeout=30)
+                if job.key not in done:
+                    yield job
 
 
 def task_records(tasks: Sequence[GeneratedTask]) -> list[dict[str, Any]]:
@@ -164,19 +210,64 @@ def open_batch_store(store: ResultStore, spec: BatchSpec, tasks: Sequence[Genera
     store.add_tasks(task_records(tasks))
 
 
-def run_jobs(jobs: Sequence[Job], store: ResultStore, slots: Slots, *, info: dict[tuple[str, str], dict] | None = None,
+class _Queue:
+    """The jobs still to submit: drawn from an iterator as needed (a batch of a million tasks is
+    generated as it runs), with a stack of jobs put back (run again first)."""
+
+    def __init__(self, jobs: Iterable[Job]) -> None:
+        self._it: Iterator[Job] = iter(jobs)
+        self._back: list[Job] = []
+
+    def peek(self) -> Job | None:
+        if not self._back:
+            nxt = next(self._it, None)
+            if nxt is None:
+                return None
+            self._back.append(nxt)
+        return self._back[-1]
+
+    def pop(self) -> Job:
+        job = self.peek()
+        assert job is not None
+        return self._back.pop()
+
+    def append(self, job: Job) -> None:
+        self._back.append(job)
+
+    def clear(self) -> None:
+        self._back.clear()
+        self._it = iter(())
+
+    def __bool__(self) -> bool:
+        return self.peek() is not None
+
+
+def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slots, *,
+             info: dict[tuple[str, str], dict] | Callable[[Job], dict] | None = None,
              progress: bool = True, console: Console | None = None, stop: threading.Event | None = None,
-             catch_sigint: bool = True) -> RunSummary:
+             catch_sigint: bool = True, total: int | None = None, skipped: int = 0) -> RunSummary:
     """Run the jobs not yet stored, storing each row as it finishes (see the module docstring).
 
     Args:
-        info: extra fields per key (e.g. tool, oe, ss) added to each row.
+        jobs: a sequence (those already stored are skipped here), or an iterator of the jobs still to
+            run (drawn as slots free up) with ``total`` pairs in all of which ``skipped`` are stored.
+        info: extra fields per key (e.g. tool, oe, ss) added to each row, or a function of the job.
         stop: set it to stop as on Ctrl-C.
     """
-    info = info or {}
-    done = store.done()
-    todo = [j for j in jobs if j.key not in done]
-    summary = RunSummary(total=len(jobs), skipped=len(jobs) - len(todo), slots=slots.slots, kind=slots.kind)
+    extra: Callable[[Job], dict]
+    if callable(info):
+        extra = info
+    else:
+        table = info or {}
+        extra = lambda job: table.get(job.key, {})  # noqa: E731
+    if isinstance(jobs, Sequence):
+        done = store.done()
+        todo: Iterable[Job] = [j for j in jobs if j.key not in done]
+        total, skipped = len(jobs), len(jobs) - len(todo)  # type: ignore[arg-type]
+    else:
+        todo = jobs
+        total = skipped if total is None else total
+    summary = RunSummary(total=total, skipped=skipped, slots=slots.slots, kind=slots.kind)
     stop = stop or threading.Event()
     aborted = False
     previous = None
@@ -194,27 +285,27 @@ def run_jobs(jobs: Sequence[Job], store: ResultStore, slots: Slots, *, info: dic
     bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TaskProgressColumn(),
                    _Rate(), TimeElapsedColumn(), TextColumn("eta"), TimeRemainingColumn(),
                    TextColumn("{task.fields[counts]}"), console=console, disable=not progress, transient=False)
-    queue = list(reversed(todo))
+    queue = _Queue(todo)
     attempts: Counter = Counter()
     inflight: dict[Future, tuple[Job, Any]] = {}  # future -> (job, the executor it went to)
     window = 2 * max(1, slots.slots)
     start = time.perf_counter()
 
     def store_row(job: Job, row: dict[str, Any]) -> None:
-        row = {**info.get(job.key, {}), **row, "task_id": job.task_id, "variant": job.variant}
+        row = {**extra(job), **row, "task_id": job.task_id, "variant": job.variant}
         store.put(row)
         summary.counts[row["status"]] += 1
 
     try:
         with bar:
-            t = bar.add_task("batch", total=len(todo), counts="")
+            t = bar.add_task("batch", total=total - skipped, counts="")
             while queue or inflight:
                 while queue and not stop.is_set() and len(inflight) < window:
                     # a job that was running when the pool broke is a suspect: it runs alone, so a job
                     # that breaks the pool again is the culprit and the others are not charged for it
                     if any(attempts[j.key] for j, _ in inflight.values()):
                         break
-                    if attempts[queue[-1].key] and inflight:
+                    if attempts[queue.peek().key] and inflight:  # type: ignore[union-attr]
                         break
                     job = queue.pop()
                     try:
@@ -275,7 +366,13 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
               dask_local: int | None = None, timeout: float | None = None, simulate: bool | None = None,
               resume: bool = False, retry: Sequence[str] = (), progress: bool = True,
               console: Console | None = None) -> RunSummary:
-    """Generate the batch's tasks and run every (task, variant) not yet in the store ``db``.
+    """Run every (task, variant) of the batch not yet in the store ``db``, generating the tasks as it
+    goes (:func:`_lazy_jobs`: the first rows are stored within seconds whatever the count).
+
+    Before the first job: the batch's dataset is loaded and checked (a corrupt one is refused here,
+    not turned into a row per job), the store is locked (:func:`planner.batch.store.lock_store`: a
+    second ``batch run`` on it is refused), and Dask workers are probed
+    (:func:`planner.batch.executors.check_workers`).
 
     Args:
         workers: process-pool size (default: the CPU count).
@@ -286,33 +383,71 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
         resume: carry on a store that already holds rows of this batch.
         retry: statuses to run again on resume (e.g. ``("error", "timeout")``).
     """
-    from planner.batch.executors import open_executor
-    from planner.batch.spec import load_batch
+    from planner.batch.generate import generate_task
+    from planner.batch.spec import dataset_folder, load_batch
+    from planner.batch.store import lock_store
+    from problems.dataset import load_dataset
 
     if timeout is not None and not timeout > 0:
         raise InputError("--timeout", "a positive number of seconds", timeout)
     spec = load_batch(batch_path)
-    tasks, jobs = batch_jobs(spec, batch_path, timeout=timeout, simulate=simulate)
+    dataset = dataset_folder(spec, batch_path)
+    load_dataset(dataset)  # a corrupt dataset is refused before the run, naming the file
+    first = generate_task(spec, 0, str(dataset))
+    warm = _warmup(spec, batch_path, first, simulate)
     console = console or Console(stderr=True)
-    with ResultStore(db) as store:
-        open_batch_store(store, spec, tasks, resume, simulate)
-        if retry:
-            store.forget(retry)
-        if len(store.done()) < len(jobs):
-            _warm_parent(jobs, console, progress)
-        tool = {t.task_id: t.tool for t in tasks}
-        info = {j.key: {"tool": tool[j.task_id], "oe": j.args[2], "ss": j.args[3]} for j in jobs}
-        with open_executor(workers, scheduler, dask_local) as slots:
-            if progress:
-                ex = ", solved plans executed open and closed loop" if simulate_setting(spec, simulate) else ""
-                console.print(f"batch {spec.name}: {len(tasks)} tasks x {len(spec.variants.pairs())} variants{ex} "
-                              f"on a {slots.kind} ({slots.where}), results in {store.path}")
-            return run_jobs(jobs, store, slots, info=info, progress=progress, console=console)
+    with lock_store(db):
+        if not Path(db).is_file():  # learn the skills before the store exists: a dataset they fail on leaves none
+            _warm_parent(task_jobs(spec, batch_path, first, timeout, simulate, warm), console, progress)
+            warmed = True
+        else:
+            warmed = False
+        with ResultStore(db) as store:
+            open_batch_store(store, spec, [], resume, simulate)
+            if retry:
+                store.forget(retry)
+            return _run_store(store, spec, batch_path, first, warm, warmed, workers, scheduler, dask_local, timeout,
+                              simulate, progress, console, str(dataset))
+
+
+def _run_store(store: ResultStore, spec: BatchSpec, batch_path: str | Path, first: GeneratedTask,
+               warm: tuple[tuple[str, tuple], ...], warmed: bool, workers: int | None, scheduler: str | None,
+               dask_local: int | None, timeout: float | None, simulate: bool | None, progress: bool,
+               console: Console, dataset: str) -> RunSummary:
+    """:func:`run_batch` on the opened, locked and checked store: the jobs not stored yet."""
+    from planner.batch.executors import open_executor
+
+    pairs = spec.variants.pairs()
+    total = spec.count * len(pairs)
+    skipped = store.count()
+    if skipped < total and not warmed:
+        _warm_parent(task_jobs(spec, batch_path, first, timeout, simulate, warm), console, progress)
+
+    def info(job: Job) -> dict[str, Any]:
+        data = job.args[0] if job.args and isinstance(job.args[0], dict) else {}
+        oe, _, ss = job.variant.partition("/")
+        return {"tool": data.get("tool", spec.tools[_index(job.task_id) % len(spec.tools)]), "oe": oe, "ss": ss}
+
+    jobs = _lazy_jobs(spec, batch_path, store, first, timeout, simulate, warm)
+    with open_executor(workers, scheduler, dask_local, dataset=dataset) as slots:
+        if progress:
+            ex = ", solved plans executed open and closed loop" if simulate_setting(spec, simulate) else ""
+            console.print(f"batch {spec.name}: {spec.count} tasks x {len(pairs)} variants{ex} "
+                          f"on a {slots.kind} ({slots.where}), results in {store.path}")
+        return run_jobs(jobs, store, slots, info=info, progress=progress, console=console, total=total,
+                        skipped=skipped)
+
+
+def _index(task_id: str) -> int:
+    tail = task_id.rsplit("-", 1)[-1]
+    return int(tail) if tail.isdigit() else 0
 
 
 def _warm_parent(jobs: Sequence[Job], console: Console, progress: bool) -> None:
-    """Learn the skills once here (the disk cache then serves every sandbox): one job per variant."""
+    """Learn the skills once here (the disk cache then serves every sandbox): one job per variant. A
+    dataset the skills cannot be learned from is refused here (every job would fail on it)."""
     from planner.batch.execute import execute_job
+    from problems.dataset import DatasetError
 
     seen = set()
     for j in jobs:
@@ -323,5 +458,10 @@ def _warm_parent(jobs: Sequence[Job], console: Console, progress: bool) -> None:
             console.print(f"warming up: skills and solver for {j.variant} ...")
         try:
             execute_job(*j.args[:4])
+        except DatasetError:
+            raise
+        except InputError as exc:  # the skills (the dataset) are every job's: refused once, here
+            if exc.field.startswith("skills"):
+                raise
         except Exception:  # the same job will run (and report) in the batch
             pass

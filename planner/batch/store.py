@@ -19,8 +19,11 @@ columns) still opens for reading (:meth:`ResultStore.rows` gives its ``sim_final
 from __future__ import annotations
 
 import json
+import os
+import socket
 import sqlite3
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -114,6 +117,15 @@ class ResultStore:
         """The (task id, variant) pairs already stored."""
         return set(self.db.execute("SELECT task_id, variant FROM results").fetchall())
 
+    def done_for(self, task_ids: Sequence[str]) -> set[tuple[str, str]]:
+        """The (task id, variant) pairs already stored for these tasks."""
+        out: set[tuple[str, str]] = set()
+        for i in range(0, len(task_ids), 500):
+            part = list(task_ids[i : i + 500])
+            sql = f"SELECT task_id, variant FROM results WHERE task_id IN ({', '.join('?' * len(part))})"
+            out.update(self.db.execute(sql, part).fetchall())
+        return out
+
     def put(self, row: dict[str, Any]) -> None:
         """Store one result row and commit it (raises ``sqlite3.IntegrityError`` for a stored key)."""
         keys = [k for k in RESULT_COLUMNS if k in row]
@@ -144,3 +156,42 @@ class ResultStore:
 
     def count(self) -> int:
         return int(self.db.execute("SELECT COUNT(*) FROM results").fetchone()[0])
+
+
+@contextmanager
+def lock_store(path: str | Path) -> Iterator[Path]:
+    """Hold the exclusive lock of the store ``path`` while a ``batch run`` writes it: an advisory lock
+    (``flock``) on ``<path>.lock``, released when the process ends however it ends (a SIGKILL too),
+    so a second run on the same store is refused at once instead of computing every pair again.
+
+    Raises:
+        InputError: naming ``--db``, the store and the process holding it.
+    """
+    p = Path(path)
+    lock = p.with_name(p.name + ".lock")
+    try:
+        lock.parent.mkdir(parents=True, exist_ok=True)
+        fh = open(lock, "a+")  # held open for the lock's lifetime
+    except OSError as exc:
+        raise InputError("--db", "a results file whose folder is writable (for its lock file)",
+                         f"{lock}: {exc.strerror}") from None
+    try:
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX: no lock (documented)
+            yield lock
+            return
+        try:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            fh.seek(0)
+            holder = fh.read().strip()[:100] or "another process"
+            raise InputError("--db", "a results file no other `tooltransfer batch run` is writing (wait for it to "
+                             "finish, or run into another --db)", f"{p} is in use by {holder} (lock {lock})") from None
+        fh.seek(0)
+        fh.truncate()
+        fh.write(f"process {os.getpid()} on {socket.gethostname()}\n")
+        fh.flush()
+        yield lock
+    finally:
+        fh.close()  # releases the lock
