@@ -96,8 +96,23 @@ def dmp_from_dict(data: dict[str, Any], source: str = "<dict>") -> DMP:
 
 
 def save_dmp(d: DMP, path: str | Path) -> None:
-    """Write ``d`` to ``path`` as JSON."""
-    Path(path).write_text(json.dumps(dmp_to_dict(d), indent=1))
+    """Write ``d`` to ``path`` as JSON, atomically: a temporary file beside it, flushed to disk,
+    replaces it in one step (so no half-written skill file is ever left; the same as
+    ``problems.atomic``, kept here so that ``dmp`` depends on no other package)."""
+    import os
+    import secrets
+
+    target = Path(path)
+    tmp = target.with_name(f".{target.name[:200]}.{os.getpid()}-{secrets.token_hex(4)}.tmp")
+    try:
+        with open(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), "w", encoding="utf-8") as fh:
+            fh.write(json.dumps(dmp_to_dict(d), indent=1))
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def read_json(path: str | Path) -> Any:

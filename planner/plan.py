@@ -108,11 +108,11 @@ class Plan:
         }
 
     def write(self, path: str | Path) -> Path:
-        """Write the plan as JSON; returns the path."""
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_text(json.dumps(self.to_dict(), indent=1))
-        return p
+        """Write the plan as JSON, atomically (a temporary file beside it replaces it once complete:
+        :mod:`problems.atomic`, so no half-written plan is ever left); returns the path."""
+        from problems.atomic import write_text
+
+        return write_text(path, json.dumps(self.to_dict(), indent=1))
 
 
 def _clean(d: dict[str, Any]) -> dict[str, Any]:

@@ -83,11 +83,11 @@ class Skills:
         return doc
 
     def save(self, path: str | Path) -> Path:
-        """Write the skills file (JSON); returns its path."""
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_text(json.dumps(self.to_dict()))
-        return p
+        """Write the skills file (JSON), atomically (a temporary file beside it replaces it once
+        complete: :mod:`problems.atomic`); returns its path."""
+        from problems.atomic import write_text
+
+        return write_text(path, json.dumps(self.to_dict()))
 
     @classmethod
     def load(cls, path: str | Path) -> Skills:
