@@ -30,20 +30,37 @@ FORMAT = "tooltransfer.task/1"
 
 # strict: a YAML true/false or a quoted number is a wrong type, not 1.0 / 0.0 (ints are still taken)
 Finite = Annotated[float, Field(allow_inf_nan=False, strict=True)]
-# bounded: 1e3 is far beyond any table-top quantity here (m, kg, m/s, m/s^2), huge values overflow downstream
-Positive = Annotated[float, Field(gt=0, le=1e3, allow_inf_nan=False, strict=True)]
-NonNegative = Annotated[float, Field(ge=0, le=1e3, allow_inf_nan=False, strict=True)]
+# every number is bounded (the bounds are in the JSON schema, ``tooltransfer schema``): a table-top
+# task on the Omni needs nothing beyond them, and larger values make a solve allocate or run without end
+Angle = Annotated[float, Field(ge=-7.0, le=7.0, allow_inf_nan=False, strict=True, description="[rad], |a| <= 7")]
 # table-top coordinates: within 10 m of the origin (huge values overflow the geometry downstream)
 Coordinate = Annotated[float, Field(ge=-10.0, le=10.0, allow_inf_nan=False, strict=True)]
 Point = Annotated[tuple[Coordinate, Coordinate], Field(description="(x, y) in the world frame [m], |x|, |y| <= 10")]
+Length = Annotated[float, Field(ge=0.0, le=0.2, allow_inf_nan=False, strict=True)]  # a length on a tool [m]
+
+
+#: Longest plan a task may ask for [s] (``simulate`` refuses plans of more than 1800 s): the plan
+#: samples its approach, switches and retreat at :data:`PLAN_RATE`, so this bounds its samples too.
+MAX_PLAN_DURATION = 900.0
+#: Sample rate of a plan's approach, switches and retreat [Hz] (:func:`planner.assemble.assemble`).
+PLAN_RATE = 100.0
+#: Largest push-sequence search of the ``qp`` variant (:func:`push_search_steps`; about 1.5 s).
+MAX_SEARCH_STEPS = 200_000
+#: Longest task name [characters] (it names output files: ``plan_<name>.png``).
+MAX_NAME = 100
+MAX_TEXT = 4000
 
 
 class TaskFileError(InputError):
     """A task file is unreadable or invalid; names the file, the field path and what was expected."""
 
     def __init__(self, path: str, field: str, expected: str, got: object | None = None) -> None:
+        from problems.yaml_file import clip
+
         self.path = path
-        super().__init__(f"{path}: {field}", expected, got)
+        # a value echoed in the message is cut at 100 characters (a field name at 200): one line, however
+        # large what the file holds
+        super().__init__(f"{path}: {clip(field, 200)}", expected, None if got is None else clip(got))
 
 
 class _Model(BaseModel):
@@ -55,14 +72,14 @@ class DiscObstacle(_Model):
 
     kind: Literal["disc"] = "disc"
     centre: Point
-    radius: Positive = Field(description="[m]")
+    radius: float = Field(gt=0, le=1.0, allow_inf_nan=False, strict=True, description="[m]")
 
 
 class PolygonObstacle(_Model):
     """A convex polygonal obstacle."""
 
     kind: Literal["polygon"] = "polygon"
-    vertices: list[Point] = Field(min_length=3, description="convex polygon, either orientation [m]")
+    vertices: list[Point] = Field(min_length=3, max_length=64, description="convex polygon, either orientation [m]")
 
     @field_validator("vertices")
     @classmethod
@@ -78,23 +95,27 @@ class PolygonObstacle(_Model):
 Obstacle = Annotated[DiscObstacle | PolygonObstacle, Field(discriminator="kind")]
 
 
+Expression = Annotated[str, Field(max_length=100)]
+
+
 class InlineFace(_Model):
-    name: str
+    name: str = Field(min_length=1, max_length=64)
     segment: tuple[Point, Point]
-    push_angle: Finite | str = Field(description="[rad] in the tool frame; numbers or 'pi' expressions")
-    theta_b: Finite | str = Field(description="cone half-angle [rad], in (0, pi/2)")
-    contact_range: tuple[NonNegative, NonNegative] | None = None
+    push_angle: Angle | Expression = Field(description="[rad] in the tool frame; numbers or 'pi' expressions")
+    theta_b: Angle | Expression = Field(description="cone half-angle [rad], in (0, pi/2)")
+    contact_range: tuple[Length, Length] | None = None
 
 
 class InlineTool(_Model):
     """A tool defined in the task itself (same fields as the library's YAML files)."""
 
-    name: str
-    a_t: Positive = Field(description="tool length of Table I's tool row [m]")
-    outline: list[Point] = Field(min_length=3, description="simple polygon in the tool frame [m]")
-    faces: list[InlineFace] = Field(min_length=1)
-    description: str = ""
-    notes: str = ""
+    name: str = Field(min_length=1, max_length=MAX_NAME)
+    a_t: float = Field(gt=0, le=0.2, allow_inf_nan=False, strict=True,
+                       description="tool length of Table I's tool row [m]")
+    outline: list[Point] = Field(min_length=3, max_length=256, description="simple polygon in the tool frame [m]")
+    faces: list[InlineFace] = Field(min_length=1, max_length=8)
+    description: str = Field("", max_length=MAX_TEXT)
+    notes: str = Field("", max_length=MAX_TEXT)
 
 
 class MechanicsSpec(_Model):
@@ -111,32 +132,38 @@ class MechanicsSpec(_Model):
 class ObjectSpec(_Model):
     """The pushed object: a disc (the paper's puck)."""
 
-    radius: Positive = Field(0.0175, description="[m]")
-    mass: Positive = Field(0.02, description="[kg], for the simulated platform")
-    friction: Positive = Field(0.3, description="sliding friction coefficient against the table")
+    radius: float = Field(0.0175, ge=0.001, le=0.2, allow_inf_nan=False, strict=True, description="[m]")
+    mass: float = Field(0.02, gt=0, le=10.0, allow_inf_nan=False, strict=True,
+                        description="[kg], for the simulated platform")
+    friction: float = Field(0.3, gt=0, le=5.0, allow_inf_nan=False, strict=True,
+                            description="sliding friction coefficient against the table")
     mechanics: MechanicsSpec | None = Field(
         None, description="push model override (default: identified with the skills, else mu 0.8, c 0.59)")
 
 
 class LimitsSpec(_Model):
-    lower: tuple[Finite, Finite, Finite] = Field(description="(q1, q2, q3) [rad], Table I convention")
-    upper: tuple[Finite, Finite, Finite] = Field(description="(q1, q2, q3) [rad]")
+    lower: tuple[Angle, Angle, Angle] = Field(description="(q1, q2, q3) [rad], Table I convention")
+    upper: tuple[Angle, Angle, Angle] = Field(description="(q1, q2, q3) [rad]")
 
 
 class PlatformSpec(_Model):
     """Placement of the Omni; omitted fields take the defaults of :class:`tools.omni.platform.OmniPlatform`."""
 
     base_xy: Point = (0.0, 0.0)
-    base_yaw: Finite = Field(float(np.pi / 2), description="[rad]; pi/2 points q1 = 0 forward (+y)")
-    table_height: Finite = Field(0.0, description="height of the pushing plane in the base frame [m]")
+    base_yaw: float = Field(float(np.pi / 2), ge=-7.0, le=7.0, allow_inf_nan=False, strict=True,
+                            description="[rad]; pi/2 points q1 = 0 forward (+y)")
+    table_height: float = Field(0.0, ge=-1.0, le=1.0, allow_inf_nan=False, strict=True,
+                                description="height of the pushing plane in the base frame [m]")
     limits: LimitsSpec | None = None
 
 
 class SkillsSpec(_Model):
     """Where the skills come from: a demonstration dataset (learned and cached) or a skills file."""
 
-    dataset: str | None = Field(None, description="dataset folder, relative to the task file")
-    file: str | None = Field(None, description="saved skills file, relative to the task file")
+    dataset: str | None = Field(None, min_length=1, max_length=4096,
+                                description="dataset folder, relative to the task file")
+    file: str | None = Field(None, min_length=1, max_length=4096,
+                             description="saved skills file, relative to the task file")
 
     @model_validator(mode="after")
     def _one(self) -> SkillsSpec:
@@ -156,65 +183,112 @@ class Variants(_Model):
 class OEOptions(_Model):
     """Options of OE condensing (see :class:`planner.oe.QPOptions`)."""
 
-    n_samples: int = Field(120, ge=10)
-    n_basis: int = Field(25, ge=1)
-    segments: int = Field(10, ge=1)
-    max_pushes: int = Field(4, ge=1)
-    candidates: int = Field(3, ge=1)
-    switch_price: NonNegative = Field(2e-7, description="cost per face change [m^2]")
-    k: float = Field(0.5, gt=0, lt=1, description="adjusting factor of the mappings (6)-(7)")
-    tube: Positive = Field(0.01, description="tube radius around the universal path, mapping variant [m]")
+    # the bounds keep one solve within seconds and well under 1 GB: n_samples 2000 takes about 2 s and
+    # 300 MB; n_basis 800 takes 9 s (100,000 asked for 1.2 TiB); n_knots 320 takes 9 s; the push-sequence
+    # search grows as faces^max_pushes x segments (:data:`MAX_SEARCH_STEPS`); each candidate is a QP
+    n_samples: int = Field(120, ge=10, le=2000, strict=True,
+                           description="constraint-grid samples of the final fit (violations are measured 10x denser)")
+    n_basis: int = Field(25, ge=1, le=100, strict=True,
+                         description="basis functions per dimension of the condensed DMP")
+    segments: int = Field(10, ge=1, le=50, strict=True, description="switch times lie on this many equal phases")
+    max_pushes: int = Field(4, ge=1, le=8, strict=True,
+                            description="longest push sequence searched (the search, faces^max_pushes x segments, "
+                                        f"is bounded at {MAX_SEARCH_STEPS} steps for the task's tool)")
+    candidates: int = Field(3, ge=1, le=20, strict=True, description="push sequences scored by a QP each")
+    switch_price: float = Field(2e-7, ge=0, le=1.0, allow_inf_nan=False, strict=True,
+                                description="cost per face change [m^2]")
+    k: float = Field(0.5, gt=0, lt=1, allow_inf_nan=False, strict=True,
+                     description="adjusting factor of the mappings (6)-(7)")
+    tube: float = Field(0.01, gt=0, le=1.0, allow_inf_nan=False, strict=True,
+                        description="tube radius around the universal path, mapping variant [m]")
     friction_cone_fraction: float = Field(
-        0.5, gt=0, le=1, allow_inf_nan=False,
+        0.5, gt=0, le=1, allow_inf_nan=False, strict=True,
         description="share of the friction cone's half-angle atan(mu) the planned object directions may use")
-    contact_margin: NonNegative = Field(
-        0.0002, description="distance the contact keeps from the ends of a face's usable range [m]")
-    contact_span: Positive = Field(
-        0.012, description="longest stretch of a face the contact may use, about its middle [m] (the reach "
-                           "is planned for the tool at both ends of it)")
-    max_contacts: int = Field(6, ge=1, le=10, description="most contacts (re-contacts + 1) one push may use")
-    self_consistency_tol: Positive = Field(
-        1e-4, description="largest distance between the planned object path and the push model's replay "
-                          "of the planned tool path for a solved plan [m]")
+    contact_margin: float = Field(
+        0.0002, ge=0, le=0.05, allow_inf_nan=False, strict=True,
+        description="distance the contact keeps from the ends of a face's usable range [m]")
+    contact_span: float = Field(
+        0.012, gt=0, le=0.2, allow_inf_nan=False, strict=True,
+        description="longest stretch of a face the contact may use, about its middle [m] (the reach "
+                    "is planned for the tool at both ends of it)")
+    max_contacts: int = Field(6, ge=1, le=10, strict=True,
+                              description="most contacts (re-contacts + 1) one push may use")
+    self_consistency_tol: float = Field(
+        1e-4, gt=0, le=0.01, allow_inf_nan=False, strict=True,
+        description="largest distance between the planned object path and the push model's replay "
+                    "of the planned tool path for a solved plan [m]")
 
 
 class SSOptions(_Model):
     """Options of the switch paths."""
 
     virtual_motion: Literal["arch", "line"] = "arch"
-    n_knots: int = Field(40, ge=4)
-    clearance: NonNegative = Field(
-        0.002, description="tool-object and tool-obstacle clearance kept during switches [m]"
+    n_knots: int = Field(40, ge=4, le=100, strict=True,
+                         description="knots of a switch path (the CasADi NLP's size grows with it)")
+    clearance: float = Field(
+        0.002, ge=0, le=0.05, allow_inf_nan=False, strict=True,
+        description="tool-object and tool-obstacle clearance kept during switches [m]"
     )
 
 
 class Timing(_Model):
-    """Time scaling of the executed plan."""
+    """Time scaling of the executed plan (slower limits make longer plans: a task whose straight push
+    alone would take more than :data:`MAX_PLAN_DURATION` is refused)."""
 
-    max_tool_speed: Positive = Field(0.05, description="[m/s]")
-    max_tool_accel: Positive = Field(0.25, description="[m/s^2]")
-    approach_distance: Positive = Field(0.02, description="approach and retreat length [m]")
+    max_tool_speed: float = Field(0.05, ge=0.005, le=1.0, allow_inf_nan=False, strict=True,
+                                  description="[m/s], from 5 mm/s (plans of minutes) to 1 m/s")
+    max_tool_accel: float = Field(0.25, ge=0.005, le=10.0, allow_inf_nan=False, strict=True,
+                                  description="[m/s^2]")
+    approach_distance: float = Field(0.02, gt=0, le=0.1, allow_inf_nan=False, strict=True,
+                                     description="approach and retreat length [m], at most 100 mm")
 
 
 class Task(_Model):
     """A planning task (SI units: m, rad, s)."""
 
     format: Literal["tooltransfer.task/1"] = FORMAT
-    name: str = Field(min_length=1)
-    description: str = ""
+    name: str = Field(min_length=1, max_length=MAX_NAME,
+                      description="names output files (plan_<name>.png): no '/', '\\' or control characters")
+    description: str = Field("", max_length=MAX_TEXT)
     tool: str | InlineTool = Field(description="library tool name (tooltransfer tools) or an inline tool")
     object: ObjectSpec = ObjectSpec()
     start: Point
     target: Point
-    obstacles: list[Obstacle] = []
-    safety_margin: NonNegative = Field(0.005, description="delta of the paper's section IV.E [m]")
+    obstacles: list[Obstacle] = Field([], max_length=32)
+    safety_margin: float = Field(0.005, ge=0, le=0.1, allow_inf_nan=False, strict=True,
+                                 description="delta of the paper's section IV.E [m]")
     platform: PlatformSpec = PlatformSpec()
     skills: SkillsSpec
     variants: Variants = Variants()
     oe: OEOptions = OEOptions()
     ss: SSOptions = SSOptions()
     timing: Timing = Timing()
-    fixed_points: list[Point] | None = Field(None, description="manual override of the demonstrations' corners")
+    fixed_points: list[Point] | None = Field(None, max_length=64,
+                                             description="manual override of the demonstrations' corners")
+
+    @field_validator("name")
+    @classmethod
+    def _file_name(cls, v: str) -> str:
+        if v.strip(".") == "" or any(c in "/\\" or ord(c) < 32 or ord(c) == 127 for c in v):
+            raise ValueError("a name without '/', '\\' or control characters, not only dots (it names output files)")
+        return v
+
+
+def min_jerk_time(length: float, v_max: float, a_max: float) -> float:
+    """Shortest duration [s] of a minimum-jerk move of ``length`` [m] within ``v_max`` [m/s] and
+    ``a_max`` [m/s^2] (as :func:`planner.timing.min_jerk_duration`)."""
+    return max(1.875 * length / v_max, float(np.sqrt(10.0 / np.sqrt(3.0) * length / a_max))) if length > 0 else 0.0
+
+
+def push_search_steps(n_faces: int, max_pushes: int, segments: int) -> int:
+    """Work of the ``qp`` variant's push-sequence search (:func:`planner.oe.sequence_proxy.ranked_sequences`)
+    in steps of about 8 us: every face order of at most ``max_pushes`` pushes is enumerated (about
+    1/6 step each) and the ones without a face twice in a row split ``segments`` phases by dynamic
+    programming (``pushes x segments`` steps each)."""
+    f = n_faces
+    enumerated = sum(f**p for p in range(1, max_pushes + 1))
+    split = sum(f * (f - 1) ** (p - 1) * p * segments for p in range(1, min(max_pushes, segments) + 1))
+    return split + enumerated // 6
 
 
 def _loc(loc: tuple[int | str, ...]) -> str:
@@ -243,19 +317,50 @@ def task_from_dict(data: Any, source: str = "<dict>") -> Task:
         raise TaskFileError(source, _loc(err["loc"]), err["msg"].removeprefix("Value error, "), got_txt) from None
     if np.hypot(task.target[0] - task.start[0], task.target[1] - task.start[1]) < 1e-6:
         raise TaskFileError(source, "target", "a point other than the start (a zero-length move)", task.target)
+    _check_duration(task, source)
     if isinstance(task.tool, InlineTool):
         from tools.library import tool_from_dict
 
         try:
-            tool_from_dict(json.loads(task.tool.model_dump_json(exclude_none=True)), source=f"{source}: tool")
+            tool = tool_from_dict(json.loads(task.tool.model_dump_json(exclude_none=True)), source=f"{source}: tool")
         except ToolSpecError as exc:
             raise TaskFileError(source, f"tool.{exc.field}", exc.reason) from None
     else:
-        from tools.library import library_names
+        from tools.library import library_names, load_tool
 
         if task.tool not in library_names():
             raise TaskFileError(source, "tool", f"a library tool ({', '.join(library_names())})", repr(task.tool))
+        tool = load_tool(task.tool)
+    _check_search(task, len(tool.faces), source)
     return task
+
+
+def _check_duration(task: Task, source: str) -> None:
+    """Refuse timing limits under which the plan would last more than :data:`MAX_PLAN_DURATION`: the
+    straight push from start to target with the approach and the retreat is a lower bound."""
+    t = task.timing
+    push = float(np.hypot(task.target[0] - task.start[0], task.target[1] - task.start[1]))
+    least = min_jerk_time(push, t.max_tool_speed, t.max_tool_accel) + 2 * min_jerk_time(
+        t.approach_distance, t.max_tool_speed, t.max_tool_accel)
+    if least <= MAX_PLAN_DURATION:
+        return
+    by_speed = 1.875 * push / t.max_tool_speed >= np.sqrt(10.0 / np.sqrt(3.0) * push / t.max_tool_accel)
+    field, value = ("max_tool_speed", t.max_tool_speed) if by_speed else ("max_tool_accel", t.max_tool_accel)
+    raise TaskFileError(source, f"timing.{field}", f"limits under which the plan lasts at most {MAX_PLAN_DURATION:g} "
+                        f"s ({int(MAX_PLAN_DURATION * PLAN_RATE)} samples at {PLAN_RATE:g} Hz; the straight push of "
+                        f"{push:.3g} m from start to target with approach and retreat alone takes {least:.4g} s)",
+                        value)
+
+
+def _check_search(task: Task, n_faces: int, source: str) -> None:
+    """Refuse a push-sequence search larger than :data:`MAX_SEARCH_STEPS` for a tool of ``n_faces``."""
+    o = task.oe
+    steps = push_search_steps(n_faces, o.max_pushes, o.segments)
+    if steps > MAX_SEARCH_STEPS:
+        raise TaskFileError(source, "oe.max_pushes", f"a push-sequence search of at most {MAX_SEARCH_STEPS} steps "
+                            f"(face orders of at most max_pushes pushes of the tool's {n_faces} faces, split over "
+                            f"oe.segments = {o.segments} phases; lower oe.max_pushes or oe.segments)",
+                            f"{o.max_pushes} ({steps} steps)")
 
 
 def load_task(path: str | Path) -> Task:
@@ -307,12 +412,16 @@ def resolve(task_path: str | Path, relative: str) -> Path:
 
 __all__ = [
     "FORMAT",
+    "MAX_PLAN_DURATION",
+    "MAX_SEARCH_STEPS",
     "DiscObstacle",
     "PolygonObstacle",
     "Task",
     "TaskFileError",
     "UnknownToolError",
     "load_task",
+    "min_jerk_time",
+    "push_search_steps",
     "resolve",
     "task_from_dict",
     "task_json_schema",
