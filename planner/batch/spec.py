@@ -37,9 +37,13 @@ from problems.task import TaskFileError, _loc
 
 FORMAT = "tooltransfer.batch/1"
 
-Finite = Annotated[float, Field(allow_inf_nan=False)]
-Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+# every number is bounded (the bounds are in ``tooltransfer batch schema``): coordinates within 10 m
+# of the origin as in task files, lengths within a metre, times within an hour
+Finite = Annotated[float, Field(ge=-10.0, le=10.0, allow_inf_nan=False)]
+Positive = Annotated[float, Field(gt=0, le=1.0, allow_inf_nan=False)]
+NonNegative = Annotated[float, Field(ge=0, le=1.0, allow_inf_nan=False)]
+Seconds = Annotated[float, Field(gt=0, le=3600.0, allow_inf_nan=False)]
+Seed = Annotated[int, Field(ge=0, le=2**63 - 1)]  # SQLite's integers
 
 
 class BatchFileError(TaskFileError):
@@ -59,6 +63,7 @@ def _ordered(v: tuple[Any, Any]) -> tuple[Any, Any]:
 Range = Annotated[tuple[Finite, Finite], AfterValidator(_ordered)]
 PositiveRange = Annotated[tuple[Positive, Positive], AfterValidator(_ordered)]
 Count = Annotated[int, Field(ge=0, le=20)]
+Radius = Annotated[float, Field(gt=0, le=0.1, allow_inf_nan=False)]
 
 
 class Box(_Model):
@@ -81,18 +86,20 @@ class Obstacles(_Model):
     """Random obstacles near the straight way from start to target."""
 
     count: Annotated[tuple[Count, Count], AfterValidator(_ordered)] = (0, 2)
-    radius: PositiveRange = Field((0.003, 0.008), description="disc radius or polygon circumradius [m]")
-    kinds: list[Literal["disc", "polygon"]] = Field(["disc"], min_length=1)
+    radius: Annotated[tuple[Radius, Radius], AfterValidator(_ordered)] = Field(
+        (0.003, 0.008), description="disc radius or polygon circumradius [m], at most 0.1")
+    kinds: list[Literal["disc", "polygon"]] = Field(["disc"], min_length=1, max_length=8)
     spread: NonNegative = Field(0.02, description="largest sideways offset from the start-target line [m]")
-    clearance: NonNegative = Field(0.004, description="kept between an obstacle and the object at start and "
-                                   "target, on top of the safety margin [m]")
+    clearance: Annotated[float, Field(ge=0, le=0.1, allow_inf_nan=False)] = Field(
+        0.004, description="kept between an obstacle and the object at start and target, on top of the safety "
+        "margin [m]")
 
 
 class VariantGrid(_Model):
     """Variants run on every task (their product)."""
 
-    oe: list[Literal["qp", "mapping"]] = Field(["qp"], min_length=1)
-    ss: list[Literal["arch", "dmp", "opt"]] = Field(["arch"], min_length=1)
+    oe: list[Literal["qp", "mapping"]] = Field(["qp"], min_length=1, max_length=8)
+    ss: list[Literal["arch", "dmp", "opt"]] = Field(["arch"], min_length=1, max_length=8)
 
     def pairs(self) -> list[tuple[str, str]]:
         """``(oe, ss)`` pairs, in a fixed order."""
@@ -106,15 +113,16 @@ class Simulation(_Model):
 
     enabled: bool = Field(False, description="execute solved plans (``batch run --simulate`` / ``--no-simulate`` "
                           "overrides it)")
-    tolerance: Positive = Field(0.01, description="``sim_success``: the open-loop run ends with the object within "
-                                "this of the target [m] (the half side of the demonstrations' target square)")
-    closed_loop_tolerance: Positive = Field(0.001, description="the closed loop stops once the object is measured "
-                                            "within this of the target [m]")
-    camera_noise: NonNegative = Field(0.0015, description="standard deviation of one camera frame per axis in the "
-                                      "closed loop [m]")
-    seed: Annotated[int, Field(ge=0)] = Field(0, description="camera-noise seed: task i's closed loop uses a seed "
-                                              "drawn from [seed, i] (the same for every variant of the task)")
-    timeout: Positive = Field(120.0, description="per execution (open loop, closed loop) of a plan [s]")
+    tolerance: Annotated[float, Field(gt=0, le=0.1, allow_inf_nan=False)] = Field(
+        0.01, description="``sim_success``: the open-loop run ends with the object within this of the target [m] "
+        "(the half side of the demonstrations' target square)")
+    closed_loop_tolerance: Annotated[float, Field(gt=0, le=0.1, allow_inf_nan=False)] = Field(
+        0.001, description="the closed loop stops once the object is measured within this of the target [m]")
+    camera_noise: Annotated[float, Field(ge=0, le=0.05, allow_inf_nan=False)] = Field(
+        0.0015, description="standard deviation of one camera frame per axis in the closed loop [m]")
+    seed: Seed = Field(0, description="camera-noise seed: task i's closed loop uses a seed "
+                       "drawn from [seed, i] (the same for every variant of the task)")
+    timeout: Seconds = Field(120.0, description="per execution (open loop, closed loop) of a plan [s], at most 3600")
 
     def closed_loop_seed(self, index: int) -> int:
         """The closed loop's camera-noise seed of task ``index`` (deterministic, independent of ``count``)."""
@@ -127,12 +135,13 @@ class BatchSpec(_Model):
     """A batch of generated tasks."""
 
     format: Literal["tooltransfer.batch/1"] = FORMAT
-    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")
-    description: str = ""
-    seed: Annotated[int, Field(ge=0)] = 0
+    name: str = Field(min_length=1, max_length=80, pattern=r"^[A-Za-z0-9_.-]+$")
+    description: str = Field("", max_length=4000)
+    seed: Seed = 0
     count: Annotated[int, Field(ge=1, le=1_000_000)]
-    tools: list[str] = Field(min_length=1, description="library tool names, used in turn")
-    dataset: str = Field(description="demonstration dataset folder, relative to the batch file")
+    tools: list[str] = Field(min_length=1, max_length=64, description="library tool names, used in turn")
+    dataset: str = Field(min_length=1, max_length=4096,
+                         description="demonstration dataset folder, relative to the batch file")
     start: Region = Region(reach_margin=0.015)
     target: Region = Region(reach_margin=0.005)
     distance: PositiveRange = Field((0.04, 0.12), description="start-target distance range [m]")
@@ -144,7 +153,7 @@ class BatchSpec(_Model):
     obstacles: Obstacles = Obstacles()
     variants: VariantGrid = VariantGrid()
     simulate: Simulation = Simulation()
-    timeout: Positive = Field(60.0, description="per task and variant [s]")
+    timeout: Seconds = Field(60.0, description="per task and variant [s], at most 3600")
     task: dict[str, Any] = Field({}, description="extra task fields, the same in every task")
 
     @field_validator("tools")
