@@ -142,9 +142,10 @@ def _kind(v: object) -> str:
     return f"a {'list' if isinstance(v, list) else 'mapping' if isinstance(v, dict) else type(v).__name__}"
 
 
-def _numbers(where: str, name: str, value: object, width: int | None, unit: str) -> NDArray[np.float64]:
+def _numbers(where: str, name: str, value: object, width: int | None, unit: str,
+             bound: float = 1e6) -> NDArray[np.float64]:
     """``value`` as a float array (T,) or (T, width), every entry a finite JSON number (not a bool,
-    a string or null); errors name ``samples.<name>[i][j]``."""
+    a string or null) within ``[-bound, bound]``; errors name ``samples.<name>[i][j]``."""
     field = f"samples.{name}"
     if not isinstance(value, list):
         raise PlanFileError(where, field, "a list" + (f" of [{width} numbers] rows" if width else " of numbers"),
@@ -158,11 +159,14 @@ def _numbers(where: str, name: str, value: object, width: int | None, unit: str)
                 at = f"{field}[{i}]" + (f"[{j}]" if width is not None else "")
                 raise PlanFileError(where, at, f"a number {unit}", _kind(x))
     arr = np.array(value, dtype=np.float64).reshape((len(value), width) if width else (len(value),))
-    bad = ~np.isfinite(arr)
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(arr) <= bound)
     if bad.any():
         k = np.argwhere(bad)[0]
         at = f"{field}[{k[0]}]" + (f"[{k[1]}]" if width is not None else "")
-        raise PlanFileError(where, at, f"a finite number {unit}", float(arr[tuple(k)]))
+        v = float(arr[tuple(k)])
+        raise PlanFileError(where, at, f"a finite number {unit}" + ("" if not np.isfinite(v) else
+                            f" within +-{bound:g}"), v)
     return arr
 
 
@@ -237,11 +241,11 @@ def read_plan(path: str | Path) -> Plan:
     for name, v in s.items():
         if isinstance(v, list) and len(v) > MAX_SAMPLES:
             raise PlanFileError(where, f"samples.{name}", f"at most {MAX_SAMPLES} samples", len(v))
-    t = _numbers(where, "t", s["t"], None, "[s]")
-    arrays = {
-        "object_xy": _numbers(where, "object_xy", s["object_xy"], 2, "[m]"),
-        "tool_pose": _numbers(where, "tool_pose", s["tool_pose"], 3, "(x, y [m], yaw [rad])"),
-        "joints": _numbers(where, "joints", s["joints"], 3, "[rad]"),
+    t = _numbers(where, "t", s["t"], None, "[s]", 1e7)
+    arrays = {  # positions within 10 m of the origin, angles within 100 rad: beyond is junk, not a plan
+        "object_xy": _numbers(where, "object_xy", s["object_xy"], 2, "[m]", 10.0),
+        "tool_pose": _numbers(where, "tool_pose", s["tool_pose"], 3, "(x, y [m], yaw [rad])", 100.0),
+        "joints": _numbers(where, "joints", s["joints"], 3, "[rad]", 100.0),
     }
     for name in ("phase", "face"):
         if not isinstance(s[name], list):
