@@ -1,19 +1,26 @@
 """The ``tooltransfer`` command line.
 
-Exit codes: 0 done (solved), 1 infeasible, 2 bad input (a message naming the field, never a
-traceback). Every command has ``--help`` with an example.
+Exit codes: 0 done (solved), 1 infeasible, 2 bad input (a one-line message naming the file and the
+field, or the option and the path, never a traceback: ``-v`` adds it for a bug report), 130
+stopped by Ctrl-C (one line). Output paths are checked before any work (a folder where a file is
+expected, a missing folder, a place that cannot be written: exit 2 naming the option), and every
+file is written atomically (:mod:`problems.atomic`). Every command has ``--help`` with an example.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import re
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
-from dmp.errors import ToolTransferError
-
-EXIT_OK, EXIT_INFEASIBLE, EXIT_BAD_INPUT = 0, 1, 2
+# nothing heavy is imported before main() runs: a Ctrl-C while numpy and the rest load is caught too
+EXIT_OK, EXIT_INFEASIBLE, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+#: The tools command's default figure (its folder is made when missing; an explicit path's must exist).
+DEFAULT_TOOLS_FIGURE = Path("out/tools.png")
 
 
 def _spinner(text: str, quiet: bool = False) -> object:
@@ -173,7 +180,9 @@ def _cmd_segment(args: argparse.Namespace) -> int:
     if args.figure:
         from planner.plots.demonstrations import plot_demonstrations
 
-        print(f"wrote {plot_demonstrations(ds, segs, tool, args.figure)}")
+        with _written(args.figure) as tmp:
+            plot_demonstrations(ds, segs, tool, tmp)
+        print(f"wrote {args.figure}")
     return EXIT_OK
 
 
@@ -185,6 +194,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     from problems.task import load_task
 
     task = load_task(args.task)
+    figure = None
+    if args.plot:  # checked before the solve: the default is named after the task
+        figure = Path(args.plot) if isinstance(args.plot, str) else (
+            args.out.with_suffix(".png") if args.out else Path(f"plan_{file_stem(task.name)}.png"))
+        check_output("--plot", figure)
     chosen = {"oe": args.oe, "ss": args.ss}
     if args.variant:
         oe, _, ss = args.variant.partition("/")
@@ -213,9 +227,9 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     if args.plot and plan.status == "solved":
         from planner.figures import fig12
 
-        where = Path(args.plot) if isinstance(args.plot, str) else (
-            args.out.with_suffix(".png") if args.out else Path(f"plan_{task.name}.png"))
-        summary["figure"] = str(fig12(plan, where, executions))
+        with _written(figure) as tmp:
+            fig12(plan, tmp, executions)
+        summary["figure"] = str(figure)
     if args.json:
         print(json.dumps(summary, default=float))
     else:
@@ -247,12 +261,15 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if args.figure:
         from planner.figures import fig12
 
-        summary["figure"] = str(fig12(plan, args.figure, executions))
+        with _written(args.figure) as tmp:
+            fig12(plan, tmp, executions)
+        summary["figure"] = str(args.figure)
     if args.gif:
         from planner.figures import execution_gif
 
-        with _spinner(f"writing {args.gif}", quiet=args.json):
-            summary["gif"] = str(execution_gif(plan, list(executions.values())[-1], args.gif))
+        with _spinner(f"writing {args.gif}", quiet=args.json), _written(args.gif) as tmp:
+            execution_gif(plan, list(executions.values())[-1], tmp)
+        summary["gif"] = str(args.gif)
     if args.json:
         print(json.dumps(summary, default=float))
     else:
@@ -265,7 +282,9 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 
     text = task_json_schema()
     if args.out:
-        args.out.write_text(text + "\n")
+        from problems.atomic import write_text
+
+        write_text(args.out, text + "\n")
         print(f"wrote {args.out}")
     else:
         print(text)
@@ -275,8 +294,156 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 def _cmd_tools(args: argparse.Namespace) -> int:
     from planner.plots.tool_library import plot_tool_library
 
-    print(f"wrote {plot_tool_library(args.out)}")
+    with _written(args.out) as tmp:
+        plot_tool_library(tmp)
+    print(f"wrote {args.out}")
     return EXIT_OK
+
+
+@contextmanager
+def _written(path: Path) -> Iterator[Path]:
+    """A temporary path beside ``path`` for a writer that takes a path (a figure): it replaces
+    ``path`` once the writer is done, and is removed if the writer fails (:func:`problems.atomic.atomic_path`)."""
+    from problems.atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        yield tmp
+
+
+def file_stem(name: str, limit: int = 100) -> str:
+    """``name`` made a safe file-name stem: letters, digits, ``.``, ``_`` and ``-`` kept, anything
+    else (``/``, ``..``, spaces, control characters) one ``_``, at most ``limit`` characters, never
+    empty or starting with a dot."""
+    stem = re.sub(r"[^A-Za-z0-9._-]+", "_", name)[:limit].lstrip(".") or "task"
+    return stem
+
+
+def _nearest_existing(path: Path) -> Path:
+    p = path.absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    return p
+
+
+def _writable(folder: Path) -> str:
+    """Why nothing can be created in ``folder`` ("" if something can): it is tried."""
+    probe = folder / f".tooltransfer-probe-{os.getpid()}"
+    try:
+        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+    except FileExistsError:
+        return ""
+    except OSError as exc:
+        return exc.strerror or str(exc)
+    try:
+        probe.unlink()
+    except OSError:
+        pass
+    return ""
+
+
+def check_output(option: str, path: Path, kind: str = "file", *, make_folders: bool = False) -> None:
+    """Check an output path before any work is done; raise :class:`~dmp.errors.InputError` naming
+    ``option`` and ``path``. ``kind``: ``"file"`` (its folder must exist, unless ``make_folders``),
+    ``"folder"`` (made with its parents when missing)."""
+    from dmp.errors import InputError
+
+    path = Path(path)
+    if len(os.fsencode(str(path))) > 4000 or any(len(os.fsencode(part)) > 255 for part in path.parts):
+        raise InputError(option, "a path whose names have at most 255 bytes", f"{str(path)[:100]}...")
+    if kind == "folder":
+        if path.exists() and not path.is_dir():
+            raise InputError(option, "a folder (to write into)", f"{path}, which is a file")
+        base = _nearest_existing(path)
+        if not base.is_dir():
+            raise InputError(option, "a folder that can be made", f"{path} ({base} is a file)")
+        why = _writable(base)
+        if why:
+            raise InputError(option, "a folder that can be written", f"{path} ({base}: {why})")
+        return
+    if path.is_dir():
+        raise InputError(option, "a file path, not a folder", str(path))
+    parent = path.parent
+    if not parent.exists():
+        if not make_folders:
+            raise InputError(option, "a file in an existing folder", f"{path} (there is no folder {parent})")
+        parent = _nearest_existing(parent)
+    if not parent.is_dir():
+        raise InputError(option, "a file in a folder", f"{path} ({parent} is not a folder)")
+    why = _writable(parent)
+    if why:
+        raise InputError(option, "a file in a place that can be written", f"{path} ({parent}: {why})")
+
+
+#: Output options by command: (argument name, option as shown, kind; see :func:`check_output`).
+OUTPUTS: dict[str, tuple[tuple[str, str, str], ...]] = {
+    "solve": (("out", "-o/--out", "file"), ("plot", "--plot", "file")),
+    "learn": (("out", "-o/--out", "file"),),
+    "simulate": (("figure", "--figure", "file"), ("gif", "--gif", "file")),
+    "segment": (("figure", "--figure", "file"),),
+    "schema": (("out", "--out", "file"),),
+    "tools": (("out", "--out", "file"),),
+    "compare": (("out", "--out", "folder"),),
+    "demo": (("out", "--out", "folder"),),
+    "demos": (("out", "--out", "folder"),),
+    "batch generate": (("out", "--out", "folder"),),
+    "batch run": (("db", "--db", "store"),),
+    "batch report": (("out", "--out", "folder"),),
+}
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    command = args.command + (f" {args.batch_command}" if args.command == "batch" else "")
+    for dest, option, kind in OUTPUTS.get(command, ()):
+        value = getattr(args, dest, None)
+        if not isinstance(value, str | Path):
+            continue
+        if kind == "store":  # a results file (SQLite): the store makes its folders
+            check_output(option, Path(value), "file", make_folders=True)
+        else:
+            default = command == "tools" and Path(value) == DEFAULT_TOOLS_FIGURE
+            check_output(option, Path(value), kind, make_folders=default)
+
+
+def _message(exc: BaseException) -> str:
+    """The error's message on one line, a long value in it cut (the field and the file stay)."""
+    from dmp.errors import InputError
+    from problems.yaml_file import clip
+
+    text = str(exc)
+    if isinstance(exc, InputError) and exc.got is not None:
+        got = str(exc.got)
+        if len(got) > 100 and text == f"{exc.field}: expected {exc.expected}, got {got}":
+            text = f"{clip(exc.field, 300)}: expected {exc.expected}, got {clip(got)}"
+    return clip(text, 2000)
+
+
+def _file_in_traceback(tb: object) -> str | None:
+    """The file a failing reader had open: a path-like local of the innermost frame that has one."""
+    frames = []
+    while tb is not None:
+        frames.append(tb.tb_frame)  # type: ignore[attr-defined]
+        tb = tb.tb_next  # type: ignore[attr-defined]
+    for frame in reversed(frames):
+        for name in ("p", "path", "file", "filename", "fname", "tool_path", "meta_path"):
+            v = frame.f_locals.get(name)
+            if isinstance(v, str | Path) and str(v) and os.path.isfile(v):
+                return str(v)
+    return None
+
+
+def _unexpected(exc: BaseException) -> str:
+    """One line for an exception no check caught (a resource, a file, or a bug)."""
+    if isinstance(exc, UnicodeError):
+        where = _file_in_traceback(exc.__traceback__)
+        return (f"{where or 'a file'}: <file>: expected UTF-8 text, got bytes that are not UTF-8 "
+                f"({type(exc).__name__}: {str(exc)[:100]})")
+    if isinstance(exc, OSError):
+        return f"{exc.filename or 'a file'}: {exc.strerror or exc}" + (f" -> {exc.filename2}" if exc.filename2 else "")
+    if isinstance(exc, MemoryError):
+        return "out of memory (an input beyond the bounds the checks know of; -v shows where)"
+    if isinstance(exc, RecursionError):
+        return "an input nested too deeply (-v shows where)"
+    return f"internal error, a bug (-v shows the traceback for a report): {type(exc).__name__}: {exc}"
 
 
 
@@ -285,6 +452,9 @@ def _add(sub: argparse._SubParsersAction, name: str, helptext: str, example: str
     p = sub.add_parser(name, help=helptext, description=helptext, epilog=f"example:\n  {example}",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.set_defaults(func=func)
+    p.add_argument("-v", "--verbose", action="store_true",
+                   help="on an error or Ctrl-C also print the traceback (for a bug report)"
+                   + ("; list every push with its interval [s]" if name == "segment" else ""))
     return p
 
 
@@ -328,7 +498,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--figure", type=Path, default=None, help="write the figure (Figs. 4b/8a style) here")
     p.add_argument("--fixed-points", type=Path, default=None,
                    help="JSON file {demo name: [[x, y], ...]} [m] overriding the automatic corners")
-    p.add_argument("-v", "--verbose", action="store_true", help="list every push with its interval [s]")
     p = _add(sub, "solve", "plan a task file: pushes, switches, approach, timing, joints",
              "tooltransfer solve problems/paper/transfer_tool2.yaml -o out/plan.json", _cmd_solve)
     p.add_argument("task", type=Path, help="task file (YAML)")
@@ -357,7 +526,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")
     p = _add(sub, "tools", "draw the tool library (faces, cones) and the Omni's reach",
              "tooltransfer tools --out out/tools.png", _cmd_tools)
-    p.add_argument("--out", type=Path, default=Path("out/tools.png"), help="output PNG")
+    p.add_argument("--out", type=Path, default=DEFAULT_TOOLS_FIGURE, help="output PNG")
     from planner.batch.cli import add_batch_parser
 
     add_batch_parser(sub, _add)
@@ -365,12 +534,36 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit code."""
+    import signal
+    import traceback
+
+    words = sys.argv[1:] if argv is None else list(argv)
+    verbose = "-v" in words or "--verbose" in words  # until the arguments are parsed
     try:
+        args = build_parser().parse_args(words)
+        verbose = bool(getattr(args, "verbose", False))
+        _check_outputs(args)
         return int(args.func(args))
-    except ToolTransferError as exc:
-        print(f"tooltransfer: error: {exc}", file=sys.stderr)
+    except KeyboardInterrupt:
+        if verbose:
+            traceback.print_exc()
+        print("tooltransfer: interrupted (Ctrl-C)", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # one line, whatever went wrong (-v: the traceback too)
+        from dmp.errors import ToolTransferError
+
+        if verbose:
+            traceback.print_exc()
+        text = _message(exc) if isinstance(exc, ToolTransferError) else _unexpected(exc)
+        print(f"tooltransfer: error: {text}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    finally:
+        if argv is None:  # the console command: a Ctrl-C while the interpreter exits ends it at once, silently
+            try:
+                signal.signal(signal.SIGINT, signal.SIG_DFL)
+            except ValueError:  # not the main thread
+                pass
 
 
 if __name__ == "__main__":
