@@ -145,13 +145,13 @@ def _decode(data: bytes) -> tuple[str | None, str]:
             return None, f"a {name} file (save it as UTF-8)"
     if data.startswith(b"\xef\xbb\xbf"):
         data = data[3:]
+    head = data[:4096]
+    zeros = (head[0::2].count(0), head[1::2].count(0))  # ASCII as UTF-16: every other byte is zero
+    if len(head) >= 8 and max(zeros) > len(head) // 4 and min(zeros) < len(head) // 16:
+        return None, "a UTF-16 file without a byte-order mark (save it as UTF-8)"
     try:
         return data.decode("utf-8"), ""
     except UnicodeDecodeError as exc:
-        head = data[:4096]
-        zeros = (head[0::2].count(0), head[1::2].count(0))
-        if max(zeros) > len(head) // 4 and min(zeros) < len(head) // 16:
-            return None, "a UTF-16 file without a byte-order mark (save it as UTF-8)"
         if sum(head.count(c) for c in _CONTROL) > len(head) // 20:
             return None, "a binary file"
         line = data[: exc.start].count(b"\n") + 1
@@ -208,6 +208,8 @@ def parse_yaml(text: str, source: str, error: Error) -> Any:
         elif "nesting depth" in str(problem):  # libyaml's own bound (1000 levels)
             expected, problem = f"at most {MAX_DEPTH} nested collections", "deeper nesting"
         raise error(source, where, expected, clip(problem) if problem else None) from None
+    except (ValueError, TypeError, OverflowError) as exc:  # a scalar its constructor refuses (2024-13-45, 5000 digits)
+        raise error(source, "<file>", "valid YAML values", clip(str(exc))) from None
     except RecursionError:  # a structure deeper than MAX_DEPTH allows for already (a guard)
         raise error(source, "<file>", f"at most {MAX_DEPTH} nested collections", "deeper nesting") from None
     finally:
