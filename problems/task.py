@@ -250,7 +250,8 @@ class Task(_Model):
     name: str = Field(min_length=1, max_length=MAX_NAME,
                       description="names output files (plan_<name>.png): no '/', '\\' or control characters")
     description: str = Field("", max_length=MAX_TEXT)
-    tool: str | InlineTool = Field(description="library tool name (tooltransfer tools) or an inline tool")
+    tool: Annotated[str, Field(max_length=MAX_NAME)] | InlineTool = Field(
+        description="library tool name (tooltransfer tools) or an inline tool")
     object: ObjectSpec = ObjectSpec()
     start: Point
     target: Point
@@ -296,7 +297,8 @@ def _loc(loc: tuple[int | str, ...]) -> str:
     for part in loc:
         if isinstance(part, int):
             out += f"[{part}]"
-        elif part in ("disc", "polygon", "str", "float", "InlineTool") or part.startswith(("function-", "tuple[")):
+        elif part in ("disc", "polygon", "str", "float", "InlineTool") or part.startswith(
+                ("function-", "tuple[", "constrained-")):
             continue  # pydantic's union-branch tags, not field names
         else:
             out += f".{part}" if out else str(part)

@@ -139,7 +139,8 @@ class BatchSpec(_Model):
     description: str = Field("", max_length=4000)
     seed: Seed = 0
     count: Annotated[int, Field(ge=1, le=1_000_000)]
-    tools: list[str] = Field(min_length=1, max_length=64, description="library tool names, used in turn")
+    tools: list[Annotated[str, Field(max_length=100)]] = Field(min_length=1, max_length=64,
+                                                               description="library tool names, used in turn")
     dataset: str = Field(min_length=1, max_length=4096,
                          description="demonstration dataset folder, relative to the batch file")
     start: Region = Region(reach_margin=0.015)
