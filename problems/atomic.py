@@ -48,9 +48,11 @@ def atomic_path(path: str | Path, *, mkdir: bool = True) -> Iterator[Path]:
             raise FileNotFoundError(2, "the writer produced no file", str(target))
         _fsync(tmp)
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, OSError) and exc.filename in (None, str(tmp)):  # a full disk: name the file meant
+            raise OSError(exc.errno, exc.strerror or str(exc), str(target)) from exc
         raise
 
 
