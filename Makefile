@@ -18,6 +18,18 @@ test: $(PY)
 	$(PY) -m ruff check .
 	$(PY) -m pytest
 
+# The suite on the floors of pyproject.toml: uv's lowest-direct resolution (every direct dependency
+# at the lowest version its specifier admits, the others at their newest) in a separate venv,
+# $(LOWEST); pip goes in too for the wheel-building tests. About as long as `make test`.
+LOWEST ?= .venv-lowest
+.PHONY: test-lowest
+test-lowest: $(PY)
+	$(PY) -m pip install -q "uv>=0.8"
+	$(PY) -m uv venv -q --clear --no-python-downloads --python python3 $(LOWEST)
+	$(PY) -m uv pip install -q --python $(LOWEST)/bin/python --resolution lowest-direct -e ".[test]"
+	$(PY) -m uv pip install -q --python $(LOWEST)/bin/python pip
+	$(LOWEST)/bin/python -m pytest
+
 # API documentation and the design document (mkdocs + mkdocstrings), offline, warnings are errors;
 # `make test` builds it too (tests/test_docs.py). Open out/docs/index.html.
 docs: $(PY)

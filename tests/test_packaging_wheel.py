@@ -23,6 +23,7 @@ from dmp.qp.dual_active_set import DualActiveSet
 
 ROOT = Path(__file__).resolve().parents[1]
 pytest.importorskip("setuptools.command.bdist_wheel", reason="the build needs setuptools >= 70.1 (floor 77)")
+pytest.importorskip("pip", reason="the builds run pip")
 
 
 def _sources(dest: Path) -> Path:

@@ -36,6 +36,7 @@ import sys
 import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
+from contextvars import ContextVar
 from functools import cache
 from pathlib import Path
 from typing import Any, Protocol
@@ -337,6 +338,11 @@ def disabled_by_env() -> bool:
     return os.environ.get(ENV_VAR, "").strip() not in ("", "0")
 
 
+@cache
+def _compiled_core(path: Path) -> CompiledCore:
+    return CompiledCore(path)
+
+
 def _numpy_core() -> Core:
     from dmp.qp._gi_numpy import NumpyCore
 
@@ -355,7 +361,7 @@ def default_core() -> Core:
     why = "is not built"
     if path is not None:
         try:
-            return CompiledCore(path)
+            return _compiled_core(path)
         except (OSError, AttributeError) as exc:
             why = f"failed to load ({exc})"
     level, frame = 1, sys._getframe()  # point the warning at the first caller outside the dmp package
@@ -369,17 +375,19 @@ def default_core() -> Core:
     return _numpy_core()
 
 
-_override: list[Core] = []
+_override: ContextVar[Core | None] = ContextVar("tooltransfer_gi_core", default=None)
 
 
 def core() -> Core:
-    """The core in use: :func:`default_core`, or the innermost :func:`using`."""
-    return _override[-1] if _override else default_core()
+    """The core in use: :func:`default_core`, or the innermost :func:`using` (of this thread or task)."""
+    c = _override.get()
+    return default_core() if c is None else c
 
 
 @contextmanager
 def using(which: str | Core) -> Iterator[Core]:
-    """Use ``which`` (``"compiled"``, ``"numpy"`` or a core) for the solvers created inside the block."""
+    """Use ``which`` (``"compiled"``, ``"numpy"`` or a core) for the solvers created inside the block
+    (in this thread or asyncio task; for tests and benchmarks)."""
     if isinstance(which, str):
         if which == "numpy":
             c = _numpy_core()
@@ -387,13 +395,13 @@ def using(which: str | Core) -> Iterator[Core]:
             path = compiled_path()
             if path is None:
                 raise ImportError(f"dmp.qp.{MODULE} is not built: reinstall tooltransfer with a C compiler")
-            c = CompiledCore(path)
+            c = _compiled_core(path)
         else:
             raise ValueError(f"unknown core {which!r}: 'compiled' or 'numpy'")
     else:
         c = which
-    _override.append(c)
+    token = _override.set(c)
     try:
         yield c
     finally:
-        _override.pop()
+        _override.reset(token)
