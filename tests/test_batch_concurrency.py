@@ -61,7 +61,7 @@ def test_a_second_run_on_a_store_in_use_is_refused_and_the_first_keeps_each_pair
             assert main(["batch", "run", str(batch), "--db", str(db), "--workers", "1", "-q", *extra]) == 2
             assert time.perf_counter() - start < 10
             err = capsys.readouterr().err
-            assert f"{db} is in use by process {first.pid}" in err and "Traceback" not in err, err
+            assert f"--db {db}:" in err and f"in use by process {first.pid}" in err and "Traceback" not in err, err
         _, err = first.communicate(timeout=120)
         assert first.returncode == 0, err
     finally:

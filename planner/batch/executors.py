@@ -100,11 +100,11 @@ def check_workers(client: object, where: str, dataset: str | None = None, timeou
         raise InputError(where, f"Dask workers that answer within {timeout:g} s", f"no answer from {', '.join(silent)}")
     for w, a in answers.items():
         if isinstance(a, BaseException):
-            raise InputError(where, "Dask workers that can run the batch's jobs", f"worker {w}: {a}")
+            raise InputError(f"{where} (worker {w})", "Dask workers that can run the batch's jobs", str(a))
         problems = a.get("problems", []) if isinstance(a, dict) else [f"an answer of {type(a).__name__}"]
         if problems:
-            raise InputError(where, "Dask workers that can run the batch's jobs (this package installed, the "
-                             "dataset at the same path)", f"worker {w}: {'; '.join(problems)}")
+            raise InputError(f"{where} (worker {w})", "Dask workers that can run the batch's jobs (this package "
+                             "installed, the dataset at the same path)", "; ".join(problems))
 
 
 def _connect(scheduler: str, timeout: float = CONNECT_TIMEOUT) -> object:

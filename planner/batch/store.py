@@ -186,8 +186,8 @@ def lock_store(path: str | Path) -> Iterator[Path]:
         except OSError:
             fh.seek(0)
             holder = fh.read().strip()[:100] or "another process"
-            raise InputError("--db", "a results file no other `tooltransfer batch run` is writing (wait for it to "
-                             "finish, or run into another --db)", f"{p} is in use by {holder} (lock {lock})") from None
+            raise InputError(f"--db {p}", "a results file no other `tooltransfer batch run` is writing (wait for it "
+                             f"to finish, or run into another --db; lock {lock.name})", f"in use by {holder}") from None
         fh.seek(0)
         fh.truncate()
         fh.write(f"process {os.getpid()} on {socket.gethostname()}\n")

@@ -66,9 +66,9 @@ def check_recording(demo: Demonstration, tool: Tool) -> None:
         raise DatasetError(o.csv, f"row {o.tool_rows[k]}, columns tool_x, tool_y, tool_yaw",
                            "the tool pose the joints q1, q2, q3 give (forward kinematics on meta.yaml's platform, "
                            f"within {1e3 * FK_TOL:g} mm and {YAW_TOL:g} rad)",
-                           f"({demo.tool_pose[k, 0]:g}, {demo.tool_pose[k, 1]:g}, {demo.tool_pose[k, 2]:g}), "
-                           f"{1e3 * pos[k]:.4g} mm and {yaw[k]:.3g} rad off ({fk[k, 0]:.4g}, {fk[k, 1]:.4g}, "
-                           f"{fk[k, 2]:.4g})")
+                           f"{1e3 * pos[k]:.3g} mm, {yaw[k]:.2g} rad off: ({demo.tool_pose[k, 0]:.4g}, "
+                           f"{demo.tool_pose[k, 1]:.4g}, {demo.tool_pose[k, 2]:.4g}) vs ({fk[k, 0]:.4g}, "
+                           f"{fk[k, 1]:.4g}, {fk[k, 2]:.4g})")
     t, t_o = demo.t_tool, demo.t_object
     if t_o.size < 7 or t.size < 7:
         return
@@ -82,8 +82,8 @@ def check_recording(demo: Demonstration, tool: Tool) -> None:
     name = o.csv.rsplit("/", 1)[-1]
     if run[k] < -(OVERLAP_TOL + excess):
         raise DatasetError(o.meta, "field tool", "the tool the recordings were made with (the object never inside "
-                           "its outline)", f"{o.tool!r}, whose outline would hold the object {1e3 * -run[k]:.1f} mm "
-                           f"deep at t = {t[k]:.2f} s of {name}")
+                           "its outline)", f"{o.tool!r}: the object {1e3 * -run[k]:.1f} mm deep inside it at t = "
+                           f"{t[k]:.2f} s of {name}")
     half = _odd(t_o, 1.0) // 2
     if t_o.size <= 2 * half:
         return
@@ -96,5 +96,5 @@ def check_recording(demo: Demonstration, tool: Tool) -> None:
     if g > MOVING_GAP_TOL + 0.5 * excess:
         k = int(np.flatnonzero(moving)[0])
         raise DatasetError(o.meta, "field tool", "the tool the recordings were made with (touching the object "
-                           "while it moves)", f"{o.tool!r}, whose outline stays {1e3 * g:.1f} mm (median) from the "
-                           f"object while it moves (from t = {t[k]:.2f} s of {name})")
+                           "while it moves)", f"{o.tool!r}: {1e3 * g:.1f} mm from the object while it moves (median; "
+                           f"from t = {t[k]:.2f} s of {name})")
