@@ -533,6 +533,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _handled_interrupt() -> None:
+    """Tell CPython the KeyboardInterrupt was handled: one that ended a nested evaluation (an
+    extension's ``PyRun_*`` call) marks the interpreter to exit by SIGINT even when caught, which
+    would replace exit code 130 by a signal (3.11; later versions keep the mark elsewhere)."""
+    try:
+        import ctypes
+
+        ctypes.c_int.in_dll(ctypes.pythonapi, "_Py_UnhandledKeyboardInterrupt").value = 0
+    except (ImportError, ValueError, AttributeError, OSError):
+        pass
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit code."""
     import signal
@@ -549,6 +561,7 @@ def main(argv: list[str] | None = None) -> int:
         if verbose:
             traceback.print_exc()
         print("tooltransfer: interrupted (Ctrl-C)", file=sys.stderr)
+        _handled_interrupt()
         return EXIT_INTERRUPTED
     except Exception as exc:  # one line, whatever went wrong (-v: the traceback too)
         from dmp.errors import ToolTransferError
