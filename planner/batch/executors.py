@@ -29,7 +29,7 @@ from dmp.errors import InputError
 from planner.batch.worker import pool_initializer
 
 #: Connecting to a Dask scheduler, waiting for its first worker, and the workers' probe [s].
-CONNECT_TIMEOUT = 5.0
+CONNECT_TIMEOUT = 4.0
 PROBE_TIMEOUT = 5.0
 
 _PROBE = """

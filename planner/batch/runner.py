@@ -383,6 +383,7 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
         resume: carry on a store that already holds rows of this batch.
         retry: statuses to run again on resume (e.g. ``("error", "timeout")``).
     """
+    from planner.batch.executors import open_executor
     from planner.batch.generate import generate_task
     from planner.batch.spec import dataset_folder, load_batch
     from planner.batch.store import lock_store
@@ -396,7 +397,9 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
     first = generate_task(spec, 0, str(dataset))
     warm = _warmup(spec, batch_path, first, simulate)
     console = console or Console(stderr=True)
-    with lock_store(db):
+    # the executor first: a scheduler that does not answer, or workers that cannot run the jobs, are refused
+    # in seconds, before the skills are learned
+    with lock_store(db), open_executor(workers, scheduler, dask_local, dataset=str(dataset)) as slots:
         if not Path(db).is_file():  # learn the skills before the store exists: a dataset they fail on leaves none
             _warm_parent(task_jobs(spec, batch_path, first, timeout, simulate, warm), console, progress)
             warmed = True
@@ -406,17 +409,14 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
             open_batch_store(store, spec, [], resume, simulate)
             if retry:
                 store.forget(retry)
-            return _run_store(store, spec, batch_path, first, warm, warmed, workers, scheduler, dask_local, timeout,
-                              simulate, progress, console, str(dataset))
+            return _run_store(store, slots, spec, batch_path, first, warm, warmed, timeout, simulate, progress,
+                              console)
 
 
-def _run_store(store: ResultStore, spec: BatchSpec, batch_path: str | Path, first: GeneratedTask,
-               warm: tuple[tuple[str, tuple], ...], warmed: bool, workers: int | None, scheduler: str | None,
-               dask_local: int | None, timeout: float | None, simulate: bool | None, progress: bool,
-               console: Console, dataset: str) -> RunSummary:
-    """:func:`run_batch` on the opened, locked and checked store: the jobs not stored yet."""
-    from planner.batch.executors import open_executor
-
+def _run_store(store: ResultStore, slots: Slots, spec: BatchSpec, batch_path: str | Path, first: GeneratedTask,
+               warm: tuple[tuple[str, tuple], ...], warmed: bool, timeout: float | None, simulate: bool | None,
+               progress: bool, console: Console) -> RunSummary:
+    """:func:`run_batch` on the opened, locked and checked store and executor: the jobs not stored yet."""
     pairs = spec.variants.pairs()
     total = spec.count * len(pairs)
     skipped = store.count()
@@ -429,13 +429,11 @@ def _run_store(store: ResultStore, spec: BatchSpec, batch_path: str | Path, firs
         return {"tool": data.get("tool", spec.tools[_index(job.task_id) % len(spec.tools)]), "oe": oe, "ss": ss}
 
     jobs = _lazy_jobs(spec, batch_path, store, first, timeout, simulate, warm)
-    with open_executor(workers, scheduler, dask_local, dataset=dataset) as slots:
-        if progress:
-            ex = ", solved plans executed open and closed loop" if simulate_setting(spec, simulate) else ""
-            console.print(f"batch {spec.name}: {spec.count} tasks x {len(pairs)} variants{ex} "
-                          f"on a {slots.kind} ({slots.where}), results in {store.path}")
-        return run_jobs(jobs, store, slots, info=info, progress=progress, console=console, total=total,
-                        skipped=skipped)
+    if progress:
+        ex = ", solved plans executed open and closed loop" if simulate_setting(spec, simulate) else ""
+        console.print(f"batch {spec.name}: {spec.count} tasks x {len(pairs)} variants{ex} "
+                      f"on a {slots.kind} ({slots.where}), results in {store.path}")
+    return run_jobs(jobs, store, slots, info=info, progress=progress, console=console, total=total, skipped=skipped)
 
 
 def _index(task_id: str) -> int:
