@@ -86,6 +86,6 @@ class bdist_wheel(_bdist_wheel):
         super().initialize_options()
 
     def finalize_options(self) -> None:
-        if STABLE_ABI and not self.py_limited_api:
+        if STABLE_ABI and not getattr(self, "py_limited_api", False):
             self.py_limited_api = LIMITED_API
         super().finalize_options()

@@ -364,9 +364,9 @@ def default_core() -> Core:
             return _compiled_core(path)
         except (OSError, AttributeError) as exc:
             why = f"failed to load ({exc})"
-    level, frame = 1, sys._getframe()  # point the warning at the first caller outside the dmp package
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
-        frame, level = frame.f_back, level + 1
+    level, f = 1, sys._getframe()  # point the warning at the first caller outside the dmp package
+    while f.f_code.co_filename.startswith(_PACKAGE_DIR) and f.f_back is not None:
+        f, level = f.f_back, level + 1
     warnings.warn(
         f"tooltransfer: the compiled dual active-set core (dmp/qp/{MODULE}) {why}; using the NumPy core "
         "(the same optimum, slower fits; reinstall with a C compiler for the fast path)",

@@ -90,9 +90,9 @@ class RowPool:
         """Rows linearised along ``x_lin`` (T, n). With ``previous`` (a pool of the same constraints
         and grid, given up by the caller) its arrays are reused and only linearised constraints
         are refreshed."""
-        coeffs = [c.coefficients(aff.t, x_lin) if (previous is None or c.linearised) else co
-                  for c, co in zip(constraints, previous.coeffs if previous else [None] * len(constraints),
-                                   strict=True)]
+        before: list[Coefficients | None] = list(previous.coeffs) if previous else [None] * len(constraints)
+        coeffs: list[Coefficients] = [c.coefficients(aff.t, x_lin) if (co is None or c.linearised) else co
+                                      for c, co in zip(constraints, before, strict=True)]
         if previous is not None:
             pool = previous
             pool.coeffs = coeffs
