@@ -6,6 +6,7 @@ from __future__ import annotations
 import ast
 import sysconfig
 import tomllib
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -152,8 +153,10 @@ def test_pyproject_builds_the_core_through_supported_commands() -> None:
 
 
 def test_build_helper_declares_an_optional_stable_abi_extension() -> None:
-    pytest.importorskip("setuptools.command.bdist_wheel")  # setuptools >= 70.1, as the build uses
-    from dmp.qp import _build
+    with warnings.catch_warnings():  # setuptools may warn about the stdlib distutils it replaces
+        warnings.simplefilter("ignore", DeprecationWarning)
+        pytest.importorskip("setuptools.command.bdist_wheel")  # setuptools >= 70.1, as the build uses
+        from dmp.qp import _build
 
     ext = _build.core_extension()
     assert ext.name == "dmp.qp._gi_core" and ext.sources == ["dmp/qp/_gi_core.c"]
