@@ -141,15 +141,16 @@ def _interrupt(argv: list[str], after: float, env: dict[str, str] | None = None)
     return proc.returncode, err
 
 
-@pytest.mark.parametrize("command", ["solve", "learn", "simulate", "demos", "segment"])
+@pytest.mark.parametrize("command", ["solve", "learn", "simulate", "demos", "compare"])
 def test_sigint_mid_run_exits_130_with_one_line(tmp_path: Path, plan_file: Path, command: str) -> None:
-    env = {"TOOLTRANSFER_CACHE": str(tmp_path / "cache")} if command == "learn" else None  # learning takes a while
+    # commands of 5 s or more (solve and learn learn the skills afresh), interrupted 2 s in
+    env = {"TOOLTRANSFER_CACHE": str(tmp_path / "cache")} if command in ("solve", "learn") else None
     argv = {
         "solve": ["solve", str(SLOW_TASK), "-o", str(tmp_path / "plan.json")],
         "learn": ["learn", str(DATA), "-o", str(tmp_path / "skills.json")],
         "simulate": ["simulate", str(plan_file), "--closed-loop", "--figure", str(tmp_path / "fig.png")],
         "demos": ["demos", "--n", "4", "--out", str(tmp_path / "demos")],
-        "segment": ["segment", str(DATA), "--figure", str(tmp_path / "seg.png")],
+        "compare": ["compare", str(TASK), "--out", str(tmp_path / "cmp")],
     }[command]
     code, err = _interrupt(argv, after=2.0, env=env)
     assert code == 130, err[-2000:]
