@@ -407,7 +407,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
 def _message(exc: BaseException) -> str:
     """The error's message on one line, a long value in it cut (the field and the file stay)."""
     from dmp.errors import InputError
-    from problems.yaml_file import clip
+    from tools.yaml_file import clip
 
     text = str(exc)
     if isinstance(exc, InputError) and exc.got is not None:

@@ -335,7 +335,7 @@ def _read_csv(path: Path) -> tuple[Demonstration, NDArray[np.int64], NDArray[np.
 
 def load_meta(folder: str | Path) -> Meta:
     """Read and validate ``meta.yaml`` of a dataset folder (errors name the field path)."""
-    from problems.yaml_file import read_yaml
+    from tools.yaml_file import read_yaml
 
     meta_path = Path(folder) / "meta.yaml"
     raw = read_yaml(meta_path, DatasetError, "meta.yaml")
@@ -471,7 +471,7 @@ def _read_truth(path: Path, meta: Meta) -> dict[str, Any] | None:
     ``pushes`` (face, t_start, t_end) and ``switches`` lists; errors name the file and the field."""
     if not path.is_file():
         return None
-    from problems.yaml_file import read_yaml
+    from tools.yaml_file import read_yaml
 
     truth = read_yaml(path, DatasetError, "truth.yaml")
     if truth is None:

@@ -55,7 +55,7 @@ class TaskFileError(InputError):
     """A task file is unreadable or invalid; names the file, the field path and what was expected."""
 
     def __init__(self, path: str, field: str, expected: str, got: object | None = None) -> None:
-        from problems.yaml_file import clip
+        from tools.yaml_file import clip
 
         self.path = path
         # a value echoed in the message is cut at 100 characters (a field name at 200): one line, however
@@ -367,7 +367,7 @@ def _check_search(task: Task, n_faces: int, source: str) -> None:
 
 def load_task(path: str | Path) -> Task:
     """Read and validate a task file (YAML or JSON)."""
-    from problems.yaml_file import read_yaml
+    from tools.yaml_file import read_yaml
 
     return task_from_dict(read_yaml(path, TaskFileError, "task file"), str(path))
 

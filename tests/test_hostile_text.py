@@ -14,6 +14,7 @@ import shutil
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
@@ -21,7 +22,7 @@ from hypothesis import strategies as st
 
 from dmp.errors import InputError
 from planner.cli import main
-from problems.yaml_file import MAX_ALIAS_EXPANSION, MAX_DEPTH, parse_yaml, read_yaml
+from tools.yaml_file import MAX_ALIAS_EXPANSION, MAX_DEPTH, parse_yaml, read_yaml
 
 HERE = Path(__file__).parent
 FIXTURES = HERE / "hostile" / "text"
@@ -298,3 +299,25 @@ def test_long_values_are_cut_in_messages(value: str) -> None:
         with pytest.raises(TaskFileError) as exc:
             task_from_dict({**base, field: value * 2 if field != "tool" else value}, "t.yaml")
         assert len(str(exc.value)) < 400 and "\n" not in str(exc.value)
+
+
+def test_tool_files_are_read_by_the_safe_reader(tmp_path: Path) -> None:
+    """A tool file in UTF-16, with a key twice, or with 10,000 outline vertices is refused naming
+    the file and the place (tool files used to be read with a bare yaml.safe_load)."""
+    from tools.errors import ToolSpecError
+    from tools.library import read_tool_file
+
+    slope = Path(__file__).resolve().parents[1] / "tools" / "library" / "slope.yaml"
+    u16 = tmp_path / "u16.yaml"
+    u16.write_bytes(slope.read_text().encode("utf-16"))
+    dup = tmp_path / "dup.yaml"
+    dup.write_text("name: a\nname: b\n")
+    big = tmp_path / "big.yaml"
+    ring = [[0.01 * float(np.cos(a)), 0.01 * float(np.sin(a))] for a in np.linspace(0, 6.28, 10_000, endpoint=False)]
+    big.write_text(yaml.safe_dump({"name": "big", "a_t": 0.03, "outline": ring,
+                                   "faces": [{"name": "f", "segment": [ring[0], ring[1]], "push_angle": 0.0,
+                                              "theta_b": 0.5}]}))
+    for path, words in ((u16, "UTF-16"), (dup, "given again"), (big, "at most 256 vertices")):
+        with pytest.raises(ToolSpecError, match=words) as err:
+            read_tool_file(path)
+        assert str(path) in str(err.value) or "big" in str(err.value)

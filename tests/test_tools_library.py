@@ -117,7 +117,7 @@ def test_unknown_names_list_valid_ones() -> None:
 
 
 def test_missing_file_is_a_spec_error(tmp_path: Path) -> None:
-    with pytest.raises(ToolSpecError, match="cannot read"):
+    with pytest.raises(ToolSpecError, match="readable tool file, got No such file"):
         load_tool(tmp_path / "nope.yaml")
 
 
@@ -225,5 +225,5 @@ def test_other_invalid_fields(tmp_path: Path) -> None:
 def test_invalid_yaml_syntax(tmp_path: Path) -> None:
     path = tmp_path / "broken.yaml"
     path.write_text("name: [unclosed\n", encoding="utf-8")
-    with pytest.raises(ToolSpecError, match="invalid YAML"):
+    with pytest.raises(ToolSpecError, match="line 2, column 1: valid YAML, got did not find expected"):
         load_tool(path)

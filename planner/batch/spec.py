@@ -200,7 +200,7 @@ def batch_from_dict(data: Any, source: str = "<dict>") -> BatchSpec:
 
 def load_batch(path: str | Path) -> BatchSpec:
     """Read and validate a batch file (YAML or JSON)."""
-    from problems.yaml_file import read_yaml
+    from tools.yaml_file import read_yaml
 
     p = Path(path)
     spec = batch_from_dict(read_yaml(p, BatchFileError, "batch file"), str(p))

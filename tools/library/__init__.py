@@ -82,6 +82,13 @@ def _require(data: dict[str, Any], key: str, tool: str, prefix: str = "") -> Any
     return data[key]
 
 
+#: Most outline vertices of a tool file (the library's tools have 4-12; the convex decomposition and
+#: every contact and clearance check scale with them).
+MAX_VERTICES = 256
+#: Most faces of a tool file (the push-sequence search grows with faces ** max_pushes).
+MAX_FACES = 12
+
+
 def tool_from_dict(data: object, source: str = "<dict>") -> Tool:
     """Build and validate a :class:`Tool` from parsed YAML; ``source`` names it in errors."""
     if not isinstance(data, dict):
@@ -97,12 +104,17 @@ def tool_from_dict(data: object, source: str = "<dict>") -> Tool:
     if not isinstance(name, str) or not name:
         raise ToolSpecError(tool, "name", "a non-empty string is required")
     a_t = _number(_require(data, "a_t", tool), tool, "a_t")
-    outline = _points(_require(data, "outline", tool), tool, "outline")
+    raw_outline = _require(data, "outline", tool)
+    if isinstance(raw_outline, list) and len(raw_outline) > MAX_VERTICES:
+        raise ToolSpecError(tool, "outline", f"at most {MAX_VERTICES} vertices, got {len(raw_outline)}")
+    outline = _points(raw_outline, tool, "outline")
     if len(outline) < 3:
         raise ToolSpecError(tool, "outline", "at least 3 vertices are required")
     raw_faces = _require(data, "faces", tool)
     if not isinstance(raw_faces, list) or not raw_faces:
         raise ToolSpecError(tool, "faces", "a non-empty list of faces is required")
+    if len(raw_faces) > MAX_FACES:
+        raise ToolSpecError(tool, "faces", f"at most {MAX_FACES} faces, got {len(raw_faces)}")
     faces = []
     for i, fd in enumerate(raw_faces):
         where = f"faces[{i}]"
@@ -192,14 +204,14 @@ def library_names() -> tuple[str, ...]:
 
 def read_tool_file(path: str | Path) -> Tool:
     """Load and validate one tool file."""
+    from tools.yaml_file import read_yaml
+
     p = Path(path)
-    try:
-        data = yaml.safe_load(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ToolSpecError(str(p), "<file>", f"cannot read: {exc.strerror}") from exc
-    except yaml.YAMLError as exc:
-        raise ToolSpecError(str(p), "<file>", f"invalid YAML: {exc}") from exc
-    return tool_from_dict(data, source=str(p))
+
+    def error(source: str, where: str, expected: str, got: object) -> ToolSpecError:
+        return ToolSpecError(source, where, expected if got is None else f"{expected}, got {got}")
+
+    return tool_from_dict(read_yaml(p, error, "tool file"), source=str(p))
 
 
 def load_tool(name_or_path: str | Path) -> Tool:
