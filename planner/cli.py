@@ -277,6 +277,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+def _cmd_export(args: argparse.Namespace) -> int:
+    from planner.export import run_export
+
+    return run_export(args)
+
+
 def _cmd_schema(args: argparse.Namespace) -> int:
     from problems.task import task_json_schema
 
@@ -379,6 +385,7 @@ OUTPUTS: dict[str, tuple[tuple[str, str, str], ...]] = {
     "solve": (("out", "-o/--out", "file"), ("plot", "--plot", "file")),
     "learn": (("out", "-o/--out", "file"),),
     "simulate": (("figure", "--figure", "file"), ("gif", "--gif", "file")),
+    "export": (("out", "-o/--out", "file"),),
     "segment": (("figure", "--figure", "file"),),
     "schema": (("out", "--out", "file"),),
     "tools": (("out", "--out", "file"),),
@@ -521,6 +528,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.add_argument("--force", action="store_true", help="run a plan that fails its checks against itself and its "
                    "task (or a violated plan) anyway, with a warning")
+    p = _add(sub, "export", "write a plan's joint trajectory (positions, velocities, accelerations) for a real arm: "
+             "CSV, NumPy .npz or a ROS JointTrajectory as JSON",
+             "tooltransfer export out/plan.json --format joint-trajectory -o out/plan.trajectory.json", _cmd_export)
+    p.add_argument("plan", type=Path, help="plan file (JSON)")
+    p.add_argument("--format", choices=("csv", "npz", "joint-trajectory"), required=True, help="what to write")
+    p.add_argument("-o", "--out", type=Path, default=None,
+                   help="file to write (default: the plan's name ending .csv, .npz or .trajectory.json)")
+    p.add_argument("--joint-names", default=None, help="the joints' names for the robot, comma-separated "
+                   "(default: the plan's, q1,q2,q3)")
+    p.add_argument("--force", action="store_true", help="export a plan that fails its checks against itself and "
+                   "its task (or a violated plan) anyway, with a warning")
     p = _add(sub, "schema", "print the JSON Schema of task files (for editors)",
              "tooltransfer schema > task.schema.json", _cmd_schema)
     p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")

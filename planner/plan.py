@@ -3,10 +3,19 @@
 Everything a checker needs is inside, in SI units, so a plan can be verified without this code:
 the task as loaded, the platform (DH rows, base pose, table height, joint limits, a_t), the object,
 the tool (outline in the tool frame, faces with push direction and cone half-angle), obstacles,
-equal-length sample arrays (time, object centre, tool pose, joints, phase, face), the pushes and
-switches, and metrics. Format ``tooltransfer.plan/1``; :func:`read_plan` refuses other versions and
-files that do not hold together (an unknown status, unequal sample arrays, values that are not finite
-numbers, unknown phases, non-increasing time), naming the file and the field. A plan's status is
+equal-length sample arrays (time, object centre, tool pose, joints, the joints' velocities and
+accelerations, phase, face), the joints' names, the pushes and switches, and metrics. Format
+``tooltransfer.plan/1``; :func:`read_plan` refuses other versions and files that do not hold together
+(an unknown status, unequal sample arrays, values that are not finite numbers, unknown phases,
+non-increasing time), naming the file and the field.
+
+The joint velocities [rad/s] and accelerations [rad/s^2] are the derivatives of the joints on the
+plan's times, as the simulated execution tracks them (:func:`joint_rates`: ``numpy.gradient`` of the
+joints over ``t``, then of the velocities; second-order central differences inside, one-sided at
+the ends); through the Omni's Jacobian they give the tool path's velocity to second order in the
+sample spacing. Plan files written before they were added (no ``joint_velocities``,
+``joint_accelerations`` or ``joint_names``) are read with them derived so, and the names of the
+simulated Omni's joints (:data:`JOINT_NAMES`). A plan's status is
 ``solved``, ``infeasible`` (no whole plan: the reason says why) or ``violated`` (a whole plan that
 breaks a hard check, :func:`planner.solve.hard_check_failures`: the reason names the families).
 """
@@ -25,6 +34,9 @@ from dmp.errors import InputError
 
 FORMAT = "tooltransfer.plan/1"
 PHASES = ("approach", "push", "switch", "retreat")
+#: Names of the Omni's three joints (waist, shoulder, elbow) as the simulated Omni's model has them
+#: (``tools.sim.mjcf.ARM_JOINTS``); ``tooltransfer export --joint-names`` renames them for a robot.
+JOINT_NAMES = ("q1", "q2", "q3")
 
 Phase = Literal["approach", "push", "switch", "retreat"]
 
@@ -55,10 +67,27 @@ class Segment:
     info: dict[str, float] = field(default_factory=dict)
 
 
+def joint_rates(t: NDArray[np.float64], joints: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The joints' velocities (T, 3) [rad/s] and accelerations (T, 3) [rad/s^2] on the times ``t`` (T,) [s]:
+    ``numpy.gradient`` of ``joints`` (T, 3) [rad] over ``t``, then of the velocities (second-order
+    central differences on the uneven grid inside, first-order one-sided at the ends: what the
+    simulated execution feeds forward, :func:`tools.sim.reference.joint_reference`). Zeros for fewer
+    than 2 samples."""
+    t = np.asarray(t, dtype=np.float64)
+    q = np.asarray(joints, dtype=np.float64).reshape(len(t), -1)
+    if t.size < 2:
+        return np.zeros_like(q), np.zeros_like(q)
+    v = np.gradient(q, t, axis=0)
+    return v, np.gradient(v, t, axis=0)
+
+
 @dataclass(frozen=True)
 class Plan:
     """A plan. ``samples`` arrays: ``t`` (T,) [s], ``object_xy`` (T, 2) [m], ``tool_pose`` (T, 3)
-    (x, y [m], yaw [rad]), ``joints`` (T, 3) [rad], ``phase`` (T,) strings, ``face`` (T,) names or None."""
+    (x, y [m], yaw [rad]), ``joints`` (T, 3) [rad], ``joint_velocities`` (T, 3) [rad/s],
+    ``joint_accelerations`` (T, 3) [rad/s^2], ``phase`` (T,) strings, ``face`` (T,) names or None;
+    ``joint_names`` names the joints' columns. The joints' velocities and accelerations, when not
+    given, are derived from the joints (:func:`joint_rates`)."""
 
     status: Literal["solved", "infeasible", "violated"]
     variant: dict[str, str]
@@ -77,6 +106,18 @@ class Plan:
     switches: tuple[Segment, ...] = ()
     metrics: dict[str, float] = field(default_factory=dict)
     reason: str = ""
+    joint_velocities: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    joint_accelerations: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    joint_names: tuple[str, ...] = JOINT_NAMES
+
+    def __post_init__(self) -> None:
+        n = len(self.t)
+        if len(self.joint_velocities) != n or len(self.joint_accelerations) != n:
+            v, a = joint_rates(self.t, self.joints) if len(self.joints) == n else (np.zeros((n, 3)),) * 2
+            object.__setattr__(self, "joint_velocities", v if len(self.joint_velocities) != n else
+                               self.joint_velocities)
+            object.__setattr__(self, "joint_accelerations", a if len(self.joint_accelerations) != n else
+                               self.joint_accelerations)
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document (plain Python types; non-finite numbers become strings)."""
@@ -94,11 +135,14 @@ class Plan:
             "object": self.object,
             "tool": self.tool,
             "obstacles": self.obstacles,
+            "joint_names": list(self.joint_names),
             "samples": {
                 "t": self.t.tolist(),
                 "object_xy": self.object_xy.tolist(),
                 "tool_pose": self.tool_pose.tolist(),
                 "joints": self.joints.tolist(),
+                "joint_velocities": self.joint_velocities.tolist(),
+                "joint_accelerations": self.joint_accelerations.tolist(),
                 "phase": list(self.phase),
                 "face": list(self.face),
             },
@@ -177,6 +221,9 @@ MAX_SAMPLES = 200_000
 #: Statuses a plan file may hold: ``violated`` is a whole plan that breaks a hard check
 #: (:func:`planner.solve.hard_check_failures`).
 STATUSES = ("solved", "infeasible", "violated")
+#: Bounds of the joints' velocities [rad/s] and accelerations [rad/s^2] read (the Omni's plans stay
+#: within a few rad/s and some tens of rad/s^2; beyond these is junk, not a plan).
+MAX_JOINT_VELOCITY, MAX_JOINT_ACCELERATION = 1e6, 1e9
 
 
 def read_plan(path: str | Path) -> Plan:
@@ -247,6 +294,11 @@ def read_plan(path: str | Path) -> Plan:
         "tool_pose": _numbers(where, "tool_pose", s["tool_pose"], 3, "(x, y [m], yaw [rad])", 100.0),
         "joints": _numbers(where, "joints", s["joints"], 3, "[rad]", 100.0),
     }
+    for name, unit, bound in (("joint_velocities", "[rad/s]", MAX_JOINT_VELOCITY),
+                              ("joint_accelerations", "[rad/s^2]", MAX_JOINT_ACCELERATION)):
+        if name in s:  # optional: plan files before them lack them (derived from the joints then)
+            arrays[name] = _numbers(where, name, s[name], 3, unit, bound)
+    joint_names = _joint_names(where, doc.get("joint_names", list(JOINT_NAMES)))
     for name in ("phase", "face"):
         if not isinstance(s[name], list):
             raise PlanFileError(where, f"samples.{name}", "a list", _kind(s[name]))
@@ -292,5 +344,17 @@ def read_plan(path: str | Path) -> Plan:
         status=status, variant=parts["variant"], task=parts["task"], platform=parts["platform"],
         object=parts["object"], tool=parts["tool"], obstacles=parts["obstacles"], t=t, phase=phase, face=face,
         pushes=segs("pushes", "push"), switches=segs("switches", "switch"), metrics=_num(parts["metrics"]),
-        reason=reason, **arrays,
+        reason=reason, joint_names=joint_names, **arrays,
     )
+
+
+def _joint_names(where: str, names: object) -> tuple[str, ...]:
+    """``joint_names`` checked: 3 distinct names of 1-100 printable characters."""
+    if not isinstance(names, list) or len(names) != 3:
+        raise PlanFileError(where, "joint_names", "a list of 3 joint names", _kind(names))
+    for i, name in enumerate(names):
+        if not isinstance(name, str) or not 0 < len(name) <= 100 or not name.isprintable():
+            raise PlanFileError(where, f"joint_names[{i}]", "a name of 1 to 100 printable characters", _kind(name))
+    if len(set(names)) != 3:
+        raise PlanFileError(where, "joint_names", "3 distinct names", ", ".join(names))
+    return tuple(names)

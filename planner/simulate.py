@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dmp.errors import InputError
-from planner.plan import Plan, PlanFileError
+from planner.plan import Plan, PlanFileError, joint_rates
 from problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
 from tools.sim import Execution, SimPlatform
 from tools.sim.config import SimConfig
@@ -58,7 +58,7 @@ def simulate_plan(plan: Plan, config: SimConfig | None = None) -> SimulationRepo
     sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task), config or task_sim_config(task))
     start = time.perf_counter()
     sim.reset(np.array(task.start), q0=plan.joints[0])
-    ex = sim.execute(plan.t, plan.joints)
+    ex = sim.execute(plan.t, plan.joints, plan.joint_velocities)  # the plan's velocities fed forward
     wall = time.perf_counter() - start
     planned = np.column_stack([np.interp(ex.t_tool, plan.t, plan.tool_pose[:, j]) for j in range(2)])
     return SimulationReport(
@@ -79,6 +79,9 @@ MAX_PLAN_DURATION = 1800.0
 FK_TOL, YAW_TOL, LIMIT_TOL, OVERLAP_TOL, END_TOL = 1e-4, 1e-4, 1e-6, 2e-4, 1e-3
 SPEED_FACTOR, ACCEL_FACTOR = 1.2, 50.0
 REPLAY_TOL = 1e-3
+#: Tolerance of the joints' velocities and accelerations against those the joints give
+#: (:func:`planner.plan.joint_rates`): this share of their largest value, plus 1e-9 rad/s (rad/s^2).
+RATES_RTOL = 1e-6
 
 
 class PlanLimitError(PlanFileError):
@@ -92,7 +95,8 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
     joints within the Omni's limits whose forward kinematics give the tool poses; the tool never
     overlapping the planned object (nor at the start) nor an obstacle; tool speeds and accelerations
     within the task's ``timing`` limits; the planned tool path moving the object as planned through
-    the push model (the mechanics in the plan's metrics).
+    the push model (the mechanics in the plan's metrics); the joints' velocities and accelerations
+    those the joints give on the plan's times (:func:`planner.plan.joint_rates`).
 
     Raises:
         PlanFileError: naming ``source`` (the file) and the field of the first problem
@@ -183,3 +187,14 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
         k = int(np.argmax(off > tol))
         fail("samples.object_xy", f"the object path the planned tool path gives through the push model (within "
              f"{1e3 * tol:g} mm)", f"{1e3 * off.max():.3g} mm off, from t = {t[k]:.3f} s ({plan.phase[k]})")
+    v_ref, a_ref = joint_rates(t, plan.joints)
+    for name, of, got, ref, unit in (
+            ("joint_velocities", "joints", plan.joint_velocities, v_ref, "rad/s"),
+            ("joint_accelerations", "joint_velocities", plan.joint_accelerations, a_ref, "rad/s^2")):
+        off = np.abs(got - ref)
+        bad = off > RATES_RTOL * np.abs(ref).max(initial=0.0) + 1e-9
+        if bad.any():
+            k, j = (int(v) for v in np.argwhere(bad)[0])
+            fail(f"samples.{name}[{k}][{j}]", f"the derivative of samples.{of} over samples.t (finite "
+                 "differences, planner.plan.joint_rates)",
+                 f"{got[k, j]:.6g} {unit} where they give {ref[k, j]:.6g} at t = {t[k]:.3f} s")
