@@ -37,6 +37,7 @@ def _argv(tmp: Path) -> dict[str, list[str]]:
         "segment": ["segment", str(DATA), "--figure", str(tmp / "seg.png")],
         "solve": ["solve", str(TASK), "-o", str(tmp / "plan.json")],
         "simulate": ["simulate", str(tmp / "plan.json"), "--figure", str(tmp / "fig.png")],
+        "export": ["export", str(tmp / "plan.json"), "--format", "csv", "-o", str(tmp / "plan.csv")],
         "schema": ["schema", "--out", str(tmp / "schema.json")],
         "tools": ["tools", "--out", str(tmp / "tools.png")],
         "batch generate": ["batch", "generate", str(BATCH), "--out", str(tmp / "tasks")],

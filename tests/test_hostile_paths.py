@@ -37,6 +37,7 @@ FILE_OUTPUTS = [
     (["learn", str(DATA)], "--out", "-o/--out", ".json"),
     (["simulate", "plan.json"], "--figure", "--figure", ".png"),
     (["simulate", "plan.json"], "--gif", "--gif", ".gif"),
+    (["export", "plan.json", "--format", "csv"], "-o", "-o/--out", ".csv"),
     (["segment", str(DATA)], "--figure", "--figure", ".png"),
     (["schema"], "--out", "--out", ".json"),
     (["tools"], "--out", "--out", ".png"),
