@@ -9,7 +9,9 @@ Strategy ``"cutting_planes"`` (default), the fast and exact way:
    the peaks of every violated stretch (:mod:`dmp.qp.pool`, scanned in C), first on the
    constraint grid, then on the dense samples the grid residuals point at, then on every dense
    sample, until no dense row is violated: the result is the exact optimum over all dense rows,
-   and a row the method cannot take proves infeasibility and names the families involved;
+   and a row the method cannot take proves infeasibility and names the families involved
+   (without the compiled core both run in NumPy, :mod:`dmp.qp.native`: the same optimum, about
+   2-3.5 times the fit's time, ``benchmarks/bench_dmp.py``);
 3. non-convex rows (discs) are re-linearised at the solution and step 2 repeated (sequential
    convex programming) until the path moves less than ``scp_tol``; each repetition starts from
    the previous active rows (warm start: taken at once, rows with negative multipliers dropped)
