@@ -4,15 +4,17 @@ so the runner has one code path (submit, wait for the first completed, store).
 - process pool (default): :class:`concurrent.futures.ProcessPoolExecutor`, spawned workers that
   ignore Ctrl-C and exit if the runner dies;
 - ``dask_local=N``: a :class:`distributed.LocalCluster` of N worker processes, one thread each;
-- ``scheduler=ADDRESS``: an existing Dask cluster (workers need this package installed and the
-  dataset at the same absolute path).
+- ``scheduler=ADDRESS``: an existing Dask cluster (workers need this package installed, at the same
+  version; not the dataset: the skills are shipped to them).
 
 Dask clients hand out ``concurrent.futures`` futures through :meth:`distributed.Client.get_executor`.
 Before the first job every Dask worker is probed (:func:`check_workers`): the package importable
-there at this version, the dataset readable at its path; a worker that fails, or does not answer
-within :data:`PROBE_TIMEOUT`, refuses the run naming the worker and what is missing. Connecting to
-the scheduler is bounded by :data:`CONNECT_TIMEOUT` (an address where no scheduler answers is
-refused with a message, not waited on).
+there at this version (and, when a dataset is given, the dataset readable at its path); a worker
+that fails, or does not answer within :data:`PROBE_TIMEOUT`, refuses the run naming the worker and
+what is missing. Connecting to the scheduler is bounded by :data:`CONNECT_TIMEOUT` (an address where
+no scheduler answers is refused with a message, not waited on). :meth:`Slots.ship` then puts the
+batch's learned skills where the jobs run (:mod:`planner.batch.shipping`): a file the pool's workers
+read, or a worker plugin on Dask.
 """
 
 from __future__ import annotations
@@ -20,13 +22,18 @@ from __future__ import annotations
 import logging
 import multiprocessing
 import os
+import tempfile
 from collections.abc import Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from dmp.errors import InputError
 from planner.batch.worker import pool_initializer
+
+if TYPE_CHECKING:
+    from planner.batch.shipping import ShippedSkills
 
 #: Connecting to a Dask scheduler, waiting for its first worker, and the workers' probe [s].
 CONNECT_TIMEOUT = 4.0
@@ -103,8 +110,9 @@ def check_workers(client: object, where: str, dataset: str | None = None, timeou
             raise InputError(f"{where} (worker {w})", "Dask workers that can run the batch's jobs", str(a))
         problems = a.get("problems", []) if isinstance(a, dict) else [f"an answer of {type(a).__name__}"]
         if problems:
-            raise InputError(f"{where} (worker {w})", "Dask workers that can run the batch's jobs (this package "
-                             "installed, the dataset at the same path)", "; ".join(problems))
+            need = "this package installed, the dataset at the same path" if dataset else "this package installed"
+            raise InputError(f"{where} (worker {w})", f"Dask workers that can run the batch's jobs ({need})",
+                             "; ".join(problems))
 
 
 def _connect(scheduler: str, timeout: float = CONNECT_TIMEOUT) -> object:
@@ -141,6 +149,8 @@ class Slots:
         slots: parallel jobs (pool workers or Dask worker threads).
         kind: ``"process pool"`` or ``"dask"``.
         where: in words (e.g. the scheduler address).
+        client: the Dask client (None for the pool); flag: the option that chose it (``--scheduler``,
+            ``--dask-local``), named in messages.
     """
 
     executor: Executor
@@ -148,12 +158,76 @@ class Slots:
     kind: str
     where: str
     abandoned: bool = False
+    client: object | None = None
+    flag: str = ""
+    _skills: tuple[tuple[str, str], ...] = ()
+    _plugins: list[str] = field(default_factory=list)
+    _folder: tempfile.TemporaryDirectory | None = None
 
     def renew(self) -> None:
         """Replace a broken process pool by a fresh one."""
         if isinstance(self.executor, ProcessPoolExecutor):
             self.executor.shutdown(wait=False, cancel_futures=True)
-            self.executor = _pool(self.slots)
+            self.executor = _pool(self.slots, self._skills)
+
+    def ship(self, skills: ShippedSkills | None, dataset: str | None = None) -> None:
+        """Put the batch's skills where the jobs run, before the first job (:mod:`planner.batch.shipping`):
+        on the pool, one file in a temporary folder (removed when the executor closes) that every pool
+        worker registers; on Dask, a worker plugin that writes it into each worker's local directory,
+        now and on workers that join later (unregistered when the executor closes). With no skills to
+        ship (``skills`` None) Dask workers are probed for ``dataset`` at its path instead.
+
+        Raises:
+            InputError: a Dask worker that cannot install them, or (without skills) cannot read ``dataset``.
+        """
+        if skills is None:
+            if self.client is not None and dataset:
+                check_workers(self.client, self.flag, dataset)
+            return
+        if self.client is None:
+            from problems.atomic import write_text
+
+            if self._folder is None:
+                self._folder = tempfile.TemporaryDirectory(prefix="tooltransfer-skills-")
+            path = write_text(os.path.join(self._folder.name, skills.file_name), skills.text)
+            self._skills = (*self._skills, (skills.digest, str(path)))
+            from planner.batch import shipping
+
+            shipping.register(skills.digest, str(path))  # jobs run here too (run_job called in this process)
+            if isinstance(self.executor, ProcessPoolExecutor):  # no job submitted yet: a pool that knows them
+                self.executor.shutdown(wait=True)
+                self.executor = _pool(self.slots, self._skills)
+            return
+        import uuid
+
+        from planner.batch.dask_plugin import SkillsPlugin
+
+        name = f"tooltransfer-skills-{skills.digest}-{uuid.uuid4().hex[:8]}"
+        try:
+            self.client.register_plugin(SkillsPlugin(skills), name=name)  # type: ignore[attr-defined]
+        except Exception as exc:
+            raise InputError(self.flag, "Dask workers that can hold the batch's skills (a file in their local "
+                             "directory)", f"{type(exc).__name__}: {exc}") from None
+        self._plugins.append(name)
+
+    def close_shipping(self) -> None:
+        """Undo :meth:`ship`: unregister the Dask plugins (their teardown removes the workers' files),
+        remove the pool's temporary folder."""
+        for name in self._plugins:
+            try:
+                self.client.unregister_worker_plugin(name)  # type: ignore[attr-defined]
+            except Exception:  # a worker gone or the scheduler closing: its local directory goes with it
+                pass
+        self._plugins.clear()
+        if self._skills:
+            from planner.batch import shipping
+
+            for digest, _ in self._skills:
+                shipping.release(digest)
+            self._skills = ()
+        if self._folder is not None:
+            self._folder.cleanup()
+            self._folder = None
 
     def abandon(self) -> None:
         """Stop the running jobs now (a second Ctrl-C): terminate the pool's workers (their sandboxes
@@ -169,16 +243,17 @@ class Slots:
             self.executor.shutdown(wait=False, cancel_futures=True)
 
 
-def _pool(n: int) -> ProcessPoolExecutor:
+def _pool(n: int, skills: tuple[tuple[str, str], ...] = ()) -> ProcessPoolExecutor:
     return ProcessPoolExecutor(max_workers=n, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=pool_initializer)
+                               initializer=pool_initializer, initargs=(skills,))
 
 
 @contextmanager
 def open_executor(workers: int | None = None, scheduler: str | None = None,
                   dask_local: int | None = None, dataset: str | None = None) -> Iterator[Slots]:
     """An executor for a batch (see the module docstring); shut down on exit. On Dask the workers are
-    probed first (:func:`check_workers`; ``dataset``: the folder they must read)."""
+    probed first (:func:`check_workers`; ``dataset``: a folder they must read, None when the skills are
+    shipped to them: :meth:`Slots.ship`)."""
     if scheduler is not None and dask_local is not None:
         raise InputError("--scheduler", "either --scheduler or --dask-local, not both", scheduler)
     for name, v in (("--workers", workers), ("--dask-local", dask_local)):
@@ -191,6 +266,7 @@ def open_executor(workers: int | None = None, scheduler: str | None = None,
             yield slots
         finally:
             slots.executor.shutdown(wait=not slots.abandoned, cancel_futures=True)
+            slots.close_shipping()
         return
     from distributed import Client, LocalCluster
 
@@ -208,18 +284,23 @@ def open_executor(workers: int | None = None, scheduler: str | None = None,
             client = Client(cluster)
         else:
             client = _connect(scheduler)  # type: ignore[arg-type]
+        flag = "--scheduler" if scheduler is not None else "--dask-local"
         with client:  # type: ignore[attr-defined]
             if not client.scheduler_info().get("workers"):  # type: ignore[attr-defined]
                 try:
                     client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)  # type: ignore[attr-defined]
                 except Exception:
                     pass
-            check_workers(client, "--scheduler" if scheduler is not None else "--dask-local", dataset)
+            check_workers(client, flag, dataset)
             info = client.scheduler_info()  # type: ignore[attr-defined]
             n = sum(w.get("nthreads", 1) for w in info.get("workers", {}).values()) or 1
             where = f"{len(info.get('workers', {}))} workers at {client.scheduler.address}"
             # retries=0: a task whose worker dies is reported (KilledWorker) and becomes an error row
-            yield Slots(client.get_executor(pure=False, retries=0), n, "dask", where)
+            slots = Slots(client.get_executor(pure=False, retries=0), n, "dask", where, client=client, flag=flag)
+            try:
+                yield slots
+            finally:
+                slots.close_shipping()
     finally:
         if cluster is not None:
             cluster.close()

@@ -12,6 +12,10 @@ pool running alone, or whose Dask worker died, becomes an ``error`` row. With si
 (``--simulate`` or ``simulate.enabled``) each solved plan is also executed open and closed loop in
 the same slot's sandbox, each execution with its own timeout; whether plans are executed is
 recorded in the store and a resume with the other setting is refused.
+
+The skills travel with the run (:mod:`planner.batch.shipping`): learned once here from the batch's
+dataset and shipped to the executor (a file the pool's workers read, a plugin that writes it on every
+Dask worker), every job planning with that copy; the workers need this package, not the dataset.
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ from concurrent.futures import FIRST_COMPLETED, CancelledError, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 from rich.progress import (
@@ -47,6 +51,9 @@ from planner.batch.generate import GeneratedTask, generate_tasks
 from planner.batch.spec import BatchSpec
 from planner.batch.store import ResultStore
 from planner.batch.worker import Job, Stage, run_job
+
+if TYPE_CHECKING:
+    from planner.batch.shipping import ShippedSkills
 
 STATUSES = ("solved", "violated", "infeasible", "error", "timeout")
 
@@ -119,8 +126,10 @@ def _warmup(spec: BatchSpec, batch_path: str | Path, first: GeneratedTask | None
 
 
 def task_jobs(spec: BatchSpec, batch_path: str | Path, t: GeneratedTask, timeout: float | None = None,
-              simulate: bool | None = None, warm: tuple[tuple[str, tuple], ...] = ()) -> list[Job]:
-    """The jobs of one task: one per variant pair (:func:`batch_jobs`)."""
+              simulate: bool | None = None, warm: tuple[tuple[str, tuple], ...] = (),
+              skills: str | None = None) -> list[Job]:
+    """The jobs of one task: one per variant pair (:func:`batch_jobs`); ``skills``: the digest of the
+    shipped skills they plan with (:attr:`planner.batch.worker.Job.skills`)."""
     sim = simulate_setting(spec, simulate)
     cfg = spec.simulate
     limit = spec.timeout if timeout is None else timeout
@@ -131,7 +140,7 @@ def task_jobs(spec: BatchSpec, batch_path: str | Path, t: GeneratedTask, timeout
                   Stage("closed_loop", "planner.batch.execute:closed_loop",
                         (cfg.closed_loop_seed(t.index), cfg.closed_loop_tolerance, cfg.camera_noise), cfg.timeout))
     return [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim), timeout=limit, warmup=warm,
-                stages=stages) for oe, ss in spec.variants.pairs()]
+                stages=stages, skills=skills) for oe, ss in spec.variants.pairs()]
 
 
 #: Tasks generated (and recorded in the store) at a time while a batch runs.
@@ -140,7 +149,7 @@ CHUNK = 64
 
 def _lazy_jobs(spec: BatchSpec, batch_path: str | Path, store: ResultStore, first: GeneratedTask,
                timeout: float | None, simulate: bool | None,
-               warm: tuple[tuple[str, tuple], ...]) -> Iterator[Job]:
+               warm: tuple[tuple[str, tuple], ...], skills: str | None = None) -> Iterator[Job]:
     """The jobs not yet stored, task by task: tasks generated :data:`CHUNK` at a time and recorded in
     the store's ``tasks`` table before their jobs are handed out. A task that cannot be generated
     (its ranges leave no room) becomes an ``error`` row per variant, and the batch goes on."""
@@ -159,7 +168,8 @@ def _lazy_jobs(spec: BatchSpec, batch_path: str | Path, store: ResultStore, firs
         store.add_tasks(task_records(chunk))
         done = store.done_for([t.task_id for t in chunk] + [f"{spec.name}-{i:05d}" for i, _ in failed])
         for t in chunk:
-            yield from (j for j in task_jobs(spec, batch_path, t, timeout, simulate, warm) if j.key not in done)
+            yield from (j for j in task_jobs(spec, batch_path, t, timeout, simulate, warm, skills)
+                        if j.key not in done)
         for i, why in failed:
             for oe, ss in spec.variants.pairs():
                 job = Job(f"{spec.name}-{i:05d}", f"{oe}/{ss}", entry="builtins:dict",
@@ -371,8 +381,10 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
 
     Before the first job: the batch's dataset is loaded and checked (a corrupt one is refused here,
     not turned into a row per job), the store is locked (:func:`planner.batch.store.lock_store`: a
-    second ``batch run`` on it is refused), and Dask workers are probed
-    (:func:`planner.batch.executors.check_workers`).
+    second ``batch run`` on it is refused), Dask workers are probed
+    (:func:`planner.batch.executors.check_workers`), and the skills are learned and shipped to the
+    executor (:mod:`planner.batch.shipping`; a dataset they cannot be learned from is refused before
+    the store is made).
 
     Args:
         workers: process-pool size (default: the CPU count).
@@ -399,23 +411,40 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
     console = console or Console(stderr=True)
     # the executor first: a scheduler that does not answer, or workers that cannot run the jobs, are refused
     # in seconds, before the skills are learned
-    with lock_store(db), open_executor(workers, scheduler, dask_local, dataset=str(dataset)) as slots:
-        if not Path(db).is_file():  # learn the skills before the store exists: a dataset they fail on leaves none
+    with lock_store(db), open_executor(workers, scheduler, dask_local) as slots:
+        # learn the skills before the store exists: a dataset they fail on leaves none
+        shipped = _ship_skills(slots, spec, batch_path, first, str(dataset), console, progress)
+        warmed = shipped is not None
+        if not warmed and not Path(db).is_file():  # not shippable: learned here for every sandbox's cache
             _warm_parent(task_jobs(spec, batch_path, first, timeout, simulate, warm), console, progress)
             warmed = True
-        else:
-            warmed = False
         with ResultStore(db) as store:
             open_batch_store(store, spec, [], resume, simulate)
             if retry:
                 store.forget(retry)
             return _run_store(store, slots, spec, batch_path, first, warm, warmed, timeout, simulate, progress,
-                              console)
+                              console, shipped.digest if shipped is not None else None)
+
+
+def _ship_skills(slots: Slots, spec: BatchSpec, batch_path: str | Path, first: GeneratedTask, dataset: str,
+                 console: Console, progress: bool) -> ShippedSkills | None:
+    """Learn the batch's skills here and ship them to the executor (:mod:`planner.batch.shipping`); the
+    :class:`~planner.batch.shipping.ShippedSkills`, or None when they cannot be shipped (the workers
+    then read the dataset at its path: Dask workers are probed for it)."""
+    from planner.batch.shipping import batch_skills
+
+    if progress:
+        console.print(f"learning the skills from {dataset} ...")
+    shipped = batch_skills(spec, batch_path, first)
+    slots.ship(shipped, dataset)
+    if progress and shipped is not None:
+        console.print(f"skills {shipped.digest} ({shipped.size / 1e3:.0f} kB) shipped to the {slots.kind} workers")
+    return shipped
 
 
 def _run_store(store: ResultStore, slots: Slots, spec: BatchSpec, batch_path: str | Path, first: GeneratedTask,
                warm: tuple[tuple[str, tuple], ...], warmed: bool, timeout: float | None, simulate: bool | None,
-               progress: bool, console: Console) -> RunSummary:
+               progress: bool, console: Console, skills: str | None = None) -> RunSummary:
     """:func:`run_batch` on the opened, locked and checked store and executor: the jobs not stored yet."""
     pairs = spec.variants.pairs()
     total = spec.count * len(pairs)
@@ -428,7 +457,7 @@ def _run_store(store: ResultStore, slots: Slots, spec: BatchSpec, batch_path: st
         oe, _, ss = job.variant.partition("/")
         return {"tool": data.get("tool", spec.tools[_index(job.task_id) % len(spec.tools)]), "oe": oe, "ss": ss}
 
-    jobs = _lazy_jobs(spec, batch_path, store, first, timeout, simulate, warm)
+    jobs = _lazy_jobs(spec, batch_path, store, first, timeout, simulate, warm, skills)
     if progress:
         ex = ", solved plans executed open and closed loop" if simulate_setting(spec, simulate) else ""
         console.print(f"batch {spec.name}: {spec.count} tasks x {len(pairs)} variants{ex} "

@@ -9,6 +9,10 @@ A job may have stages (:class:`Stage`, e.g. executing the plan open and closed l
 ``solved`` call, each a sandbox call of its own with its own timeout, given what the job returned
 under ``"plan"``: its columns join the row, and a stage that raises, hangs or crashes sets only its
 ``<stage>_status`` (``error`` or ``timeout``) and ``<stage>_reason``; the row keeps its status.
+
+A job whose :attr:`Job.skills` names the batch's shipped skills (:mod:`planner.batch.shipping`)
+plans with this slot's local copy of them: its calls (and the sandbox's warm-up) take the task's
+skills from that file rather than from the dataset, which the worker then need not have.
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
+from planner.batch import shipping
 from planner.batch.sandbox import Sandbox
 
 _LOCAL = threading.local()
@@ -53,6 +58,8 @@ class Job:
         timeout: [s] for the call.
         warmup: calls a new sandbox runs first, untimed (imports, skills).
         stages: run in turn when the call returns a ``solved`` row (module docstring).
+        skills: the digest of the batch's shipped skills (:mod:`planner.batch.shipping`), or None
+            (the task's own ``skills`` as they are: the dataset at its path).
     """
 
     task_id: str
@@ -62,6 +69,7 @@ class Job:
     timeout: float = 60.0
     warmup: tuple[tuple[str, tuple], ...] = field(default=(), repr=False)
     stages: tuple[Stage, ...] = ()
+    skills: str | None = None
 
     @property
     def key(self) -> tuple[str, str]:
@@ -79,10 +87,20 @@ def run_job(job: Job) -> dict[str, Any]:
     """Run ``job`` (and its stages) in this slot's sandbox; the result row (never raises for the
     job's own failures)."""
     started = time.time()
-    box = _sandbox(job.warmup)
-    out = box.call(job.entry, job.args, job.timeout)
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    args, warmup = job.args, job.warmup
+    if job.skills is not None:
+        path = shipping.local_path(job.skills)
+        if path is None:
+            return {"task_id": job.task_id, "variant": job.variant, "started_at": started, "worker": worker,
+                    "wall_time": 0.0, "status": "error", "finished_at": time.time(),
+                    "reason": f"the batch's skills ({job.skills}) were not shipped to this worker ({worker})"}
+        args = shipping.localize(args, path)
+        warmup = tuple((entry, shipping.localize(a, path)) for entry, a in warmup)
+    box = _sandbox(warmup)
+    out = box.call(job.entry, args, job.timeout)
     row: dict[str, Any] = {"task_id": job.task_id, "variant": job.variant, "started_at": started,
-                           "worker": f"{socket.gethostname()}:{os.getpid()}", "wall_time": out.wall}
+                           "worker": worker, "wall_time": out.wall}
     if out.kind == "ok" and isinstance(out.value, dict) and "status" in out.value:
         row.update(out.value)
     elif out.kind == "ok":
@@ -129,7 +147,10 @@ def _watch_parent(ppid: int) -> None:
         time.sleep(0.5)
 
 
-def pool_initializer() -> None:
-    """Process-pool worker set-up: Ctrl-C is the runner's to handle; exit when the runner dies."""
+def pool_initializer(skills: tuple[tuple[str, str], ...] = ()) -> None:
+    """Process-pool worker set-up: Ctrl-C is the runner's to handle; exit when the runner dies;
+    ``skills``: ``(digest, path)`` of the skills files the runner wrote (:mod:`planner.batch.shipping`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    for digest, path in skills:
+        shipping.register(digest, path)
     threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True).start()
