@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test docs bench bench-sim bench-ss bench-batch bench-exec lint clean
+.PHONY: demo test docs figures bench bench-sim bench-ss bench-batch bench-exec lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -35,6 +35,13 @@ test-lowest: $(PY)
 docs: $(PY)
 	$(PY) -m pip install -q -e ".[docs]"
 	$(PY) -m mkdocs build --strict --site-dir out/docs
+
+# The README's two figures, committed in docs/images: the paper's transfer task solved with every
+# variant pair, and its qp/opt plan executed open and closed loop on the simulated Omni (Fig. 12).
+# Deterministic (the same bytes on the same versions of the dependencies); about 10 s.
+figures: $(PY)
+	$(PY) -m pip install -q -e .
+	$(PY) -m planner.figures docs/images
 
 bench: $(PY)
 	$(PY) -m pip install -q -e ".[bench]"

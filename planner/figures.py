@@ -11,9 +11,11 @@ Fig. 11    generalized switches for the T-shape and the trapezoid, dmp vs opt   
 Fig. 12    a plan; planned versus executed object and tool paths                   :func:`fig12`
 Fig. 14    the safety margin and the tail effect round an obstacle                 :func:`fig14`
 GIF        the simulated execution: tool outline and puck                          :func:`execution_gif`
+README     Fig. 12 of the transfer task (plan, open and closed loop) and the       :func:`readme_figures`
+           variant pairs compared, small PNGs (``make figures``)
 =========  ======================================================================  =====================
 
-Each writes one file and returns its path.
+Each writes one file (:func:`readme_figures` two) and returns its path. Lengths are in mm throughout.
 """
 
 from __future__ import annotations
@@ -146,3 +148,59 @@ def execution_gif(plan: Plan, ex: Execution, out: str | Path) -> Path:
     from planner.plots.execution import animate_execution
 
     return animate_execution(plan, ex, out)
+
+
+#: The README's figures (``docs/images``, committed): file names, and the resolution they are drawn at.
+README_FIGURES = ("fig12_transfer_tool2.png", "compare_transfer_tool2.png")
+README_DPI = 100
+
+
+def _palette_png(path: Path, colours: int = 128) -> Path:
+    """Rewrite a PNG with an adaptive palette of ``colours`` (no dithering: the same image gives the
+    same bytes), about a third of the size of the RGBA file for line drawings."""
+    from PIL import Image
+
+    with Image.open(path) as im:
+        small = im.convert("RGB").quantize(colors=colours, method=Image.Quantize.MEDIANCUT,
+                                           dither=Image.Dither.NONE)
+    small.save(path, optimize=True)
+    return path
+
+
+def readme_figures(out: str | Path = "docs/images") -> tuple[Path, Path]:
+    """The README's figures from the paper's transfer task (tool 1's demonstrations -> tool 2): every
+    variant pair solved and drawn on shared axes (``compare_transfer_tool2.png``), and Fig. 12 of the
+    ``qp``/``opt`` plan with its open- and closed-loop executions on the simulated Omni
+    (``fig12_transfer_tool2.png``). Deterministic (the planner, the simulation and the closed loop's
+    camera noise are); small palette PNGs. ``make figures`` writes them to ``docs/images``."""
+    from planner.closed_loop import execute_closed_loop
+    from planner.demo import PAIRS, TRANSFER
+    from planner.plots.execution import plot_plan, plot_plans
+    from planner.simulate import simulate_plan
+    from planner.solve import solve
+    from problems.task import load_task
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    task = load_task(TRANSFER)
+    plans: dict[str, Plan] = {}
+    for oe, ss in PAIRS:
+        variant = task.model_copy(update={"variants": task.variants.model_copy(update={"oe": oe, "ss": ss})})
+        plans[f"{oe}/{ss}"] = solve(variant, TRANSFER)
+    main = plans["qp/opt"]
+    if main.status != "solved":
+        raise RuntimeError(f"the transfer task's qp/opt plan is {main.status}: {main.reason}")
+    executions = {"open loop": simulate_plan(main).execution, "closed loop": execute_closed_loop(main).execution}
+    fig12_path = _palette_png(plot_plan(main, out / README_FIGURES[0], executions, dpi=README_DPI))
+    compare_path = _palette_png(plot_plans(plans, out / README_FIGURES[1], dpi=README_DPI))
+    return fig12_path, compare_path
+
+
+if __name__ == "__main__":  # make figures: python -m planner.figures [OUT]
+    import sys
+    import time
+
+    start = time.perf_counter()
+    for path in readme_figures(sys.argv[1] if len(sys.argv) > 1 else "docs/images"):
+        print(f"wrote {path} ({path.stat().st_size / 1024:.0f} kB)")
+    print(f"in {time.perf_counter() - start:.1f} s")

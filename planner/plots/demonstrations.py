@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
 FACE_COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown")
+MM = 1e3  # the figures draw lengths in mm (the data are in m)
 
 
 def _scene_patches(ax: Axes, scene: dict) -> None:
@@ -30,14 +31,16 @@ def _scene_patches(ax: Axes, scene: dict) -> None:
 
     obstacles = scene.get("obstacles") or ([scene["obstacle"]] if "obstacle" in scene else [])
     for o in obstacles:
-        ax.add_patch(plt.Circle(tuple(o["centre"]), o["radius"], color="tab:red", alpha=0.45, lw=0))
+        ax.add_patch(plt.Circle(tuple(MM * np.asarray(o["centre"])), MM * o["radius"], color="tab:red", alpha=0.45,
+                                lw=0))
     target = scene.get("target") or (scene["corners"][-1] if "corners" in scene else None)
     if target is not None:
-        h = float(scene.get("target_half", 0.0))
-        ax.add_patch(plt.Rectangle((target[0] - h, target[1] - h), 2 * h, 2 * h, fill=False, color="k", ls="--"))
+        h = MM * float(scene.get("target_half", 0.0))
+        x, y = MM * np.asarray(target, dtype=float)
+        ax.add_patch(plt.Rectangle((x - h, y - h), 2 * h, 2 * h, fill=False, color="k", ls="--"))
     start = scene.get("start") or (scene["corners"][0] if "corners" in scene else None)
     if start is not None:
-        ax.plot(*start, "ko", mfc="none", ms=7)
+        ax.plot(*(MM * np.asarray(start, dtype=float)), "ko", mfc="none", ms=7)
 
 
 def plot_demonstrations(ds: Dataset, segs: Sequence[Segmentation], tool: Tool, out: str | Path) -> Path:
@@ -53,22 +56,22 @@ def plot_demonstrations(ds: Dataset, segs: Sequence[Segmentation], tool: Tool, o
     grid = fig.add_gridspec(1, 3, width_ratios=[1.0, 1.0, 1.1])
     ax0, ax1, ax2 = (fig.add_subplot(grid[0, i]) for i in range(3))
     for d, s in zip(ds.demonstrations, segs, strict=True):
-        ax0.plot(*d.object_xy.T, ".", color="0.75", ms=1.2, zorder=1)
-        ax1.plot(*d.tool_pose[:, :2].T, "-", color="0.75", lw=0.5, zorder=1)
+        ax0.plot(*(MM * d.object_xy).T, ".", color="0.75", ms=1.2, zorder=1)
+        ax1.plot(*(MM * d.tool_pose[:, :2]).T, "-", color="0.75", lw=0.5, zorder=1)
         for p in s.pushes:
-            ax0.plot(*s.object_at_tool[p.samples].T, "-", color=colours[p.face], lw=1.3, zorder=2)
-            ax1.plot(*d.tool_pose[p.samples, :2].T, "-", color=colours[p.face], lw=1.0, zorder=2)
+            ax0.plot(*(MM * s.object_at_tool[p.samples]).T, "-", color=colours[p.face], lw=1.3, zorder=2)
+            ax1.plot(*(MM * d.tool_pose[p.samples, :2]).T, "-", color=colours[p.face], lw=1.0, zorder=2)
         for w, c in zip(s.switches, s.fixed_points, strict=False):
             for q in (w.object_point_from, w.object_point_to):
-                ax0.plot(*np.vstack([c, q]).T, "k-", lw=0.5, zorder=3)
+                ax0.plot(*(MM * np.vstack([c, q])).T, "k-", lw=0.5, zorder=3)
         if len(s.fixed_points):
-            ax0.plot(*s.fixed_points.T, "k^", ms=6, mfc="yellow", zorder=4)
+            ax0.plot(*(MM * np.asarray(s.fixed_points)).T, "k^", ms=6, mfc="yellow", zorder=4)
     scene = ds.meta.scene or {}
     for ax in (ax0, ax1):
         _scene_patches(ax, scene)
         ax.set_aspect("equal")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_xlabel("x [mm]")
+        ax.set_ylabel("y [mm]")
         ax.grid(alpha=0.3)
     for name, col in colours.items():
         ax0.plot([], [], color=col, label=f"push: {name} face")

@@ -49,11 +49,19 @@ def _scene(ax, plan: Plan) -> None:  # type: ignore[no-untyped-def]
 
 def draw_plan(ax, plan: Plan, title: str) -> None:  # type: ignore[no-untyped-def]
     """Draw a plan on ``ax``: the scene, the tool reference point by phase, the object path, the tool
-    outline at the start of every push and at four instants of every switch."""
+    outline at the start of every push and at four instants of every switch. A plan without samples
+    (infeasible) shows why in the panel; a violated one is drawn with what it breaks."""
+    import textwrap
+
     _scene(ax, plan)
-    if plan.status != "solved":
-        ax.set_title(f"{title}\n{plan.status}: {plan.reason[:80]}", fontsize=8)
+    if plan.status != "solved" and plan.t.size < 2:
+        ax.set_title(f"{title}\n{plan.status}", fontsize=9)
+        why = textwrap.fill(plan.reason, 60, max_lines=8, placeholder=" ...")
+        ax.text(0.5, 0.03, why, transform=ax.transAxes, ha="center", va="bottom", fontsize=7, color="tab:red",
+                wrap=False)
         return
+    if plan.status != "solved":
+        title = f"{title}\n{plan.status}: {plan.reason.removeprefix('hard checks violated: ')[:90]}"
     outline = _outline(plan)
     phase = np.asarray(plan.phase)
     for name, colour in PHASE_COLOURS.items():
@@ -72,8 +80,9 @@ def draw_plan(ax, plan: Plan, title: str) -> None:  # type: ignore[no-untyped-de
     ax.legend(fontsize=7, loc="best")
 
 
-def plot_plans(plans: Mapping[str, Plan], out: str | Path) -> Path:
-    """One panel per plan (e.g. every variant pair of a task), side by side. Returns the written path."""
+def plot_plans(plans: Mapping[str, Plan], out: str | Path, dpi: int = 120) -> Path:
+    """One panel per plan (e.g. every variant pair of a task), side by side on shared axes [mm]. Returns
+    the written path."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -82,7 +91,8 @@ def plot_plans(plans: Mapping[str, Plan], out: str | Path) -> Path:
     n = len(plans)
     cols = min(n, 2) if n == 4 else n
     rows = int(np.ceil(n / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(5.4 * cols, 5.4 * rows), squeeze=False)
+    # one scale for every panel (shared axes, limits over all of them): the variants compare at a glance
+    fig, axes = plt.subplots(rows, cols, figsize=(5.4 * cols, 5.4 * rows), squeeze=False, sharex=True, sharey=True)
     for ax, (name, plan) in zip(axes.ravel(), plans.items(), strict=False):
         m = plan.metrics
         extra = ""
@@ -92,12 +102,15 @@ def plot_plans(plans: Mapping[str, Plan], out: str | Path) -> Path:
         draw_plan(ax, plan, f"{name}{extra}")
     for ax in axes.ravel()[n:]:
         ax.set_visible(False)
-    return save_figure(fig, out)
+    for ax in axes.ravel()[:n]:
+        ax.label_outer()
+    return save_figure(fig, out, dpi)
 
 
-def plot_plan(plan: Plan, out: str | Path, executions: Mapping[str, Execution] | None = None) -> Path:
+def plot_plan(plan: Plan, out: str | Path, executions: Mapping[str, Execution] | None = None,
+              dpi: int = 120) -> Path:
     """Fig. 12: panel (a) the plan; then one panel per execution (e.g. ``{"open loop": ex}``) with
-    the planned and executed object and tool paths [mm]. Returns the written path."""
+    the planned and executed object and tool paths, on shared axes [mm]. Returns the written path."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -105,7 +118,7 @@ def plot_plan(plan: Plan, out: str | Path, executions: Mapping[str, Execution] |
 
     executions = dict(executions or {})
     n = 1 + len(executions)
-    fig, axes = plt.subplots(1, n, figsize=(5.4 * n, 5.4), squeeze=False)
+    fig, axes = plt.subplots(1, n, figsize=(5.4 * n, 5.4), squeeze=False, sharex=True, sharey=True)
     v = plan.variant
     draw_plan(axes[0, 0], plan, f"(a) plan {plan.task.get('name', '')}: oe {v.get('oe')}, ss {v.get('ss')}")
     goal = np.asarray(plan.object["goal"])
@@ -119,7 +132,9 @@ def plot_plan(plan: Plan, out: str | Path, executions: Mapping[str, Execution] |
         err = float(np.linalg.norm(ex.object_xy[-1] - goal))
         ax.set_title(f"({chr(98 + i)}) {name}: final object error {1e3 * err:.1f} mm", fontsize=9)
         ax.legend(fontsize=7, loc="best")
-    return save_figure(fig, out)
+    for ax in axes[0]:
+        ax.label_outer()  # the panels share their axes [mm]
+    return save_figure(fig, out, dpi)
 
 
 def animate_execution(plan: Plan, ex: Execution, out: str | Path, *, fps: int = 10, speed: float = 4.0) -> Path:

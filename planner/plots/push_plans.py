@@ -15,6 +15,8 @@ from tools.model import Tool
 from tools.objects import Disc, Obstacle
 from tools.pose import rotation
 
+MM = 1e3  # the figures draw lengths in mm (the plans are in m)
+
 
 def plot_push_plans(
     plans: Mapping[str, PushPlan],
@@ -37,26 +39,26 @@ def plot_push_plans(
     fig, axes = plt.subplots(1, len(plans), figsize=(5.2 * len(plans), 5.2), squeeze=False)
     outline = np.asarray(tool.outline.exterior.coords)
     for ax, (name, plan) in zip(axes[0], plans.items(), strict=True):
-        ax.plot(*plan.universal.T, "k--", lw=1, label="generalized universal path")
+        ax.plot(*(MM * plan.universal).T, "k--", lw=1, label="generalized universal path")
         if plan.status != "solved":
             ax.text(0.5, 0.5, f"infeasible:\n{plan.reason}", transform=ax.transAxes, ha="center", wrap=True)
         for p in plan.pushes:
-            seg = plan.object_xy[p.samples]
+            seg = MM * plan.object_xy[p.samples]
             ax.plot(*seg.T, color=colours[p.face], lw=2.2, label=f"push: {p.face}")
             x, y, yaw = p.tool_pose[0]
-            ring = outline @ rotation(yaw).T + [x, y]
+            ring = MM * (outline @ rotation(yaw).T + [x, y])
             ax.fill(*ring.T, color=colours[p.face], alpha=0.35, lw=0.6)
             c = seg[0]
-            ax.add_patch(plt.Circle(tuple(c), radius, fill=False, color=colours[p.face], lw=0.7))
+            ax.add_patch(plt.Circle(tuple(c), MM * radius, fill=False, color=colours[p.face], lw=0.7))
             ax.plot(*seg[0], "k.", ms=5)
         for o in obstacles:
             shape = o.polygon() if isinstance(o, Disc) else o
-            ax.fill(*np.asarray(shape.exterior.coords).T, color="tab:red", alpha=0.4)
+            ax.fill(*(MM * np.asarray(shape.exterior.coords)).T, color="tab:red", alpha=0.4)
             if margin > 0:
-                ax.plot(*np.asarray(shape.buffer(radius + margin).exterior.coords).T, ":", color="tab:red",
+                ax.plot(*(MM * np.asarray(shape.buffer(radius + margin).exterior.coords)).T, ":", color="tab:red",
                         lw=0.8)
         if target is not None:
-            ax.plot(*target, "k*", ms=10, label="target")
+            ax.plot(*(MM * np.asarray(target)), "k*", ms=10, label="target")
         m = plan.metrics
         if plan.status == "solved":
             ax.set_title(f"{name}: {len(plan.pushes)} pushes, goal error {1e3 * m['goal_error']:.2f} mm,\n"
@@ -66,8 +68,8 @@ def plot_push_plans(
         uniq = dict(zip(labels, handles, strict=True))
         ax.legend(uniq.values(), uniq.keys(), fontsize=7, loc="best")
         ax.set_aspect("equal")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_xlabel("x [mm]")
+        ax.set_ylabel("y [mm]")
     if title:
         fig.suptitle(title)
     return save_figure(fig, out)

@@ -18,6 +18,8 @@ from planner.oe.push_plan import PushPlan
 from planner.plots.save import save_figure
 from tools.objects import Disc
 
+MM = 1e3  # the figures draw lengths in mm (the paths are in m)
+
 
 def plot_safety_margin(
     universal: np.ndarray,
@@ -38,16 +40,17 @@ def plot_safety_margin(
 
     fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(11, 5.2))
     for ax in (ax0, ax1):
-        ax.add_patch(plt.Circle(tuple(obstacle.centre), obstacle.radius, color="tab:red", alpha=0.4))
-        ax.plot(*universal.T, "k--", lw=1, label="universal path")
+        ax.add_patch(plt.Circle(tuple(MM * np.asarray(obstacle.centre)), MM * obstacle.radius, color="tab:red",
+                                alpha=0.4))
+        ax.plot(*(MM * universal).T, "k--", lw=1, label="universal path")
         ax.set_aspect("equal")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_xlabel("x [mm]")
+        ax.set_ylabel("y [mm]")
     for delta in margins:
         mapped = avoid_obstacles(universal, [obstacle], k, delta, radius)
-        line = ax0.plot(*mapped.T, lw=1.4, label=f"outer (7), delta = {1e3 * delta:.0f} mm")[0]
-        ax0.add_patch(plt.Circle(tuple(obstacle.centre), obstacle.radius + radius + delta, fill=False,
-                                 ls=":", color=line.get_color(), lw=0.8))
+        line = ax0.plot(*(MM * mapped).T, lw=1.4, label=f"outer (7), delta = {1e3 * delta:.0f} mm")[0]
+        ax0.add_patch(plt.Circle(tuple(MM * np.asarray(obstacle.centre)), MM * (obstacle.radius + radius + delta),
+                                 fill=False, ls=":", color=line.get_color(), lw=0.8))
     shift = np.linalg.norm(avoid_obstacles(universal, [obstacle], k, margins[-1], radius) - universal, axis=1)
     far = np.linalg.norm(universal - obstacle.centre, axis=1) > 3 * (obstacle.radius + radius)
     ax0.set_title(f"tail effect: points beyond 3 r_b still move up to {1e3 * shift[far].max(initial=0):.1f} mm",
@@ -57,7 +60,7 @@ def plot_safety_margin(
         if plan.status != "solved":
             continue
         clear = plan.metrics.get("obstacle_clearance_min", float("nan"))
-        ax1.plot(*plan.object_xy.T, lw=1.6, label=f"{name}: clearance {1e3 * clear:.1f} mm")
+        ax1.plot(*(MM * plan.object_xy).T, lw=1.6, label=f"{name}: clearance {1e3 * clear:.1f} mm")
     ax1.set_title("condensed object paths (clearance = object edge to obstacle edge)", fontsize=9)
     ax1.legend(fontsize=7)
     return save_figure(fig, out)
