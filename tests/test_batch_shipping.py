@@ -102,22 +102,36 @@ def test_workers_in_another_folder_without_the_dataset_run_the_batch(tmp_path, m
     print(f"3 tasks on 2 workers without the dataset, planned and executed: {time.perf_counter() - start:.1f} s")
 
 
-def test_workers_that_join_later_get_the_skills_and_the_run_removes_them(tmp_path) -> None:
+def test_workers_that_join_later_get_the_skills_and_jobs_and_the_run_removes_them(tmp_path, monkeypatch) -> None:
     from distributed import Client, LocalCluster
 
+    from planner.batch import executors
+
     skills = _skills(tmp_path)
+    monkeypatch.setattr(executors, "RECOUNT", 0.0)
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         with open_executor(scheduler=cluster.scheduler_address) as slots:
             slots.ship(skills)
+            assert slots.current() == 1
             cluster.scale(2)  # a worker that joins after the run started (dask-jobqueue's adapt, a scaled-up pod group)
             client = slots.client
             assert isinstance(client, Client)
             client.wait_for_workers(2, timeout=60)
+            assert slots.current() == 2  # the runner's window widens: the new worker gets jobs
             paths = client.run(shipping.local_path, skills.digest)
             assert len(paths) == 2 and all(paths.values()) and len(set(paths.values())) == 2
             for p in paths.values():
                 assert Path(p).read_text() == skills.text
         assert not any(Path(p).exists() for p in paths.values())
+
+
+def test_every_worker_of_a_larger_cluster_is_probed_and_counted() -> None:
+    """More than five workers: distributed's scheduler_info listed only five by default for a while."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=7, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        with open_executor(scheduler=cluster.scheduler_address) as slots:
+            assert slots.slots == 7 and slots.where.startswith("7 workers")
 
 
 def test_the_pool_reads_one_file_the_run_removes(tmp_path) -> None:

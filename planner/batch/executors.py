@@ -23,6 +23,7 @@ import logging
 import multiprocessing
 import os
 import tempfile
+import time
 from collections.abc import Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
@@ -38,6 +39,8 @@ if TYPE_CHECKING:
 #: Connecting to a Dask scheduler, waiting for its first worker, and the workers' probe [s].
 CONNECT_TIMEOUT = 4.0
 PROBE_TIMEOUT = 5.0
+#: How often a running batch counts the Dask workers' threads again [s] (:meth:`Slots.current`).
+RECOUNT = 2.0
 
 _PROBE = """
 def probe(dataset, version):
@@ -74,6 +77,20 @@ def _version() -> str | None:
         return None
 
 
+def workers_info(client: object) -> dict[str, dict]:
+    """Every worker the scheduler knows (address -> its info, with ``nthreads``): all of them, also on
+    the distributed releases (2025 to mid-2026) whose :meth:`~distributed.Client.scheduler_info` lists
+    only the first five by default (the probe and the slot count saw five workers of a larger cluster)."""
+    import inspect
+
+    info = client.scheduler_info  # type: ignore[attr-defined]
+    try:
+        every = "n_workers" in inspect.signature(info).parameters
+    except (TypeError, ValueError):
+        every = False
+    return dict((info(n_workers=-1) if every else info()).get("workers", {}))
+
+
 def check_workers(client: object, where: str, dataset: str | None = None, timeout: float = PROBE_TIMEOUT) -> None:
     """Probe every worker of a Dask ``client`` before the first job: the package importable at this
     version, ``dataset`` readable (module docstring).
@@ -81,9 +98,7 @@ def check_workers(client: object, where: str, dataset: str | None = None, timeou
     Raises:
         InputError: naming ``where`` (``--scheduler`` or ``--dask-local``), the worker and the problem.
     """
-    import time
-
-    workers = list(client.scheduler_info().get("workers", {}))  # type: ignore[attr-defined]
+    workers = list(workers_info(client))
     if not workers:
         raise InputError(where, "a Dask cluster with at least one worker", "no worker connected")
     import uuid
@@ -163,6 +178,24 @@ class Slots:
     _skills: tuple[tuple[str, str], ...] = ()
     _plugins: list[str] = field(default_factory=list)
     _folder: tempfile.TemporaryDirectory | None = None
+    _counted: float = 0.0
+
+    def current(self) -> int:
+        """Parallel jobs now: on Dask the threads of the workers connected, counted again every
+        :data:`RECOUNT` seconds, so workers that join after the start (dask-jobqueue's ``adapt``, SLURM
+        jobs that leave the queue later, a scaled-up worker group) get jobs too; a cluster that shrinks
+        keeps the largest count (the scheduler queues what it cannot place)."""
+        if self.client is None:
+            return self.slots
+        now = time.monotonic()
+        if now - self._counted >= RECOUNT:
+            self._counted = now
+            try:
+                n = sum(w.get("nthreads", 1) for w in workers_info(self.client).values())
+            except Exception:  # the scheduler busy or gone: the futures will say so
+                n = 0
+            self.slots = max(self.slots, n)
+        return self.slots
 
     def renew(self) -> None:
         """Replace a broken process pool by a fresh one."""
@@ -286,15 +319,15 @@ def open_executor(workers: int | None = None, scheduler: str | None = None,
             client = _connect(scheduler)  # type: ignore[arg-type]
         flag = "--scheduler" if scheduler is not None else "--dask-local"
         with client:  # type: ignore[attr-defined]
-            if not client.scheduler_info().get("workers"):  # type: ignore[attr-defined]
+            if not workers_info(client):
                 try:
                     client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)  # type: ignore[attr-defined]
                 except Exception:
                     pass
             check_workers(client, flag, dataset)
-            info = client.scheduler_info()  # type: ignore[attr-defined]
-            n = sum(w.get("nthreads", 1) for w in info.get("workers", {}).values()) or 1
-            where = f"{len(info.get('workers', {}))} workers at {client.scheduler.address}"
+            info = workers_info(client)
+            n = sum(w.get("nthreads", 1) for w in info.values()) or 1
+            where = f"{len(info)} workers at {client.scheduler.address}"
             # retries=0: a task whose worker dies is reported (KilledWorker) and becomes an error row
             slots = Slots(client.get_executor(pure=False, retries=0), n, "dask", where, client=client, flag=flag)
             try:

@@ -298,7 +298,6 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
     queue = _Queue(todo)
     attempts: Counter = Counter()
     inflight: dict[Future, tuple[Job, Any]] = {}  # future -> (job, the executor it went to)
-    window = 2 * max(1, slots.slots)
     start = time.perf_counter()
 
     def store_row(job: Job, row: dict[str, Any]) -> None:
@@ -310,6 +309,9 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
         with bar:
             t = bar.add_task("batch", total=total - skipped, counts="")
             while queue or inflight:
+                # two jobs per slot in flight; on Dask the slots are counted again as workers join
+                window = 2 * max(1, slots.current())
+                summary.slots = slots.slots
                 while queue and not stop.is_set() and len(inflight) < window:
                     # a job that was running when the pool broke is a suspect: it runs alone, so a job
                     # that breaks the pool again is the culprit and the others are not charged for it
