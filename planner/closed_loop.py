@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from dmp.errors import InputError
+from planner.oe.contacts import MIN_PIECE
 from planner.oe.push_plan import Push, PushPlan
 from planner.plan import Plan
 from planner.scene import Scene
@@ -153,6 +154,10 @@ class _Reference:
         u = (tt - tt[0]) / max(tt[-1] - tt[0], 1e-9)
         ref = xy + (1.0 - u)[:, None] * (start - xy[0]) + u[:, None] * (target - xy[-1])
         spans = [(f, max(a, tau0) - tau0, b - tau0) for f, a, b in self.spans if b > tau0 + 1e-9]
+        if len(spans) > 1:  # a face with less than MIN_PIECE of the plan left: the next face from here
+            ahead = (tt <= tau0 + spans[0][2] + 1e-9)
+            if np.sum(np.linalg.norm(np.diff(ref[ahead], axis=0), axis=1)) < MIN_PIECE:
+                spans = [(spans[1][0], 0.0, spans[1][2]), *spans[2:]]
         faces = tuple(f for f, _, _ in spans)
         switches = tuple(b for _, _, b in spans[:-1])
         return tt - tau0, ref, faces, switches
@@ -270,13 +275,14 @@ class _Loop:
                                   MappingOptions(k=self.task.oe.k, tube=self.task.oe.tube))
         elif faces:
             pp = condense_sequence(t, ref, self.tool, self.platform, scene, self.target, faces, switches,
-                                   self.options, s_first=s_first)
+                                   self.options, s_first=s_first, free_start=True)
             if pp.status != "solved":
                 self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
                                 "new search")
-                pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options)
+                pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options,
+                                 free_start=True)
         else:
-            pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options)
+            pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options, free_start=True)
         self.replan_times.append(time.perf_counter() - start)
         if pp.status == "solved" and not pp.pushes:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")

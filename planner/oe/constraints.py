@@ -102,6 +102,18 @@ def reach_constraints(
     return [polygon, OutsideDisc(frame.base, r_in, family=family, window=window)]
 
 
+def reach_entry(rows: list[Constraint], points: NDArray[np.float64], tol: float = 1e-6) -> int:
+    """Index of the first of ``points`` (K, 2) [m] that satisfies every row of
+    :func:`reach_constraints` (``rows``) within ``tol`` [m]; ``K`` when none does."""
+    ok = np.ones(len(points), dtype=bool)
+    for c in rows:
+        if isinstance(c, PositionPolygon):
+            ok &= np.all(points @ c.A.T - c.b <= tol, axis=1)
+        elif isinstance(c, OutsideDisc):
+            ok &= np.hypot(*(points - c.center).T) >= c.radius - tol
+    return int(np.argmax(ok)) if ok.any() else len(points)
+
+
 def heading_gradient(frame: FaceFrame, p: NDArray[np.float64]) -> NDArray[np.float64]:
     """Gradient (K, 2) [rad/m] of the tool heading :meth:`FaceFrame.heading` with the object at
     ``p`` (K, 2) [m]: ``((-d_y, d_x) + offset d / u) / |d|^2`` with ``d = p - base``."""

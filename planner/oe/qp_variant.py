@@ -56,7 +56,7 @@ from dmp.qp import (
 )
 from dmp.qp.constraints.base import Constraint
 from dmp.validation import check_array, check_positive
-from planner.oe.constraints import ContactOnFace, HeadingCone, reach_constraints
+from planner.oe.constraints import ContactOnFace, HeadingCone, reach_constraints, reach_entry
 from planner.oe.contacts import PushRefused, realise_pushes, usable_range
 from planner.oe.face_frame import FaceFrame
 from planner.oe.objectives import RollingPenalty
@@ -169,9 +169,10 @@ class _Scene:
 
     def __init__(
         self, t: NDArray[np.float64], universal: NDArray[np.float64], tool: Tool, platform: OmniPlatform,
-        target: NDArray[np.float64], scene: Scene, opts: QPOptions,
+        target: NDArray[np.float64], scene: Scene, opts: QPOptions, free_start: bool = False,
     ) -> None:
         self.t, self.universal, self.target, self.opts, self.scene = t, universal, target, opts, scene
+        self.free_start = free_start
         self.tool, self.platform = tool, platform
         self.frames = {f: FaceFrame.build(tool, f, platform, scene) for f in tool.face_names}
         self._face_rows: dict[str, tuple[FaceGeometry, tuple[float, float], list[FaceFrame]]] = {}
@@ -194,7 +195,7 @@ class _Scene:
     def problem(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> FitProblem:
         edges = (self.t[0], *switches, self.t[-1])
         cons = list(self.fixed)
-        for face, lo, hi in zip(faces, edges[:-1], edges[1:], strict=True):
+        for n, (face, lo, hi) in enumerate(zip(faces, edges[:-1], edges[1:], strict=True)):
             fr = self.frames[face]
             g, (s_lo, s_hi), ends = self._face_rows[face]
             cons.append(HeadingCone(fr, window=(lo, hi)))
@@ -202,7 +203,11 @@ class _Scene:
             ang = np.arctan2(ref[:, 1], ref[:, 0])
             near = (float(ang.min()), float(ang.max())) if ang.size else None
             for end in ends:  # the Omni reaches the tool wherever the contact is on the face
-                cons += reach_constraints(end, window=(lo, hi), near=near)
+                rows = reach_constraints(end, window=(lo, hi), near=near)
+                if self.free_start and n == 0:
+                    start = self._entry(rows, lo, hi)
+                    rows = rows if start == lo else reach_constraints(end, window=(start, hi), near=near)
+                cons += rows
             if s_hi > s_lo:
                 cons.append(ContactOnFace(fr, g, self.scene.mechanics, self.scene.radius, s_lo, s_hi,
                                           max_contacts=self.opts.max_contacts, window=(lo, hi)))
@@ -216,6 +221,17 @@ class _Scene:
                 self.universal, self.scene, self.opts.recontact_price))
         return FitProblem(self.dmp, self.t, x0=self.universal[0], g=self.target, objectives=objectives,
                           constraints=cons)
+
+    def _entry(self, rows: list[Constraint], lo: float, hi: float) -> float:
+        """When one contact end's reach ``rows`` start to apply in a re-plan's first window
+        ``[lo, hi]`` [s]: where the reference first satisfies them. A re-plan starts where the object
+        is, possibly outside the region every contact on the face reaches it from though inside the
+        one the actual contact does (the realised tool poses are then checked against the joint
+        limits exactly, :func:`condense_sequence`); ``lo`` when the reference starts inside or never
+        enters."""
+        inside = np.flatnonzero((self.t >= lo - 1e-12) & (self.t <= hi + 1e-12))
+        k = reach_entry(rows, self.universal[inside])
+        return lo if k == 0 or k >= inside.size else float(self.t[inside[k]])
 
     def score(self, faces: tuple[str, ...], switches: tuple[float, ...], *, contact_rows: bool = True,
               warm: bool = False) -> _Scored:
@@ -283,11 +299,11 @@ class _Scene:
         return self._const
 
 
-def _precheck(scene: _Scene) -> str:
+def _precheck(scene: _Scene, check_start: bool = True) -> str:
     ends = np.vstack([scene.universal[0], scene.target])
     reach = {f: reach_distance(fr, ends) for f, fr in scene.frames.items()}
     for i, what in ((0, "start"), (1, "target")):
-        if all(r[i] > 0 for r in reach.values()):
+        if (i or check_start) and all(r[i] > 0 for r in reach.values()):
             gap = min(r[i] for r in reach.values())
             return f"{what} outside the Omni's reach for every face (nearest face {gap * 1e3:.1f} mm away)"
     return ""
@@ -300,13 +316,25 @@ def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.
     edges = (t[0], *best.switches, t[-1])
     spans = [(face, np.flatnonzero((t >= lo - 1e-12) & (t <= hi + 1e-12)))
              for face, lo, hi in zip(best.faces, edges[:-1], edges[1:], strict=True)]
-    return realise_pushes(scene.tool, spans[:spans_wanted], t, x, scene.scene, scene.platform, s_first)
+    pushes = realise_pushes(scene.tool, spans[:spans_wanted], t, x, scene.scene, scene.platform, s_first)
+    if scene.free_start:  # the fit's reach rows started late: the realised tool poses, exactly
+        from tools.omni.ik import joint_path
+
+        for p in pushes:
+            jp = joint_path(scene.platform, p.tool_pose[:, :2])
+            bad = np.flatnonzero(~np.isfinite(jp.heading) | (jp.violation > 0))
+            if bad.size:
+                where = np.round(p.tool_pose[bad[0], :2], 4).tolist()
+                raise PushRefused(f"face {p.face!r} would hold the tool at {where} m, outside the Omni's reach "
+                                  "or joint limits")
+    return pushes
 
 
 def condense_sequence(
     t: NDArray[np.float64], universal: NDArray[np.float64], tool: Tool, platform: OmniPlatform, scene: Scene,
     target: NDArray[np.float64], faces: tuple[str, ...], switches: tuple[float, ...],
     options: QPOptions | None = None, *, s_first: float | None = None, first_face_only: bool = False,
+    free_start: bool = False,
 ) -> PushPlan:
     """One push sequence (``faces`` with switches at times ``switches`` [s]) fitted to the path
     ``universal`` (T, 2) [m] on times ``t`` (T,) [s] and realised, without the search: the closed
@@ -314,8 +342,10 @@ def condense_sequence(
     The fit's non-convex rows are first linearised at ``universal`` (warm-started from the plan in
     force, when that is what it is). ``s_first`` [m]: where the first face already touches the
     object; ``first_face_only``: realise only the first face's pushes (what a receding horizon
-    executes before it re-plans; the pushes then end before the path does). ``infeasible`` with the
-    reason when the fit or the realisation fails."""
+    executes before it re-plans; the pushes then end before the path does); ``free_start``: the
+    first face's reach rows apply from where the path enters them (an object observed off the plan
+    may start outside the region every contact on the face reaches it from), the realised tool poses
+    then checked exactly. ``infeasible`` with the reason when the fit or the realisation fails."""
     start_time = time.perf_counter()
     opts = options or QPOptions()
     t = check_array(t, "t", ndim=1)
@@ -323,7 +353,7 @@ def condense_sequence(
     target = check_array(target, "target", shape=(2,))
     grid = np.linspace(t[0], t[-1], opts.n_samples)
     ref = np.column_stack([np.interp(grid, t, universal[:, j]) for j in range(2)])
-    fine = _Scene(grid, ref, tool, platform, target, scene, opts)
+    fine = _Scene(grid, ref, tool, platform, target, scene, opts, free_start)
     empty = np.zeros((0, 2))
     s = fine.score(tuple(faces), tuple(float(v) for v in switches), warm=True)
     if not s.feasible or s.result.rollout is None:
@@ -350,6 +380,8 @@ def condense_qp(
     scene: Scene,
     target: NDArray[np.float64] | None = None,
     options: QPOptions | None = None,
+    *,
+    free_start: bool = False,
 ) -> PushPlan:
     """Condense the generalized universal path for ``tool`` on ``platform`` (the ``qp`` variant).
 
@@ -360,6 +392,8 @@ def condense_qp(
         scene: the object (radius, push mechanics), the obstacles (discs and convex shapely
             polygons, kept ``scene.margin`` away from beyond the radius) and the friction-cone share.
         target: where the object must end [m] (default the path's end).
+        free_start: each candidate's first reach rows apply from where the path enters them (the
+            closed loop's re-plan from an observed object, :func:`condense_sequence`).
     Returns:
         a :class:`PushPlan` (``status == "infeasible"`` with the reason when no plan is found).
     """
@@ -375,19 +409,19 @@ def condense_qp(
     grid, ref = resample(opts.n_samples)
     if not isinstance(scene, Scene):
         raise InputError("scene", "a planner.scene.Scene", type(scene).__name__)
-    fine = _Scene(grid, ref, tool, platform, target, scene, opts)
+    fine = _Scene(grid, ref, tool, platform, target, scene, opts, free_start)
     # ranking needs no 1e-8 accuracy: the screening fits stop at 1e-5 (the final one at ``tol``)
     screen_opts = replace(opts, tol=max(opts.tol, 1e-5), accept=max(opts.accept, 1e-5),
                           scp_rtol=max(opts.scp_rtol, SCREEN_RTOL))
     screen = _Scene(*resample(min(opts.screen_samples, opts.n_samples)), tool, platform, target, scene,
-                    screen_opts)
+                    screen_opts, free_start)
 
     def infeasible(reason: str, n_qp: int = 0, cands: tuple = ()) -> PushPlan:
         empty = np.zeros((0, 2))
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=reason, n_qp=n_qp,
                         candidates=cands, metrics={"compute_time": time.perf_counter() - start_time})
 
-    why = _precheck(screen)
+    why = _precheck(screen, check_start=not free_start)
     if why:
         return infeasible(why)
     v_ref = np.gradient(screen.universal, screen.t, axis=0)
