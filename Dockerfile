@@ -28,8 +28,8 @@ COPY --from=build /wheels /wheels
 # bokeh: the scheduler's and the workers' dashboards (optional for the batch)
 RUN pip install --no-cache-dir /wheels/*.whl "bokeh>=3.1" \
     && rm -rf /wheels \
-    && python -c "import planner.batch.execute, planner.solve, planner.closed_loop, planner.simulate; \
-from dmp.qp.native import compiled_path; assert compiled_path(), 'the compiled core was not built'"
+    && python -c "import tooltransfer.planner.batch.execute, tooltransfer.planner.solve, tooltransfer.planner.closed_loop, tooltransfer.planner.simulate; \
+from tooltransfer.dmp.qp.native import compiled_path; assert compiled_path(), 'the compiled core was not built'"
 # `dask-worker` and `dask-scheduler`: the commands dask's Kubernetes operator starts its pods with
 RUN printf '#!/bin/sh\nexec dask worker "$@"\n' > /usr/local/bin/dask-worker \
     && printf '#!/bin/sh\nexec dask scheduler "$@"\n' > /usr/local/bin/dask-scheduler \

@@ -41,7 +41,7 @@ docs: $(PY)
 # Deterministic (the same bytes on the same versions of the dependencies); about 10 s.
 figures: $(PY)
 	$(PY) -m pip install -q -e .
-	$(PY) -m planner.figures docs/images
+	$(PY) -m tooltransfer.planner.figures docs/images
 
 bench: $(PY)
 	$(PY) -m pip install -q -e ".[bench]"

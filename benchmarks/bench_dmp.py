@@ -26,10 +26,10 @@ import time
 
 import numpy as np
 
-from dmp import DMP
-from dmp.exact import RESPONSE_CACHE
-from dmp.qp import native, solve_fit
-from problems.fit_cases import l_push_case, minimum_jerk
+from tooltransfer.dmp import DMP
+from tooltransfer.dmp.exact import RESPONSE_CACHE
+from tooltransfer.dmp.qp import native, solve_fit
+from tooltransfer.problems.fit_cases import l_push_case, minimum_jerk
 
 
 def generated_paths(n: int, samples: int = 1000) -> list[tuple[np.ndarray, np.ndarray, str]]:

@@ -2,20 +2,20 @@
 
 Run with `python benchmarks/bench_execution.py` (or `make bench-exec`). For every task:
 
-1. plan it (:func:`planner.solve.solve`): status, reason, planning wall and CPU time;
-2. a solved plan is executed open loop (:func:`planner.simulate.simulate_plan`) and closed loop
-   (:func:`planner.closed_loop.execute_closed_loop`, a fixed camera-noise seed): the puck's final
+1. plan it (:func:`tooltransfer.planner.solve.solve`): status, reason, planning wall and CPU time;
+2. a solved plan is executed open loop (:func:`tooltransfer.planner.simulate.simulate_plan`) and closed loop
+   (:func:`tooltransfer.planner.closed_loop.execute_closed_loop`, a fixed camera-noise seed): the puck's final
    distance to the target [m], the closed loop's status, re-plans (count and wall times) and
    re-contacts. An exception in either (or in the planner) is recorded as
    ``"exception: <type>: <message>"`` and counted; the benchmark goes on;
 3. the model prediction error: the tool poses MuJoCo executed open loop (its recorded track)
-   replayed through the push model (:func:`tools.pushing.forward.simulate`, the plan's
+   replayed through the push model (:func:`tooltransfer.tools.pushing.forward.simulate`, the plan's
    ``mechanics_mu``, ``mechanics_c``) from the start, the predicted final puck against the recorded
    one (the recording's object track is the true pose) [m]; with the plan's self-consistency and
    planned re-contacts;
 4. unless ``--no-mismatch``, the plan on mismatched plants (:data:`MISMATCH_PLANTS`), open and closed
    loop: MuJoCo with tool friction 0.5 and table friction 0.2, and the quasi-static
-   :class:`planner.execution.ModelPlant` with mu and c 0.6 and 1.4 times the plan's (camera noise
+   :class:`tooltransfer.planner.execution.ModelPlant` with mu and c 0.6 and 1.4 times the plan's (camera noise
    1.5 mm; open loop there is the push model run on the plan's tool poses).
 
 Tasks: the generated batch ``problems/batch/execution_60.yaml`` (60 tasks, five library tools in
@@ -163,7 +163,7 @@ def _count(v: Any) -> int | None:
 
 
 def _task(job: Job) -> Any:
-    from problems.task import Variants, task_from_dict
+    from tooltransfer.problems.task import Variants, task_from_dict
 
     task = task_from_dict(job.data, job.source)
     return task.model_copy(update={"variants": Variants(oe=job.oe, ss=job.ss)})
@@ -171,21 +171,21 @@ def _task(job: Job) -> Any:
 
 def _mechanics(plan: Any, task: Any, source: str) -> Any:
     """The push mechanics the plan was made with (its metrics; the task's, for a plan without them)."""
-    from tools.pushing.mechanics import PushMechanics
+    from tooltransfer.tools.pushing.mechanics import PushMechanics
 
     mu, c = _finite(plan.metrics.get("mechanics_mu")), _finite(plan.metrics.get("mechanics_c"))
     if mu is not None and c is not None:
         return PushMechanics(mu, c, "given")
-    from planner.solve import task_mechanics, task_skills
+    from tooltransfer.planner.solve import task_mechanics, task_skills
 
     return task_mechanics(task, task_skills(task, source, need_ss=False))
 
 
 def _mechanics_source(job: Job) -> str | None:
     """Where the planner's mechanics for the job's task come from (``identified``, ``task``,
-    ``default``; :func:`planner.solve.task_mechanics`), None when that cannot be told."""
+    ``default``; :func:`tooltransfer.planner.solve.task_mechanics`), None when that cannot be told."""
     try:
-        from planner.solve import task_mechanics, task_skills
+        from tooltransfer.planner.solve import task_mechanics, task_skills
 
         task = _task(job)
         return task_mechanics(task, task_skills(task, job.source, need_ss=task.variants.ss != "arch")).source
@@ -195,12 +195,12 @@ def _mechanics_source(job: Job) -> str | None:
 
 def model_prediction(plan: Any, execution: Any, mech: Any) -> tuple[float, float]:
     """The push model's prediction of an open-loop run: the tool poses MuJoCo executed (its recorded
-    track) replayed through :func:`tools.pushing.forward.simulate` with ``mech`` from the task's
+    track) replayed through :func:`tooltransfer.tools.pushing.forward.simulate` with ``mech`` from the task's
     start. Returns the predicted final puck's distance to the recorded final puck [m] (the
     recording's object track is the true pose: the platform adds no camera noise) and the largest
     distance along the run (the prediction at the object's sample times)."""
-    from problems.task import task_from_dict, task_tool
-    from tools.pushing.forward import simulate
+    from tooltransfer.problems.task import task_from_dict, task_tool
+    from tooltransfer.tools.pushing.forward import simulate
 
     task = task_from_dict(plan.task, "plan.task")
     ex = execution
@@ -224,12 +224,12 @@ def run_mismatch(plan: Any, job: Job, mech: Any) -> dict[str, Row]:
     job runs it. Per plant: ``open_loop_status`` (``"ok"`` or the exception), ``open_loop_error``,
     ``closed_loop_status``, ``closed_loop_reason``, ``closed_loop_error``, ``closed_loop_n_replans``,
     ``closed_loop_replan_times``, ``mechanics`` ([mu, c] of the model plants) and ``wall`` [s]."""
-    from planner.closed_loop import execute_closed_loop
-    from planner.execution import ModelPlant
-    from planner.simulate import simulate_plan, task_sim_config
-    from problems.task import task_from_dict, task_platform, task_tool
-    from tools.pushing.forward import simulate
-    from tools.pushing.mechanics import PushMechanics
+    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution import ModelPlant
+    from tooltransfer.planner.simulate import simulate_plan, task_sim_config
+    from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
+    from tooltransfer.tools.pushing.forward import simulate
+    from tooltransfer.tools.pushing.mechanics import PushMechanics
 
     task = task_from_dict(plan.task, "plan.task")
     tool = task_tool(task)
@@ -299,7 +299,7 @@ def run_task(job: Job) -> Row:
                 "closed_loop_wall": None, "closed_loop_n_pushes": None, "closed_loop_n_switches": None,
                 "closed_loop_n_recontacts": None, "closed_loop_n_replans": None, "closed_loop_replan_times": None,
                 "mismatch": None, "mismatch_wall": None, "worker": os.getpid()}
-    from planner.solve import solve
+    from tooltransfer.planner.solve import solve
 
     wall, cpu = time.perf_counter(), time.process_time()
     try:
@@ -320,8 +320,8 @@ def run_task(job: Job) -> Row:
                time_skills=_finite(m.get("time_skills")), time_oe=_finite(m.get("time_oe")),
                time_switches_and_timing=_finite(m.get("time_switches_and_timing")))
     if plan.status == "solved":
-        from planner.closed_loop import execute_closed_loop
-        from planner.simulate import simulate_plan
+        from tooltransfer.planner.closed_loop import execute_closed_loop
+        from tooltransfer.planner.simulate import simulate_plan
 
         row.update(n_switches=len(plan.switches), duration=_finite(m.get("duration")))
         mech = None
@@ -373,10 +373,10 @@ def run_task(job: Job) -> Row:
 
 def warm_up(jobs: Sequence[tuple[dict[str, Any], str]]) -> None:
     """Import the planner and the platform and learn (or load) the skills the tasks name."""
-    import planner.closed_loop
-    import planner.simulate  # noqa: F401
-    from planner.solve import task_skills
-    from problems.task import task_from_dict
+    import tooltransfer.planner.closed_loop
+    import tooltransfer.planner.simulate  # noqa: F401
+    from tooltransfer.planner.solve import task_skills
+    from tooltransfer.problems.task import task_from_dict
 
     for data, source in jobs:
         task = task_from_dict(data, source)
@@ -408,9 +408,9 @@ def make_jobs(batch: Path, count: int | None, variants: Sequence[tuple[str, str]
     tasks in order, each with every variant."""
     import yaml
 
-    from planner.batch.generate import generate_tasks
-    from planner.batch.spec import load_batch
-    from problems.task import load_task, task_obstacles
+    from tooltransfer.planner.batch.generate import generate_tasks
+    from tooltransfer.planner.batch.spec import load_batch
+    from tooltransfer.problems.task import load_task, task_obstacles
 
     spec = load_batch(batch)
     tasks = generate_tasks(spec, batch)
@@ -865,7 +865,7 @@ def main(argv: Sequence[str] | None = None) -> None:
               f"variants {variants}; closed loop {'on, seed ' + str(args.seed) if args.closed_loop else 'off'}; "
               f"mismatched plants {'on' if args.mismatch else 'off'}); "
               f"{args.workers} workers")
-    from planner.skills import cache_dir
+    from tooltransfer.planner.skills import cache_dir
 
     con.print(f"commit {commit}; skills cache {cache_dir()}")
     done = 0

@@ -15,10 +15,10 @@ import time
 
 import numpy as np
 
-from planner.oe import condense_qp
-from planner.oe.mapping_variant import condense_mapping
-from planner.scene import Scene
-from problems.paper_cases import transfer_case
+from tooltransfer.planner.oe import condense_qp
+from tooltransfer.planner.oe.mapping_variant import condense_mapping
+from tooltransfer.planner.scene import Scene
+from tooltransfer.problems.paper_cases import transfer_case
 
 
 def main(reps: int = 7) -> None:

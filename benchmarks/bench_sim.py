@@ -5,7 +5,7 @@
    and 200 Hz (tool); median of several runs, and the real-time factor (target: at least 10x,
    i.e. at most 1 s of wall time). The model is built once (its time is printed apart).
 2. Batch throughput: 8 such plans (pucks at different places) one after another on one
-   :class:`SimPlatform`, then through :func:`tools.sim.execute_many` on 1 and 2 threads
+   :class:`SimPlatform`, then through :func:`tooltransfer.tools.sim.execute_many` on 1 and 2 threads
    (``mujoco.rollout``), in simulated seconds per wall second; the results are checked equal.
 
 Single-threaded BLAS (``OPENBLAS_NUM_THREADS=1``); the machine is shared, so figures vary by some
@@ -23,10 +23,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from tools import contact_on_platform, load_tool
-from tools.omni.platform import OmniPlatform
-from tools.sim import Job, SimPlatform, execute_many
-from tools.sim.reference import tool_path_joints
+from tooltransfer.tools import contact_on_platform, load_tool
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.sim import Job, SimPlatform, execute_many
+from tooltransfer.tools.sim.reference import tool_path_joints
 
 DURATION = 10.0
 REPEATS = 5

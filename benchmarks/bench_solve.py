@@ -27,8 +27,8 @@ def main(reps: int = 5) -> None:
         t0 = time.perf_counter()
         subprocess.run(cmd, check=True, capture_output=True)
         walls.append(time.perf_counter() - t0)
-    from planner.solve import solve
-    from problems.task import load_task
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import load_task
 
     task = load_task(TASK)
     solve(task, TASK)

@@ -19,11 +19,11 @@ from typing import Any
 
 import numpy as np
 
-from planner.ss import SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
-from planner.ss.adapter import dataset_switches, default_dataset
-from planner.ss.cases import FIG11, fig11_task, random_task
-from planner.ss.nlp import Capsule
-from tools.library import load_tool
+from tooltransfer.planner.ss import SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
+from tooltransfer.planner.ss.adapter import dataset_switches, default_dataset
+from tooltransfer.planner.ss.cases import FIG11, fig11_task, random_task
+from tooltransfer.planner.ss.nlp import Capsule
+from tooltransfer.tools.library import load_tool
 
 
 def _ms(x: list[float]) -> str:
@@ -127,9 +127,9 @@ _FRESH = """
 import time
 t0 = time.perf_counter()
 import casadi as ca
-from planner.ss.bodies import all_bodies
-from planner.ss.cases import fig11_task
-from planner.ss.nlp import build_nlp
+from tooltransfer.planner.ss.bodies import all_bodies
+from tooltransfer.planner.ss.cases import fig11_task
+from tooltransfer.planner.ss.nlp import build_nlp
 t1 = time.perf_counter()
 task = fig11_task("fig11a")
 bodies = all_bodies(task.shape, task.obstacles)

@@ -5,8 +5,8 @@ Notation used throughout (paper eqs. 1-5, DESIGN section 3): positions ``x`` [m]
 functions ``psi_i(s)`` per dimension, weights ``W`` of shape (N, n), flattened row-major into ``w``.
 """
 
-from dmp.affine import AffineRollout
-from dmp.errors import (
+from tooltransfer.dmp.affine import AffineRollout
+from tooltransfer.dmp.errors import (
     InfeasibleError,
     InputError,
     SkillFileError,
@@ -14,8 +14,8 @@ from dmp.errors import (
     ToolTransferError,
     UnknownSolverError,
 )
-from dmp.primitive import DMP
-from dmp.trajectory import Rollout
+from tooltransfer.dmp.primitive import DMP
+from tooltransfer.dmp.trajectory import Rollout
 
 __all__ = [
     "DMP",

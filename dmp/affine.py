@@ -21,7 +21,7 @@ class AffineRollout:
     Attributes:
         t: absolute sample times, shape (T,) [s].
         x_free, v_free: unforced positions [m] and velocities [m/s], shape (T, n).
-        Gx, Gv: basis responses, shape (T, N) (see :mod:`dmp.exact`).
+        Gx, Gv: basis responses, shape (T, N) (see :mod:`tooltransfer.dmp.exact`).
         M: forcing-term scaling matrix, shape (n, n).
         psi: basis values at the samples, shape (T, N).
     """

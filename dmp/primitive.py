@@ -11,14 +11,14 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.affine import AffineRollout
-from dmp.basis import DEFAULT_GAMMA, basis, centres_and_widths, phase
-from dmp.errors import InputError
-from dmp.exact import RESPONSE_CACHE, SystemParams, free_response
-from dmp.integrate import rk4_rollout
-from dmp.scaling import SCALING_MODES, ScalingMode, scaling_matrix
-from dmp.trajectory import Rollout
-from dmp.validation import check_array, check_positive, check_time
+from tooltransfer.dmp.affine import AffineRollout
+from tooltransfer.dmp.basis import DEFAULT_GAMMA, basis, centres_and_widths, phase
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.exact import RESPONSE_CACHE, SystemParams, free_response
+from tooltransfer.dmp.integrate import rk4_rollout
+from tooltransfer.dmp.scaling import SCALING_MODES, ScalingMode, scaling_matrix
+from tooltransfer.dmp.trajectory import Rollout
+from tooltransfer.dmp.validation import check_array, check_positive, check_time
 
 FitMethod = Literal["forcing", "trajectory"]
 
@@ -50,8 +50,8 @@ class DMP:
         \tau \dot v = \alpha_z(\beta_z(g - x) - v) + f(s), \quad \tau \dot x = v, \quad
         \tau \dot s = -\gamma s,
 
-    forcing term (eq. 3) ``f(s) = M(x0, g) @ W.T @ psi(s)`` with ``psi`` from :mod:`dmp.basis`
-    and ``M`` the scaling matrix of the chosen mode (:mod:`dmp.scaling`; the paper prints
+    forcing term (eq. 3) ``f(s) = M(x0, g) @ W.T @ psi(s)`` with ``psi`` from :mod:`tooltransfer.dmp.basis`
+    and ``M`` the scaling matrix of the chosen mode (:mod:`tooltransfer.dmp.scaling`; the paper prints
     ``"none"``). Fitting (eqs. 4-5) regresses ``W`` on the forcing targets
     ``f_j = tau^2 xdd_j - alpha_z (beta_z (g - x_j) - tau xd_j)`` of all demonstrations at once
     (``method="forcing"``), or on the positions themselves through the exact affine rollout
@@ -253,7 +253,7 @@ class DMP:
             rk4_step: largest RK4 step [s].
             weights: override the fitted weights, shape (N, n) or (N*n,).
         Returns:
-            :class:`~dmp.trajectory.Rollout` with ``t``, ``x``, ``v``, ``a``, each (T, n) but ``t``.
+            :class:`~tooltransfer.dmp.trajectory.Rollout` with ``t``, ``x``, ``v``, ``a``, each (T, n) but ``t``.
         """
         tt = check_time(t, "t", min_len=2)
         x0a, ga, v0a, taua = self._resolve(x0, g, v0, tau)
@@ -285,14 +285,14 @@ class DMP:
 
     # ------------------------------------------------------------------ files
     def save(self, path: str) -> None:
-        """Save the skill as a versioned JSON file (see :mod:`dmp.skill_file`)."""
-        from dmp.skill_file import save_dmp
+        """Save the skill as a versioned JSON file (see :mod:`tooltransfer.dmp.skill_file`)."""
+        from tooltransfer.dmp.skill_file import save_dmp
 
         save_dmp(self, path)
 
     @classmethod
     def load(cls, path: str) -> DMP:
-        """Load a skill saved by :meth:`save`; raises :class:`~dmp.errors.SkillFileError`."""
-        from dmp.skill_file import load_dmp
+        """Load a skill saved by :meth:`save`; raises :class:`~tooltransfer.dmp.errors.SkillFileError`."""
+        from tooltransfer.dmp.skill_file import load_dmp
 
         return load_dmp(path)

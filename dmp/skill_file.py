@@ -16,10 +16,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dmp.errors import InputError, SkillFileError
+from tooltransfer.dmp.errors import InputError, SkillFileError
 
 if TYPE_CHECKING:
-    from dmp.primitive import DMP
+    from tooltransfer.dmp.primitive import DMP
 
 FORMAT = "tooltransfer.dmp"
 VERSION = 1
@@ -53,7 +53,7 @@ def dmp_to_dict(d: DMP) -> dict[str, Any]:
 
 def dmp_from_dict(data: dict[str, Any], source: str = "<dict>") -> DMP:
     """Rebuild a DMP from :func:`dmp_to_dict` output; raises :class:`SkillFileError`."""
-    from dmp.primitive import DMP
+    from tooltransfer.dmp.primitive import DMP
 
     if not isinstance(data, dict) or "format" not in data:
         raise SkillFileError(source, "not a tooltransfer skill file (no 'format' field)")
@@ -98,7 +98,7 @@ def dmp_from_dict(data: dict[str, Any], source: str = "<dict>") -> DMP:
 def save_dmp(d: DMP, path: str | Path) -> None:
     """Write ``d`` to ``path`` as JSON, atomically: a temporary file beside it, flushed to disk,
     replaces it in one step (so no half-written skill file is ever left; the same as
-    ``problems.atomic``, kept here so that ``dmp`` depends on no other package)."""
+    ``tooltransfer.problems.atomic``, kept here so that ``dmp`` depends on no other package)."""
     import os
     import secrets
 

@@ -1,12 +1,12 @@
 """Closed loop on a plant the plan mispredicts, through the ``Plant`` protocol.
 
 The plan is made with the push mechanics identified from the demonstrations (``mu``, ``c``). The
-plant here is :class:`planner.execution.ModelPlant`: the quasi-static push model with ``mu`` and
+plant here is :class:`tooltransfer.planner.execution.ModelPlant`: the quasi-static push model with ``mu`` and
 ``c`` scaled (0.6x by default), a camera with 1.5 mm noise per frame, and the Omni's joint limits
 checked on every commanded path. The same plan is executed twice on it:
 
 * open loop: the whole planned tool path at once, the way the paper executed its plans;
-* closed loop: :func:`planner.closed_loop.execute_closed_loop`, which pushes a chunk, observes the
+* closed loop: :func:`tooltransfer.planner.closed_loop.execute_closed_loop`, which pushes a chunk, observes the
   puck, re-plans the rest when it is off the plan, and identifies ``mu`` and ``c`` again when the
   model mispredicts.
 
@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-import problems
-from planner.execution import ModelPlant, Plant
+from tooltransfer import problems
+from tooltransfer.planner.execution import ModelPlant, Plant
 
 TRANSFER = Path(problems.__file__).resolve().parent / "paper" / "transfer_tool2.yaml"
 
@@ -74,10 +74,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=3, help="camera noise seed")
     args = ap.parse_args(argv)
 
-    from planner.closed_loop import execute_closed_loop
-    from planner.solve import solve
-    from problems.task import load_task, task_platform, task_tool
-    from tools.pushing.mechanics import PushMechanics
+    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import load_task, task_platform, task_tool
+    from tooltransfer.tools.pushing.mechanics import PushMechanics
 
     task = load_task(args.task)
     plan = solve(task, args.task)

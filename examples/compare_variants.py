@@ -17,7 +17,7 @@ import argparse
 import csv
 from pathlib import Path
 
-import problems
+from tooltransfer import problems
 
 TRANSFER = Path(problems.__file__).resolve().parent / "paper" / "transfer_tool2.yaml"
 
@@ -48,8 +48,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--csv", type=Path, help="write the table as CSV")
     args = ap.parse_args(argv)
 
-    from planner.solve import solve
-    from problems.task import load_task
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import load_task
 
     task = load_task(args.task)
     rows: dict[str, dict[str, object]] = {}
@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
         row: dict[str, object] = {"status": plan.status, "reason": plan.reason}
         row.update({key: plan.metrics.get(key) for key, *_ in METRICS})
         if args.simulate and plan.status == "solved":
-            from planner.simulate import simulate_plan
+            from tooltransfer.planner.simulate import simulate_plan
 
             row["open_loop_error"] = simulate_plan(plan).final_error
         rows[pair] = row

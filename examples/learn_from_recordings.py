@@ -12,7 +12,7 @@ demonstration (pushes per face, switches), learns the OE and SS skills and the p
     python examples/learn_from_recordings.py --convert out/examples/converted  # write a dataset from arrays
 
 ``--convert DIR`` shows the other half: recordings you hold as arrays (a camera track and an encoder
-track, each on its own clock) written as a dataset folder with :func:`problems.dataset.write_dataset`.
+track, each on its own clock) written as a dataset folder with :func:`tooltransfer.problems.dataset.write_dataset`.
 Edit :func:`my_recordings` to read your own logs; here it replays the committed dataset's arrays.
 """
 
@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-import problems
-from problems.dataset import Demonstration, Meta, load_dataset, write_dataset
+from tooltransfer import problems
+from tooltransfer.problems.dataset import Demonstration, Meta, load_dataset, write_dataset
 
 DEMOS = Path(problems.__file__).resolve().parent / "data" / "finger_demos"
 
@@ -55,7 +55,7 @@ def my_recordings() -> tuple[Meta, list[Demonstration]]:
 
 def describe(folder: Path) -> None:
     """What the planner will see in the dataset: streams, rates and the segmentation."""
-    from planner.segmentation import segment
+    from tooltransfer.planner.segmentation import segment
 
     ds = load_dataset(folder)                   # raises DatasetError naming the file, row and column
     tool = ds.tool()
@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="first write my_recordings() as a dataset folder DIR, then learn from it")
     args = ap.parse_args(argv)
 
-    from planner.skills import learn_skills
+    from tooltransfer.planner.skills import learn_skills
 
     folder = args.dataset
     if args.convert is not None:

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import yaml
 
-import problems
-from tools import load_tool
+from tooltransfer import problems
+from tooltransfer.tools import load_tool
 
 HERE = Path(__file__).resolve().parent
 SCENE = Path(problems.__file__).resolve().parent / "paper" / "transfer_tool2.yaml"
@@ -37,8 +37,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--plot", action="store_true", help="draw the plan (Fig. 12 style)")
     args = ap.parse_args(argv)
 
-    from planner.solve import solve
-    from problems.task import resolve, task_from_dict
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import resolve, task_from_dict
 
     tool = load_tool(args.tool)
     print(f"tool {tool.name!r}: a_t {1e3 * tool.a_t:.0f} mm, faces "
@@ -69,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     plan_file = plan.write(args.out / "plan.json")
     print(f"wrote {task_file} and {plan_file}")
     if args.plot and plan.status == "solved":
-        from planner.plots.execution import plot_plan
+        from tooltransfer.planner.plots.execution import plot_plan
 
         print(f"wrote {plot_plan(plan, args.out / 'plan.png')}")
     return 0 if plan.status == "solved" else 1

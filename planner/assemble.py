@@ -25,12 +25,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.oe.push_plan import Push, PushPlan
-from planner.timing import min_jerk_along, min_jerk_duration, stretch_factor
-from tools.model import Tool
-from tools.omni.ik import joint_path
-from tools.omni.platform import OmniPlatform
-from tools.pose import rotation
+from tooltransfer.planner.oe.push_plan import Push, PushPlan
+from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration, stretch_factor
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.omni.ik import joint_path
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pose import rotation
 
 
 @dataclass(frozen=True)

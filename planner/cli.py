@@ -4,7 +4,7 @@ Exit codes: 0 done (solved), 1 infeasible, 2 bad input (a one-line message namin
 field, or the option and the path, never a traceback: ``-v`` adds it for a bug report), 130
 stopped by Ctrl-C (one line). Output paths are checked before any work (a folder where a file is
 expected, a missing folder, a place that cannot be written: exit 2 naming the option), and every
-file is written atomically (:mod:`problems.atomic`). Every command has ``--help`` with an example.
+file is written atomically (:mod:`tooltransfer.problems.atomic`). Every command has ``--help`` with an example.
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ def _execute(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str,
     summary fields and the executions by mode."""
     import numpy as np
 
-    from planner.simulate import simulate_plan
+    from tooltransfer.planner.simulate import simulate_plan
 
     with _spinner("simulating open loop", quiet=quiet):
         rep = simulate_plan(plan)  # type: ignore[arg-type]
@@ -72,7 +72,7 @@ def _execute(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str,
         "real_time_factor": float(plan.t[-1] / rep.wall_time)}  # type: ignore[attr-defined]
     executions: dict[str, object] = {"open loop": rep.execution}
     if closed_loop:
-        from planner.closed_loop import execute_closed_loop
+        from tooltransfer.planner.closed_loop import execute_closed_loop
 
         with _spinner("executing closed loop (re-planning from the observed puck)", quiet=quiet):
             cl = execute_closed_loop(plan)  # type: ignore[arg-type]
@@ -87,7 +87,7 @@ def _execute(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str,
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from planner.demo import run_demo
+    from tooltransfer.planner.demo import run_demo
 
     print(run_demo(args.out))
     print(f"wrote the figures, plan files and report.txt to {args.out}/")
@@ -100,7 +100,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    from planner.demo import compare
+    from tooltransfer.planner.demo import compare
 
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), transient=True,
                   disable=args.json) as bar:
@@ -120,15 +120,15 @@ def _cmd_demos(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     if args.calibration:
-        from problems.dataset import load_meta
-        from tools.operator.calibration import generate_calibration
+        from tooltransfer.problems.dataset import load_meta
+        from tooltransfer.tools.operator.calibration import generate_calibration
 
         out = generate_calibration(args.out, seed=args.seed, tool=args.tool)
         n = len(load_meta(out).demonstrations)
         print(f"wrote a calibration recording ({n} trials of straight pushes) to {out} in "
               f"{time.perf_counter() - t0:.1f} s")
         return EXIT_OK
-    from tools.operator.generate import generate_demonstrations
+    from tooltransfer.tools.operator.generate import generate_demonstrations
 
     out = generate_demonstrations(args.out, n=args.n, seed=args.seed, tool=args.tool)
     print(f"wrote {args.n} demonstrations to {out} in {time.perf_counter() - t0:.1f} s")
@@ -138,7 +138,7 @@ def _cmd_demos(args: argparse.Namespace) -> int:
 def _cmd_learn(args: argparse.Namespace) -> int:
     import time
 
-    from planner.skills import learn_skills
+    from tooltransfer.planner.skills import learn_skills
 
     t0 = time.perf_counter()
     skills = learn_skills(args.dataset, k=args.k, virtual=args.virtual, calibration=args.calibration)
@@ -161,8 +161,8 @@ def _cmd_learn(args: argparse.Namespace) -> int:
 def _cmd_segment(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from planner.segmentation import load_fixed_points, segment
-    from problems.dataset import load_dataset
+    from tooltransfer.planner.segmentation import load_fixed_points, segment
+    from tooltransfer.problems.dataset import load_dataset
 
     ds = load_dataset(args.dataset)
     tool = ds.tool()
@@ -178,7 +178,7 @@ def _cmd_segment(args: argparse.Namespace) -> int:
         if args.verbose:
             print(f"    {faces}")
     if args.figure:
-        from planner.plots.demonstrations import plot_demonstrations
+        from tooltransfer.planner.plots.demonstrations import plot_demonstrations
 
         with _written(args.figure) as tmp:
             plot_demonstrations(ds, segs, tool, tmp)
@@ -189,9 +189,9 @@ def _cmd_segment(args: argparse.Namespace) -> int:
 def _cmd_solve(args: argparse.Namespace) -> int:
     import json
 
-    from dmp.errors import InputError
-    from planner.solve import solve
-    from problems.task import load_task
+    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import load_task
 
     task = load_task(args.task)
     figure = None
@@ -225,7 +225,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         outcome, executions = _execute(plan, closed_loop=True, quiet=args.json)
         summary.update(outcome)
     if args.plot and plan.status == "solved":
-        from planner.figures import fig12
+        from tooltransfer.planner.figures import fig12
 
         with _written(figure) as tmp:
             fig12(plan, tmp, executions)
@@ -240,8 +240,8 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import json
 
-    from planner.plan import PlanFileError, read_plan
-    from planner.simulate import PlanLimitError, check_plan
+    from tooltransfer.planner.plan import PlanFileError, read_plan
+    from tooltransfer.planner.simulate import PlanLimitError, check_plan
 
     plan = read_plan(args.plan)
     if plan.status != "solved" and not (args.force and plan.status == "violated"):
@@ -259,13 +259,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         print(f"tooltransfer: warning: {exc}; running it anyway (--force)", file=sys.stderr)
     summary, executions = _execute(plan, closed_loop=args.closed_loop, quiet=args.json)
     if args.figure:
-        from planner.figures import fig12
+        from tooltransfer.planner.figures import fig12
 
         with _written(args.figure) as tmp:
             fig12(plan, tmp, executions)
         summary["figure"] = str(args.figure)
     if args.gif:
-        from planner.figures import execution_gif
+        from tooltransfer.planner.figures import execution_gif
 
         with _spinner(f"writing {args.gif}", quiet=args.json), _written(args.gif) as tmp:
             execution_gif(plan, list(executions.values())[-1], tmp)
@@ -278,17 +278,17 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    from planner.export import run_export
+    from tooltransfer.planner.export import run_export
 
     return run_export(args)
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
-    from problems.task import task_json_schema
+    from tooltransfer.problems.task import task_json_schema
 
     text = task_json_schema()
     if args.out:
-        from problems.atomic import write_text
+        from tooltransfer.problems.atomic import write_text
 
         write_text(args.out, text + "\n")
         print(f"wrote {args.out}")
@@ -298,7 +298,7 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 
 
 def _cmd_tools(args: argparse.Namespace) -> int:
-    from planner.plots.tool_library import plot_tool_library
+    from tooltransfer.planner.plots.tool_library import plot_tool_library
 
     with _written(args.out) as tmp:
         plot_tool_library(tmp)
@@ -309,8 +309,9 @@ def _cmd_tools(args: argparse.Namespace) -> int:
 @contextmanager
 def _written(path: Path) -> Iterator[Path]:
     """A temporary path beside ``path`` for a writer that takes a path (a figure): it replaces
-    ``path`` once the writer is done, and is removed if the writer fails (:func:`problems.atomic.atomic_path`)."""
-    from problems.atomic import atomic_path
+    ``path`` once the writer is done, and is removed if the writer fails
+    (:func:`tooltransfer.problems.atomic.atomic_path`)."""
+    from tooltransfer.problems.atomic import atomic_path
 
     with atomic_path(path) as tmp:
         yield tmp
@@ -348,10 +349,10 @@ def _writable(folder: Path) -> str:
 
 
 def check_output(option: str, path: Path, kind: str = "file", *, make_folders: bool = False) -> None:
-    """Check an output path before any work is done; raise :class:`~dmp.errors.InputError` naming
+    """Check an output path before any work is done; raise :class:`~tooltransfer.dmp.errors.InputError` naming
     ``option`` and ``path``. ``kind``: ``"file"`` (its folder must exist, unless ``make_folders``),
     ``"folder"`` (made with its parents when missing)."""
-    from dmp.errors import InputError
+    from tooltransfer.dmp.errors import InputError
 
     path = Path(path)
     if len(os.fsencode(str(path))) > 4000 or any(len(os.fsencode(part)) > 255 for part in path.parts):
@@ -413,8 +414,8 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 def _message(exc: BaseException) -> str:
     """The error's message on one line, a long value in it cut (the field and the file stay)."""
-    from dmp.errors import InputError
-    from tools.yaml_file import clip
+    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.tools.yaml_file import clip
 
     text = str(exc)
     if isinstance(exc, InputError) and exc.got is not None:
@@ -545,7 +546,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = _add(sub, "tools", "draw the tool library (faces, cones) and the Omni's reach",
              "tooltransfer tools --out out/tools.png", _cmd_tools)
     p.add_argument("--out", type=Path, default=DEFAULT_TOOLS_FIGURE, help="output PNG")
-    from planner.batch.cli import add_batch_parser
+    from tooltransfer.planner.batch.cli import add_batch_parser
 
     add_batch_parser(sub, _add)
     return parser
@@ -582,7 +583,7 @@ def main(argv: list[str] | None = None) -> int:
         _handled_interrupt()
         return EXIT_INTERRUPTED
     except Exception as exc:  # one line, whatever went wrong (-v: the traceback too)
-        from dmp.errors import ToolTransferError
+        from tooltransfer.dmp.errors import ToolTransferError
 
         if verbose:
             traceback.print_exc()

@@ -1,15 +1,15 @@
 """Closed-loop execution as receding-horizon re-planning with the planner itself (model predictive control).
 
-The plan's pushes are executed a chunk at a time through a :class:`planner.execution.Plant` (the
+The plan's pushes are executed a chunk at a time through a :class:`tooltransfer.planner.execution.Plant` (the
 MuJoCo platform by default, a mismatched quasi-static model in tests, a real Omni with a camera).
 After each chunk the loop observes the resting object (the mean of ``frames`` camera frames) and
 re-solves the rest of the task from there with the same condensing as the plan:
 
 1. the rest of the plan's object path, shifted to start at the observed object and blended back to
    the target (a reference from here), with the rest of the plan's face sequence and switch times:
-   one fit of that sequence (:func:`planner.oe.qp_variant.condense_sequence`, the contact starting
+   one fit of that sequence (:func:`tooltransfer.planner.oe.qp_variant.condense_sequence`, the contact starting
    where the face already touches the object), and when it fails a new sequence search
-   (:func:`planner.oe.qp_variant.condense_qp`) from here; ``mapping`` plans re-plan with the mapping;
+   (:func:`tooltransfer.planner.oe.qp_variant.condense_qp`) from here; ``mapping`` plans re-plan with the mapping;
 2. the next chunk: the first push of that re-plan, at most ``chunk`` of object travel (and at most
    ``approach`` of what is left once the target is near, so the object comes at it from short of it:
    faces cannot pull back), its tool path from the push model (the re-plan's tool poses); a change of
@@ -34,16 +34,16 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from planner.oe.contacts import MIN_PIECE
-from planner.oe.push_plan import Push, PushPlan
-from planner.plan import Plan
-from planner.scene import Scene
-from planner.timing import min_jerk_along, min_jerk_duration
-from problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
-from tools.arch import swept_clearance
-from tools.omni.ik import joint_path
-from tools.pose import rotation
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.oe.contacts import MIN_PIECE
+from tooltransfer.planner.oe.push_plan import Push, PushPlan
+from tooltransfer.planner.plan import Plan
+from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration
+from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
+from tooltransfer.tools.arch import swept_clearance
+from tooltransfer.tools.omni.ik import joint_path
+from tooltransfer.tools.pose import rotation
 
 #: Tool moves shorter than this [m] between a chunk's end and the next chunk's start are skipped.
 SAME_POSE = 3e-4
@@ -172,9 +172,9 @@ class _Loop:
 
     def __init__(self, plan: Plan, task: Task, plant: object, frames: int, tolerance: float,
                  adapt: bool = True) -> None:
-        from planner.recontact import recontact_planner
-        from planner.solve import effective_margin, qp_options, task_scene, task_skills
-        from planner.switches import arch_planner, skill_planner, with_fallback
+        from tooltransfer.planner.recontact import recontact_planner
+        from tooltransfer.planner.solve import effective_margin, qp_options, task_scene, task_skills
+        from tooltransfer.planner.switches import arch_planner, skill_planner, with_fallback
 
         self.plan, self.task, self.plant, self.frames, self.tolerance = plan, task, plant, frames, tolerance
         self.tool = task_tool(task)
@@ -240,12 +240,12 @@ class _Loop:
     def scene_at(self, o: NDArray[np.float64]) -> Scene:
         """The scene for a re-plan from ``o``: the safety margin at most the object's clearance there
         (an object pushed closer to an obstacle than the margin keeps that clearance, as a start
-        touching one does: :func:`planner.solve.effective_margin`). (Narrowing the friction cone
+        touching one does: :func:`tooltransfer.planner.solve.effective_margin`). (Narrowing the friction cone
         once the model mispredicts was tried: on the 0.6 x mu, c plant it ended fewer runs within
         3 mm, the re-plans more often infeasible.)"""
         import shapely
 
-        from tools.objects import Disc
+        from tooltransfer.tools.objects import Disc
 
         disc = shapely.Point(o).buffer(self.scene.radius, quad_segs=64)
         gap = min((float(shapely.distance(disc, ob.polygon() if isinstance(ob, Disc) else ob))
@@ -256,7 +256,7 @@ class _Loop:
         """Where the face in contact touches the object at ``o`` [m along the face], if it does."""
         if self.face is None:
             return None
-        from planner.switches import contact_fraction
+        from tooltransfer.planner.switches import contact_fraction
 
         pose = self.plant.tool_pose()  # type: ignore[attr-defined]
         return contact_fraction(self.tool, self.face, o, pose, self.scene.radius) * self.tool.face(self.face).length
@@ -264,8 +264,8 @@ class _Loop:
     def replan(self, t: NDArray[np.float64], ref: NDArray[np.float64], faces: tuple[str, ...],
                switches: tuple[float, ...], o: NDArray[np.float64]) -> PushPlan:
         """The rest of the task from the observed object ``o``: the sequence, else a new search."""
-        from planner.oe.mapping_variant import MappingOptions, condense_mapping
-        from planner.oe.qp_variant import condense_qp, condense_sequence
+        from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping
+        from tooltransfer.planner.oe.qp_variant import condense_qp, condense_sequence
 
         start = time.perf_counter()
         s_first = self.contact_s(o) if faces and faces[0] == self.face else None
@@ -294,7 +294,7 @@ class _Loop:
         target, else the shortest corner of two faces' normals that splits it (``r = a u1 + b u2``,
         ``a, b > 0``), each fitted as that sequence; a new search along the straight way when none
         of them works."""
-        from planner.oe.face_frame import FaceFrame
+        from tooltransfer.planner.oe.face_frame import FaceFrame
 
         r = self.target - o
         d = float(np.hypot(*r))
@@ -382,10 +382,10 @@ class _Loop:
     def learn(self, o: NDArray[np.float64]) -> None:
         """The last push chunk observed at its end ``o``: keep it, and when the model predicted it more
         than ``ADAPT_ERROR`` off, identify ``mu`` and ``c`` again from the last chunks
-        (:func:`tools.pushing.identify.identify_mechanics`, started from and pulled towards the
+        (:func:`tooltransfer.tools.pushing.identify.identify_mechanics`, started from and pulled towards the
         mechanics in force), so the re-plans use the plant's own."""
-        from tools.pushing.forward import simulate
-        from tools.pushing.identify import RecordedPush, identify_mechanics
+        from tooltransfer.tools.pushing.forward import simulate
+        from tooltransfer.tools.pushing.identify import RecordedPush, identify_mechanics
 
         if self.pending is None or self.before is None:
             return
@@ -425,9 +425,9 @@ class _Stop(Exception):
 
 
 def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, config: object | None) -> object:
-    from planner.execution import SimPlant
-    from planner.simulate import task_sim_config
-    from tools.sim import SimPlatform
+    from tooltransfer.planner.execution import SimPlant
+    from tooltransfer.planner.simulate import task_sim_config
+    from tooltransfer.tools.sim import SimPlatform
 
     tool = task_tool(task)
     sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task), config or task_sim_config(task))
@@ -444,11 +444,11 @@ def execute_closed_loop(
     """Execute a solved plan closed loop (module docstring).
 
     Args:
-        plan: a solved plan (its task names the skills by absolute path, as :func:`planner.solve`
+        plan: a solved plan (its task names the skills by absolute path, as :func:`tooltransfer.planner.solve`
             writes it).
-        plant: a :class:`planner.execution.Plant` with the object at the task's start and the tool
+        plant: a :class:`tooltransfer.planner.execution.Plant` with the object at the task's start and the tool
             at the plan's first pose; default the MuJoCo platform (``config``: its
-            :class:`tools.sim.SimConfig`, default the task's object) with a camera of
+            :class:`tooltransfer.tools.sim.SimConfig`, default the task's object) with a camera of
             ``camera_noise`` [m] per frame (seed ``seed``).
         tolerance: the object counts as at the target within this distance [m] (as measured).
         chunk: longest object travel [m] of one chunk before the object is observed again.

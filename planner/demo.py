@@ -17,8 +17,8 @@ import io
 from collections.abc import Callable
 from pathlib import Path
 
-from planner.plan import Plan
-from problems.task import load_task
+from tooltransfer.planner.plan import Plan
+from tooltransfer.problems.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
 TRANSFER = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
@@ -101,8 +101,8 @@ def compare(
     """Solve ``task_path`` with every variant pair (:data:`PAIRS`); write the plans
     (``plan_<task>_<oe>_<ss>.json``) and ``compare_<task>.png`` to ``out``; return the metrics table
     (rich) and the plans. ``step`` is called with a description before each solve (progress)."""
-    from planner.plots.execution import plot_plans
-    from planner.solve import solve
+    from tooltransfer.planner.plots.execution import plot_plans
+    from tooltransfer.planner.solve import solve
 
     task = load_task(task_path)
     out.mkdir(parents=True, exist_ok=True)
@@ -121,10 +121,10 @@ def run_demo(out: Path) -> str:
     """Run the main job; returns the report text (also written to ``out/report.txt``)."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    from planner import figures
-    from planner.closed_loop import execute_closed_loop
-    from planner.simulate import simulate_plan
-    from planner.skills import Skills, learn_skills
+    from tooltransfer.planner import figures
+    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.simulate import simulate_plan
+    from tooltransfer.planner.skills import Skills, learn_skills
 
     out.mkdir(parents=True, exist_ok=True)
     report: list[str] = []

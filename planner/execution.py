@@ -1,6 +1,6 @@
 """What the closed loop drives: a plant behind a small protocol, and the plants of this project.
 
-:class:`Plant` is all :func:`planner.closed_loop.execute_closed_loop` needs of a robot:
+:class:`Plant` is all :func:`tooltransfer.planner.closed_loop.execute_closed_loop` needs of a robot:
 
 * ``observe_object() -> (2,)``: the object's centre [m] in the world frame, as the camera sees it
   (noisy: the loop averages several calls while the object rests);
@@ -11,17 +11,17 @@
 
 Plants here: :class:`SimPlant`, the MuJoCo platform (PD tracking through the Omni's inverse
 kinematics, the camera's noise); :class:`ModelPlant`, the quasi-static push model of
-:mod:`tools.pushing` (a plant with other mechanics than the planner assumes, for tests and for
+:mod:`tooltransfer.tools.pushing` (a plant with other mechanics than the planner assumes, for tests and for
 studies of mismatch). Both also answer ``true_object()`` (not part of the protocol), so reports give
 the true error rather than the camera's.
 
 Wrapping a real device: implement the three methods over its drivers, e.g. for a Phantom Omni with
 a camera, ``observe_object`` returns the latest camera estimate of the puck's centre transformed
 into the world frame of DESIGN section 2 (origin under joint 1, metres), ``tool_pose`` the forward
-kinematics of the encoder angles (:func:`tools.omni.ik.table_pose`), and ``move_tool`` turns the
-path into joints with :func:`tools.sim.reference.tool_path_joints` (which checks the joint limits)
+kinematics of the encoder angles (:func:`tooltransfer.tools.omni.ik.table_pose`), and ``move_tool`` turns the
+path into joints with :func:`tooltransfer.tools.sim.reference.tool_path_joints` (which checks the joint limits)
 and streams them to the device's PD loop at its rate, blocking until the last sample. Any
-:class:`~dmp.errors.ToolTransferError` it raises ends the closed loop with that reason.
+:class:`~tooltransfer.dmp.errors.ToolTransferError` it raises ends the closed loop with that reason.
 """
 
 from __future__ import annotations
@@ -31,13 +31,13 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array
-from tools.model import Tool
-from tools.omni.ik import joint_path
-from tools.omni.platform import OmniPlatform
-from tools.pushing.forward import simulate
-from tools.pushing.mechanics import PushMechanics
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.omni.ik import joint_path
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pushing.forward import simulate
+from tooltransfer.tools.pushing.mechanics import PushMechanics
 
 
 @runtime_checkable
@@ -66,7 +66,7 @@ def _check_path(t: ArrayLike, tool_pose: ArrayLike) -> tuple[NDArray[np.float64]
 
 
 class SimPlant:
-    """The MuJoCo platform of :mod:`tools.sim` as a :class:`Plant`.
+    """The MuJoCo platform of :mod:`tooltransfer.tools.sim` as a :class:`Plant`.
 
     Args:
         sim: the simulated platform (already reset where the run starts).
@@ -75,10 +75,10 @@ class SimPlant:
     """
 
     def __init__(self, sim: object, camera_noise: float = 0.0015, seed: int = 0) -> None:
-        from tools.sim import SimPlatform
+        from tooltransfer.tools.sim import SimPlatform
 
         if not isinstance(sim, SimPlatform):
-            raise InputError("sim", "a tools.sim.SimPlatform", type(sim).__name__)
+            raise InputError("sim", "a tooltransfer.tools.sim.SimPlatform", type(sim).__name__)
         if not np.isfinite(camera_noise) or camera_noise < 0:
             raise InputError("camera_noise", "a standard deviation >= 0 [m]", camera_noise)
         self.sim, self.noise, self.rng = sim, float(camera_noise), np.random.default_rng(seed)
@@ -100,22 +100,22 @@ class SimPlant:
 
     @property
     def execution(self) -> object:
-        """Everything recorded so far (:class:`tools.sim.Execution`; None before the first move)."""
-        from tools.sim import Execution
+        """Everything recorded so far (:class:`tooltransfer.tools.sim.Execution`; None before the first move)."""
+        from tooltransfer.tools.sim import Execution
 
         return Execution.concat(self.parts) if self.parts else None
 
 
 class ModelPlant:
     """The quasi-static push model as a :class:`Plant`: the tool follows the commanded poses exactly,
-    the object moves as :func:`tools.pushing.forward.simulate` says with ``mechanics`` (which may
+    the object moves as :func:`tooltransfer.tools.pushing.forward.simulate` says with ``mechanics`` (which may
     differ from the planner's: a mismatched plant).
 
     Args:
         tool: the tool; radius: the object's radius [m]; mechanics: the plant's push parameters.
         object_xy: (2,) the object's start [m]; tool_pose: (3,) the tool's start.
         platform: when given, commanded paths are checked against the Omni's reach and joint limits
-            (as a real device would refuse them: :class:`~dmp.errors.InputError`).
+            (as a real device would refuse them: :class:`~tooltransfer.dmp.errors.InputError`).
         camera_noise, seed: as :class:`SimPlant`'s.
     """
 

@@ -2,7 +2,7 @@
 shaped like ROS ``trajectory_msgs/msg/JointTrajectory``.
 
 Each holds, per sample of the plan, the time from the start [s] and the joints' positions [rad],
-velocities [rad/s] and accelerations [rad/s^2] (:func:`planner.plan.joint_rates`), under the
+velocities [rad/s] and accelerations [rad/s^2] (:func:`tooltransfer.planner.plan.joint_rates`), under the
 joints' names (the plan's ``joint_names``, or others for a robot's description):
 
 - ``csv``: a header ``t,<name>_position,...,<name>_velocity,...,<name>_acceleration,...,phase``, one
@@ -16,7 +16,7 @@ joints' names (the plan's ``joint_names``, or others for a robot's description):
   times rounded to the nanosecond).
 
 :func:`read_trajectory` reads any of them back (the round trip is exact but for those nanoseconds).
-Files are written atomically (:mod:`problems.atomic`).
+Files are written atomically (:mod:`tooltransfer.problems.atomic`).
 """
 
 from __future__ import annotations
@@ -32,8 +32,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from planner.plan import JOINT_NAMES, Plan
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.plan import JOINT_NAMES, Plan
 
 FORMATS = ("csv", "npz", "joint-trajectory")
 #: The file name ending of each format (the default output is the plan's name with it).
@@ -63,7 +63,7 @@ class Trajectory:
 
 def check_joint_names(names: tuple[str, ...] | list[str], field: str = "--joint-names") -> tuple[str, ...]:
     """``names`` if they are 3 distinct names of 1-100 printable characters without commas, else
-    :class:`~dmp.errors.InputError` naming ``field``."""
+    :class:`~tooltransfer.dmp.errors.InputError` naming ``field``."""
     expected = "3 distinct joint names (1 to 100 printable characters, no commas), e.g. waist,shoulder,elbow"
     if len(names) != 3 or len(set(names)) != 3 or not all(
             isinstance(n, str) and 0 < len(n) <= 100 and n.isprintable() and "," not in n for n in names):
@@ -116,7 +116,7 @@ def _csv_text(traj: Trajectory) -> str:
 def export_plan(plan: Plan, out: str | Path, fmt: str, joint_names: tuple[str, ...] | None = None) -> Path:
     """Write ``plan``'s joint trajectory to ``out`` in format ``fmt`` (:data:`FORMATS`) under
     ``joint_names`` (default: the plan's); returns the path."""
-    from problems.atomic import atomic_path, write_text
+    from tooltransfer.problems.atomic import atomic_path, write_text
 
     if fmt not in FORMATS:
         raise InputError("--format", f"one of {', '.join(FORMATS)}", fmt)
@@ -222,13 +222,13 @@ def _checked(p: Path, t: Any, pos: Any, vel: Any, acc: Any, names: list[Any], ph
 
 def run_export(args: Any) -> int:
     """``tooltransfer export PLAN --format F [-o OUT] [--joint-names a,b,c] [--force]``: the plan read
-    and checked against itself and its task (:func:`planner.simulate.check_plan`, as ``simulate``
+    and checked against itself and its task (:func:`tooltransfer.planner.simulate.check_plan`, as ``simulate``
     does: ``--force`` exports one that fails, with a warning), then written. Exit 0 written, 1 the
     plan is infeasible (or violated, without ``--force``); errors raise (the command line's exit 2)."""
     import sys
 
-    from planner.cli import EXIT_INFEASIBLE, EXIT_OK, check_output
-    from planner.plan import PlanFileError, read_plan
+    from tooltransfer.planner.cli import EXIT_INFEASIBLE, EXIT_OK, check_output
+    from tooltransfer.planner.plan import PlanFileError, read_plan
 
     names = check_joint_names(args.joint_names.split(",")) if args.joint_names is not None else None
     out = Path(args.out) if args.out is not None else default_output(args.plan, args.format)
@@ -243,7 +243,7 @@ def run_export(args: Any) -> int:
     if plan.status == "violated":
         print(f"tooltransfer: warning: plan {args.plan} is violated ({plan.reason}); exporting it anyway (--force)",
               file=sys.stderr)
-    from planner.simulate import PlanLimitError, check_plan
+    from tooltransfer.planner.simulate import PlanLimitError, check_plan
 
     try:  # the plan against itself and its task before an arm runs it (a hand-edited plan may lie)
         check_plan(plan, str(args.plan))

@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.plan import Plan
-from planner.skills import Skills
-from tools.sim.execution import Execution
+from tooltransfer.planner.plan import Plan
+from tooltransfer.planner.skills import Skills
+from tooltransfer.tools.sim.execution import Execution
 
 
 def fig8(dataset: str | Path, skills: Skills, out: str | Path) -> tuple[Path, Path]:
@@ -37,11 +37,11 @@ def fig8(dataset: str | Path, skills: Skills, out: str | Path) -> tuple[Path, Pa
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from planner.oe.generalize import generalize
-    from planner.plots.demonstrations import plot_demonstrations
-    from planner.plots.save import save_figure
-    from planner.segmentation import segment
-    from problems.dataset import load_dataset
+    from tooltransfer.planner.oe.generalize import generalize
+    from tooltransfer.planner.plots.demonstrations import plot_demonstrations
+    from tooltransfer.planner.plots.save import save_figure
+    from tooltransfer.planner.segmentation import segment
+    from tooltransfer.problems.dataset import load_dataset
 
     out = Path(out)
     ds = load_dataset(dataset)
@@ -66,9 +66,9 @@ def fig8(dataset: str | Path, skills: Skills, out: str | Path) -> tuple[Path, Pa
 def fig9(dataset: str | Path, out: str | Path) -> Path:
     """Fig. 9: the dataset's demonstrated switches and the SS skills learned from them with both
     virtual object motions."""
-    from planner.plots.switches import plot_learned_switches
-    from planner.skills import learn_ss_from_dataset
-    from planner.ss.adapter import dataset_switches
+    from tooltransfer.planner.plots.switches import plot_learned_switches
+    from tooltransfer.planner.skills import learn_ss_from_dataset
+    from tooltransfer.planner.ss.adapter import dataset_switches
 
     skills = [learn_ss_from_dataset(Path(dataset), v) for v in ("arch", "line")]
     demos = [d for d in dataset_switches(dataset, faces=None) if (d.face_from, d.face_to) == skills[0].faces]
@@ -78,11 +78,11 @@ def fig9(dataset: str | Path, out: str | Path) -> Path:
 def _condensed(task_path: str | Path) -> tuple:
     """The task's tool, obstacles, margin used, target, generalized universal path (T, 2) [m] and its
     condensed push plans with the mapping and the qp variants."""
-    from planner.oe.generalize import generalize
-    from planner.oe.mapping_variant import MappingOptions, condense_mapping
-    from planner.oe.qp_variant import condense_qp
-    from planner.solve import effective_margin, qp_options, task_scene, task_skills
-    from problems.task import load_task, task_obstacles, task_platform, task_tool
+    from tooltransfer.planner.oe.generalize import generalize
+    from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping
+    from tooltransfer.planner.oe.qp_variant import condense_qp
+    from tooltransfer.planner.solve import effective_margin, qp_options, task_scene, task_skills
+    from tooltransfer.problems.task import load_task, task_obstacles, task_platform, task_tool
 
     task = load_task(task_path)
     tool = task_tool(task)
@@ -102,7 +102,7 @@ def _condensed(task_path: str | Path) -> tuple:
 
 def fig10(task_path: str | Path, out: str | Path) -> Path:
     """Fig. 10: the task's condensed object paths with the mapping and the qp variants."""
-    from planner.plots.push_plans import plot_push_plans
+    from tooltransfer.planner.plots.push_plans import plot_push_plans
 
     task, tool, obstacles, margin, target, _, plans = _condensed(task_path)
     return plot_push_plans(plans, tool, out, radius=task.object.radius, obstacles=obstacles, margin=margin,
@@ -112,11 +112,11 @@ def fig10(task_path: str | Path, out: str | Path) -> Path:
 def fig11(skills: Skills, out: str | Path) -> Path:
     """Fig. 11: the SS skill generalized to the T-shape (both of its cases) and the trapezoid, with
     the ``dmp`` and ``opt`` variants and their measured penetrations."""
-    from planner.plots.switches import plot_generalized_switches
-    from planner.ss.cases import FIG11, fig11_task
+    from tooltransfer.planner.plots.switches import plot_generalized_switches
+    from tooltransfer.planner.ss.cases import FIG11, fig11_task
 
     if skills.ss is None:
-        from dmp.errors import InputError
+        from tooltransfer.dmp.errors import InputError
 
         raise InputError("skills.ss", "an SS skill", None)
     return plot_generalized_switches(skills.ss, {name: fig11_task(name) for name in FIG11}, out)
@@ -124,7 +124,7 @@ def fig11(skills: Skills, out: str | Path) -> Path:
 
 def fig12(plan: Plan, out: str | Path, executions: Mapping[str, Execution] | None = None) -> Path:
     """Fig. 12: the plan, and planned versus executed paths for each execution given."""
-    from planner.plots.execution import plot_plan
+    from tooltransfer.planner.plots.execution import plot_plan
 
     return plot_plan(plan, out, executions)
 
@@ -132,9 +132,9 @@ def fig12(plan: Plan, out: str | Path, executions: Mapping[str, Execution] | Non
 def fig14(task_path: str | Path, out: str | Path, margins: tuple[float, ...] = (0.0, 0.005, 0.01)) -> Path:
     """Fig. 14: the outer map (7) with several safety margins round the task's first disc obstacle
     (left) and the mapping and qp condensed paths with the task's margin (right)."""
-    from dmp.errors import InputError
-    from planner.plots.safety_margin import plot_safety_margin
-    from tools.objects import Disc
+    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.planner.plots.safety_margin import plot_safety_margin
+    from tooltransfer.tools.objects import Disc
 
     task, _, obstacles, _, _, x, plans = _condensed(task_path)
     discs = [o for o in obstacles if isinstance(o, Disc)]
@@ -144,8 +144,8 @@ def fig14(task_path: str | Path, out: str | Path, margins: tuple[float, ...] = (
 
 
 def execution_gif(plan: Plan, ex: Execution, out: str | Path) -> Path:
-    """The animated GIF of an execution (:func:`planner.plots.execution.animate_execution`)."""
-    from planner.plots.execution import animate_execution
+    """The animated GIF of an execution (:func:`tooltransfer.planner.plots.execution.animate_execution`)."""
+    from tooltransfer.planner.plots.execution import animate_execution
 
     return animate_execution(plan, ex, out)
 
@@ -173,12 +173,12 @@ def readme_figures(out: str | Path = "docs/images") -> tuple[Path, Path]:
     ``qp``/``opt`` plan with its open- and closed-loop executions on the simulated Omni
     (``fig12_transfer_tool2.png``). Deterministic (the planner, the simulation and the closed loop's
     camera noise are); small palette PNGs. ``make figures`` writes them to ``docs/images``."""
-    from planner.closed_loop import execute_closed_loop
-    from planner.demo import PAIRS, TRANSFER
-    from planner.plots.execution import plot_plan, plot_plans
-    from planner.simulate import simulate_plan
-    from planner.solve import solve
-    from problems.task import load_task
+    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.demo import PAIRS, TRANSFER
+    from tooltransfer.planner.plots.execution import plot_plan, plot_plans
+    from tooltransfer.planner.simulate import simulate_plan
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import load_task
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -196,7 +196,7 @@ def readme_figures(out: str | Path = "docs/images") -> tuple[Path, Path]:
     return fig12_path, compare_path
 
 
-if __name__ == "__main__":  # make figures: python -m planner.figures [OUT]
+if __name__ == "__main__":  # make figures: python -m tooltransfer.planner.figures [OUT]
     import sys
     import time
 

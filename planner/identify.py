@@ -1,16 +1,16 @@
 """Identifying the push mechanics (``mu``, ``c``) of a dataset: the dataset-facing side of
-:mod:`tools.pushing.identify`.
+:mod:`tooltransfer.tools.pushing.identify`.
 
 The least squares lives in the tools layer and knows nothing of datasets; here the segmentation
-(:func:`planner.segmentation.segment`) finds each push (its contact interval from the encoders) and
+(:func:`tooltransfer.planner.segmentation.segment`) finds each push (its contact interval from the encoders) and
 the puck's rest positions before and after it (the means of the camera samples while it rests,
 robust to a push it missed, projected onto the tool outline where the previous push left it), and
-each push is cut into a :class:`~tools.pushing.identify.RecordedPush`: the encoder poses from
+each push is cut into a :class:`~tooltransfer.tools.pushing.identify.RecordedPush`: the encoder poses from
 ``lead`` before the contact to ``tail`` after its end, the camera samples from the contact to
 ``rest`` after its end (or to the next push, if that comes first).
 
 Used by ``tooltransfer learn`` (the demonstrations, or a calibration recording made with
-``tooltransfer demos --calibration``) through the skills cache (:mod:`planner.skills`).
+``tooltransfer demos --calibration``) through the skills cache (:mod:`tooltransfer.planner.skills`).
 """
 
 from __future__ import annotations
@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from dmp.errors import InputError
-from dmp.validation import check_positive
-from problems.dataset import Dataset, load_dataset
-from tools.pushing.identify import Identification, RecordedPush, identify_mechanics
-from tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_positive
+from tooltransfer.problems.dataset import Dataset, load_dataset
+from tooltransfer.tools.pushing.identify import Identification, RecordedPush, identify_mechanics
+from tooltransfer.tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
 
 LEAD, TAIL, REST = 0.15, 0.05, 0.3
 """Default windows [s]: tool poses from ``LEAD`` before the contact starts to ``TAIL`` after it ends
@@ -36,11 +36,11 @@ def recorded_pushes(ds: Dataset, segmentations: Sequence | None = None, *, lead:
     """The pushes of every demonstration of ``ds`` as :class:`RecordedPush` (named ``demo#i``).
 
     Args:
-        ds: the dataset; segmentations: one :class:`planner.segmentation.Segmentation` per
+        ds: the dataset; segmentations: one :class:`tooltransfer.planner.segmentation.Segmentation` per
             demonstration (default: segmented here with the dataset's object radius).
         lead, tail, rest: the windows [s] of the module docstring.
     """
-    from planner.segmentation import segment  # scipy.signal: imported only when identifying
+    from tooltransfer.planner.segmentation import segment  # scipy.signal: imported only when identifying
 
     lead, tail, rest = (check_positive(v, n) for v, n in ((lead, "lead"), (tail, "tail"), (rest, "rest")))
     tool = ds.tool()
@@ -68,7 +68,7 @@ def identify_dataset(source: str | Path | Dataset, *, initial: PushMechanics = P
                      **options: float) -> Identification:
     """Identify ``mu`` and ``c`` from every push of a dataset (a folder or a loaded :class:`Dataset`).
 
-    ``options`` go to :func:`tools.pushing.identify.identify_mechanics` (``max_step``, ``prior_sd``,
+    ``options`` go to :func:`tooltransfer.tools.pushing.identify.identify_mechanics` (``max_step``, ``prior_sd``,
     ``excitation_tol``). The result's summary names the dataset folder.
 
     Raises:

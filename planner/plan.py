@@ -17,7 +17,7 @@ sample spacing. Plan files written before they were added (no ``joint_velocities
 ``joint_accelerations`` or ``joint_names``) are read with them derived so, and the names of the
 simulated Omni's joints (:data:`JOINT_NAMES`). A plan's status is
 ``solved``, ``infeasible`` (no whole plan: the reason says why) or ``violated`` (a whole plan that
-breaks a hard check, :func:`planner.solve.hard_check_failures`: the reason names the families).
+breaks a hard check, :func:`tooltransfer.planner.solve.hard_check_failures`: the reason names the families).
 """
 
 from __future__ import annotations
@@ -30,12 +30,12 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
+from tooltransfer.dmp.errors import InputError
 
 FORMAT = "tooltransfer.plan/1"
 PHASES = ("approach", "push", "switch", "retreat")
 #: Names of the Omni's three joints (waist, shoulder, elbow) as the simulated Omni's model has them
-#: (``tools.sim.mjcf.ARM_JOINTS``); ``tooltransfer export --joint-names`` renames them for a robot.
+#: (``tooltransfer.tools.sim.mjcf.ARM_JOINTS``); ``tooltransfer export --joint-names`` renames them for a robot.
 JOINT_NAMES = ("q1", "q2", "q3")
 
 Phase = Literal["approach", "push", "switch", "retreat"]
@@ -71,7 +71,7 @@ def joint_rates(t: NDArray[np.float64], joints: NDArray[np.float64]) -> tuple[ND
     """The joints' velocities (T, 3) [rad/s] and accelerations (T, 3) [rad/s^2] on the times ``t`` (T,) [s]:
     ``numpy.gradient`` of ``joints`` (T, 3) [rad] over ``t``, then of the velocities (second-order
     central differences on the uneven grid inside, first-order one-sided at the ends: what the
-    simulated execution feeds forward, :func:`tools.sim.reference.joint_reference`). Zeros for fewer
+    simulated execution feeds forward, :func:`tooltransfer.tools.sim.reference.joint_reference`). Zeros for fewer
     than 2 samples."""
     t = np.asarray(t, dtype=np.float64)
     q = np.asarray(joints, dtype=np.float64).reshape(len(t), -1)
@@ -153,8 +153,8 @@ class Plan:
 
     def write(self, path: str | Path) -> Path:
         """Write the plan as JSON, atomically (a temporary file beside it replaces it once complete:
-        :mod:`problems.atomic`, so no half-written plan is ever left); returns the path."""
-        from problems.atomic import write_text
+        :mod:`tooltransfer.problems.atomic`, so no half-written plan is ever left); returns the path."""
+        from tooltransfer.problems.atomic import write_text
 
         return write_text(path, json.dumps(self.to_dict(), indent=1))
 
@@ -219,7 +219,7 @@ def _numbers(where: str, name: str, value: object, width: int | None, unit: str,
 MAX_PLAN_BYTES = 64 * 2**20
 MAX_SAMPLES = 200_000
 #: Statuses a plan file may hold: ``violated`` is a whole plan that breaks a hard check
-#: (:func:`planner.solve.hard_check_failures`).
+#: (:func:`tooltransfer.planner.solve.hard_check_failures`).
 STATUSES = ("solved", "infeasible", "violated")
 #: Bounds of the joints' velocities [rad/s] and accelerations [rad/s^2] read (the Omni's plans stay
 #: within a few rad/s and some tens of rad/s^2; beyond these is junk, not a plan).

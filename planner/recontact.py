@@ -1,7 +1,7 @@
 """Re-contacts: the same face leaves the resting object and touches it again elsewhere along the face.
 
 When one contact cannot carry a push (the contact rolls along the face as the object moves sideways
-and the heading turns, DESIGN section 10), the push is split (:mod:`planner.oe.contacts`) and the
+and the heading turns, DESIGN section 10), the push is split (:mod:`tooltransfer.planner.oe.contacts`) and the
 tool moves, while the object rests, from the contact pose where one piece ends to the one where the
 next begins: it backs off along the face's normal by ``back_off``, shifts (the heading following
 the Omni's waist on the way) and approaches along the new normal. The move is checked like a
@@ -18,13 +18,13 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from planner.assemble import SwitchPath, SwitchPlanner
-from planner.switches import densify
-from tools.model import Tool
-from tools.objects import Disc, Obstacle
-from tools.omni.ik import joint_path
-from tools.omni.platform import OmniPlatform
-from tools.pose import rotation
+from tooltransfer.planner.assemble import SwitchPath, SwitchPlanner
+from tooltransfer.planner.switches import densify
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc, Obstacle
+from tooltransfer.tools.omni.ik import joint_path
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pose import rotation
 
 
 def swept_distance(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], shape: shapely.Geometry) -> float:
@@ -38,7 +38,7 @@ def swept_distance(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64]
 
 def recontact_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: Sequence[Obstacle],
                       back_off: float = 0.002) -> SwitchPlanner:
-    """The re-contact move as a :data:`planner.assemble.SwitchPlanner` (``face_a == face_b``)."""
+    """The re-contact move as a :data:`tooltransfer.planner.assemble.SwitchPlanner` (``face_a == face_b``)."""
     shapes = [o.polygon() if isinstance(o, Disc) else o for o in obstacles]
 
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,

@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from dmp.errors import InputError
-from tools.objects import Obstacle
-from tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools.objects import Obstacle
+from tooltransfer.tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
 
 #: Default share of the friction cone's half-angle a plan may use (``oe.friction_cone_fraction``).
 CONE_FRACTION = 0.5
@@ -33,7 +33,7 @@ class Scene:
         mechanics: the push model's parameters (tool-object friction ``mu``, limit-surface ``c``).
         obstacles: discs and convex polygons in the world [m].
         margin: safety margin [m] kept from the obstacles beyond the radius (the one the plan can
-            keep: see :func:`planner.solve.effective_margin`).
+            keep: see :func:`tooltransfer.planner.solve.effective_margin`).
         cone_fraction: share (0, 1] of the friction cone's half-angle ``atan(mu)`` the planned
             object directions may use about a face's normal, so that the plan survives an error in
             ``mu`` (a fraction 0.5 still sticks with a true ``mu`` of ``tan(atan(mu) / 2)``).

@@ -13,11 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dmp.errors import InputError
-from planner.plan import Plan, PlanFileError, joint_rates
-from problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
-from tools.sim import Execution, SimPlatform
-from tools.sim.config import SimConfig
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.plan import Plan, PlanFileError, joint_rates
+from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
+from tooltransfer.tools.sim import Execution, SimPlatform
+from tooltransfer.tools.sim.config import SimConfig
 
 
 def task_sim_config(task: Task, **overrides: float) -> SimConfig:
@@ -80,7 +80,7 @@ FK_TOL, YAW_TOL, LIMIT_TOL, OVERLAP_TOL, END_TOL = 1e-4, 1e-4, 1e-6, 2e-4, 1e-3
 SPEED_FACTOR, ACCEL_FACTOR = 1.2, 50.0
 REPLAY_TOL = 1e-3
 #: Tolerance of the joints' velocities and accelerations against those the joints give
-#: (:func:`planner.plan.joint_rates`): this share of their largest value, plus 1e-9 rad/s (rad/s^2).
+#: (:func:`tooltransfer.planner.plan.joint_rates`): this share of their largest value, plus 1e-9 rad/s (rad/s^2).
 RATES_RTOL = 1e-6
 
 
@@ -96,16 +96,16 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
     overlapping the planned object (nor at the start) nor an obstacle; tool speeds and accelerations
     within the task's ``timing`` limits; the planned tool path moving the object as planned through
     the push model (the mechanics in the plan's metrics); the joints' velocities and accelerations
-    those the joints give on the plan's times (:func:`planner.plan.joint_rates`).
+    those the joints give on the plan's times (:func:`tooltransfer.planner.plan.joint_rates`).
 
     Raises:
         PlanFileError: naming ``source`` (the file) and the field of the first problem
             (:class:`PlanLimitError` for the bounds ``--force`` does not lift).
     """
-    from planner.segmentation.geometry import ToolGeometry, table_poses, to_tool_frame
-    from planner.tool_clearance import tool_obstacle_clearance
-    from tools.pushing.forward import simulate
-    from tools.pushing.mechanics import PushMechanics
+    from tooltransfer.planner.segmentation.geometry import ToolGeometry, table_poses, to_tool_frame
+    from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
+    from tooltransfer.tools.pushing.forward import simulate
+    from tooltransfer.tools.pushing.mechanics import PushMechanics
 
     def fail(field: str, expected: str, got: object | None = None) -> None:
         raise PlanFileError(source, field, expected, got)
@@ -177,7 +177,7 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
         except InputError as exc:
             fail(f"metrics.{exc.field.replace('mechanics.', 'mechanics_')}", exc.expected, exc.got)
     else:
-        from planner.solve import task_mechanics
+        from tooltransfer.planner.solve import task_mechanics
 
         mech = task_mechanics(task)
     replay = simulate(tool, plan.tool_pose, start, task.object.radius, mech)
@@ -196,5 +196,5 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
         if bad.any():
             k, j = (int(v) for v in np.argwhere(bad)[0])
             fail(f"samples.{name}[{k}][{j}]", f"the derivative of samples.{of} over samples.t (finite "
-                 "differences, planner.plan.joint_rates)",
+                 "differences, tooltransfer.planner.plan.joint_rates)",
                  f"{got[k, j]:.6g} {unit} where they give {ref[k, j]:.6g} at t = {t[k]:.3f} s")

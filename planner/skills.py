@@ -11,7 +11,7 @@ memory and as skill files in :func:`cache_dir`) or from a saved skills file writ
      "mechanics": {"mu", "c", "source", "mu_std", "c_std"},      (optional)
      "identification": {<what the mechanics were identified from and how well they fit>}}  (optional)
 
-The mechanics (``mu``, ``c`` of DESIGN section 10) are identified by :mod:`planner.identify` from
+The mechanics (``mu``, ``c`` of DESIGN section 10) are identified by :mod:`tooltransfer.planner.identify` from
 the dataset's pushes, or from a calibration recording (``tooltransfer demos --calibration``) when
 one is given; a file without them (written before they existed) loads with ``mechanics`` None.
 """
@@ -26,14 +26,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from dmp.errors import InputError, SkillFileError
-from dmp.skill_file import read_json
-from planner.oe.learn import OESkill
-from planner.ss.learn import SwitchSkill
-from tools.pushing.mechanics import PushMechanics
+from tooltransfer.dmp.errors import InputError, SkillFileError
+from tooltransfer.dmp.skill_file import read_json
+from tooltransfer.planner.oe.learn import OESkill
+from tooltransfer.planner.ss.learn import SwitchSkill
+from tooltransfer.tools.pushing.mechanics import PushMechanics
 
 if TYPE_CHECKING:
-    from tools.pushing.identify import Identification
+    from tooltransfer.tools.pushing.identify import Identification
 
 SKILLS_FORMAT = "tooltransfer.skills/1"
 MECHANICS_FORMAT = "tooltransfer.mechanics/1"
@@ -55,9 +55,9 @@ class Skills:
         dataset: the dataset folder they were learned from; dataset_sha256: its content hash.
         mechanics: the push mechanics identified from the recordings (``source="identified"``), or
             None (not identified, or an older skills file). A planner takes the task's override if
-            given, else these, else :data:`tools.pushing.mechanics.PLATFORM_MECHANICS`.
+            given, else these, else :data:`tooltransfer.tools.pushing.mechanics.PLATFORM_MECHANICS`.
         identification: what the mechanics were identified from and how well they fit (the
-            :meth:`tools.pushing.identify.Identification.summary` and the recording's hash), or None.
+            :meth:`tooltransfer.tools.pushing.identify.Identification.summary` and the recording's hash), or None.
     """
 
     oe: OESkill
@@ -69,7 +69,7 @@ class Skills:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data description, format ``tooltransfer.skills/1``."""
-        from planner.ss.skill_file import switch_skill_to_dict
+        from tooltransfer.planner.ss.skill_file import switch_skill_to_dict
 
         if self.ss is None:
             raise InputError("skills.ss", "an SS skill to save (learn_skills(..., with_ss=True))", None)
@@ -84,16 +84,16 @@ class Skills:
 
     def save(self, path: str | Path) -> Path:
         """Write the skills file (JSON), atomically (a temporary file beside it replaces it once
-        complete: :mod:`problems.atomic`); returns its path."""
-        from problems.atomic import write_text
+        complete: :mod:`tooltransfer.problems.atomic`); returns its path."""
+        from tooltransfer.problems.atomic import write_text
 
         return write_text(path, json.dumps(self.to_dict()))
 
     @classmethod
     def load(cls, path: str | Path) -> Skills:
         """Read a skills file; a missing or damaged file or another format raises
-        :class:`~dmp.errors.SkillFileError` naming the file."""
-        from planner.ss.skill_file import switch_skill_from_dict
+        :class:`~tooltransfer.dmp.errors.SkillFileError` naming the file."""
+        from tooltransfer.planner.ss.skill_file import switch_skill_from_dict
 
         doc = read_json(path)
         src = str(path)
@@ -161,9 +161,9 @@ def _cached(name: str, load: Any, save: Any, learn: Any) -> Any:
 
 def learn_oe_from_dataset(folder: Path, k: float) -> OESkill:
     """Learn the universal OE skill from a dataset (segmentation, recovery with ``k``, one DMP)."""
-    from planner.oe.learn import learn_oe_skill
-    from planner.segmentation import segment  # scipy.signal: half a second of imports, only to learn
-    from problems.dataset import load_dataset
+    from tooltransfer.planner.oe.learn import learn_oe_skill
+    from tooltransfer.planner.segmentation import segment  # scipy.signal: half a second of imports, only to learn
+    from tooltransfer.problems.dataset import load_dataset
 
     ds = load_dataset(folder)
     tool = ds.tool()
@@ -177,9 +177,9 @@ def learn_oe_from_dataset(folder: Path, k: float) -> OESkill:
 
 def learn_ss_from_dataset(folder: Path, virtual: str = "arch") -> SwitchSkill:
     """Learn the SS skill from a dataset's switches (the most frequent pair of faces)."""
-    from planner.ss import learn_switch_skill
-    from planner.ss.adapter import dataset_switches
-    from problems.dataset import load_dataset
+    from tooltransfer.planner.ss import learn_switch_skill
+    from tooltransfer.planner.ss.adapter import dataset_switches
+    from tooltransfer.problems.dataset import load_dataset
 
     switches = dataset_switches(folder, faces=None)
     if not switches:
@@ -199,7 +199,7 @@ def oe_skill_from_dataset(folder: Path, k: float) -> OESkill:
 
 def ss_skill_from_dataset(folder: Path, virtual: str = "arch") -> SwitchSkill:
     """The SS skill of a dataset, cached by the dataset's content hash and the virtual motion."""
-    from planner.ss import load_switch_skill, save_switch_skill
+    from tooltransfer.planner.ss import load_switch_skill, save_switch_skill
 
     folder = _check_dataset(folder)
     return _cached(f"ss-{dataset_hash(folder)}-{virtual}.json", load_switch_skill, save_switch_skill,
@@ -207,7 +207,7 @@ def ss_skill_from_dataset(folder: Path, virtual: str = "arch") -> SwitchSkill:
 
 
 def _load_identification(path: Path) -> Identification:
-    from tools.pushing.identify import Identification
+    from tooltransfer.tools.pushing.identify import Identification
 
     doc = read_json(path)
     if not isinstance(doc, dict) or doc.get("format") != MECHANICS_FORMAT:
@@ -229,8 +229,8 @@ def _save_identification(ident: Identification, path: Path) -> None:
 
 def identification_from_dataset(folder: str | Path) -> Identification:
     """The push mechanics identified from every push of a dataset (demonstrations or a calibration
-    recording), cached by the dataset's content hash (:func:`planner.identify.identify_dataset`)."""
-    from planner.identify import identify_dataset
+    recording), cached by the dataset's content hash (:func:`tooltransfer.planner.identify.identify_dataset`)."""
+    from tooltransfer.planner.identify import identify_dataset
 
     folder = _check_dataset(Path(folder))
     return _cached(f"mech{IDENTIFICATION_VERSION}-{dataset_hash(folder)}.json", _load_identification,

@@ -1,19 +1,20 @@
-"""The planner end to end: a task in, a plan out (``planner.solve``).
+"""The planner end to end: a task in, a plan out (``tooltransfer.planner.solve``).
 
 Stages (each timed in the plan's metrics): skills (the universal OE skill learned from the task's
 dataset, cached in memory by the dataset's content hash), the scene (object radius, push mechanics,
-obstacles, margin: :mod:`planner.scene`), OE condensing with the chosen variant (pushes realised
-by the inverse push model, :mod:`planner.oe.contacts`), a switch between consecutive pushes of
+obstacles, margin: :mod:`tooltransfer.planner.scene`), OE condensing with the chosen variant (pushes realised
+by the inverse push model, :mod:`tooltransfer.planner.oe.contacts`), a switch between consecutive pushes of
 different faces and a re-contact between pieces of one face, approach and retreat, timing under the
 tool's speed and acceleration limits, inverse kinematics of the whole tool path (joint limits
 checked), and the checks: the shared OE metrics on the dense object path, the switches' clearances,
 the tool body against the obstacles at every sample, the joint-limit violation, and the plan's
-self-consistency: the forward push model (:mod:`tools.pushing.forward`) replays the whole planned
+self-consistency: the forward push model (:mod:`tooltransfer.tools.pushing.forward`) replays the whole planned
 tool path from the start and must reproduce the planned object path within
 ``oe.self_consistency_tol`` (a switch that knocks the object, a push the mechanics would not
 deliver, fail here with the time and place).
 
-Switch variants (:mod:`planner.switches`): ``arch`` (the geometric reference of :mod:`tools.arch`),
+Switch variants (:mod:`tooltransfer.planner.switches`): ``arch`` (the geometric reference of
+:mod:`tooltransfer.tools.arch`),
 ``dmp`` (the SS skill recombined, eq. 18; its penetration is reported, not avoided) and ``opt`` (the
 CasADi NLP, non-penetrating, checked with shapely).
 """
@@ -26,22 +27,22 @@ from typing import Any
 
 import numpy as np
 
-from dmp.errors import InputError
-from planner.assemble import SwitchFailed, assemble
-from planner.oe.generalize import generalize
-from planner.oe.mapping_variant import MappingOptions, condense_mapping
-from planner.oe.qp_variant import QPOptions, condense_qp
-from planner.plan import Plan, Segment
-from planner.recontact import recontact_planner
-from planner.scene import Scene
-from planner.skills import Skills, learn_skills, load_skills_file
-from planner.switches import arch_planner, skill_planner, with_fallback
-from planner.tool_clearance import tool_obstacle_clearance
-from problems.task import Task, resolve, task_obstacles, task_platform, task_tool
-from tools.objects import Disc
-from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
-from tools.pushing.forward import simulate
-from tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.assemble import SwitchFailed, assemble
+from tooltransfer.planner.oe.generalize import generalize
+from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping
+from tooltransfer.planner.oe.qp_variant import QPOptions, condense_qp
+from tooltransfer.planner.plan import Plan, Segment
+from tooltransfer.planner.recontact import recontact_planner
+from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.skills import Skills, learn_skills, load_skills_file
+from tooltransfer.planner.switches import arch_planner, skill_planner, with_fallback
+from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
+from tooltransfer.problems.task import Task, resolve, task_obstacles, task_origin, task_platform, task_tool
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
+from tooltransfer.tools.pushing.forward import simulate
+from tooltransfer.tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
 
 
 def _describe(task: Task, tool: Any, platform: Any, obstacles: list) -> dict[str, Any]:
@@ -79,14 +80,16 @@ def _as_loaded(task: Task, task_path: str | Path) -> dict[str, Any]:
     return data
 
 
-def task_skills(task: Task, task_path: str | Path = ".", *, need_ss: bool = True) -> Skills:
+def task_skills(task: Task, task_path: str | Path | None = None, *, need_ss: bool = True) -> Skills:
     """The skills ``task`` names: learned from its dataset (cached; the SS skill only if ``need_ss``)
-    or read from its skills file.
+    or read from its skills file (relative to ``task_path``, by default the task's file:
+    :func:`~tooltransfer.problems.task.task_origin`).
 
     Raises:
         InputError: a missing dataset or skills file, or a skills file learned with another ``k``
             than the task's ``oe.k``.
     """
+    task_path = task_origin(task, task_path)
     if task.skills.file is not None:
         skills = load_skills_file(resolve(task_path, task.skills.file))
         if "k" in task.oe.model_fields_set and task.oe.k != skills.oe.k:
@@ -144,8 +147,13 @@ def effective_margin(task: Task, obstacles: list) -> float:
     return margin
 
 
-def solve(task: Task, task_path: str | Path = ".") -> Plan:
-    """Plan ``task`` (relative paths in it are relative to ``task_path``'s folder)."""
+def solve(task: Task, task_path: str | Path | None = None) -> Plan:
+    """Plan ``task``: the plan's status is ``"solved"`` only when every hard check holds.
+
+    Relative paths in the task are relative to ``task_path``'s folder, by default the folder of the file
+    the task was loaded from (:func:`~tooltransfer.problems.task.load_task`; the working folder for a task
+    built in code)."""
+    task_path = task_origin(task, task_path)
     stages: dict[str, float] = {}
     start = clock = time.perf_counter()
 

@@ -1,16 +1,16 @@
-"""Switch planners for :func:`planner.assemble.assemble`: the tool path between two pushes while the
+"""Switch planners for :func:`tooltransfer.planner.assemble.assemble`: the tool path between two pushes while the
 object rests, by variant.
 
-* ``arch``: the geometric reference (:mod:`tools.arch`): back off, arch round the object (and
+* ``arch``: the geometric reference (:mod:`tooltransfer.tools.arch`): back off, arch round the object (and
   disc obstacles; a polygon obstacle is taken as its enclosing disc), approach;
 * ``dmp``: the SS skill generalized by recombination (paper section III.B, eq. 18;
-  :func:`planner.ss.recombine`); it may penetrate the object or an obstacle: the penetration is
+  :func:`tooltransfer.planner.ss.recombine`); it may penetrate the object or an obstacle: the penetration is
   measured exactly (shapely) and reported, as the paper's method would produce it;
 * ``opt``: the CasADi NLP near the ``dmp`` path with non-penetration and reach
-  (:func:`planner.ss.optimize`), checked exactly with shapely; never returns a penetrating path.
+  (:func:`tooltransfer.planner.ss.optimize`), checked exactly with shapely; never returns a penetrating path.
 
 Each planner is ``planner(object_xy (2,), face_a, pose_a (3,), face_b, pose_b (3,)) -> SwitchPath``
-(:data:`planner.assemble.SwitchPlanner`); ``min_clearance`` is the least tool-object distance [m]
+(:data:`tooltransfer.planner.assemble.SwitchPlanner`); ``min_clearance`` is the least tool-object distance [m]
 over the middle of the switch (away from the two contacts, where the tool must touch), and
 ``info["object_penetration"]``, ``info["obstacle_penetration"]`` the largest penetration depths [m]
 over the whole switch, measured exactly on the swept outline.
@@ -24,15 +24,15 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from planner.assemble import SwitchPath, SwitchPlanner
-from planner.ss import SwitchSkill, SwitchTask, optimize, recombine
-from tools.arch import NoArch, swept_clearance, switch_path
-from tools.model import Tool
-from tools.objects import Disc, DiscObject
-from tools.omni.ik import joint_path
-from tools.omni.platform import OmniPlatform
-from tools.pose import rotation
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.assemble import SwitchPath, SwitchPlanner
+from tooltransfer.planner.ss import SwitchSkill, SwitchTask, optimize, recombine
+from tooltransfer.tools.arch import NoArch, swept_clearance, switch_path
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc, DiscObject
+from tooltransfer.tools.omni.ik import joint_path
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pose import rotation
 
 Obstacle = Disc | shapely.Polygon
 

@@ -16,8 +16,8 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tools.model import Tool
-from tools.objects import Disc
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc
 
 
 @dataclass(frozen=True)

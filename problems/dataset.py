@@ -35,8 +35,8 @@ import yaml
 from numpy.typing import NDArray
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator
 
-from dmp.errors import InputError
-from tools.model import Tool
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools.model import Tool
 
 FORMAT = "tooltransfer.dataset/1"
 COLUMNS = ("t", "obj_x", "obj_y", "tool_x", "tool_y", "tool_yaw", "q1", "q2", "q3")
@@ -185,7 +185,7 @@ class Dataset:
 
     def tool(self) -> Tool:
         """The demonstration tool (a library tool, or the tool YAML next to the data)."""
-        from tools.library import library_names, load_tool
+        from tooltransfer.tools.library import library_names, load_tool
 
         return load_tool(self.meta.tool if self.meta.tool in library_names() else self.folder / self.meta.tool)
 
@@ -335,7 +335,7 @@ def _read_csv(path: Path) -> tuple[Demonstration, NDArray[np.int64], NDArray[np.
 
 def load_meta(folder: str | Path) -> Meta:
     """Read and validate ``meta.yaml`` of a dataset folder (errors name the field path)."""
-    from tools.yaml_file import read_yaml
+    from tooltransfer.tools.yaml_file import read_yaml
 
     meta_path = Path(folder) / "meta.yaml"
     raw = read_yaml(meta_path, DatasetError, "meta.yaml")
@@ -358,7 +358,7 @@ def load_dataset(folder: str | Path) -> Dataset:
     :data:`RATE_FACTOR` of ``rates`` (times in seconds), the object and tool streams cover the same
     time, joints lie within the Omni's limits widened by :data:`JOINT_SLACK`, tool and object
     positions within its reach region grown by :data:`REACH_SLACK` (positions in metres, not
-    millimetres). The segmentation (:func:`planner.segmentation.segment`) checks the rest against the
+    millimetres). The segmentation (:func:`tooltransfer.planner.segmentation.segment`) checks the rest against the
     recordings themselves: the tool poses against the joints' forward kinematics, and the contacts
     against the declared tool's outline.
 
@@ -368,8 +368,8 @@ def load_dataset(folder: str | Path) -> Dataset:
     root = Path(folder)
     meta = load_meta(root)
     meta_path = str(root / "meta.yaml")
-    from tools.errors import ToolSpecError
-    from tools.library import library_names, read_tool_file
+    from tooltransfer.tools.errors import ToolSpecError
+    from tooltransfer.tools.library import library_names, read_tool_file
 
     if meta.tool not in library_names():
         tool_path = root / meta.tool
@@ -415,7 +415,7 @@ def _check_plausible(demo: Demonstration, meta: Meta, tool: Tool) -> None:
         raise DatasetError(where, "column t", "object and tool samples over the same time (one recording, one "
                            "clock)", f"object {demo.t_object[0]:.6g}-{demo.t_object[-1]:.6g} s, tool "
                            f"{demo.t_tool[0]:.6g}-{demo.t_tool[-1]:.6g} s")
-    from tools.omni.platform import DEFAULT_LIMITS
+    from tooltransfer.tools.omni.platform import DEFAULT_LIMITS
 
     lower = np.asarray(DEFAULT_LIMITS.lower) - JOINT_SLACK
     upper = np.asarray(DEFAULT_LIMITS.upper) + JOINT_SLACK
@@ -445,8 +445,8 @@ def _check_plausible(demo: Demonstration, meta: Meta, tool: Tool) -> None:
 @lru_cache(maxsize=16)
 def _reach_region(a_t: float, x: float, y: float, yaw: float, height: float) -> Any:
     """The Omni's reachable table region (shapely) for a dataset's platform."""
-    from tools.omni.platform import OmniPlatform
-    from tools.omni.reach import reachable_polygon
+    from tooltransfer.tools.omni.platform import OmniPlatform
+    from tooltransfer.tools.omni.reach import reachable_polygon
 
     return reachable_polygon(OmniPlatform(a_t=a_t, base_xy=(x, y), base_yaw=yaw, table_height=height))
 
@@ -471,7 +471,7 @@ def _read_truth(path: Path, meta: Meta) -> dict[str, Any] | None:
     ``pushes`` (face, t_start, t_end) and ``switches`` lists; errors name the file and the field."""
     if not path.is_file():
         return None
-    from tools.yaml_file import read_yaml
+    from tooltransfer.tools.yaml_file import read_yaml
 
     truth = read_yaml(path, DatasetError, "truth.yaml")
     if truth is None:

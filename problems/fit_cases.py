@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp import DMP
-from dmp.qp import (
+from tooltransfer.dmp import DMP
+from tooltransfer.dmp.qp import (
     FitProblem,
     FixedEndPoint,
     OutsideDisc,

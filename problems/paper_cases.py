@@ -14,15 +14,15 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.oe.generalize import generalize
-from planner.oe.learn import OESkill, learn_oe_skill
-from planner.segmentation import segment
-from problems.dataset import load_dataset
-from tools.library import load_tool
-from tools.model import Tool
-from tools.objects import Disc
-from tools.omni.platform import OmniPlatform
-from tools.operator.scene import DEMO_SCENE
+from tooltransfer.planner.oe.generalize import generalize
+from tooltransfer.planner.oe.learn import OESkill, learn_oe_skill
+from tooltransfer.planner.segmentation import segment
+from tooltransfer.problems.dataset import load_dataset
+from tooltransfer.tools.library import load_tool
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.operator.scene import DEMO_SCENE
 
 DEFAULT_DATASET = Path(__file__).resolve().parent / "data" / "finger_demos"
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from tools.objects import Disc
+from tooltransfer.tools.objects import Disc
 
 
 @dataclass(frozen=True)

@@ -16,15 +16,15 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 import shapely
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
-from dmp.errors import InputError
-from tools.errors import ToolSpecError, UnknownToolError
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools.errors import ToolSpecError, UnknownToolError
 
 if TYPE_CHECKING:
-    from tools.model import Tool
-    from tools.objects import Obstacle as ObstacleShape
-    from tools.omni.platform import OmniPlatform
+    from tooltransfer.tools.model import Tool
+    from tooltransfer.tools.objects import Obstacle as ObstacleShape
+    from tooltransfer.tools.omni.platform import OmniPlatform
 
 FORMAT = "tooltransfer.task/1"
 
@@ -42,7 +42,7 @@ Length = Annotated[float, Field(ge=0.0, le=0.2, allow_inf_nan=False, strict=True
 #: Longest plan a task may ask for [s] (``simulate`` refuses plans of more than 1800 s): the plan
 #: samples its approach, switches and retreat at :data:`PLAN_RATE`, so this bounds its samples too.
 MAX_PLAN_DURATION = 900.0
-#: Sample rate of a plan's approach, switches and retreat [Hz] (:func:`planner.assemble.assemble`).
+#: Sample rate of a plan's approach, switches and retreat [Hz] (:func:`tooltransfer.planner.assemble.assemble`).
 PLAN_RATE = 100.0
 #: Largest push-sequence search of the ``qp`` variant (:func:`push_search_steps`; about 1.5 s).
 MAX_SEARCH_STEPS = 200_000
@@ -55,7 +55,7 @@ class TaskFileError(InputError):
     """A task file is unreadable or invalid; names the file, the field path and what was expected."""
 
     def __init__(self, path: str, field: str, expected: str, got: object | None = None) -> None:
-        from tools.yaml_file import clip
+        from tooltransfer.tools.yaml_file import clip
 
         self.path = path
         # a value echoed in the message is cut at 100 characters (a field name at 200): one line, however
@@ -147,7 +147,8 @@ class LimitsSpec(_Model):
 
 
 class PlatformSpec(_Model):
-    """Placement of the Omni; omitted fields take the defaults of :class:`tools.omni.platform.OmniPlatform`."""
+    """Placement of the Omni; omitted fields take the defaults of
+    :class:`tooltransfer.tools.omni.platform.OmniPlatform`."""
 
     base_xy: Point = (0.0, 0.0)
     base_yaw: float = Field(float(np.pi / 2), ge=-7.0, le=7.0, allow_inf_nan=False, strict=True,
@@ -181,7 +182,7 @@ class Variants(_Model):
 
 
 class OEOptions(_Model):
-    """Options of OE condensing (see :class:`planner.oe.QPOptions`)."""
+    """Options of OE condensing (see :class:`tooltransfer.planner.oe.QPOptions`)."""
 
     # the bounds keep one solve within seconds and well under 1 GB: n_samples 2000 takes about 2 s and
     # 300 MB; n_basis 800 takes 9 s (100,000 asked for 1.2 TiB); n_knots 320 takes 9 s; the push-sequence
@@ -266,6 +267,13 @@ class Task(_Model):
     timing: Timing = Timing()
     fixed_points: list[Point] | None = Field(None, max_length=64,
                                              description="manual override of the demonstrations' corners")
+    _source: str | None = PrivateAttr(None)
+
+    @property
+    def source(self) -> str | None:
+        """The file the task was read from (absolute; :func:`load_task`), or None for a task built in code:
+        relative paths in the task (the skills' dataset or file) are relative to its folder."""
+        return self._source
 
     @field_validator("name")
     @classmethod
@@ -277,12 +285,13 @@ class Task(_Model):
 
 def min_jerk_time(length: float, v_max: float, a_max: float) -> float:
     """Shortest duration [s] of a minimum-jerk move of ``length`` [m] within ``v_max`` [m/s] and
-    ``a_max`` [m/s^2] (as :func:`planner.timing.min_jerk_duration`)."""
+    ``a_max`` [m/s^2] (as :func:`tooltransfer.planner.timing.min_jerk_duration`)."""
     return max(1.875 * length / v_max, float(np.sqrt(10.0 / np.sqrt(3.0) * length / a_max))) if length > 0 else 0.0
 
 
 def push_search_steps(n_faces: int, max_pushes: int, segments: int) -> int:
-    """Work of the ``qp`` variant's push-sequence search (:func:`planner.oe.sequence_proxy.ranked_sequences`)
+    """Work of the ``qp`` variant's push-sequence search
+    (:func:`tooltransfer.planner.oe.sequence_proxy.ranked_sequences`)
     in steps of about 8 us: every face order of at most ``max_pushes`` pushes is enumerated (about
     1/6 step each) and the ones without a face twice in a row split ``segments`` phases by dynamic
     programming (``pushes x segments`` steps each)."""
@@ -321,14 +330,14 @@ def task_from_dict(data: Any, source: str = "<dict>") -> Task:
         raise TaskFileError(source, "target", "a point other than the start (a zero-length move)", task.target)
     _check_duration(task, source)
     if isinstance(task.tool, InlineTool):
-        from tools.library import tool_from_dict
+        from tooltransfer.tools.library import tool_from_dict
 
         try:
             tool = tool_from_dict(json.loads(task.tool.model_dump_json(exclude_none=True)), source=f"{source}: tool")
         except ToolSpecError as exc:
             raise TaskFileError(source, f"tool.{exc.field}", exc.reason) from None
     else:
-        from tools.library import library_names, load_tool
+        from tooltransfer.tools.library import library_names, load_tool
 
         if task.tool not in library_names():
             raise TaskFileError(source, "tool", f"a library tool ({', '.join(library_names())})", repr(task.tool))
@@ -367,14 +376,24 @@ def _check_search(task: Task, n_faces: int, source: str) -> None:
 
 def load_task(path: str | Path) -> Task:
     """Read and validate a task file (YAML or JSON)."""
-    from tools.yaml_file import read_yaml
+    from tooltransfer.tools.yaml_file import read_yaml
 
-    return task_from_dict(read_yaml(path, TaskFileError, "task file"), str(path))
+    task = task_from_dict(read_yaml(path, TaskFileError, "task file"), str(path))
+    task._source = str(Path(path).resolve())
+    return task
+
+
+def task_origin(task: Task, task_path: str | Path | None = None) -> str | Path:
+    """Where relative paths in ``task`` start: ``task_path`` when given, else the file it was loaded from
+    (:attr:`Task.source`), else the working folder."""
+    if task_path is not None:
+        return task_path
+    return task.source if task.source is not None else "."
 
 
 def task_tool(task: Task) -> Tool:
     """The task's tool."""
-    from tools.library import load_tool, tool_from_dict
+    from tooltransfer.tools.library import load_tool, tool_from_dict
 
     if isinstance(task.tool, InlineTool):
         return tool_from_dict(json.loads(task.tool.model_dump_json(exclude_none=True)), source="task tool")
@@ -383,7 +402,7 @@ def task_tool(task: Task) -> Tool:
 
 def task_platform(task: Task, tool: Tool) -> OmniPlatform:
     """The task's Omni carrying ``tool`` (its ``a_t``)."""
-    from tools.omni.platform import DEFAULT_LIMITS, JointLimits, OmniPlatform
+    from tooltransfer.tools.omni.platform import DEFAULT_LIMITS, JointLimits, OmniPlatform
 
     spec = task.platform
     limits = DEFAULT_LIMITS if spec.limits is None else JointLimits(spec.limits.lower, spec.limits.upper, "task file")
@@ -392,8 +411,8 @@ def task_platform(task: Task, tool: Tool) -> OmniPlatform:
 
 
 def task_obstacles(task: Task) -> list[ObstacleShape]:
-    """The task's obstacles as :class:`tools.objects.Disc` and shapely polygons."""
-    from tools.objects import Disc
+    """The task's obstacles as :class:`tooltransfer.tools.objects.Disc` and shapely polygons."""
+    from tooltransfer.tools.objects import Disc
 
     return [
         Disc(np.array(o.centre), o.radius) if isinstance(o, DiscObstacle) else shapely.Polygon(o.vertices)

@@ -11,10 +11,10 @@ import pytest
 import shapely
 import yaml
 
-from planner.batch.generate import _reach, generate_tasks, write_tasks
-from planner.batch.spec import batch_from_dict, load_batch
-from planner.cli import main
-from problems.task import load_task
+from tooltransfer.planner.batch.generate import _reach, generate_tasks, write_tasks
+from tooltransfer.planner.batch.spec import batch_from_dict, load_batch
+from tooltransfer.planner.cli import main
+from tooltransfer.problems.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
 SMALL = ROOT / "problems" / "batch" / "small.yaml"

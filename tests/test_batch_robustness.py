@@ -16,7 +16,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from planner.cli import main
+from tooltransfer.planner.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASET = str(ROOT / "problems" / "data" / "finger_demos")
@@ -194,7 +194,7 @@ def test_broken_batch_files_exit_2_naming_the_field(tmp_path, capsys, key, value
     err = capsys.readouterr().err
     assert "Traceback" not in err
     if code == 0:  # a value the schema accepts (e.g. a seed): the tasks are valid task files
-        from problems.task import load_task
+        from tooltransfer.problems.task import load_task
 
         assert all(load_task(f).name.startswith("small-") for f in (tmp_path / "tasks").iterdir())
         return

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from planner.batch.sandbox import Sandbox
-from planner.batch.worker import Job, run_job
+from tooltransfer.planner.batch.sandbox import Sandbox
+from tooltransfer.planner.batch.worker import Job, run_job
 
 
 @pytest.fixture(scope="module")

@@ -15,13 +15,13 @@ from pathlib import Path
 import pytest
 import yaml
 
-from dmp.errors import InputError
-from planner.batch.report import EXEC_TOLS, summarize, write_report
-from planner.batch.runner import batch_jobs, open_batch_store
-from planner.batch.spec import batch_from_dict, load_batch
-from planner.batch.store import RESULT_COLUMNS, ResultStore
-from planner.batch.worker import Job, Stage, run_job
-from planner.cli import main
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.batch.report import EXEC_TOLS, summarize, write_report
+from tooltransfer.planner.batch.runner import batch_jobs, open_batch_store
+from tooltransfer.planner.batch.spec import batch_from_dict, load_batch
+from tooltransfer.planner.batch.store import RESULT_COLUMNS, ResultStore
+from tooltransfer.planner.batch.worker import Job, Stage, run_job
+from tooltransfer.planner.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASET = ROOT / "problems" / "data" / "finger_demos"

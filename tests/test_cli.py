@@ -3,7 +3,7 @@ command has --help with an example; compare covers every variant pair."""
 
 from __future__ import annotations
 
-from planner.cli import main
+from tooltransfer.planner.cli import main
 
 
 def test_demo_runs_the_transfer_job(tmp_path, capsys) -> None:
@@ -23,7 +23,7 @@ def test_every_command_has_help_with_an_example(capsys) -> None:
 
     import pytest
 
-    from planner.cli import build_parser
+    from tooltransfer.planner.cli import build_parser
 
     def commands(parser: argparse.ArgumentParser, prefix: list[str]) -> list[list[str]]:
         subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]

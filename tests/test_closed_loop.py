@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.cli import main
-from planner.plan import read_plan
+from tooltransfer.planner.cli import main
+from tooltransfer.planner.plan import read_plan
 
 TRANSFER = Path(__file__).resolve().parents[1] / "problems" / "paper" / "transfer_tool2.yaml"
 
@@ -38,7 +38,7 @@ def test_closed_loop_reaches_the_target_where_open_loop_drifts(plan_file: Path, 
 
 
 def test_closed_loop_report_is_consistent(plan_file: Path) -> None:
-    from planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.closed_loop import execute_closed_loop
 
     plan = read_plan(plan_file)
     rep = execute_closed_loop(plan)
@@ -52,7 +52,7 @@ def test_closed_loop_report_is_consistent(plan_file: Path) -> None:
 
 @pytest.mark.parametrize("seed", range(4))
 def test_closed_loop_within_5_mm_whatever_the_camera_noise(plan_file: Path, seed: int) -> None:
-    from planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.closed_loop import execute_closed_loop
 
     rep = execute_closed_loop(read_plan(plan_file), seed=seed)
     assert rep.status == "reached", rep.reason
@@ -71,11 +71,11 @@ def test_unsolved_plan_is_not_executed(tmp_path: Path, capsys) -> None:
 def test_closed_loop_on_a_mismatched_quasi_static_plant(plan_file: Path, mu: float, c: float) -> None:
     """The same loop through the Plant protocol on the push model with mu and c off the planner's
     (factors of the identified values): it ends within 3 mm, no exception."""
-    from planner.closed_loop import execute_closed_loop
-    from planner.execution import ModelPlant, Plant
-    from planner.solve import task_mechanics, task_skills
-    from problems.task import task_from_dict, task_platform, task_tool
-    from tools.pushing.mechanics import PushMechanics
+    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution import ModelPlant, Plant
+    from tooltransfer.planner.solve import task_mechanics, task_skills
+    from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
+    from tooltransfer.tools.pushing.mechanics import PushMechanics
 
     plan = read_plan(plan_file)
     task = task_from_dict(plan.task)
@@ -91,7 +91,7 @@ def test_closed_loop_on_a_mismatched_quasi_static_plant(plan_file: Path, mu: flo
 
 
 def test_a_plant_that_refuses_a_move_ends_the_run_with_its_reason(plan_file: Path) -> None:
-    from planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.closed_loop import execute_closed_loop
 
     class Jammed:
         """A plant whose arm refuses to move (e.g. a driver fault)."""
@@ -103,7 +103,7 @@ def test_a_plant_that_refuses_a_move_ends_the_run_with_its_reason(plan_file: Pat
             return plan.tool_pose[0]
 
         def move_tool(self, t: np.ndarray, tool_pose: np.ndarray) -> None:
-            from dmp.errors import InputError
+            from tooltransfer.dmp.errors import InputError
 
             raise InputError("tool_pose", "a reachable path", "the arm is jammed")
 
@@ -115,11 +115,11 @@ def test_a_plant_that_refuses_a_move_ends_the_run_with_its_reason(plan_file: Pat
 def test_the_loop_adapts_the_push_model_to_a_mismatched_plant(plan_file: Path) -> None:
     """On a plant whose limit surface is 0.6 x the identified one, the chunks the model mispredicts
     identify c again: the model in force ends nearer the plant's c than the plan's."""
-    from planner.closed_loop import execute_closed_loop
-    from planner.execution import ModelPlant
-    from planner.solve import task_mechanics, task_skills
-    from problems.task import task_from_dict, task_platform, task_tool
-    from tools.pushing.mechanics import PushMechanics
+    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution import ModelPlant
+    from tooltransfer.planner.solve import task_mechanics, task_skills
+    from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
+    from tooltransfer.tools.pushing.mechanics import PushMechanics
 
     plan = read_plan(plan_file)
     task = task_from_dict(plan.task)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from problems.dataset import (
+from tooltransfer.problems.dataset import (
     COLUMNS,
     MIN_SAMPLES,
     DatasetError,

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dmp import DMP, InputError, SkillFileError
-from problems.fit_cases import l_path
+from tooltransfer.dmp import DMP, InputError, SkillFileError
+from tooltransfer.problems.fit_cases import l_path
 
 
 def smooth_path(seed: int, n: int = 400) -> tuple[np.ndarray, np.ndarray]:

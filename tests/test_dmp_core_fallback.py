@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 import shapely
 
-from dmp.qp import FitProblem, FixedEndPoint, OutsidePolygon, TrackPath, VelocityCone, native, solve_fit
-from dmp.qp.dual_active_set import DualActiveSet, DualInfeasible
-from problems.fit_cases import l_push_case
+from tooltransfer.dmp.qp import FitProblem, FixedEndPoint, OutsidePolygon, TrackPath, VelocityCone, native, solve_fit
+from tooltransfer.dmp.qp.dual_active_set import DualActiveSet, DualInfeasible
+from tooltransfer.problems.fit_cases import l_push_case
 
 ROOT = Path(__file__).resolve().parents[1]
 compiled = pytest.mark.skipif(native.compiled_path() is None, reason="the compiled core is not built")
@@ -137,8 +137,8 @@ def test_numpy_core_alone_meets_every_row() -> None:
 
 @compiled
 def test_scan_and_rows_match_the_compiled_core() -> None:
-    from dmp.qp.pool import RowPool, Samples
-    from dmp.qp.problem import unconstrained_weights
+    from tooltransfer.dmp.qp.pool import RowPool, Samples
+    from tooltransfer.dmp.qp.problem import unconstrained_weights
 
     prob = l_push_case(20, 80).problem
     aff = prob.affine("dense")
@@ -162,8 +162,8 @@ def test_scan_and_rows_match_the_compiled_core() -> None:
 
 def test_scan_reports_every_peak_beyond_a_small_buffer() -> None:
     """More peaks than the output buffer holds: the count says so and the pool asks again."""
-    from dmp.qp.pool import RowPool, Samples
-    from dmp.qp.problem import unconstrained_weights
+    from tooltransfer.dmp.qp.pool import RowPool, Samples
+    from tooltransfer.dmp.qp.problem import unconstrained_weights
 
     prob = l_push_case(20, 80).problem
     aff = prob.affine("dense")
@@ -210,7 +210,8 @@ def _python(code: str, **env: str) -> subprocess.CompletedProcess[str]:
 
 def test_environment_variable_forces_the_numpy_core_silently() -> None:
     code = ("import warnings; warnings.simplefilter('error')\n"
-            "from dmp.qp import native, solve_fit\nfrom problems.fit_cases import l_push_case\n"
+            "from tooltransfer.dmp.qp import native, solve_fit\n"
+            "from tooltransfer.problems.fit_cases import l_push_case\n"
             "r = solve_fit(l_push_case(10, 50, obstacle=False).problem)\nprint(native.core().name, r.status)")
     out = _python(code, TOOLTRANSFER_NO_NATIVE="1")
     assert out.returncode == 0, out.stderr
@@ -222,10 +223,10 @@ def test_environment_variable_forces_the_numpy_core_silently() -> None:
 
 
 def test_planner_solves_the_transfer_task_without_the_compiled_core() -> None:
-    """``planner.solve.solve`` on the paper's transfer task, in a fresh process with the core disabled."""
+    """``tooltransfer.planner.solve.solve`` on the paper's transfer task, in a fresh process with the core disabled."""
     code = (
-        "import json\nfrom planner.solve import solve\nfrom problems.task import load_task\n"
-        "from dmp.qp import native\n"
+        "import json\nfrom tooltransfer.planner.solve import solve\nfrom tooltransfer.problems.task import load_task\n"
+        "from tooltransfer.dmp.qp import native\n"
         "path = 'problems/paper/transfer_tool2.yaml'\nplan = solve(load_task(path), path)\n"
         "print(json.dumps({'core': native.core().name, 'status': plan.status, 'reason': plan.reason,"
         " 'goal_error': plan.metrics.get('goal_error')}))"

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dmp import InfeasibleError, UnknownSolverError
-from dmp.qp import (
+from tooltransfer.dmp import InfeasibleError, UnknownSolverError
+from tooltransfer.dmp.qp import (
     FitProblem,
     FixedEndPoint,
     PositionPolygon,
@@ -15,8 +15,8 @@ from dmp.qp import (
     build_fit_qp,
     solve_fit,
 )
-from dmp.qp.problem import stack_rows
-from problems.fit_cases import l_push_case
+from tooltransfer.dmp.qp.problem import stack_rows
+from tooltransfer.problems.fit_cases import l_push_case
 
 
 def test_cutting_planes_hold_every_constraint_on_dense_grid() -> None:
@@ -58,7 +58,7 @@ def test_optimum_matches_second_backend_on_the_same_dense_rows() -> None:
     p, q = prob.quadratic()
     aff = prob.affine("dense")
     g, h, _, a, b, _ = stack_rows(prob.constraints, aff, r.rollout.x)
-    from dmp.qp.backends import solve_qp
+    from tooltransfer.dmp.qp.backends import solve_qp
 
     out = solve_qp(p, q, g, h, a, b, "quadprog")
     assert out.x is not None
@@ -106,7 +106,7 @@ def test_unknown_solver_lists_installed() -> None:
 
 
 def test_polygon_rejects_non_convex() -> None:
-    from dmp import InputError
+    from tooltransfer.dmp import InputError
 
     with pytest.raises(InputError, match="convex"):
         PositionPolygon.from_vertices([[0, 0], [1, 0], [0.2, 0.2], [0, 1]])
@@ -115,7 +115,7 @@ def test_polygon_rejects_non_convex() -> None:
 def test_outside_polygon_holds_on_the_dense_grid() -> None:
     import shapely
 
-    from dmp.qp import OutsidePolygon
+    from tooltransfer.dmp.qp import OutsidePolygon
 
     case = l_push_case(30, 200, obstacle=False)
     box = shapely.box(-0.004, 0.03, 0.01, 0.05)  # on the forward stretch of the L
@@ -135,7 +135,7 @@ def test_exact_step_matches_quadprog_cold_and_warm(seed: int) -> None:
     """The C dual active-set core (cold, and warm-started from a random guess of the active rows)
     reaches quadprog's optimum of ``min 0.5 |z - z_c|^2, E z = f, G z <= h``."""
     quadprog = pytest.importorskip("quadprog")
-    from dmp.qp.dual_active_set import DualActiveSet
+    from tooltransfer.dmp.qp.dual_active_set import DualActiveSet
 
     rng = np.random.default_rng(seed)
     n, m = 12, 60
@@ -161,8 +161,8 @@ def test_exact_step_matches_quadprog_cold_and_warm(seed: int) -> None:
 
 def test_compiled_scan_matches_numpy_residuals_and_peaks() -> None:
     """The oracle's compiled scan gives the NumPy residuals and local maxima on every kind of sample set."""
-    from dmp.qp.pool import RowPool, Samples
-    from dmp.qp.problem import unconstrained_weights
+    from tooltransfer.dmp.qp.pool import RowPool, Samples
+    from tooltransfer.dmp.qp.problem import unconstrained_weights
 
     prob = l_push_case(20, 80).problem
     aff = prob.affine("dense")
@@ -181,8 +181,8 @@ def test_compiled_scan_matches_numpy_residuals_and_peaks() -> None:
 
 def test_pool_rows_equal_the_condensed_rows() -> None:
     """Rows built by the compiled core for row ids equal the condensed form's rows (``stack_rows``)."""
-    from dmp.qp.pool import RowPool
-    from dmp.qp.problem import unconstrained_weights
+    from tooltransfer.dmp.qp.pool import RowPool
+    from tooltransfer.dmp.qp.problem import unconstrained_weights
 
     prob = l_push_case(20, 80).problem
     aff = prob.affine("dense")
@@ -204,8 +204,8 @@ def test_misleading_warm_start_is_proved_again_cold(monkeypatch: pytest.MonkeyPa
     """Every coarse row guessed active at once (far more than the 60 variables, nearly dependent):
     the warm-started exact step ends in a spurious infeasibility proof, the step is re-run cold, and
     the optimum is the cold one."""
-    import dmp.qp.solve as S
-    from dmp.qp.pool import RowPool, Samples
+    import tooltransfer.dmp.qp.solve as S
+    from tooltransfer.dmp.qp.pool import RowPool, Samples
 
     case = l_push_case(30, 200)
     pr = case.problem

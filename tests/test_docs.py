@@ -51,9 +51,10 @@ def test_every_page_is_built(site: Path) -> None:
     nav = yaml.safe_load(_text(ROOT / "mkdocs.yml"))["nav"]
     api = next(item["API reference"] for item in nav if "API reference" in item)
     modules = {next(iter(entry)) for entry in api} - {"Overview"}
-    assert modules >= {"dmp", "dmp.qp", "tools", "tools.pushing", "tools.omni", "planner.solve", "planner.plan",
-                       "planner.scene", "planner.closed_loop", "planner.execution", "problems.task",
-                       "problems.dataset"}
+    assert modules >= {"tooltransfer", "tooltransfer.dmp", "tooltransfer.dmp.qp", "tooltransfer.tools",
+                       "tooltransfer.tools.pushing", "tooltransfer.tools.omni", "tooltransfer.planner.solve",
+                       "tooltransfer.planner.plan", "tooltransfer.planner.scene", "tooltransfer.planner.closed_loop",
+                       "tooltransfer.planner.execution", "tooltransfer.problems.task", "tooltransfer.problems.dataset"}
     for module in modules:
         html = _text(site / "api" / module / "index.html")
         assert f'id="{module}' in html, module
@@ -62,17 +63,22 @@ def test_every_page_is_built(site: Path) -> None:
 @needs_mkdocs
 def test_the_api_reference_documents_the_entry_points(site: Path) -> None:
     anchors = {
-        "planner.solve": ["planner.solve.solve"],
-        "planner.closed_loop": ["planner.closed_loop.execute_closed_loop", "planner.closed_loop.ClosedLoopReport"],
-        "planner.execution": ["planner.execution.Plant", "planner.execution.ModelPlant", "planner.execution.SimPlant"],
-        "dmp.qp": ["dmp.qp.solve_fit", "dmp.qp.VelocityCone"],
-        "dmp": ["dmp.DMP"],
-        "tools.pushing": ["tools.pushing.mechanics.PushMechanics", "tools.pushing.forward.simulate",
-                          "tools.pushing.inverse.push_tool_path", "tools.pushing.identify"],
-        "problems.task": ["problems.task.load_task", "problems.task.Task"],
-        "problems.dataset": ["problems.dataset.load_dataset"],
-        "planner.plan": ["planner.plan.read_plan", "planner.plan.Plan"],
-        "planner.scene": ["planner.scene.Scene"],
+        "tooltransfer.planner.solve": ["tooltransfer.planner.solve.solve"],
+        "tooltransfer.planner.closed_loop": ["tooltransfer.planner.closed_loop.execute_closed_loop",
+                                             "tooltransfer.planner.closed_loop.ClosedLoopReport"],
+        "tooltransfer.planner.execution": ["tooltransfer.planner.execution.Plant",
+                                           "tooltransfer.planner.execution.ModelPlant",
+                                           "tooltransfer.planner.execution.SimPlant"],
+        "tooltransfer.dmp.qp": ["tooltransfer.dmp.qp.solve_fit", "tooltransfer.dmp.qp.VelocityCone"],
+        "tooltransfer.dmp": ["tooltransfer.dmp.DMP"],
+        "tooltransfer.tools.pushing": ["tooltransfer.tools.pushing.mechanics.PushMechanics",
+                                       "tooltransfer.tools.pushing.forward.simulate",
+                                       "tooltransfer.tools.pushing.inverse.push_tool_path",
+                                       "tooltransfer.tools.pushing.identify"],
+        "tooltransfer.problems.task": ["tooltransfer.problems.task.load_task", "tooltransfer.problems.task.Task"],
+        "tooltransfer.problems.dataset": ["tooltransfer.problems.dataset.load_dataset"],
+        "tooltransfer.planner.plan": ["tooltransfer.planner.plan.read_plan", "tooltransfer.planner.plan.Plan"],
+        "tooltransfer.planner.scene": ["tooltransfer.planner.scene.Scene"],
     }
     for module, ids in anchors.items():
         html = _text(site / "api" / module / "index.html")

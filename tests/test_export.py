@@ -12,10 +12,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner.cli import main
-from planner.export import FORMATS, SUFFIXES, Trajectory, export_plan, joint_trajectory_message, read_trajectory
-from planner.plan import JOINT_NAMES, Plan, PlanFileError, joint_rates, read_plan
-from planner.simulate import check_plan
+from tooltransfer.planner.cli import main
+from tooltransfer.planner.export import (
+    FORMATS,
+    SUFFIXES,
+    Trajectory,
+    export_plan,
+    joint_trajectory_message,
+    read_trajectory,
+)
+from tooltransfer.planner.plan import JOINT_NAMES, Plan, PlanFileError, joint_rates, read_plan
+from tooltransfer.planner.simulate import check_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 TASK = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
@@ -23,8 +30,8 @@ TASK = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
 
 @pytest.fixture(scope="module")
 def plan_path(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from planner.solve import solve
-    from problems.task import load_task
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import load_task
 
     plan = solve(load_task(TASK), TASK)
     assert plan.status == "solved", plan.reason
@@ -65,8 +72,8 @@ def test_the_plan_carries_its_joint_rates_and_names(plan: Plan) -> None:
     np.testing.assert_array_equal(plan.joint_velocities, v)
     np.testing.assert_array_equal(plan.joint_accelerations, a)
     # what the simulated execution feeds forward when it is given no velocities
-    from problems.task import task_from_dict, task_platform, task_tool
-    from tools.sim.reference import joint_reference
+    from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
+    from tooltransfer.tools.sim.reference import joint_reference
 
     task = task_from_dict(plan.task)
     platform = task_platform(task, task_tool(task))
@@ -78,7 +85,7 @@ def test_the_plan_carries_its_joint_rates_and_names(plan: Plan) -> None:
 
 
 def test_through_the_jacobian_the_joint_velocities_give_the_tool_velocity(plan: Plan) -> None:
-    from planner.segmentation.geometry import table_poses
+    from tooltransfer.planner.segmentation.geometry import table_poses
 
     p = plan.platform
 
@@ -221,7 +228,7 @@ def test_the_joint_trajectory_is_shaped_like_the_ros_message(plan: Plan) -> None
 
 
 def test_a_time_just_below_a_second_carries_over() -> None:
-    from planner.export import _duration
+    from tooltransfer.planner.export import _duration
 
     assert _duration(0.9999999999) == {"sec": 1, "nanosec": 0}
     assert _duration(2.5) == {"sec": 2, "nanosec": 500_000_000}
@@ -303,7 +310,7 @@ def test_export_of_an_infeasible_or_violated_plan(plan_path: Path, tmp_path: Pat
 
 
 def test_read_trajectory_names_the_file_of_a_bad_export(tmp_path: Path) -> None:
-    from dmp.errors import InputError
+    from tooltransfer.dmp.errors import InputError
 
     cases = {"a.csv": "t,a\n1,2\n", "b.trajectory.json": '{"points": [{"positions": [1, 2, 3]}]}',
              "c.npz": "not a zip", "d.txt": "x"}

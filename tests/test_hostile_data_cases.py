@@ -1,7 +1,7 @@
 """Hostile datasets (issue 16, class 5): datasets that lie about their columns, their tool, their units,
 their platform or their ground truth, and files too large to read whole. Each case is a copy of two of
 the committed demonstrations with one lie in it; loading and segmenting it (what ``segment``,
-``learn`` and ``batch run`` do first) must end in a :class:`~problems.dataset.DatasetError` (exit
+``learn`` and ``batch run`` do first) must end in a :class:`~tooltransfer.problems.dataset.DatasetError` (exit
 code 2) whose one-line message names the file and the field, the row or the place, within seconds;
 the unchanged copy loads and segments."""
 
@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 import yaml
 
-from dmp.errors import InputError
-from planner.cli import main
-from planner.segmentation import load_fixed_points, segment
-from problems import dataset as dataset_module
-from problems.dataset import DatasetError, load_dataset
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.cli import main
+from tooltransfer.planner.segmentation import load_fixed_points, segment
+from tooltransfer.problems import dataset as dataset_module
+from tooltransfer.problems.dataset import DatasetError, load_dataset
 
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "problems" / "data" / "finger_demos"

@@ -1,6 +1,6 @@
 """Hostile datasets drawn by hypothesis (derandomized, bounded): a CSV cell, a header or a meta.yaml field
 replaced by junk, a column group rescaled (other units), truth.yaml replaced by junk. Loading and
-segmenting either works or raises a :class:`~problems.dataset.DatasetError` whose one-line message
+segmenting either works or raises a :class:`~tooltransfer.problems.dataset.DatasetError` whose one-line message
 names the file (never another exception, never a traceback); a rescaled column group is always
 refused."""
 
@@ -15,8 +15,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_hostile_data_cases import copy_dataset
 
-from planner.segmentation import segment
-from problems.dataset import DatasetError, load_dataset
+from tooltransfer.planner.segmentation import segment
+from tooltransfer.problems.dataset import DatasetError, load_dataset
 
 SETTINGS = settings(derandomize=True, deadline=None, database=None, max_examples=25,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])

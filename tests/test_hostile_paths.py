@@ -19,9 +19,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from planner.cli import file_stem, main
-from problems.atomic import atomic_path, write_bytes
-from problems.task import TaskFileError, task_from_dict
+from tooltransfer.planner.cli import file_stem, main
+from tooltransfer.problems.atomic import atomic_path, write_bytes
+from tooltransfer.problems.task import TaskFileError, task_from_dict
 
 ROOT = Path(__file__).resolve().parent.parent
 TASK = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
@@ -185,17 +185,17 @@ def test_a_failing_writer_leaves_the_old_file_and_no_temporary(tmp_path: Path, f
 
 def _disk_full(monkeypatch: pytest.MonkeyPatch) -> None:
     """The next flush to disk fails as on a full disk (after the content went to the temporary file)."""
-    import problems.atomic
+    import tooltransfer.problems.atomic
 
     def full(path: Path) -> None:
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(problems.atomic, "_fsync", full)
+    monkeypatch.setattr(tooltransfer.problems.atomic, "_fsync", full)
 
 
 def test_plan_and_skills_files_are_never_half_written(tmp_path: Path, monkeypatch) -> None:
-    from planner.plan import Plan
-    from planner.skills import learn_skills
+    from tooltransfer.planner.plan import Plan
+    from tooltransfer.planner.skills import learn_skills
 
     plan = Plan(status="infeasible", variant={"oe": "qp", "ss": "arch"}, task={"name": "x"}, platform={}, object={},
                 tool={}, obstacles=[], reason="why")
@@ -220,8 +220,8 @@ def test_plan_and_skills_files_are_never_half_written(tmp_path: Path, monkeypatc
 def test_dmp_skill_files_are_never_half_written(tmp_path: Path, monkeypatch) -> None:
     import numpy as np
 
-    from dmp import DMP
-    from dmp.skill_file import load_dmp, save_dmp
+    from tooltransfer.dmp import DMP
+    from tooltransfer.dmp.skill_file import load_dmp, save_dmp
 
     t = np.linspace(0, 1, 50)
     d = DMP(n_dims=2, n_basis=10).fit(t, np.column_stack([t, t**2]))

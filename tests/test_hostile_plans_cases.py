@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dmp.errors import InputError
-from planner.cli import main
-from planner.plan import PlanFileError, read_plan
-from planner.segmentation.geometry import table_poses
-from planner.simulate import check_plan
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.cli import main
+from tooltransfer.planner.plan import PlanFileError, read_plan
+from tooltransfer.planner.segmentation.geometry import table_poses
+from tooltransfer.planner.simulate import check_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -29,8 +29,8 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="module")
 def plan_doc(tmp_path_factory: pytest.TempPathFactory) -> dict:
     """The transfer task's qp/opt plan as JSON data."""
-    from planner.solve import solve
-    from problems.task import load_task
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import load_task
 
     path = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
     plan = solve(load_task(path), path)
@@ -55,8 +55,8 @@ def _approach_into_the_puck(d: dict) -> None:
 
 
 def _start_on_the_puck(d: dict) -> None:
-    from problems.task import task_from_dict, task_platform, task_tool
-    from tools.omni.ik import inverse_kinematics
+    from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
+    from tooltransfer.tools.omni.ik import inverse_kinematics
 
     task = task_from_dict(d["task"])
     platform = task_platform(task, task_tool(task))
@@ -67,8 +67,8 @@ def _start_on_the_puck(d: dict) -> None:
 
 def _sweep_through(d: dict) -> None:
     """The tool path of the pushes moved 15 mm forward (through the puck), joints by inverse kinematics."""
-    from problems.task import task_from_dict, task_platform, task_tool
-    from tools.omni.ik import joint_path
+    from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
+    from tooltransfer.tools.omni.ik import joint_path
 
     task = task_from_dict(d["task"])
     platform = task_platform(task, task_tool(task))
@@ -227,7 +227,7 @@ def test_files_that_are_not_plans(tmp_path: Path, raw: str | bytes, words: tuple
 
 
 def test_a_plan_file_too_large_is_refused_before_it_is_read(tmp_path: Path, monkeypatch) -> None:
-    import planner.plan as plan_module
+    import tooltransfer.planner.plan as plan_module
 
     p = tmp_path / "plan.json"
     p.write_text(" " * 5000 + "{}")

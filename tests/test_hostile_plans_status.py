@@ -13,11 +13,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import planner.solve as solve_module
-from planner.batch.report import print_report, summarize, top_reasons
-from planner.cli import main
-from planner.plan import read_plan
-from planner.solve import HARD_CHECKS, hard_check_failures
+import tooltransfer.planner.solve as solve_module
+from tooltransfer.planner.batch.report import print_report, summarize, top_reasons
+from tooltransfer.planner.cli import main
+from tooltransfer.planner.plan import read_plan
+from tooltransfer.planner.solve import HARD_CHECKS, hard_check_failures
 
 ROOT = Path(__file__).resolve().parents[1]
 TRANSFER = ROOT / "problems" / "paper" / "transfer_tool2.yaml"

@@ -1,6 +1,6 @@
 """Hostile plan files drawn by hypothesis (derandomized, bounded): a sample, a metric, a segment or a
 top-level field replaced by junk of any JSON type, arrays cut short, time scaled. Reading and checking
-the plan either passes or raises an :class:`~dmp.errors.InputError` whose one-line message names the
+the plan either passes or raises an :class:`~tooltransfer.dmp.errors.InputError` whose one-line message names the
 file (never another exception); a plan timed faster than its tool's limits never passes."""
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from dmp.errors import InputError
-from planner.plan import read_plan
-from planner.simulate import check_plan
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.plan import read_plan
+from tooltransfer.planner.simulate import check_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 SETTINGS = settings(derandomize=True, deadline=None, database=None, max_examples=30,
@@ -27,8 +27,8 @@ JUNK = st.one_of(st.none(), st.booleans(), st.integers(-10**20, 10**20), st.samp
 
 @pytest.fixture(scope="module")
 def plan_doc(tmp_path_factory: pytest.TempPathFactory) -> dict:
-    from planner.solve import solve
-    from problems.task import load_task
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import load_task
 
     path = ROOT / "problems" / "paper" / "fig14_safety_margin.yaml"
     plan = solve(load_task(path), path)

@@ -20,9 +20,9 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from dmp.errors import InputError
-from planner.cli import main
-from tools.yaml_file import MAX_ALIAS_EXPANSION, MAX_DEPTH, parse_yaml, read_yaml
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.cli import main
+from tooltransfer.tools.yaml_file import MAX_ALIAS_EXPANSION, MAX_DEPTH, parse_yaml, read_yaml
 
 HERE = Path(__file__).parent
 FIXTURES = HERE / "hostile" / "text"
@@ -75,7 +75,7 @@ def test_hostile_task_files_are_refused_naming_the_file(path: Path, capsys) -> N
 
 @pytest.mark.parametrize("path", sorted((FIXTURES / "accepted").glob("*.yaml")), ids=lambda p: p.stem)
 def test_benign_variants_load(path: Path) -> None:
-    from problems.task import load_task
+    from tooltransfer.problems.task import load_task
 
     task = load_task(path)
     assert task.safety_margin == 0.005 and task.start == (0.045, 0.12)
@@ -107,7 +107,7 @@ def _meta_folder(tmp_path: Path) -> Path:
 
 @pytest.mark.parametrize("case", ["utf-16", "latin-1", "duplicate", "bomb", "nested"])
 def test_hostile_meta_yaml_is_refused_naming_it(tmp_path: Path, case: str) -> None:
-    from problems.dataset import DatasetError, load_meta
+    from tooltransfer.problems.dataset import DatasetError, load_meta
 
     folder = _meta_folder(tmp_path)
     meta = folder / "meta.yaml"
@@ -130,7 +130,7 @@ def test_hostile_meta_yaml_is_refused_naming_it(tmp_path: Path, case: str) -> No
 
 
 def test_meta_yaml_takes_exponent_floats(tmp_path: Path) -> None:
-    from problems.dataset import load_meta
+    from tooltransfer.problems.dataset import load_meta
 
     folder = _meta_folder(tmp_path)
     meta = folder / "meta.yaml"
@@ -162,7 +162,7 @@ def test_hostile_dataset_files_exit_2_naming_the_file(tmp_path: Path, case: str,
 
 @pytest.mark.parametrize("case", ["duplicate", "bomb", "utf-16", "exponent"])
 def test_hostile_batch_files(tmp_path: Path, case: str) -> None:
-    from planner.batch.spec import BatchFileError, load_batch
+    from tooltransfer.planner.batch.spec import BatchFileError, load_batch
 
     text = BATCH.read_text().replace("../data/finger_demos", str(DATA))
     laughs = "".join(f"  l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * 10 if i else ["x"] * 10) + "]\n" for i in range(6))
@@ -292,7 +292,7 @@ def test_arbitrary_bytes_give_a_value_or_the_error(tmp_path_factory, data: bytes
 @SETTINGS
 @given(st.text(min_size=150, max_size=20_000))
 def test_long_values_are_cut_in_messages(value: str) -> None:
-    from problems.task import TaskFileError, task_from_dict
+    from tooltransfer.problems.task import TaskFileError, task_from_dict
 
     base = yaml.safe_load((FIXTURES / "accepted" / "utf8_bom.yaml").read_bytes()[3:])
     for field in ("start", "tool", "name"):
@@ -304,8 +304,8 @@ def test_long_values_are_cut_in_messages(value: str) -> None:
 def test_tool_files_are_read_by_the_safe_reader(tmp_path: Path) -> None:
     """A tool file in UTF-16, with a key twice, or with 10,000 outline vertices is refused naming
     the file and the place (tool files used to be read with a bare yaml.safe_load)."""
-    from tools.errors import ToolSpecError
-    from tools.library import read_tool_file
+    from tooltransfer.tools.errors import ToolSpecError
+    from tooltransfer.tools.library import read_tool_file
 
     slope = Path(__file__).resolve().parents[1] / "tools" / "library" / "slope.yaml"
     u16 = tmp_path / "u16.yaml"

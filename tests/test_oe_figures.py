@@ -7,14 +7,14 @@ from pathlib import Path
 import matplotlib.image as mpimg
 import numpy as np
 
-from planner.oe import QPOptions, condense_qp
-from planner.oe.mapping_variant import condense_mapping
-from planner.plots.push_plans import plot_push_plans
-from planner.plots.safety_margin import plot_safety_margin
-from planner.scene import Scene
-from problems.fit_cases import minimum_jerk
-from tools import Disc, load_tool
-from tools.omni.platform import OmniPlatform
+from tooltransfer.planner.oe import QPOptions, condense_qp
+from tooltransfer.planner.oe.mapping_variant import condense_mapping
+from tooltransfer.planner.plots.push_plans import plot_push_plans
+from tooltransfer.planner.plots.safety_margin import plot_safety_margin
+from tooltransfer.planner.scene import Scene
+from tooltransfer.problems.fit_cases import minimum_jerk
+from tooltransfer.tools import Disc, load_tool
+from tooltransfer.tools.omni.platform import OmniPlatform
 
 
 def test_push_plan_and_safety_margin_figures(tmp_path: Path) -> None:

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner.oe.face_frame import FaceFrame
-from planner.oe.learn import DemoPush, condense_recovered, learn_oe_skill, recover
-from planner.scene import Scene
-from problems.fit_cases import minimum_jerk
-from tools import load_tool
-from tools.omni.platform import OmniPlatform
+from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.planner.oe.learn import DemoPush, condense_recovered, learn_oe_skill, recover
+from tooltransfer.planner.scene import Scene
+from tooltransfer.problems.fit_cases import minimum_jerk
+from tooltransfer.tools import load_tool
+from tooltransfer.tools.omni.platform import OmniPlatform
 
 START = np.array([0.06, 0.10])
 LENGTHS = (0.04, 0.05, 0.045, 0.05)
@@ -92,8 +92,8 @@ def test_skill_fitted_on_all_recovered_demonstrations(n_demos: int) -> None:
 
 
 def test_skill_file_round_trip_and_refusals(tmp_path) -> None:
-    from dmp.errors import SkillFileError
-    from planner.oe.learn import OESkill
+    from tooltransfer.dmp.errors import SkillFileError
+    from tooltransfer.planner.oe.learn import OESkill
 
     skill = learn_oe_skill([demo(np.random.default_rng(5))], load_tool("finger"), k=0.5, n_basis=20)
     path = skill.save(tmp_path / "oe.json")

@@ -9,15 +9,15 @@ import pytest
 import shapely
 import yaml
 
-from planner.oe import QPOptions, condense_qp
-from planner.oe.constraints import HeadingCone, reach_constraints
-from planner.oe.face_frame import FaceFrame
-from planner.scene import Scene
-from problems.fit_cases import minimum_jerk
-from tools import Disc, load_tool, tool_from_dict
-from tools.library import library_names
-from tools.omni.ik import inverse_kinematics
-from tools.omni.platform import OmniPlatform
+from tooltransfer.planner.oe import QPOptions, condense_qp
+from tooltransfer.planner.oe.constraints import HeadingCone, reach_constraints
+from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.planner.scene import Scene
+from tooltransfer.problems.fit_cases import minimum_jerk
+from tooltransfer.tools import Disc, load_tool, tool_from_dict
+from tooltransfer.tools.library import library_names
+from tooltransfer.tools.omni.ik import inverse_kinematics
+from tooltransfer.tools.omni.platform import OmniPlatform
 
 R = 0.0175
 PUCK = Scene(R)
@@ -159,7 +159,7 @@ def test_qp_variant_keeps_the_margin_from_a_polygon_obstacle() -> None:
 
 
 def test_mapping_variant_runs_from_start_to_target_and_reports_what_it_violates() -> None:
-    from planner.oe.mapping_variant import MappingOptions, condense_mapping
+    from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping
 
     tool = load_tool("slope")
     t, x = l_scene()
@@ -180,7 +180,7 @@ def test_mapping_variant_runs_from_start_to_target_and_reports_what_it_violates(
 def test_the_scene_radius_is_the_one_planned_for() -> None:
     """A 24 mm puck: the obstacle margin and every tool pose are for that radius (the face's contact
     point sits on the puck's rim, the tool outline clear of the puck)."""
-    from tools.pose import Pose2D
+    from tooltransfer.tools.pose import Pose2D
 
     tool = load_tool("slope")
     t, x = l_scene()

@@ -6,14 +6,14 @@ from collections import Counter
 
 import numpy as np
 
-from planner.oe import condense_qp
-from planner.oe.learn import condense_recovered
-from planner.oe.mapping_variant import condense_mapping
-from planner.scene import Scene
-from planner.segmentation import segment
-from problems.dataset import load_dataset
-from problems.paper_cases import DEFAULT_DATASET, default_oe_skill, transfer_case
-from tools import load_tool
+from tooltransfer.planner.oe import condense_qp
+from tooltransfer.planner.oe.learn import condense_recovered
+from tooltransfer.planner.oe.mapping_variant import condense_mapping
+from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.segmentation import segment
+from tooltransfer.problems.dataset import load_dataset
+from tooltransfer.problems.paper_cases import DEFAULT_DATASET, default_oe_skill, transfer_case
+from tooltransfer.tools import load_tool
 
 
 def _scene(case: object) -> Scene:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from tools.omni.ik import inverse_kinematics, joint_path
-from tools.omni.platform import OmniPlatform
+from tooltransfer.tools.omni.ik import inverse_kinematics, joint_path
+from tooltransfer.tools.omni.platform import OmniPlatform
 
 
 def test_joint_path_matches_pointwise_ik() -> None:

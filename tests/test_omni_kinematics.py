@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dmp.errors import InputError
-from tools.omni import (
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools.omni import (
     JointLimits,
     OmniPlatform,
     forward_kinematics,
@@ -19,7 +19,7 @@ from tools.omni import (
     table_pose,
     tool_pose_world,
 )
-from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL, dh_transform
+from tooltransfer.tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL, dh_transform
 
 PLATFORM = OmniPlatform()
 LO, HI = np.array(PLATFORM.limits.lower), np.array(PLATFORM.limits.upper)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import shapely
 
-from dmp.errors import InputError
-from tools.omni import (
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools.omni import (
     OmniPlatform,
     inner_row,
     inverse_kinematics,
@@ -19,7 +19,7 @@ from tools.omni import (
     stack_rows,
     wedge_rows,
 )
-from tools.omni.reach import reach_intervals
+from tooltransfer.tools.omni.reach import reach_intervals
 
 PLATFORMS = [
     OmniPlatform(),

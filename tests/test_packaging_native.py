@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dmp.qp import native
-from dmp.qp.pool import RowPool, Samples
-from dmp.qp.problem import unconstrained_weights
-from problems.fit_cases import l_push_case
+from tooltransfer.dmp.qp import native
+from tooltransfer.dmp.qp.pool import RowPool, Samples
+from tooltransfer.dmp.qp.problem import unconstrained_weights
+from tooltransfer.problems.fit_cases import l_push_case
 
 ROOT = Path(__file__).resolve().parents[1]
 compiled = pytest.mark.skipif(native.compiled_path() is None, reason="the compiled core is not built")
@@ -148,7 +148,7 @@ def test_pyproject_builds_the_core_through_supported_commands() -> None:
     classes = {n.name for n in ast.walk(ast.parse(helper.read_text())) if isinstance(n, ast.ClassDef)}
     for cmd, target in st["cmdclass"].items():
         module, _, cls = target.rpartition(".")
-        assert module == "dmp.qp._build" and cls in classes and cls == cmd
+        assert module == "tooltransfer.dmp.qp._build" and cls in classes and cls == cmd
     assert {"build_ext", "bdist_wheel", "editable_wheel", "sdist"} <= set(st["cmdclass"])
 
 
@@ -156,10 +156,10 @@ def test_build_helper_declares_an_optional_stable_abi_extension() -> None:
     with warnings.catch_warnings():  # setuptools may warn about the stdlib distutils it replaces
         warnings.simplefilter("ignore", DeprecationWarning)
         pytest.importorskip("setuptools.command.bdist_wheel")  # setuptools >= 70.1, as the build uses
-        from dmp.qp import _build
+        from tooltransfer.dmp.qp import _build
 
     ext = _build.core_extension()
-    assert ext.name == "dmp.qp._gi_core" and ext.sources == ["dmp/qp/_gi_core.c"]
+    assert ext.name == "tooltransfer.dmp.qp._gi_core" and ext.sources == ["dmp/qp/_gi_core.c"]
     assert ext.optional  # no compiler: the build goes on, the NumPy core takes over
     if _build.STABLE_ABI:
         assert ext.py_limited_api and ("Py_LIMITED_API", "0x030B0000") in ext.define_macros

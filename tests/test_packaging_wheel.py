@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from dmp.qp import native
-from dmp.qp.dual_active_set import DualActiveSet
+from tooltransfer.dmp.qp import native
+from tooltransfer.dmp.qp.dual_active_set import DualActiveSet
 
 ROOT = Path(__file__).resolve().parents[1]
 pytest.importorskip("setuptools.command.bdist_wheel", reason="the build needs setuptools >= 70.1 (floor 77)")
@@ -30,7 +30,7 @@ def _sources(dest: Path) -> Path:
     """The files a build reads, without build products."""
     src = dest / "src"
     src.mkdir()
-    for name in ("pyproject.toml", "README.md"):
+    for name in ("pyproject.toml", "README.md", "__init__.py", "py.typed"):
         shutil.copy2(ROOT / name, src / name)
     skip = shutil.ignore_patterns("__pycache__", "*.so", "*.pyd", "*.egg-info", "build", ".*")
     for pkg in ("dmp", "tools", "planner", "problems"):
@@ -58,7 +58,7 @@ def test_wheel_is_stable_abi_and_its_core_solves(tmp_path: Path) -> None:
         assert (py, abi) == ("cp311", "abi3")  # one wheel for every CPython >= 3.11
     assert plat != "any"
     with zipfile.ZipFile(whl) as zf:
-        cores = [n for n in zf.namelist() if n.startswith("dmp/qp/_gi_core.") and not n.endswith(".c")]
+        cores = [n for n in zf.namelist() if n.startswith("tooltransfer/dmp/qp/_gi_core.") and not n.endswith(".c")]
         assert len(cores) == 1 and ".abi3." in cores[0]
         lib = Path(zf.extract(cores[0], tmp_path / "unpacked"))
     rng = np.random.default_rng(0)
@@ -78,8 +78,11 @@ def test_wheel_is_stable_abi_and_its_core_solves(tmp_path: Path) -> None:
 @pytest.mark.skipif(not Path("/bin/false").exists(), reason="needs /bin/false as the failing compiler")
 def test_build_without_a_compiler_succeeds_without_the_core(tmp_path: Path) -> None:
     whl, log = _wheel(tmp_path, CC="/bin/false")
-    assert 'building extension "dmp.qp._gi_core" failed' in log
+    assert 'building extension "tooltransfer.dmp.qp._gi_core" failed' in log
     with zipfile.ZipFile(whl) as zf:
         names = zf.namelist()
-    assert "dmp/qp/_gi_numpy.py" in names and "dmp/qp/native.py" in names
-    assert not [n for n in names if n.startswith("dmp/qp/_gi_core.") and not n.endswith(".c")]
+    assert "tooltransfer/dmp/qp/_gi_numpy.py" in names and "tooltransfer/dmp/qp/native.py" in names
+    # one import name: nothing but the package tooltransfer and the distribution's metadata
+    assert {n.split("/")[0] for n in names if not n.split("/")[0].endswith(".dist-info")} == {"tooltransfer"}
+    assert "tooltransfer/__init__.py" in names and "tooltransfer/problems/paper/transfer_tool2.yaml" in names
+    assert not [n for n in names if n.startswith("tooltransfer/dmp/qp/_gi_core.") and not n.endswith(".c")]

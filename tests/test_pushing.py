@@ -1,4 +1,4 @@
-"""The quasi-static push model (tools.pushing): the contact law, the forward simulator, the inverse,
+"""The quasi-static push model (tooltransfer.tools.pushing): the contact law, the forward simulator, the inverse,
 and their agreement with the MuJoCo platform (DESIGN section 10)."""
 
 from __future__ import annotations
@@ -8,12 +8,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tools.library import load_tool, tool_from_dict
-from tools.omni.heading import heading
-from tools.omni.platform import OmniPlatform
-from tools.pushing.forward import simulate
-from tools.pushing.inverse import FaceGeometry, push_tool_path
-from tools.pushing.mechanics import SLIDE, STICK, PushMechanics, object_displacement, pusher_velocity
+from tooltransfer.tools.library import load_tool, tool_from_dict
+from tooltransfer.tools.omni.heading import heading
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pushing.forward import simulate
+from tooltransfer.tools.pushing.inverse import FaceGeometry, push_tool_path
+from tooltransfer.tools.pushing.mechanics import SLIDE, STICK, PushMechanics, object_displacement, pusher_velocity
 
 R = 0.0175
 
@@ -161,9 +161,9 @@ def test_model_agrees_with_the_mujoco_platform_on_straight_pushes() -> None:
     """DESIGN section 10's table: a 100 mm face pushed 45 mm at 50 mm/s, 0-60 degrees off its normal,
     on the MuJoCo platform (tool friction 0.8); the model (mu 0.8, c 0.59) replays the recorded tool
     poses: the puck's direction within 2 degrees and its end within 1 mm."""
-    from tools.sim.execution import Rates
-    from tools.sim.platform import SimPlatform
-    from tools.sim.scenarios import line_push
+    from tooltransfer.tools.sim.execution import Rates
+    from tooltransfer.tools.sim.platform import SimPlatform
+    from tooltransfer.tools.sim.scenarios import line_push
 
     sim = SimPlatform(BAR)
     mech = PushMechanics(0.8, 0.59)

@@ -1,4 +1,4 @@
-"""Many executions at once (:func:`tools.sim.execute_many`, a rollout on a thread pool): each equals
+"""Many executions at once (:func:`tooltransfer.tools.sim.execute_many`, a rollout on a thread pool): each equals
 the sequential execution on :class:`SimPlatform` bit for bit, whatever the number of threads and
 the jobs' lengths."""
 
@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dmp.errors import InputError
-from tools import contact_on_platform, load_tool
-from tools.omni.platform import OmniPlatform
-from tools.sim import Job, Rates, SimPlatform, execute_many
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools import contact_on_platform, load_tool
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.sim import Job, Rates, SimPlatform, execute_many
 
 
 def _jobs(plat: OmniPlatform) -> list[Job]:

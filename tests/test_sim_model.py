@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 import shapely
 
-from dmp.errors import InputError
-from tools import Disc, load_tool
-from tools.library import library_names
-from tools.omni.ik import tool_pose_world
-from tools.omni.platform import OmniPlatform
-from tools.sim import SimConfig, SimModel, SimPlatform, build_mjcf
-from tools.sim.mjcf import ARM_JOINTS, LEVEL_JOINTS, TCP_BODY, TOOL_BODY, tool_piece_names
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools import Disc, load_tool
+from tooltransfer.tools.library import library_names
+from tooltransfer.tools.omni.ik import tool_pose_world
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.sim import SimConfig, SimModel, SimPlatform, build_mjcf
+from tooltransfer.tools.sim.mjcf import ARM_JOINTS, LEVEL_JOINTS, TCP_BODY, TOOL_BODY, tool_piece_names
 
 
 @pytest.mark.parametrize("name", library_names())
@@ -51,7 +51,7 @@ def _tool_vertices(sim: SimPlatform) -> np.ndarray:
 
 def test_the_tool_plane_is_the_tool_frame_of_the_outline() -> None:
     """The prisms' vertices land where the recorded tool pose (a Pose2D) puts the outline's pieces."""
-    from tools.pose import Pose2D
+    from tooltransfer.tools.pose import Pose2D
 
     tool = load_tool("l_shape")
     sim = SimPlatform(tool)

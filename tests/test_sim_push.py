@@ -12,11 +12,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dmp.errors import InputError
-from tools import load_tool
-from tools.pose import Pose2D
-from tools.sim import Rates, SimPlatform
-from tools.sim.scenarios import forward_push, sideways_sweep
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools import load_tool
+from tooltransfer.tools.pose import Pose2D
+from tooltransfer.tools.sim import Rates, SimPlatform
+from tooltransfer.tools.sim.scenarios import forward_push, sideways_sweep
 
 RATES = Rates(object_hz=1000.0, tool_hz=1000.0)
 
@@ -53,11 +53,11 @@ def test_a_forward_push_moves_the_puck_with_the_tool(sim: SimPlatform) -> None:
     assert event.face == "upper" and event.piece == 0
     assert 1.0 < event.t_start < 1.3 and event.t_end == pytest.approx(ex.t_tool[-1])
     assert np.array_equal(ex.contact, (ex.t_tool >= event.t_start) & (ex.t_tool <= event.t_end))
-    # inside it the puck touches the face in bursts (micrometre separations, see tools.sim.recorder)
+    # inside it the puck touches the face in bursts (micrometre separations, see tooltransfer.tools.sim.recorder)
     bursts = np.mean(ex.penetration[ex.contact] > 0)
     assert 0.4 < bursts < 0.9, bursts  # measured 0.71
     assert ex.tracking_error < 1e-3  # [rad]: pushing the 20 g puck hardly loads the arm
-    from tools.sim.mjcf import TCP_BODY, TOOL_BODY
+    from tooltransfer.tools.sim.mjcf import TCP_BODY, TOOL_BODY
 
     assert abs(sim.data.body(TCP_BODY).xpos[2]) < 1e-4  # the tool at its height (measured 40 um low)
     assert sim.data.body(TOOL_BODY).xmat[8] > 1.0 - 1e-8  # and level
@@ -102,7 +102,7 @@ def test_a_wall_stops_the_puck_and_holds_the_arm() -> None:
     squeezes only, a free push keeps it within 0.04 mm of its height)."""
     import shapely
 
-    from tools import OBJECT_RADIUS
+    from tooltransfer.tools import OBJECT_RADIUS
 
     wall = shapely.Polygon([(-0.03, 0.19), (0.03, 0.19), (0.03, 0.21), (-0.03, 0.21)])
     sim = SimPlatform(load_tool("finger"), obstacles=[wall])
@@ -115,7 +115,7 @@ def test_a_wall_stops_the_puck_and_holds_the_arm() -> None:
     assert ex.max_penetration < 1e-3  # measured 0.42 mm
     # squeezed, the tool stays level (the joint equalities hold: 1.2e-4 rad), but the held arm's
     # joint errors lower it 9.7 mm: it passes into the table, which it does not collide with
-    from tools.sim.mjcf import TCP_BODY, TOOL_BODY
+    from tooltransfer.tools.sim.mjcf import TCP_BODY, TOOL_BODY
 
     tilt = np.arccos(min(1.0, sim.data.body(TOOL_BODY).xmat.reshape(3, 3)[2, 2]))
     assert tilt < 1e-3
@@ -126,7 +126,7 @@ def test_a_wall_stops_the_puck_and_holds_the_arm() -> None:
 
 def test_a_two_millisecond_step_gives_the_same_push() -> None:
     """The forward push with a 2 ms step ends 0.34 mm from the 1 ms one (the issue: 1-2 ms are ok)."""
-    from tools.sim import SimConfig
+    from tooltransfer.tools.sim import SimConfig
 
     ends = [forward_push(SimPlatform(load_tool("finger"), config=SimConfig(timestep=dt))).execution.object_xy[-1]
             for dt in (0.001, 0.002)]

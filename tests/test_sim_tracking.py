@@ -7,10 +7,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from dmp.errors import InputError
-from tools import load_tool
-from tools.omni.ik import tool_pose_world
-from tools.sim import Execution, Rates, SimPlatform
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools import load_tool
+from tooltransfer.tools.omni.ik import tool_pose_world
+from tooltransfer.tools.sim import Execution, Rates, SimPlatform
 
 QA, QB = np.array([-0.4, 0.2, 0.8]), np.array([0.5, 0.6, 1.2])
 
@@ -137,7 +137,7 @@ def _recording(t0: float, n: int, events: tuple) -> Execution:
 
 
 def test_concat_joins_a_contact_event_cut_by_a_chunk_boundary() -> None:
-    from tools.sim import ContactEvent
+    from tooltransfer.tools.sim import ContactEvent
 
     a = _recording(0.0, 100, (ContactEvent(0.01, 0.02, 0, 1e-5, "left"), ContactEvent(0.09, 0.099, 0, 2e-5, "upper")))
     b = _recording(0.1, 100, (ContactEvent(0.105, 0.15, 1, 3e-5, "upper"),))

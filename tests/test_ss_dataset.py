@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner.ss import SwitchTask, learn_switch_skill, optimize, recombine
-from planner.ss.adapter import dataset_switches, default_dataset
-from tools.library import load_tool
+from tooltransfer.planner.ss import SwitchTask, learn_switch_skill, optimize, recombine
+from tooltransfer.planner.ss.adapter import dataset_switches, default_dataset
+from tooltransfer.tools.library import load_tool
 
 
 @pytest.fixture(scope="module")

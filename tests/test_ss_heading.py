@@ -6,8 +6,8 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tools.omni.heading import centre_path, heading, point_path
-from tools.omni.platform import OmniPlatform
+from tooltransfer.tools.omni.heading import centre_path, heading, point_path
+from tooltransfer.tools.omni.platform import OmniPlatform
 
 PLATFORM = OmniPlatform()
 

@@ -7,13 +7,13 @@ import json
 import numpy as np
 import pytest
 
-from dmp.errors import InputError, SkillFileError
-from dmp.primitive import DMP
-from planner.ss import DemoSwitch, SwitchSkill, learn_switch_skill
-from planner.ss.learn import decompose
-from planner.ss.synthetic import synthetic_switches
-from planner.ss.virtual import virtual_motion
-from tools.objects import Disc
+from tooltransfer.dmp.errors import InputError, SkillFileError
+from tooltransfer.dmp.primitive import DMP
+from tooltransfer.planner.ss import DemoSwitch, SwitchSkill, learn_switch_skill
+from tooltransfer.planner.ss.learn import decompose
+from tooltransfer.planner.ss.synthetic import synthetic_switches
+from tooltransfer.planner.ss.virtual import virtual_motion
+from tooltransfer.tools.objects import Disc
 
 
 @pytest.fixture(scope="module")

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.ss.bodies import UNIT, all_bodies
-from planner.ss.cases import fig11_task
-from planner.ss.nlp import build_nlp
-from tools.objects import Disc
-from tools.omni.heading import heading
-from tools.omni.reach import reach_sector, wedge_rows
+from tooltransfer.planner.ss.bodies import UNIT, all_bodies
+from tooltransfer.planner.ss.cases import fig11_task
+from tooltransfer.planner.ss.nlp import build_nlp
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.heading import heading
+from tooltransfer.tools.omni.reach import reach_sector, wedge_rows
 
 
 def test_rows_knot_by_knot_in_order() -> None:

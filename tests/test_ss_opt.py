@@ -10,14 +10,14 @@ import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from planner.ss import SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
-from planner.ss.cases import fig11_task, random_task
-from planner.ss.synthetic import synthetic_switches
-from tools.clearance import swept_penetration_depth
-from tools.library import load_tool
-from tools.model import Face, Tool
-from tools.omni.ik import joint_path
-from tools.pose import Pose2D
+from tooltransfer.planner.ss import SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
+from tooltransfer.planner.ss.cases import fig11_task, random_task
+from tooltransfer.planner.ss.synthetic import synthetic_switches
+from tooltransfer.tools.clearance import swept_penetration_depth
+from tooltransfer.tools.library import load_tool
+from tooltransfer.tools.model import Face, Tool
+from tooltransfer.tools.omni.ik import joint_path
+from tooltransfer.tools.pose import Pose2D
 
 
 @pytest.fixture(scope="module")
@@ -26,7 +26,7 @@ def skill() -> SwitchSkill:
 
 
 def exact_penetration(task: SwitchTask, xy: np.ndarray, yaw: np.ndarray) -> float:
-    """Largest penetration into the object and obstacles over the steps, from tools.clearance."""
+    """Largest penetration into the object and obstacles over the steps, from tooltransfer.tools.clearance."""
     poses = [Pose2D(*p, a) for p, a in zip(xy, yaw, strict=True)]
     return max(swept_penetration_depth(task.tool, a, b, s)
                for a, b in itertools.pairwise(poses) for s in (task.shape, *task.obstacles))
@@ -117,7 +117,7 @@ HARD = {
 
 @pytest.mark.parametrize("name", sorted(HARD))
 def test_hard_switches_are_solved_from_a_path_round_the_object(skill: SwitchSkill, name: str) -> None:
-    from tools.objects import Disc
+    from tooltransfer.tools.objects import Disc
 
     tool, fa, fb, c, sa, sb, obs = HARD[name]
     task = SwitchTask(load_tool(tool), fa, fb, np.array(c), s_from=sa, s_to=sb,
@@ -131,7 +131,7 @@ def test_hard_switches_are_solved_from_a_path_round_the_object(skill: SwitchSkil
 
 
 def test_round_paths_join_the_contacts_outside_the_c_obstacle() -> None:
-    from planner.ss.initial import c_obstacle, round_paths
+    from tooltransfer.planner.ss.initial import c_obstacle, round_paths
 
     task = fig11_task("fig11a_stem")
     a, b = task.contact("from"), task.contact("to")
@@ -159,7 +159,7 @@ def test_every_separator_form_solves_the_fig11_cases(skill: SwitchSkill, separat
                                               ("min_step", float("nan")), ("body_band", -0.01),
                                               ("reach_band", float("inf")), ("separators", "polar")])
 def test_bad_options_raise_input_error(skill: SwitchSkill, field: str, value: object) -> None:
-    from dmp.errors import InputError
+    from tooltransfer.dmp.errors import InputError
 
     with pytest.raises(InputError, match=field):
         optimize(skill, fig11_task("fig11b"), **{field: value})
@@ -168,7 +168,7 @@ def test_bad_options_raise_input_error(skill: SwitchSkill, field: str, value: ob
 def test_polygon_object_with_disc_and_polygon_obstacles(skill: SwitchSkill) -> None:
     """Mixed bodies under the default rows: the square object and a square obstacle keep their
     separating variables, the disc obstacle gets signed-distance rows; the path does not penetrate."""
-    from tools.objects import Disc, PolygonObject
+    from tooltransfer.tools.objects import Disc, PolygonObject
 
     c = np.array([0.0, 0.16])
     square = PolygonObject(shapely.box(-0.015, -0.015, 0.015, 0.015))
@@ -176,8 +176,8 @@ def test_polygon_object_with_disc_and_polygon_obstacles(skill: SwitchSkill) -> N
                       obstacles=(Disc(c + np.array([0.055, 0.02]), 0.01), shapely.box(-0.075, 0.17, -0.06, 0.185)))
     # the upper face meets the square flush (its heading iteration alternates between two corners):
     # the contact has the Omni's heading at its position and touches without overlap
-    from planner.ss.verify import pose_depth_and_gap
-    from tools.omni.heading import heading
+    from tooltransfer.planner.ss.verify import pose_depth_and_gap
+    from tooltransfer.tools.omni.heading import heading
 
     a = task.contact("from")
     assert abs(heading(task.omni, a.pose.position)[0] - a.pose.yaw) < 1e-12

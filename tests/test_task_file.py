@@ -9,9 +9,16 @@ import numpy as np
 import pytest
 import yaml
 
-from problems.task import TaskFileError, load_task, task_from_dict, task_json_schema, task_obstacles, task_platform
-from problems.task import task_tool as build_tool
-from tools import Disc
+from tooltransfer.problems.task import (
+    TaskFileError,
+    load_task,
+    task_from_dict,
+    task_json_schema,
+    task_obstacles,
+    task_platform,
+)
+from tooltransfer.problems.task import task_tool as build_tool
+from tooltransfer.tools import Disc
 
 BASE = {"name": "t", "tool": "slope", "start": [0.05, 0.12], "target": [-0.07, 0.18], "skills": {"dataset": "d"}}
 

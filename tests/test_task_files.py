@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from planner.solve import solve
-from problems.task import load_task
+from tooltransfer.planner.solve import solve
+from tooltransfer.problems.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1] / "problems"
 
@@ -64,7 +64,7 @@ def test_start_touching_keeps_the_starting_clearance() -> None:
 
 
 def test_object_overlapping_an_obstacle_is_bad_input(tmp_path: Path) -> None:
-    from dmp.errors import InputError
+    from tooltransfer.dmp.errors import InputError
 
     text = (ROOT / "hard/start_touching_obstacle.yaml").read_text().replace("[0.0225, 0.12]", "[0.03, 0.12]")
     bad = tmp_path / "overlap.yaml"

@@ -8,8 +8,8 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dmp.errors import InputError
-from tools import (
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools import (
     Disc,
     Pose2D,
     clearance,
@@ -20,7 +20,7 @@ from tools import (
     swept_penetration_depth,
     tool_polygon,
 )
-from tools.clearance import swept_pieces
+from tooltransfer.tools.clearance import swept_pieces
 
 I_SHAPE = load_tool("i_shape")  # box x in [-6, 6] mm, y in [-30, 10] mm
 L_SHAPE = load_tool("l_shape")

@@ -8,8 +8,8 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dmp.errors import InputError
-from tools import (
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools import (
     OBJECT_RADIUS,
     Disc,
     DiscObject,
@@ -22,7 +22,7 @@ from tools import (
     signed_distance,
     tool_polygon,
 )
-from tools.omni import OmniPlatform, inverse_kinematics
+from tooltransfer.tools.omni import OmniPlatform, inverse_kinematics
 
 LIBRARY = load_library()
 FACES = [(t, f.name) for t, tool in sorted(LIBRARY.items()) for f in tool.faces]
@@ -93,7 +93,7 @@ def test_contact_range_is_enforced() -> None:
     c = contact_pose(tool, "stem_left", [0.0, 0.1], np.pi, s=0.42)
     f = tool.face("stem_left")
     p = f.point(0.9)
-    from tools.pose import Pose2D
+    from tooltransfer.tools.pose import Pose2D
 
     x = c.object_point - c.pose.rotate(p)
     bad = Pose2D(x[0], x[1], c.pose.yaw)

@@ -9,9 +9,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from shapely.ops import unary_union
 
-from dmp.errors import InputError
-from tools import convex_decomposition, load_library
-from tools.decompose import check_decomposition, is_convex
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools import convex_decomposition, load_library
+from tooltransfer.tools.decompose import check_decomposition, is_convex
 
 
 def _assert_exact(outline: shapely.Polygon, pieces: tuple[shapely.Polygon, ...]) -> None:

@@ -11,8 +11,8 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from dmp.errors import ToolTransferError
-from tools import (
+from tooltransfer.dmp.errors import ToolTransferError
+from tooltransfer.tools import (
     Face,
     Tool,
     ToolSpecError,
@@ -25,7 +25,7 @@ from tools import (
     tool_from_dict,
     tool_to_dict,
 )
-from tools.library import parse_angle
+from tooltransfer.tools.library import parse_angle
 
 PAPER = {"finger": 0.026, "slope": 0.028}
 

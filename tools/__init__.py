@@ -1,20 +1,20 @@
 """Tool and object geometry and the Phantom Omni arm.
 
-* :mod:`tools.model`: a :class:`Tool` is a planar outline in the tool frame [m] with named
+* :mod:`tooltransfer.tools.model`: a :class:`Tool` is a planar outline in the tool frame [m] with named
   :class:`Face` s (push direction and cone half-angle ``theta_b`` [rad], contact range).
-* :mod:`tools.library`: tools as YAML files (``tools/library/*.yaml``); :func:`load_tool`.
-* :mod:`tools.decompose`: exact, checked convex decomposition of an outline.
-* :mod:`tools.objects`: the pushed object (disc of radius 17.5 mm by default) and obstacles.
-* :mod:`tools.contact`: tool poses putting a face in contact with the object.
-* :mod:`tools.clearance`: clearance and penetration depth, static and swept.
-* :mod:`tools.omni`: DH kinematics, inverse kinematics and reachable region of the Omni.
-* :mod:`tools.sim`: the Omni with a tool, the puck and obstacles in MuJoCo (imported on demand).
+* :mod:`tooltransfer.tools.library`: tools as YAML files (``tools/library/*.yaml``); :func:`load_tool`.
+* :mod:`tooltransfer.tools.decompose`: exact, checked convex decomposition of an outline.
+* :mod:`tooltransfer.tools.objects`: the pushed object (disc of radius 17.5 mm by default) and obstacles.
+* :mod:`tooltransfer.tools.contact`: tool poses putting a face in contact with the object.
+* :mod:`tooltransfer.tools.clearance`: clearance and penetration depth, static and swept.
+* :mod:`tooltransfer.tools.omni`: DH kinematics, inverse kinematics and reachable region of the Omni.
+* :mod:`tooltransfer.tools.sim`: the Omni with a tool, the puck and obstacles in MuJoCo (imported on demand).
 
 Frames and units follow DESIGN section 2: SI units, world frame in the table plane with the
 origin under the Omni's first joint axis, x right, y forward, z up.
 """
 
-from tools.clearance import (
+from tooltransfer.tools.clearance import (
     clearance,
     penetration_depth,
     signed_distance,
@@ -22,10 +22,10 @@ from tools.clearance import (
     swept_penetration_depth,
     tool_polygon,
 )
-from tools.contact import Contact, PlatformContact, contact_on_platform, contact_pose
-from tools.decompose import convex_decomposition
-from tools.errors import ToolSpecError, UnknownFaceError, UnknownToolError
-from tools.library import (
+from tooltransfer.tools.contact import Contact, PlatformContact, contact_on_platform, contact_pose
+from tooltransfer.tools.decompose import convex_decomposition
+from tooltransfer.tools.errors import ToolSpecError, UnknownFaceError, UnknownToolError
+from tooltransfer.tools.library import (
     dump_tool,
     library_names,
     load_library,
@@ -33,9 +33,9 @@ from tools.library import (
     tool_from_dict,
     tool_to_dict,
 )
-from tools.model import Face, Tool
-from tools.objects import OBJECT_RADIUS, Disc, DiscObject, PolygonObject
-from tools.pose import Pose2D
+from tooltransfer.tools.model import Face, Tool
+from tooltransfer.tools.objects import OBJECT_RADIUS, Disc, DiscObject, PolygonObject
+from tooltransfer.tools.pose import Pose2D
 
 __all__ = [
     "OBJECT_RADIUS",

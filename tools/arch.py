@@ -14,11 +14,11 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tools.model import Tool
-from tools.objects import OBJECT_RADIUS, Disc
-from tools.omni.ik import joint_path
-from tools.omni.platform import OmniPlatform
-from tools.pose import rotation
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import OBJECT_RADIUS, Disc
+from tooltransfer.tools.omni.ik import joint_path
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pose import rotation
 
 
 class NoArch(Exception):

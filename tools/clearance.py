@@ -27,12 +27,12 @@ import shapely
 from numpy.typing import NDArray
 from shapely.ops import unary_union
 
-from dmp.errors import InputError
-from dmp.validation import check_positive
-from tools.decompose import convex_decomposition
-from tools.model import Tool
-from tools.objects import Disc, Obstacle
-from tools.pose import Pose2D
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_positive
+from tooltransfer.tools.decompose import convex_decomposition
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc, Obstacle
+from tooltransfer.tools.pose import Pose2D
 
 
 def tool_polygon(tool: Tool, pose: Pose2D) -> shapely.Polygon:

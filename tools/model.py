@@ -23,9 +23,9 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from tools.decompose import convex_decomposition
-from tools.errors import ToolSpecError, UnknownFaceError
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools.decompose import convex_decomposition
+from tooltransfer.tools.errors import ToolSpecError, UnknownFaceError
 
 #: Distance [m] within which a face must lie on the outline.
 ON_OUTLINE_TOL = 1e-9

@@ -1,5 +1,6 @@
 """Constrained DMP fitting as a QP (DESIGN section 4): build with :func:`build_fit_qp`, solve with
-:func:`solve_fit`; constraints in :mod:`dmp.qp.constraints`, objectives in :mod:`dmp.qp.objectives`."""
+:func:`solve_fit`; constraints in :mod:`tooltransfer.dmp.qp.constraints`, objectives in
+:mod:`tooltransfer.dmp.qp.objectives`."""
 
 import os
 
@@ -9,7 +10,7 @@ import os
 # when osqp is first imported (so here, before qpsolvers), and a user's own setting wins.
 os.environ.setdefault("OSQP_ALGEBRA_BACKEND", "builtin")
 
-from dmp.qp.constraints import (
+from tooltransfer.dmp.qp.constraints import (
     Constraint,
     FixedEndPoint,
     OutsideDisc,
@@ -19,10 +20,10 @@ from dmp.qp.constraints import (
     VelocityCone,
     ZeroEndVelocity,
 )
-from dmp.qp.objectives import MatchForcing, Objective, Ridge, TrackPath
-from dmp.qp.problem import FitProblem, FitQP, build_fit_qp
-from dmp.qp.result import FitResult
-from dmp.qp.solve import solve_fit
+from tooltransfer.dmp.qp.objectives import MatchForcing, Objective, Ridge, TrackPath
+from tooltransfer.dmp.qp.problem import FitProblem, FitQP, build_fit_qp
+from tooltransfer.dmp.qp.result import FitResult
+from tooltransfer.dmp.qp.solve import solve_fit
 
 __all__ = [
     "Constraint",

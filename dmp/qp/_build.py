@@ -7,12 +7,12 @@ way to customise setuptools from ``pyproject.toml`` (its ``ext-modules`` table i
 level, which the design card fixes). Each command adds the extension to the distribution before
 it does its work:
 
-- ``dmp.qp._gi_core`` from ``dmp/qp/_gi_core.c`` with ``Py_LIMITED_API`` = 3.11 and
+- ``tooltransfer.dmp.qp._gi_core`` from ``dmp/qp/_gi_core.c`` with ``Py_LIMITED_API`` = 3.11 and
   ``py_limited_api``, so the file is ``_gi_core.abi3.so`` and ``bdist_wheel`` tags the wheel
   ``cp311-abi3-<platform>``: one wheel for every CPython >= 3.11 (the library is loaded by ctypes and
   uses no Python API beyond an empty module init, so the stable ABI costs nothing);
 - ``optional``: without a working C compiler the build warns and goes on without it, and the
-  package falls back to the NumPy core (:mod:`dmp.qp.native`) at run time.
+  package falls back to the NumPy core (:mod:`tooltransfer.dmp.qp.native`) at run time.
 
 A free-threaded interpreter (``Py_GIL_DISABLED``, no stable ABI before 3.15) builds the
 version-specific file instead.
@@ -40,7 +40,7 @@ def core_extension() -> Extension:
     """The compiled core's extension (see the module docstring)."""
     macros = [("Py_LIMITED_API", "0x030B0000")] if STABLE_ABI else []
     return Extension(
-        "dmp.qp._gi_core", sources=["dmp/qp/_gi_core.c"], extra_compile_args=["-O3"], define_macros=macros,
+        "tooltransfer.dmp.qp._gi_core", sources=["dmp/qp/_gi_core.c"], extra_compile_args=["-O3"], define_macros=macros,
         py_limited_api=STABLE_ABI, optional=True,
     )
 
@@ -48,7 +48,7 @@ def core_extension() -> Extension:
 def add_core(dist: Any) -> None:
     """Give ``dist`` the compiled core's extension unless it has it already."""
     mods = list(dist.ext_modules or [])
-    if not any(getattr(m, "name", None) == "dmp.qp._gi_core" for m in mods):
+    if not any(getattr(m, "name", None) == "tooltransfer.dmp.qp._gi_core" for m in mods):
         dist.ext_modules = [*mods, core_extension()]
 
 

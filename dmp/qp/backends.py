@@ -15,10 +15,10 @@ import qpsolvers
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from dmp.errors import SolverError, UnknownSolverError
+from tooltransfer.dmp.errors import SolverError, UnknownSolverError
 
 DEFAULT_OPTIONS: dict[str, dict[str, Any]] = {
-    # plain OSQP calls ("full" strategy); the cutting-plane seed overrides eps to 1e-4 (dmp.qp.solve)
+    # plain OSQP calls ("full" strategy); the cutting-plane seed overrides eps to 1e-4 (tooltransfer.dmp.qp.solve)
     "osqp": {"eps_abs": 1e-7, "eps_rel": 1e-7, "max_iter": 20000, "polishing": True, "verbose": False},
     "clarabel": {"verbose": False},
 }

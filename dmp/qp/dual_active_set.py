@@ -14,7 +14,7 @@ through ctypes): the DMP fits are degenerate (constraints active along stretches
 by the path at isolated instants), so the method takes hundreds of cheap steps, and interpreter
 overhead per step was the cost (about 30-60 us in NumPy against a few us compiled). Without the
 compiled core (an install without a C compiler, or ``TOOLTRANSFER_NO_NATIVE=1``) the same steps run
-in NumPy (:mod:`dmp.qp._gi_numpy`, chosen by :func:`dmp.qp.native.core`), to the same optimum.
+in NumPy (:mod:`tooltransfer.dmp.qp._gi_numpy`, chosen by :func:`tooltransfer.dmp.qp.native.core`), to the same optimum.
 
 A warm start (:meth:`DualActiveSet.warm_start`) takes a guess of the active rows at once and drops
 those with negative multipliers, which gives the dual-feasible start the method needs; the
@@ -31,7 +31,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.qp.native import INFEASIBLE, MAX_ITER, GIWork, core
+from tooltransfer.dmp.qp.native import INFEASIBLE, MAX_ITER, GIWork, core
 
 RowSource = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64]]]
 """``oracle(z) -> (G_new, h_new)``: rows violated at ``z`` that the candidates lack (empty if none)."""
@@ -54,7 +54,7 @@ class DualActiveSet:
         G, h: candidate inequality rows (m, n) and (m,), normalised by the caller.
         active: candidate indices of the active inequality rows.
         iterations: add/drop steps taken.
-        core: the dual active-set core the steps run in (:func:`dmp.qp.native.core` at creation).
+        core: the dual active-set core the steps run in (:func:`tooltransfer.dmp.qp.native.core` at creation).
     """
 
     def __init__(self, z_c: NDArray[np.float64], g: NDArray[np.float64], h: NDArray[np.float64], tol: float = 1e-13):

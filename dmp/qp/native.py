@@ -1,10 +1,10 @@
 """The dual active-set core: the compiled one (``_gi_core.c``, built with the package, loaded through
-ctypes) or, when it is absent, the same steps in NumPy (:mod:`dmp.qp._gi_numpy`).
+ctypes) or, when it is absent, the same steps in NumPy (:mod:`tooltransfer.dmp.qp._gi_numpy`).
 
 Both offer the five entry points of ``_gi_core.c`` with the same semantics: ``gi_equality``,
-``gi_solve``, ``gi_warm`` (the Goldfarb-Idnani steps of :mod:`dmp.qp.dual_active_set`, on a
+``gi_solve``, ``gi_warm`` (the Goldfarb-Idnani steps of :mod:`tooltransfer.dmp.qp.dual_active_set`, on a
 :class:`GIWork`) and ``gi_scan``, ``gi_rows`` (the residual scan and the row builder of
-:mod:`dmp.qp.pool`, on a :class:`PoolArrays`). :func:`core` picks one at first use:
+:mod:`tooltransfer.dmp.qp.pool`, on a :class:`PoolArrays`). :func:`core` picks one at first use:
 
 - the compiled core when ``dmp/qp/_gi_core*.so`` (``.pyd`` on Windows) is there and loads;
 - the NumPy core, with one :class:`NativeCoreWarning`, when it is not (an install without a C
@@ -22,7 +22,7 @@ checked against them once, at creation, cannot be rebound afterwards, and their 
 taken then (taking an address costs 2 us, and NumPy's ``ndpointer`` checks about 7 us per
 argument and call, which added up to about 1 ms per fit).
 
-The library is the extension module ``dmp.qp._gi_core`` built against the stable ABI (``abi3``,
+The library is the extension module ``tooltransfer.dmp.qp._gi_core`` built against the stable ABI (``abi3``,
 ``Py_LIMITED_API`` 3.11): one file, ``_gi_core.abi3.so``, for every CPython >= 3.11. It carries no
 Python API (only an empty module init) and is never imported, only loaded with ctypes.
 """
@@ -112,7 +112,7 @@ class GIWork(_Pinned):
 
 
 class PoolArrays(_Pinned):
-    """The arrays of a :class:`dmp.qp.pool.RowPool` that ``gi_scan`` and ``gi_rows`` read (see
+    """The arrays of a :class:`tooltransfer.dmp.qp.pool.RowPool` that ``gi_scan`` and ``gi_rows`` read (see
     ``_gi_core.c`` for the layout), with their dimensions, checked here and fixed; refills write
     into them in place (and call :meth:`check_tables`).
 
@@ -344,7 +344,7 @@ def _compiled_core(path: Path) -> CompiledCore:
 
 
 def _numpy_core() -> Core:
-    from dmp.qp._gi_numpy import NumpyCore
+    from tooltransfer.dmp.qp._gi_numpy import NumpyCore
 
     return NumpyCore()
 
@@ -394,7 +394,8 @@ def using(which: str | Core) -> Iterator[Core]:
         elif which == "compiled":
             path = compiled_path()
             if path is None:
-                raise ImportError(f"dmp.qp.{MODULE} is not built: reinstall tooltransfer with a C compiler")
+                raise ImportError(f"tooltransfer.dmp.qp.{MODULE} is not built: reinstall tooltransfer with a C "
+                                  "compiler")
             c = _compiled_core(path)
         else:
             raise ValueError(f"unknown core {which!r}: 'compiled' or 'numpy'")

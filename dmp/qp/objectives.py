@@ -12,9 +12,9 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.affine import AffineRollout
-from dmp.errors import InputError
-from dmp.validation import check_array, check_positive
+from tooltransfer.dmp.affine import AffineRollout
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array, check_positive
 
 
 class Quadratic(NamedTuple):

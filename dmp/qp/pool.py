@@ -7,7 +7,7 @@ asked for. For residuals, the rows of all constraints are stacked as *series* (o
 row ``j``) over all dense samples, with neutral entries where a constraint does not apply, so that
 the residuals of every row on any subset of samples (a :class:`Samples`) and their violated local
 maxima take one pass of the dual active-set core (:meth:`RowPool.scan`, compiled or its NumPy
-fallback, :mod:`dmp.qp.native`; :meth:`RowPool.residuals` and :meth:`RowPool.peaks` are the same
+fallback, :mod:`tooltransfer.dmp.qp.native`; :meth:`RowPool.residuals` and :meth:`RowPool.peaks` are the same
 in plain NumPy), whatever the number of constraints; the rows of new ids are built there too
 (:meth:`RowPool.rows`).
 """
@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.affine import AffineRollout
-from dmp.qp.constraints.base import Coefficients, Constraint
-from dmp.qp.native import PoolArrays, core
+from tooltransfer.dmp.affine import AffineRollout
+from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
+from tooltransfer.dmp.qp.native import PoolArrays, core
 
 Ids = NDArray[np.intp]
 Cols = NDArray[np.intp] | slice

@@ -2,8 +2,8 @@
 
 Domain problem -> solver problem -> domain result: :class:`FitProblem` says what motion is wanted
 (objective terms, constraints, time grid); :func:`build_fit_qp` turns it into matrices on the flat
-weights ``w`` that can be inspected, saved, or handed to any QP solver; :func:`dmp.qp.solve.solve_fit`
-returns a :class:`dmp.qp.result.FitResult` in domain words.
+weights ``w`` that can be inspected, saved, or handed to any QP solver; :func:`tooltransfer.dmp.qp.solve.solve_fit`
+returns a :class:`tooltransfer.dmp.qp.result.FitResult` in domain words.
 """
 
 from __future__ import annotations
@@ -17,12 +17,12 @@ import numpy as np
 import qpsolvers
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.affine import AffineRollout
-from dmp.errors import InputError
-from dmp.primitive import DMP
-from dmp.qp.constraints.base import Constraint
-from dmp.qp.objectives import Objective, Quadratic
-from dmp.validation import check_array, check_positive, check_time
+from tooltransfer.dmp.affine import AffineRollout
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.primitive import DMP
+from tooltransfer.dmp.qp.constraints.base import Constraint
+from tooltransfer.dmp.qp.objectives import Objective, Quadratic
+from tooltransfer.dmp.validation import check_array, check_positive, check_time
 
 
 @dataclass

@@ -7,13 +7,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InfeasibleError
-from dmp.trajectory import Rollout
+from tooltransfer.dmp.errors import InfeasibleError
+from tooltransfer.dmp.trajectory import Rollout
 
 
 @dataclass
 class FitResult:
-    """Outcome of :func:`dmp.qp.solve.solve_fit`.
+    """Outcome of :func:`tooltransfer.dmp.qp.solve.solve_fit`.
 
     Attributes:
         status: ``"solved"`` (every constraint holds on the dense grid within ``tol``),

@@ -4,13 +4,13 @@ Strategy ``"cutting_planes"`` (default), the fast and exact way:
 
 1. whiten: with ``P = L L'`` and ``w = L^{-T} z`` the objective becomes ``0.5 |z - z_c|^2``
    (the trajectory-space Hessian is badly conditioned; its whitened form is the identity);
-2. rows are normalised and taken lazily: the exact step (:mod:`dmp.qp.dual_active_set`, a
+2. rows are normalised and taken lazily: the exact step (:mod:`tooltransfer.dmp.qp.dual_active_set`, a
    Goldfarb-Idnani dual active-set method in C) starts from the unconstrained optimum and takes
-   the peaks of every violated stretch (:mod:`dmp.qp.pool`, scanned in C), first on the
+   the peaks of every violated stretch (:mod:`tooltransfer.dmp.qp.pool`, scanned in C), first on the
    constraint grid, then on the dense samples the grid residuals point at, then on every dense
    sample, until no dense row is violated: the result is the exact optimum over all dense rows,
    and a row the method cannot take proves infeasibility and names the families involved
-   (without the compiled core both run in NumPy, :mod:`dmp.qp.native`: the same optimum, about
+   (without the compiled core both run in NumPy, :mod:`tooltransfer.dmp.qp.native`: the same optimum, about
    2-3.5 times the fit's time, ``benchmarks/bench_dmp.py``);
 3. non-convex rows (discs) are re-linearised at the solution and step 2 repeated (sequential
    convex programming) until the path moves less than ``scp_tol``; each repetition starts from
@@ -49,15 +49,15 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import NDArray
 
-from dmp.affine import AffineRollout
-from dmp.errors import InputError, SolverError
-from dmp.qp.backends import QPOutcome, check_solver, solve_qp
-from dmp.qp.dual_active_set import DualActiveSet, DualInfeasible
-from dmp.qp.pool import RowPool, Samples
-from dmp.qp.problem import FitProblem, stack_rows, unconstrained_weights
-from dmp.qp.result import FitResult
-from dmp.trajectory import Rollout
-from dmp.validation import check_array
+from tooltransfer.dmp.affine import AffineRollout
+from tooltransfer.dmp.errors import InputError, SolverError
+from tooltransfer.dmp.qp.backends import QPOutcome, check_solver, solve_qp
+from tooltransfer.dmp.qp.dual_active_set import DualActiveSet, DualInfeasible
+from tooltransfer.dmp.qp.pool import RowPool, Samples
+from tooltransfer.dmp.qp.problem import FitProblem, stack_rows, unconstrained_weights
+from tooltransfer.dmp.qp.result import FitResult
+from tooltransfer.dmp.trajectory import Rollout
+from tooltransfer.dmp.validation import check_array
 
 Strategy = Literal["cutting_planes", "full"]
 

@@ -18,15 +18,15 @@
    file under ``docs/`` is rewritten relative to the page, any other becomes its text followed by the
    path in code, and an image outside ``docs/`` becomes its caption and path.
 
-2. **Module docstrings and schemas.** ``<!-- docstring: planner.plan -->`` is replaced by that
+2. **Module docstrings and schemas.** ``<!-- docstring: tooltransfer.planner.plan -->`` is replaced by that
    module's docstring (read from its source, not imported; a reST ``::`` before a literal block
-   becomes ``:``). ``<!-- schema: problems.task.Task -->`` imports the pydantic model and writes a
+   becomes ``:``). ``<!-- schema: tooltransfer.problems.task.Task -->`` imports the pydantic model and writes a
    table of its fields, nested models as dotted paths (type, default, description). Pages outside
    the API reference use these rather than a second mkdocstrings rendering of an object, which
    would give one identifier two URLs.
 
 3. **Sphinx roles in docstrings.** The code's docstrings cross-reference with Sphinx roles
-   (``:func:`planner.solve.solve```), which Markdown renders as ``:func:<code>...</code>``. The role
+   (``:func:`tooltransfer.planner.solve.solve```), which Markdown renders as ``:func:<code>...</code>``. The role
    is dropped and the name becomes an optional mkdocs-autorefs reference: a link where the name is
    documented on the site, plain code where it is not (never a warning). ``~a.b.C`` shows ``C``.
 """
@@ -117,7 +117,9 @@ def _links(text: str, source: Path, page: Path, docs: Path, root: Path) -> str:
 
 
 def _module_docstring(root: Path, module: str) -> str | None:
-    base = root.joinpath(*module.split("."))
+    """The docstring of ``module`` (``tooltransfer.x.y``: the repository's root is the package)."""
+    parts = module.split(".")
+    base = root.joinpath(*(parts[1:] if parts[0] == "tooltransfer" else parts))
     path = base / "__init__.py" if base.is_dir() else base.with_suffix(".py")
     if not path.is_file():
         return None

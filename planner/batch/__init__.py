@@ -1,14 +1,15 @@
 """Batch feasibility studies: many generated tasks, every variant, in parallel, into SQLite.
 
-- :mod:`planner.batch.spec`: batch files (``tooltransfer.batch/1``, pydantic);
-- :mod:`planner.batch.generate`: deterministic random tasks, each a valid task file;
-- :mod:`planner.batch.sandbox` and :mod:`planner.batch.worker`: each job isolated in a long-lived
+- :mod:`tooltransfer.planner.batch.spec`: batch files (``tooltransfer.batch/1``, pydantic);
+- :mod:`tooltransfer.planner.batch.generate`: deterministic random tasks, each a valid task file;
+- :mod:`tooltransfer.planner.batch.sandbox` and :mod:`tooltransfer.planner.batch.worker`: each job isolated in a
+long-lived
   child process with a timeout (hangs, crashes and exceptions become rows);
-- :mod:`planner.batch.executors`: a process pool or Dask distributed, one code path;
-- :mod:`planner.batch.store`: the SQLite store (WAL, one row per task and variant, resumable);
-- :mod:`planner.batch.runner`: submit, store as each finishes, progress, Ctrl-C;
-- :mod:`planner.batch.report` and :mod:`planner.batch.figures`: tables, CSV, figures;
-- :mod:`planner.batch.cli`: ``tooltransfer batch generate|run|report|schema``.
+- :mod:`tooltransfer.planner.batch.executors`: a process pool or Dask distributed, one code path;
+- :mod:`tooltransfer.planner.batch.store`: the SQLite store (WAL, one row per task and variant, resumable);
+- :mod:`tooltransfer.planner.batch.runner`: submit, store as each finishes, progress, Ctrl-C;
+- :mod:`tooltransfer.planner.batch.report` and :mod:`tooltransfer.planner.batch.figures`: tables, CSV, figures;
+- :mod:`tooltransfer.planner.batch.cli`: ``tooltransfer batch generate|run|report|schema``.
 
 Scripts that call :func:`run_batch` must guard their entry point with ``if __name__ ==
 "__main__":`` (the process pool spawns its workers, which import the main module).
@@ -28,7 +29,7 @@ __all__ = sorted(_EXPORTS)
 
 
 def __getattr__(name: str) -> Any:
-    # lazy: the sandbox child imports planner.batch.sandbox without numpy, pydantic, rich or scipy
+    # lazy: the sandbox child imports tooltransfer.planner.batch.sandbox without numpy, pydantic, rich or scipy
     if name in _EXPORTS:
-        return getattr(import_module(f"planner.batch.{_EXPORTS[name]}"), name)
-    raise AttributeError(f"module 'planner.batch' has no attribute {name!r}")
+        return getattr(import_module(f"tooltransfer.planner.batch.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module 'tooltransfer.planner.batch' has no attribute {name!r}")

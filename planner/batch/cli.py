@@ -22,9 +22,9 @@ MAX_TASK_FILES = 100_000
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
-    from dmp.errors import InputError
-    from planner.batch.generate import write_tasks
-    from planner.batch.spec import load_batch
+    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.planner.batch.generate import write_tasks
+    from tooltransfer.planner.batch.spec import load_batch
 
     spec = load_batch(args.batch)
     n = spec.count if args.first is None else args.first
@@ -41,12 +41,12 @@ def _cmd_generate(args: argparse.Namespace) -> int:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from planner.batch.runner import run_batch
+    from tooltransfer.planner.batch.runner import run_batch
 
     retry = tuple(s for s in (args.retry or "").split(",") if s)
     bad = [s for s in retry if s not in ("error", "timeout", "infeasible", "violated")]
     if bad:
-        from dmp.errors import InputError
+        from tooltransfer.dmp.errors import InputError
 
         raise InputError("--retry", "a comma-separated list of error, timeout, infeasible, violated", bad[0])
     s = run_batch(args.batch, args.db, workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local,
@@ -67,7 +67,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from planner.batch.report import write_report
+    from tooltransfer.planner.batch.report import write_report
 
     written = write_report(args.db, args.out)
     if written:
@@ -76,7 +76,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:
-    from planner.batch.spec import batch_json_schema
+    from tooltransfer.planner.batch.spec import batch_json_schema
 
     print(batch_json_schema())
     return 0

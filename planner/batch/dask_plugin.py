@@ -1,6 +1,6 @@
-"""The Dask worker plugin that puts the batch's skills on every worker (:mod:`planner.batch.shipping`).
+"""The Dask worker plugin that puts the batch's skills on every worker (:mod:`tooltransfer.planner.batch.shipping`).
 
-Registered once per run (:meth:`planner.batch.executors.Slots.ship`); the scheduler keeps it and
+Registered once per run (:meth:`tooltransfer.planner.batch.executors.Slots.ship`); the scheduler keeps it and
 installs it on every worker, those that join the cluster later (dask-jobqueue's ``adapt``, a
 Kubernetes worker group scaled up) and those that restart. ``setup`` writes the skills file into the
 worker's local directory (``dask worker --local-directory``; the temporary folder if it cannot be
@@ -16,7 +16,7 @@ from typing import Any
 
 from distributed.diagnostics.plugin import WorkerPlugin
 
-from planner.batch.shipping import ShippedSkills, install, release
+from tooltransfer.planner.batch.shipping import ShippedSkills, install, release
 
 
 class SkillsPlugin(WorkerPlugin):

@@ -1,8 +1,8 @@
 """One task with one variant, planned (and executed) inside a sandbox process: the measures of a
-result row (see :data:`planner.batch.store.RESULT_COLUMNS`).
+result row (see :data:`tooltransfer.planner.batch.store.RESULT_COLUMNS`).
 
 Planning (:func:`execute_job`) and each execution of a solved plan (:func:`open_loop`,
-:func:`closed_loop`) are separate sandbox calls (:class:`planner.batch.worker.Stage`), each with its
+:func:`closed_loop`) are separate sandbox calls (:class:`tooltransfer.planner.batch.worker.Stage`), each with its
 own timeout: an execution that raises, hangs or crashes the interpreter becomes that stage's
 status and reason in the row, and the plan's own measures are kept. The plan goes from one call to
 the next pickled (bytes), so the executor slots never unpickle planner objects.
@@ -39,8 +39,8 @@ def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: 
     metrics (SI units; infinities stored as NULL and kept in ``metrics_json``), switch count and
     penetration; with ``keep_plan`` a solved plan also comes back pickled under ``"plan"`` (for the
     execution stages; not a column)."""
-    from planner.solve import solve
-    from problems.task import Variants, task_from_dict
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import Variants, task_from_dict
 
     t = task_from_dict(task, source)
     t = t.model_copy(update={"variants": Variants(oe=oe, ss=ss)})
@@ -70,7 +70,7 @@ def open_loop(plan: bytes, tolerance: float = 0.01) -> dict[str, Any]:
     (object to target at the end), ``open_loop_status`` ``"done"``, and the same under the schema-1
     names ``sim_final_error``, ``sim_tool_deviation`` [m], ``sim_wall_time`` [s] and ``sim_success``
     (within ``tolerance`` [m])."""
-    from planner.simulate import simulate_plan
+    from tooltransfer.planner.simulate import simulate_plan
 
     rep = simulate_plan(pickle.loads(plan))
     err = _finite(rep.final_error)
@@ -84,7 +84,7 @@ def closed_loop(plan: bytes, seed: int, tolerance: float = 0.001, camera_noise: 
     ``camera_noise`` [m] per frame, seed ``seed``; stops within ``tolerance`` [m] as measured): the
     ``closed_loop_*`` columns (status ``reached|closest|rounds|failed`` and its reason, the true final
     error [m], pushes, switches, re-contacts, re-plans and their median time [s])."""
-    from planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.closed_loop import execute_closed_loop
 
     rep = execute_closed_loop(pickle.loads(plan), tolerance=tolerance, camera_noise=camera_noise, seed=seed)
     times = [float(x) for x in rep.replan_times]
@@ -99,8 +99,8 @@ def closed_loop(plan: bytes, seed: int, tolerance: float = 0.001, camera_noise: 
 def warm_up(simulate: bool = False) -> None:
     """Import what :func:`execute_job` (and with ``simulate`` the executions) need (run once when a
     sandbox starts)."""
-    import planner.solve
+    import tooltransfer.planner.solve
 
     if simulate:
-        import planner.closed_loop
-        import planner.simulate  # noqa: F401
+        import tooltransfer.planner.closed_loop
+        import tooltransfer.planner.simulate  # noqa: F401

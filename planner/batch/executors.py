@@ -13,7 +13,7 @@ there at this version (and, when a dataset is given, the dataset readable at its
 that fails, or does not answer within :data:`PROBE_TIMEOUT`, refuses the run naming the worker and
 what is missing. Connecting to the scheduler is bounded by :data:`CONNECT_TIMEOUT` (an address where
 no scheduler answers is refused with a message, not waited on). :meth:`Slots.ship` then puts the
-batch's learned skills where the jobs run (:mod:`planner.batch.shipping`): a file the pool's workers
+batch's learned skills where the jobs run (:mod:`tooltransfer.planner.batch.shipping`): a file the pool's workers
 read, or a worker plugin on Dask.
 """
 
@@ -30,11 +30,11 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from dmp.errors import InputError
-from planner.batch.worker import pool_initializer
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.batch.worker import pool_initializer
 
 if TYPE_CHECKING:
-    from planner.batch.shipping import ShippedSkills
+    from tooltransfer.planner.batch.shipping import ShippedSkills
 
 #: Connecting to a Dask scheduler, waiting for its first worker, and the workers' probe [s].
 CONNECT_TIMEOUT = 4.0
@@ -47,7 +47,7 @@ def probe(dataset, version):
     import importlib, importlib.metadata, os, socket, sys
     out = {"host": socket.gethostname(), "python": sys.version.split()[0], "problems": []}
     try:
-        importlib.import_module("planner.batch.execute")
+        importlib.import_module("tooltransfer.planner.batch.execute")
     except Exception as exc:
         out["problems"].append(f"the tooltransfer package cannot be imported ({type(exc).__name__}: {exc})")
     try:
@@ -204,7 +204,7 @@ class Slots:
             self.executor = _pool(self.slots, self._skills)
 
     def ship(self, skills: ShippedSkills | None, dataset: str | None = None) -> None:
-        """Put the batch's skills where the jobs run, before the first job (:mod:`planner.batch.shipping`):
+        """Put the batch's skills where the jobs run, before the first job (:mod:`tooltransfer.planner.batch.shipping`):
         on the pool, one file in a temporary folder (removed when the executor closes) that every pool
         worker registers; on Dask, a worker plugin that writes it into each worker's local directory,
         now and on workers that join later (unregistered when the executor closes). With no skills to
@@ -218,13 +218,13 @@ class Slots:
                 check_workers(self.client, self.flag, dataset)
             return
         if self.client is None:
-            from problems.atomic import write_text
+            from tooltransfer.problems.atomic import write_text
 
             if self._folder is None:
                 self._folder = tempfile.TemporaryDirectory(prefix="tooltransfer-skills-")
             path = write_text(os.path.join(self._folder.name, skills.file_name), skills.text)
             self._skills = (*self._skills, (skills.digest, str(path)))
-            from planner.batch import shipping
+            from tooltransfer.planner.batch import shipping
 
             shipping.register(skills.digest, str(path))  # jobs run here too (run_job called in this process)
             if isinstance(self.executor, ProcessPoolExecutor):  # no job submitted yet: a pool that knows them
@@ -233,7 +233,7 @@ class Slots:
             return
         import uuid
 
-        from planner.batch.dask_plugin import SkillsPlugin
+        from tooltransfer.planner.batch.dask_plugin import SkillsPlugin
 
         name = f"tooltransfer-skills-{skills.digest}-{uuid.uuid4().hex[:8]}"
         try:
@@ -253,7 +253,7 @@ class Slots:
                 pass
         self._plugins.clear()
         if self._skills:
-            from planner.batch import shipping
+            from tooltransfer.planner.batch import shipping
 
             for digest, _ in self._skills:
                 shipping.release(digest)

@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from planner.batch.report import wilson
-from planner.plots.save import save_figure
+from tooltransfer.planner.batch.report import wilson
+from tooltransfer.planner.plots.save import save_figure
 
 
 def _rates(rows: Sequence[dict[str, Any]], key: Any) -> tuple[list, list, list, list]:
@@ -88,7 +88,7 @@ def plot_execution(by_var: dict[str, list[dict[str, Any]]], path: Path) -> Path:
     """Executed success per variant (shares of all tasks, 95% Wilson) and the final errors' CDFs."""
     import matplotlib.pyplot as plt
 
-    from planner.batch.report import EXEC_TOLS
+    from tooltransfer.planner.batch.report import EXEC_TOLS
 
     bars = [("planned", None, None)] + [(f"{name} <= {1e3 * tol:g} mm", key, tol)
                                         for name, key in (("OL", "open_loop"), ("CL", "closed_loop"))

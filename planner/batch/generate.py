@@ -3,11 +3,11 @@
 Task ``i`` is drawn from its own generator ``numpy.random.default_rng([seed, i])``, so it does not
 depend on ``count`` or on which other tasks were drawn. Tools are used in turn (``i mod len``) so
 each tool gets an equal share. Start and target are drawn uniformly inside the tool's reach region
-(:func:`tools.omni.reach.reachable_polygon` of the task's Omni with the tool's ``a_t``) shrunk by
+(:func:`tooltransfer.tools.omni.reach.reachable_polygon` of the task's Omni with the tool's ``a_t``) shrunk by
 the region's ``reach_margin`` and cut by its box, at a distance within ``distance``; obstacles
 (discs or regular convex polygons) lie near the straight way between them, clear of the object at
 start and target by the safety margin plus ``obstacles.clearance``. Each task is validated by
-:func:`problems.task.task_from_dict` before it is returned.
+:func:`tooltransfer.problems.task.task_from_dict` before it is returned.
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ import numpy as np
 import shapely
 import yaml
 
-from dmp.errors import InputError
-from planner.batch.spec import BatchSpec, Region, dataset_folder
-from problems.task import task_from_dict
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.batch.spec import BatchSpec, Region, dataset_folder
+from tooltransfer.problems.task import task_from_dict
 
 _TRIES = 2000
 
@@ -74,8 +74,8 @@ def _base(spec: BatchSpec, tool: str, dataset: str) -> dict[str, Any]:
 def _reach(tool: str, extra_json: str) -> shapely.Polygon:
     import json
 
-    from problems.task import task_platform, task_tool
-    from tools.omni.reach import reachable_polygon
+    from tooltransfer.problems.task import task_platform, task_tool
+    from tooltransfer.tools.omni.reach import reachable_polygon
 
     probe = task_from_dict({"name": "probe", "tool": tool, "start": [0.0, 0.15], "target": [0.01, 0.15],
                             "skills": {"dataset": "."}, **json.loads(extra_json)}, "batch.task")

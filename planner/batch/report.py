@@ -1,5 +1,5 @@
 """Statistics of a batch's results: per tool and variant, success rate with a Wilson interval,
-violated (a whole plan that breaks a hard check: :func:`planner.solve.hard_check_failures`; counted
+violated (a whole plan that breaks a hard check: :func:`tooltransfer.planner.solve.hard_check_failures`; counted
 apart, never as a success), infeasible, error and timeout counts with the top reasons,
 planning-time percentiles, violation maxima and, for a batch run with ``--simulate``, executed
 success; rich tables and CSV files.
@@ -300,8 +300,8 @@ def write_csv(path: Path, rows: Sequence[dict[str, Any]], columns: Sequence[str]
 def write_report(db: str | Path, out: str | Path | None, console: Console | None = None) -> list[Path]:
     """Print the report of the store ``db``; with ``out``, write ``results.csv``, ``summary.csv``,
     ``reasons.csv`` and the figures there. Returns the written paths."""
-    from dmp.errors import InputError
-    from planner.batch.store import ResultStore
+    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.planner.batch.store import ResultStore
 
     p = Path(db)
     if not p.is_file():
@@ -326,7 +326,7 @@ def write_report(db: str | Path, out: str | Path | None, console: Console | None
     written = [write_csv(folder / "results.csv", [{**r, "valid": int(is_valid(r))} for r in rows]),
                write_csv(folder / "summary.csv", [asdict(s) for s in stats], [f.name for f in fields(GroupStats)]),
                write_csv(folder / "reasons.csv", reasons, ["variant", "status", "count", "reason"])]
-    from planner.batch.figures import plot_batch
+    from tooltransfer.planner.batch.figures import plot_batch
 
     written += plot_batch(rows, folder)
     return written

@@ -1,6 +1,6 @@
 """Running a batch: jobs to an executor, rows to the store as each job finishes, progress, Ctrl-C.
 
-One code path for the process pool and Dask (:mod:`planner.batch.executors`): at most two jobs per
+One code path for the process pool and Dask (:mod:`tooltransfer.planner.batch.executors`): at most two jobs per
 slot are in flight; each finished future's row is committed at once. ``resume`` skips the
 (task, variant) pairs already stored; without it a store that already holds rows is refused. The
 first Ctrl-C (SIGINT) stops submitting, cancels what has not started, waits for the running jobs
@@ -13,7 +13,7 @@ pool running alone, or whose Dask worker died, becomes an ``error`` row. With si
 the same slot's sandbox, each execution with its own timeout; whether plans are executed is
 recorded in the store and a resume with the other setting is refused.
 
-The skills travel with the run (:mod:`planner.batch.shipping`): learned once here from the batch's
+The skills travel with the run (:mod:`tooltransfer.planner.batch.shipping`): learned once here from the batch's
 dataset and shipped to the executor (a file the pool's workers read, a plugin that writes it on every
 Dask worker), every job planning with that copy; the workers need this package, not the dataset.
 """
@@ -45,15 +45,15 @@ from rich.progress import (
 )
 from rich.text import Text
 
-from dmp.errors import InputError
-from planner.batch.executors import Slots
-from planner.batch.generate import GeneratedTask, generate_tasks
-from planner.batch.spec import BatchSpec
-from planner.batch.store import ResultStore
-from planner.batch.worker import Job, Stage, run_job
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.batch.executors import Slots
+from tooltransfer.planner.batch.generate import GeneratedTask, generate_tasks
+from tooltransfer.planner.batch.spec import BatchSpec
+from tooltransfer.planner.batch.store import ResultStore
+from tooltransfer.planner.batch.worker import Job, Stage, run_job
 
 if TYPE_CHECKING:
-    from planner.batch.shipping import ShippedSkills
+    from tooltransfer.planner.batch.shipping import ShippedSkills
 
 STATUSES = ("solved", "violated", "infeasible", "error", "timeout")
 
@@ -106,8 +106,8 @@ def batch_jobs(spec: BatchSpec, batch_path: str | Path, tasks: Sequence[Generate
                timeout: float | None = None, simulate: bool | None = None) -> tuple[list[GeneratedTask], list[Job]]:
     """The batch's tasks and its jobs (every task with every variant), in task order. With
     simulation, each job executes its solved plan open loop and closed loop in two more sandbox
-    calls (:class:`planner.batch.worker.Stage`, ``simulate.timeout`` each), the closed loop with task
-    ``i``'s camera-noise seed (:meth:`planner.batch.spec.Simulation.closed_loop_seed`). (Every task
+    calls (:class:`tooltransfer.planner.batch.worker.Stage`, ``simulate.timeout`` each), the closed loop with task
+    ``i``'s camera-noise seed (:meth:`tooltransfer.planner.batch.spec.Simulation.closed_loop_seed`). (Every task
     up front: :func:`run_batch` generates them as it runs.)"""
     tasks = list(tasks) if tasks is not None else generate_tasks(spec, batch_path)
     warm = _warmup(spec, batch_path, tasks[0] if tasks else None, simulate)
@@ -118,9 +118,10 @@ def _warmup(spec: BatchSpec, batch_path: str | Path, first: GeneratedTask | None
             simulate: bool | None) -> tuple[tuple[str, tuple], ...]:
     """The calls a new sandbox runs first: imports, and each variant on the batch's first task (skills)."""
     source = str(Path(batch_path).resolve())
-    warm: list[tuple[str, tuple]] = [("planner.batch.execute:warm_up", (simulate_setting(spec, simulate),))]
+    warm: list[tuple[str, tuple]] = [
+        ("tooltransfer.planner.batch.execute:warm_up", (simulate_setting(spec, simulate),))]
     if first is not None:
-        warm += [("planner.batch.execute:execute_job", (first.data, source, oe, ss, False))
+        warm += [("tooltransfer.planner.batch.execute:execute_job", (first.data, source, oe, ss, False))
                  for oe, ss in spec.variants.pairs()]
     return tuple(warm)
 
@@ -129,15 +130,15 @@ def task_jobs(spec: BatchSpec, batch_path: str | Path, t: GeneratedTask, timeout
               simulate: bool | None = None, warm: tuple[tuple[str, tuple], ...] = (),
               skills: str | None = None) -> list[Job]:
     """The jobs of one task: one per variant pair (:func:`batch_jobs`); ``skills``: the digest of the
-    shipped skills they plan with (:attr:`planner.batch.worker.Job.skills`)."""
+    shipped skills they plan with (:attr:`tooltransfer.planner.batch.worker.Job.skills`)."""
     sim = simulate_setting(spec, simulate)
     cfg = spec.simulate
     limit = spec.timeout if timeout is None else timeout
     source = str(Path(batch_path).resolve())
     stages: tuple[Stage, ...] = ()
     if sim:
-        stages = (Stage("open_loop", "planner.batch.execute:open_loop", (cfg.tolerance,), cfg.timeout),
-                  Stage("closed_loop", "planner.batch.execute:closed_loop",
+        stages = (Stage("open_loop", "tooltransfer.planner.batch.execute:open_loop", (cfg.tolerance,), cfg.timeout),
+                  Stage("closed_loop", "tooltransfer.planner.batch.execute:closed_loop",
                         (cfg.closed_loop_seed(t.index), cfg.closed_loop_tolerance, cfg.camera_noise), cfg.timeout))
     return [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim), timeout=limit, warmup=warm,
                 stages=stages, skills=skills) for oe, ss in spec.variants.pairs()]
@@ -153,8 +154,8 @@ def _lazy_jobs(spec: BatchSpec, batch_path: str | Path, store: ResultStore, firs
     """The jobs not yet stored, task by task: tasks generated :data:`CHUNK` at a time and recorded in
     the store's ``tasks`` table before their jobs are handed out. A task that cannot be generated
     (its ranges leave no room) becomes an ``error`` row per variant, and the batch goes on."""
-    from planner.batch.generate import GenerationError, generate_task
-    from planner.batch.spec import dataset_folder
+    from tooltransfer.planner.batch.generate import GenerationError, generate_task
+    from tooltransfer.planner.batch.spec import dataset_folder
 
     dataset = str(dataset_folder(spec, batch_path))
     for lo in range(0, spec.count, CHUNK):
@@ -194,7 +195,7 @@ def open_batch_store(store: ResultStore, spec: BatchSpec, tasks: Sequence[Genera
     """Tie ``store`` to the batch and its settings, refusing: a file of an older schema, another
     batch's store, a filled one without ``resume``, and one filled with the other execution setting
     (``simulate``, default the batch file's: see :func:`simulate_setting`)."""
-    from planner.batch.store import SCHEMA_VERSION
+    from tooltransfer.planner.batch.store import SCHEMA_VERSION
 
     if store.schema != SCHEMA_VERSION:
         raise InputError("--db", f"a results file of schema {SCHEMA_VERSION} to resume, or a new file",
@@ -382,26 +383,27 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
     goes (:func:`_lazy_jobs`: the first rows are stored within seconds whatever the count).
 
     Before the first job: the batch's dataset is loaded and checked (a corrupt one is refused here,
-    not turned into a row per job), the store is locked (:func:`planner.batch.store.lock_store`: a
+    not turned into a row per job), the store is locked (:func:`tooltransfer.planner.batch.store.lock_store`: a
     second ``batch run`` on it is refused), Dask workers are probed
-    (:func:`planner.batch.executors.check_workers`), and the skills are learned and shipped to the
-    executor (:mod:`planner.batch.shipping`; a dataset they cannot be learned from is refused before
+    (:func:`tooltransfer.planner.batch.executors.check_workers`), and the skills are learned and shipped to the
+    executor (:mod:`tooltransfer.planner.batch.shipping`; a dataset they cannot be learned from is refused before
     the store is made).
 
     Args:
         workers: process-pool size (default: the CPU count).
-        scheduler, dask_local: run on a Dask cluster instead (see :func:`planner.batch.executors.open_executor`).
+        scheduler, dask_local: run on a Dask cluster instead (see
+        :func:`tooltransfer.planner.batch.executors.open_executor`).
         timeout: per job [s] (default: the batch file's).
         simulate: override the batch file's ``simulate.enabled`` (part of the store's settings: a resume
             with the other setting is refused).
         resume: carry on a store that already holds rows of this batch.
         retry: statuses to run again on resume (e.g. ``("error", "timeout")``).
     """
-    from planner.batch.executors import open_executor
-    from planner.batch.generate import generate_task
-    from planner.batch.spec import dataset_folder, load_batch
-    from planner.batch.store import lock_store
-    from problems.dataset import load_dataset
+    from tooltransfer.planner.batch.executors import open_executor
+    from tooltransfer.planner.batch.generate import generate_task
+    from tooltransfer.planner.batch.spec import dataset_folder, load_batch
+    from tooltransfer.planner.batch.store import lock_store
+    from tooltransfer.problems.dataset import load_dataset
 
     if timeout is not None and not timeout > 0:
         raise InputError("--timeout", "a positive number of seconds", timeout)
@@ -430,10 +432,10 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
 
 def _ship_skills(slots: Slots, spec: BatchSpec, batch_path: str | Path, first: GeneratedTask, dataset: str,
                  console: Console, progress: bool) -> ShippedSkills | None:
-    """Learn the batch's skills here and ship them to the executor (:mod:`planner.batch.shipping`); the
-    :class:`~planner.batch.shipping.ShippedSkills`, or None when they cannot be shipped (the workers
+    """Learn the batch's skills here and ship them to the executor (:mod:`tooltransfer.planner.batch.shipping`); the
+    :class:`~tooltransfer.planner.batch.shipping.ShippedSkills`, or None when they cannot be shipped (the workers
     then read the dataset at its path: Dask workers are probed for it)."""
-    from planner.batch.shipping import batch_skills
+    from tooltransfer.planner.batch.shipping import batch_skills
 
     if progress:
         console.print(f"learning the skills from {dataset} ...")
@@ -475,8 +477,8 @@ def _index(task_id: str) -> int:
 def _warm_parent(jobs: Sequence[Job], console: Console, progress: bool) -> None:
     """Learn the skills once here (the disk cache then serves every sandbox): one job per variant. A
     dataset the skills cannot be learned from is refused here (every job would fail on it)."""
-    from planner.batch.execute import execute_job
-    from problems.dataset import DatasetError
+    from tooltransfer.planner.batch.execute import execute_job
+    from tooltransfer.problems.dataset import DatasetError
 
     seen = set()
     for j in jobs:

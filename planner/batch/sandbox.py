@@ -4,7 +4,7 @@ Why: a batch must survive a task that hangs, crashes the interpreter (a solver's
 ``os._exit``) or raises. Signals cannot interrupt a call in a Dask worker's thread, and a fresh
 process per call would pay the imports and the skill loading each time. So each executor slot
 (a process-pool worker or a Dask worker thread) keeps one sandbox: ``python -m
-planner.batch.sandbox``, fed ``(entry, args)`` over a pipe (:class:`multiprocessing.connection.Connection`
+tooltransfer.planner.batch.sandbox``, fed ``(entry, args)`` over a pipe (:class:`multiprocessing.connection.Connection`
 framing). :meth:`Sandbox.call` waits at most ``timeout`` seconds; on a timeout the child is killed
 (SIGKILL) and the next call starts a new one, which first runs the warm-up calls (imports, skills)
 outside any timeout. The child ignores SIGINT (Ctrl-C is the batch runner's to handle), writes
@@ -82,8 +82,8 @@ class Sandbox:
         # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers; inherited, it made the planner
         # spend 1.5x the CPU (glibc returning memory after every numpy temporary), so the child goes without
         env.pop("MALLOC_TRIM_THRESHOLD_", None)
-        self._proc = subprocess.Popen([sys.executable, "-m", "planner.batch.sandbox"], stdin=c_rx, stdout=c_tx,
-                                      stderr=self._log, close_fds=True, env=env)
+        self._proc = subprocess.Popen([sys.executable, "-m", "tooltransfer.planner.batch.sandbox"], stdin=c_rx,
+                                      stdout=c_tx, stderr=self._log, close_fds=True, env=env)
         os.close(c_rx)
         os.close(c_tx)
         self._tx, self._rx = Connection(p_tx, readable=False), Connection(p_rx, writable=False)

@@ -5,13 +5,13 @@ dataset, the same paths or the same working directory.
 - :func:`batch_skills` learns them where ``batch run`` runs (the batch's dataset with the tasks'
   ``oe.k`` and ``ss.virtual_motion``, the SS skill and the identified push mechanics, through the
   skills cache) and returns a :class:`ShippedSkills`: the text of a skills file
-  (``tooltransfer.skills/1``, :meth:`planner.skills.Skills.to_dict`, about 200 kB) and its digest.
-- How they get to a slot (:meth:`planner.batch.executors.Slots.ship`): on the process pool the
+  (``tooltransfer.skills/1``, :meth:`tooltransfer.planner.skills.Skills.to_dict`, about 200 kB) and its digest.
+- How they get to a slot (:meth:`tooltransfer.planner.batch.executors.Slots.ship`): on the process pool the
   runner writes the file once into a temporary folder and each pool worker registers its path (the
-  pool's initializer); on Dask a worker plugin (:class:`planner.batch.dask_plugin.SkillsPlugin`,
+  pool's initializer); on Dask a worker plugin (:class:`tooltransfer.planner.batch.dask_plugin.SkillsPlugin`,
   registered once per run) writes it into every worker's local directory, also on workers that join
   the cluster later or restart.
-- A job names the skills by digest (:attr:`planner.batch.worker.Job.skills`): its calls get this
+- A job names the skills by digest (:attr:`tooltransfer.planner.batch.worker.Job.skills`): its calls get this
   slot's local file as the task's ``skills: {file: ...}`` in place of the dataset (:func:`localize`).
   A slot that holds no skills of that digest turns the job into an ``error`` row naming the worker.
 
@@ -68,7 +68,7 @@ def install(skills: ShippedSkills, folder: str | Path) -> str:
     """Write the skills file into ``folder`` (atomically, unless a file of the same content is there)
     and register it in this process under the digest; returns its path. Each call is matched by one
     :func:`release`."""
-    from problems.atomic import write_text
+    from tooltransfer.problems.atomic import write_text
 
     path = Path(folder) / skills.file_name
     with _LOCK:
@@ -137,11 +137,11 @@ def batch_skills(spec: Any, batch_path: str | Path, first: Any) -> ShippedSkills
     """
     import json
 
-    from dmp.errors import InputError
-    from planner.batch.spec import dataset_folder
-    from planner.skills import learn_skills
-    from problems.dataset import DatasetError
-    from problems.task import task_from_dict
+    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.planner.batch.spec import dataset_folder
+    from tooltransfer.planner.skills import learn_skills
+    from tooltransfer.problems.dataset import DatasetError
+    from tooltransfer.problems.task import task_from_dict
 
     folder = dataset_folder(spec, batch_path)
     task = task_from_dict(first.data, str(Path(batch_path).resolve()))

@@ -33,7 +33,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from problems.task import TaskFileError, _loc
+from tooltransfer.problems.task import TaskFileError, _loc
 
 FORMAT = "tooltransfer.batch/1"
 
@@ -108,8 +108,8 @@ class VariantGrid(_Model):
 
 class Simulation(_Model):
     """Executing solved plans on the simulated platform (MuJoCo): each one open loop (the planned
-    joints tracked, :func:`planner.simulate.simulate_plan`) and closed loop (re-planning from the
-    observed object, :func:`planner.closed_loop.execute_closed_loop`)."""
+    joints tracked, :func:`tooltransfer.planner.simulate.simulate_plan`) and closed loop (re-planning from the
+    observed object, :func:`tooltransfer.planner.closed_loop.execute_closed_loop`)."""
 
     enabled: bool = Field(False, description="execute solved plans (``batch run --simulate`` / ``--no-simulate`` "
                           "overrides it)")
@@ -160,7 +160,7 @@ class BatchSpec(_Model):
     @field_validator("tools")
     @classmethod
     def _library(cls, v: list[str]) -> list[str]:
-        from tools.library import library_names
+        from tooltransfer.tools.library import library_names
 
         names = library_names()
         bad = [t for t in v if t not in names]
@@ -179,7 +179,7 @@ class BatchSpec(_Model):
     def digest(self) -> str:
         """Hash of the batch's content without ``simulate.enabled`` (a store refuses to resume a different
         batch; whether plans are executed is a setting of its own, checked by name:
-        :func:`planner.batch.runner.open_batch_store`)."""
+        :func:`tooltransfer.planner.batch.runner.open_batch_store`)."""
         data = self.model_dump(mode="json")
         data["simulate"].pop("enabled")
         return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
@@ -200,7 +200,7 @@ def batch_from_dict(data: Any, source: str = "<dict>") -> BatchSpec:
 
 def load_batch(path: str | Path) -> BatchSpec:
     """Read and validate a batch file (YAML or JSON)."""
-    from tools.yaml_file import read_yaml
+    from tooltransfer.tools.yaml_file import read_yaml
 
     p = Path(path)
     spec = batch_from_dict(read_yaml(p, BatchFileError, "batch file"), str(p))

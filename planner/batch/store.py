@@ -13,7 +13,7 @@ twice.
 
 Schema 2 added the execution columns. A schema-1 file (no ``open_loop_*``/``closed_loop_*``
 columns) still opens for reading (:meth:`ResultStore.rows` gives its ``sim_final_error`` as
-``open_loop_error``); :func:`planner.batch.runner.open_batch_store` refuses to resume it.
+``open_loop_error``); :func:`tooltransfer.planner.batch.runner.open_batch_store` refuses to resume it.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from dmp.errors import InputError
+from tooltransfer.dmp.errors import InputError
 
 SCHEMA_VERSION = "2"
 #: Schemas :class:`ResultStore` can read (only the current one is resumed).

@@ -1,7 +1,7 @@
 """What an executor slot runs: :func:`run_job` takes a :class:`Job` and returns its result row.
 
 The same function runs in a process-pool worker and in a Dask worker thread; each slot (thread)
-keeps its own :class:`~planner.batch.sandbox.Sandbox`, so skills are loaded once per slot and a
+keeps its own :class:`~tooltransfer.planner.batch.sandbox.Sandbox`, so skills are loaded once per slot and a
 hang or crash costs only that job. Every way a job can end becomes a row: the job's own measures,
 an ``error`` (exception or crash, with the message), or a ``timeout``.
 
@@ -10,7 +10,7 @@ A job may have stages (:class:`Stage`, e.g. executing the plan open and closed l
 under ``"plan"``: its columns join the row, and a stage that raises, hangs or crashes sets only its
 ``<stage>_status`` (``error`` or ``timeout``) and ``<stage>_reason``; the row keeps its status.
 
-A job whose :attr:`Job.skills` names the batch's shipped skills (:mod:`planner.batch.shipping`)
+A job whose :attr:`Job.skills` names the batch's shipped skills (:mod:`tooltransfer.planner.batch.shipping`)
 plans with this slot's local copy of them: its calls (and the sandbox's warm-up) take the task's
 skills from that file rather than from the dataset, which the worker then need not have.
 """
@@ -25,8 +25,8 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
-from planner.batch import shipping
-from planner.batch.sandbox import Sandbox
+from tooltransfer.planner.batch import shipping
+from tooltransfer.planner.batch.sandbox import Sandbox
 
 _LOCAL = threading.local()
 
@@ -58,13 +58,13 @@ class Job:
         timeout: [s] for the call.
         warmup: calls a new sandbox runs first, untimed (imports, skills).
         stages: run in turn when the call returns a ``solved`` row (module docstring).
-        skills: the digest of the batch's shipped skills (:mod:`planner.batch.shipping`), or None
+        skills: the digest of the batch's shipped skills (:mod:`tooltransfer.planner.batch.shipping`), or None
             (the task's own ``skills`` as they are: the dataset at its path).
     """
 
     task_id: str
     variant: str
-    entry: str = "planner.batch.execute:execute_job"
+    entry: str = "tooltransfer.planner.batch.execute:execute_job"
     args: tuple = ()
     timeout: float = 60.0
     warmup: tuple[tuple[str, tuple], ...] = field(default=(), repr=False)
@@ -149,7 +149,7 @@ def _watch_parent(ppid: int) -> None:
 
 def pool_initializer(skills: tuple[tuple[str, str], ...] = ()) -> None:
     """Process-pool worker set-up: Ctrl-C is the runner's to handle; exit when the runner dies;
-    ``skills``: ``(digest, path)`` of the skills files the runner wrote (:mod:`planner.batch.shipping`)."""
+    ``skills``: ``(digest, path)`` of the skills files the runner wrote (:mod:`tooltransfer.planner.batch.shipping`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     for digest, path in skills:
         shipping.register(digest, path)

@@ -1,7 +1,7 @@
 """OE skill condensing for a new tool (DESIGN section 5): push plans, the ``qp`` variant, metrics."""
 
-from planner.oe.face_frame import FaceFrame
-from planner.oe.push_plan import Push, PushPlan
-from planner.oe.qp_variant import QPOptions, condense_qp
+from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.planner.oe.push_plan import Push, PushPlan
+from tooltransfer.planner.oe.qp_variant import QPOptions, condense_qp
 
 __all__ = ["FaceFrame", "Push", "PushPlan", "QPOptions", "condense_qp"]

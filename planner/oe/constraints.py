@@ -4,7 +4,7 @@
   with the tool heading (which follows the Omni's waist, hence the object's position): the rows
   are linearised at the current path and re-built in the sequential loop (family ``"cone"``).
 * :func:`reach_constraints`: the object positions from which the face can push it lie in an
-  annular sector about the joint-1 axis (:mod:`planner.oe.face_frame`); its two straight sides are
+  annular sector about the joint-1 axis (:mod:`tooltransfer.planner.oe.face_frame`); its two straight sides are
   exact half-planes, its outer arc is replaced by chords inside it and its inner arc by a tangent
   half-plane linearised at the current path (conservative), family ``"reach"``.
 * :class:`ContactOnFace`: the contact stays on the face's usable segment while the object moves
@@ -18,12 +18,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from dmp.qp.constraints import OutsideDisc, PositionPolygon
-from dmp.qp.constraints.base import Coefficients, Constraint
-from planner.oe.face_frame import FaceFrame
-from tools.pushing.inverse import FaceGeometry
-from tools.pushing.mechanics import PushMechanics
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.qp.constraints import OutsideDisc, PositionPolygon
+from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
+from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.tools.pushing.inverse import FaceGeometry
+from tooltransfer.tools.pushing.mechanics import PushMechanics
 
 
 class HeadingCone(Constraint):
@@ -127,10 +127,10 @@ class ContactOnFace(Constraint):
     """The contact stays on the face's usable segment (``[lo, hi]``, arc length [m]) over the window.
 
     While the contact sticks it rolls along the face at ``ds/dt = a(x) . v`` with
-    ``a(x) = -(1/c^2) e_w(x) - sigma R grad psi(x)`` (:mod:`tools.pushing.inverse`: the object's
+    ``a(x) = -(1/c^2) e_w(x) - sigma R grad psi(x)`` (:mod:`tooltransfer.tools.pushing.inverse`: the object's
     sideways travel in the face frame and the heading's turn, ``e_w`` the face's world direction at
     the heading ``psi`` the Omni imposes with the object at ``x``). A push may use up to
-    ``max_contacts`` contacts (re-contacts in between, placed by :mod:`planner.oe.contacts`), so the
+    ``max_contacts`` contacts (re-contacts in between, placed by :mod:`tooltransfer.planner.oe.contacts`), so the
     contact's total travel ``int |ds|`` must stay within that many usable lengths. The rows bound the
     rolling *rate* sample by sample,
 

@@ -1,7 +1,7 @@
 """From a condensed object path and its face spans to pushes the mechanics deliver (both OE variants).
 
 Each span (a face and the samples it pushes) gets its tool path from the inverse push model
-(:func:`tools.pushing.inverse.push_tool_path`): the contact sticks, rolls along the face as the
+(:func:`tooltransfer.tools.pushing.inverse.push_tool_path`): the contact sticks, rolls along the face as the
 object moves sideways and the heading turns, and the tool poses follow. Where the contact starts
 is a rule: its excursion over the push is centred in the face's usable range (the range shrunk by
 the scene's ``contact_margin``), which is the start that leaves the most room at both ends, unless
@@ -10,7 +10,7 @@ excursion on the face, the one that keeps the tool farthest from the obstacles. 
 one contact cannot carry the span's sideways travel, the span is split into several contacts of the
 same face: the longest stretch whose excursion fits, then a *re-contact* (the tool backs off,
 shifts along the object and approaches again while the object rests, planned like a switch by
-:mod:`planner.recontact`), and so on. A stretch shorter than ``MIN_PIECE`` of object travel means
+:mod:`tooltransfer.planner.recontact`), and so on. A stretch shorter than ``MIN_PIECE`` of object travel means
 the face cannot carry that motion at all: the pushes are refused with the reason.
 """
 
@@ -22,13 +22,13 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from planner.oe.push_plan import Push
-from planner.scene import Scene
-from tools.model import Tool
-from tools.objects import Disc
-from tools.omni.platform import OmniPlatform
-from tools.pose import rotation
-from tools.pushing.inverse import FaceGeometry, FacePush, push_tool_path
+from tooltransfer.planner.oe.push_plan import Push
+from tooltransfer.planner.scene import Scene
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pose import rotation
+from tooltransfer.tools.pushing.inverse import FaceGeometry, FacePush, push_tool_path
 
 #: Shortest object travel [m] one contact must carry before a re-contact.
 MIN_PIECE = 0.001

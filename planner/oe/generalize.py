@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp import DMP
-from dmp.errors import InputError
-from dmp.validation import check_array, check_positive
+from tooltransfer.dmp import DMP
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array, check_positive
 
 
 def generalize(

@@ -30,11 +30,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp import DMP
-from dmp.errors import InputError
-from dmp.mappings import angle_inverse, wrap_angle
-from dmp.validation import check_array
-from tools.model import Tool
+from tooltransfer.dmp import DMP
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.mappings import angle_inverse, wrap_angle
+from tooltransfer.dmp.validation import check_array
+from tooltransfer.tools.model import Tool
 
 OE_FORMAT = "tooltransfer.oe/1"
 
@@ -116,7 +116,7 @@ def _map_steps(
 ) -> NDArray[np.float64]:
     """Steps (K-1, 2) turned about the push directions ``phi`` by (6) (condensing) or by its
     inverse (recovering), lengths kept: exact inverses of each other step by step."""
-    from dmp.mappings import angle_map
+    from tooltransfer.dmp.mappings import angle_map
 
     theta = wrap_angle(np.arctan2(steps[:, 1], steps[:, 0]) - phi)
     if inverse:
@@ -191,7 +191,7 @@ class OESkill:
     def to_dict(self) -> dict[str, Any]:
         """Plain-data description, format ``tooltransfer.oe/1``: the DMP (``tooltransfer.dmp/1``),
         the recovery's ``k``, the demonstration tool and the recovered demonstrations."""
-        from dmp.skill_file import dmp_to_dict
+        from tooltransfer.dmp.skill_file import dmp_to_dict
 
         return {
             "format": OE_FORMAT, "k": self.k, "tool": self.tool, "dmp": dmp_to_dict(self.dmp),
@@ -202,9 +202,9 @@ class OESkill:
     @classmethod
     def from_dict(cls, doc: Any, source: str = "<dict>") -> OESkill:
         """Rebuild a skill from :meth:`to_dict` output; another format or damaged data raises
-        :class:`~dmp.errors.SkillFileError`."""
-        from dmp.errors import SkillFileError
-        from dmp.skill_file import dmp_from_dict
+        :class:`~tooltransfer.dmp.errors.SkillFileError`."""
+        from tooltransfer.dmp.errors import SkillFileError
+        from tooltransfer.dmp.skill_file import dmp_from_dict
 
         if not isinstance(doc, dict) or doc.get("format") != OE_FORMAT:
             got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
@@ -228,8 +228,8 @@ class OESkill:
     @classmethod
     def load(cls, path: str | Path) -> OESkill:
         """Read a skill written by :meth:`save`; another format or a damaged file raises
-        :class:`~dmp.errors.SkillFileError`."""
-        from dmp.skill_file import read_json
+        :class:`~tooltransfer.dmp.errors.SkillFileError`."""
+        from tooltransfer.dmp.skill_file import read_json
 
         return cls.from_dict(read_json(path), str(path))
 

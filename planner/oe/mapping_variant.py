@@ -16,12 +16,12 @@ Along the generalized universal path:
    about the universal path by the inner map (7);
 4. the end error is removed by a linear blend over the last push so the object reaches the target;
 5. the pushes are realised by the same inverse push model as the ``qp`` variant's
-   (:mod:`planner.oe.contacts`: tool poses, the contact rolling along the face, re-contacts where one
+   (:mod:`tooltransfer.planner.oe.contacts`: tool poses, the contact rolling along the face, re-contacts where one
    contact cannot carry the travel), so the two variants are compared on equal terms.
 
 The faces' cones are the same admissible cones as the ``qp`` variant's (the friction cone about the
 normal, narrowed to the scene's fraction, intersected with the tool file's cone; see
-:mod:`planner.oe.face_frame`): (6) compresses the directions into them.
+:mod:`tooltransfer.planner.oe.face_frame`): (6) compresses the directions into them.
 
 As in the paper there is no reach constraint; the shared metrics show what that costs (cone
 violations where the tube pulls the path, reach violations where a face cannot be placed).
@@ -36,17 +36,17 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from dmp.mappings import angle_map, inner_map_points, outer_map_points, wrap_angle
-from dmp.validation import check_array, check_positive
-from planner.oe.contacts import PushRefused, realise_pushes
-from planner.oe.face_frame import FaceFrame
-from planner.oe.metrics import plan_metrics
-from planner.oe.push_plan import PushPlan
-from planner.scene import Scene
-from tools.model import Tool
-from tools.objects import Disc, Obstacle
-from tools.omni.platform import OmniPlatform
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.mappings import angle_map, inner_map_points, outer_map_points, wrap_angle
+from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.planner.oe.contacts import PushRefused, realise_pushes
+from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.planner.oe.metrics import plan_metrics
+from tooltransfer.planner.oe.push_plan import PushPlan
+from tooltransfer.planner.scene import Scene
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc, Obstacle
+from tooltransfer.tools.omni.platform import OmniPlatform
 
 
 @dataclass(frozen=True)
@@ -132,7 +132,7 @@ def condense_mapping(
 ) -> PushPlan:
     """Condense the generalized universal path for ``tool`` by the paper's mappings.
 
-    Args and returns as :func:`planner.oe.qp_variant.condense_qp`.
+    Args and returns as :func:`tooltransfer.planner.oe.qp_variant.condense_qp`.
     """
     start_time = time.perf_counter()
     opts = options or MappingOptions()
@@ -142,7 +142,7 @@ def condense_mapping(
     tt = np.linspace(t[0], t[-1], opts.n_samples)
     gen = np.column_stack([np.interp(tt, t, universal[:, j]) for j in range(2)])
     if not isinstance(scene, Scene):
-        raise InputError("scene", "a planner.scene.Scene", type(scene).__name__)
+        raise InputError("scene", "a tooltransfer.planner.scene.Scene", type(scene).__name__)
     ref = avoid_obstacles(gen, scene.obstacles, opts.k, scene.margin, scene.radius)
     # the outer map's tail moves every point a little, the start and target too: take the ends'
     # displacement out linearly in time so the path still runs from the start to the target

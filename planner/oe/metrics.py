@@ -8,12 +8,12 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from planner.oe.constraints import HeadingCone
-from planner.oe.face_frame import FaceFrame
-from planner.oe.push_plan import PushPlan
-from planner.oe.sequence_proxy import reach_distance
-from planner.scene import Scene
-from tools.objects import Disc
+from tooltransfer.planner.oe.constraints import HeadingCone
+from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.planner.oe.push_plan import PushPlan
+from tooltransfer.planner.oe.sequence_proxy import reach_distance
+from tooltransfer.planner.scene import Scene
+from tooltransfer.tools.objects import Disc
 
 
 def _deviation(x: NDArray[np.float64], t: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -1,9 +1,9 @@
 """An objective term of the ``qp`` condensing fit that prices the contact's rolling along the faces.
 
 While a face pushes, the sticking contact rolls along it at ``ds/dt = a(x) . v``
-(:class:`planner.oe.constraints.ContactOnFace`); the contact must stay on the face, so a push
+(:class:`tooltransfer.planner.oe.constraints.ContactOnFace`); the contact must stay on the face, so a push
 whose contact travels ``S`` along a face of usable length ``w`` needs about ``S / w`` contacts
-(:mod:`planner.oe.contacts`). A fit free to wiggle sideways rolls the contact for nothing, and each
+(:mod:`tooltransfer.planner.oe.contacts`). A fit free to wiggle sideways rolls the contact for nothing, and each
 re-contact is a move of the tool. :class:`RollingPenalty` adds, per push window ``p``,
 
     lambda_p / T * 0.5 * sum_k (a_k . v_k)^2,      lambda_p = 2 price T T_p / w_p^2,
@@ -21,12 +21,12 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.affine import AffineRollout
-from dmp.qp.objectives import Objective, Quadratic
-from planner.oe.constraints import heading_gradient
-from planner.oe.face_frame import FaceFrame
-from planner.scene import Scene
-from tools.pushing.inverse import FaceGeometry
+from tooltransfer.dmp.affine import AffineRollout
+from tooltransfer.dmp.qp.objectives import Objective, Quadratic
+from tooltransfer.planner.oe.constraints import heading_gradient
+from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.planner.scene import Scene
+from tooltransfer.tools.pushing.inverse import FaceGeometry
 
 Window = tuple[FaceGeometry, FaceFrame, float, float, tuple[float, float]]
 """(face geometry, face frame, t_start [s], t_end [s], usable range (lo, hi) [m])."""

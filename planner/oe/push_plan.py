@@ -53,7 +53,7 @@ class PushPlan:
         object_xy: object centre (T, 2) [m]; object_v: its velocity (T, 2) [m/s].
         universal: the generalized universal path (T, 2) [m] the plan condenses.
         pushes: in time order.
-        metrics: see :func:`planner.oe.metrics.plan_metrics`.
+        metrics: see :func:`tooltransfer.planner.oe.metrics.plan_metrics`.
         n_qp: constrained fits solved (``qp`` variant).
         candidates: push sequences scored, each ``(faces, switch times [s], cost or None)``.
         next_best: when set, computes the plan of the next candidate in order of cost (``qp``

@@ -2,12 +2,12 @@
 
 For a new tool, the generalized universal object path is condensed into pushes the tool can make
 on the Omni. A candidate push sequence (faces in order, switch times) is scored by the constrained
-DMP fit of :mod:`dmp.qp`: track the universal path, with, during each push, the object's velocity in
+DMP fit of :mod:`tooltransfer.dmp.qp`: track the universal path, with, during each push, the object's velocity in
 the active face's admissible cone (its friction cone about the normal, narrowed to the scene's
 fraction and intersected with the tool file's cone, turning with the tool heading, re-linearised
-until it settles; :mod:`planner.oe.face_frame`), the contact on the face's usable segment as it
-rolls (:class:`planner.oe.constraints.ContactOnFace`), the object where the Omni can push it from
-with that face wherever the contact is on it (:func:`planner.oe.constraints.reach_constraints` at
+until it settles; :mod:`tooltransfer.planner.oe.face_frame`), the contact on the face's usable segment as it
+rolls (:class:`tooltransfer.planner.oe.constraints.ContactOnFace`), the object where the Omni can push it from
+with that face wherever the contact is on it (:func:`tooltransfer.planner.oe.constraints.reach_constraints` at
 both ends of the segment), obstacles kept out with the scene's margin beyond its radius, and the
 target reached with zero velocity. At a switch instant
 both faces' rows hold, so the object stops there when their cones do not overlap (the tool moves
@@ -18,13 +18,13 @@ Search (:func:`condense_qp`), bounded and pruned, not exhaustive:
 
 1. pre-checks: the start and the target must each be in reach of some face (else ``infeasible``);
 2. every face order of at most ``max_pushes`` pushes is ranked by a proxy
-   (:mod:`planner.oe.sequence_proxy`) with switch times on a grid of ``segments`` equal phases;
+   (:mod:`tooltransfer.planner.oe.sequence_proxy`) with switch times on a grid of ``segments`` equal phases;
 3. the ``candidates`` best are scored by the QP (one sequential-convex solve each) on a coarser
    screening grid;
 4. the best feasible one has each switch moved by one segment either way, kept when it lowers
    the cost (one pass);
 5. the cheapest screened candidates are solved again on the full grid; the first feasible one
-   whose pushes the inverse push model realises (:mod:`planner.oe.contacts`: tool poses, the
+   whose pushes the inverse push model realises (:mod:`tooltransfer.planner.oe.contacts`: tool poses, the
    contact's start, re-contacts where one contact cannot carry the travel) is the plan.
 
 What it guarantees: the returned plan satisfies every constraint family on the dense grid (the
@@ -41,9 +41,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp import DMP
-from dmp.errors import InputError
-from dmp.qp import (
+from tooltransfer.dmp import DMP
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.qp import (
     FitProblem,
     FitResult,
     FixedEndPoint,
@@ -54,19 +54,19 @@ from dmp.qp import (
     ZeroEndVelocity,
     solve_fit,
 )
-from dmp.qp.constraints.base import Constraint
-from dmp.validation import check_array, check_positive
-from planner.oe.constraints import ContactOnFace, HeadingCone, reach_constraints, reach_entry
-from planner.oe.contacts import PushRefused, realise_pushes, usable_range
-from planner.oe.face_frame import FaceFrame
-from planner.oe.objectives import RollingPenalty
-from planner.oe.push_plan import Push, PushPlan
-from planner.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
-from planner.scene import Scene
-from tools.model import Tool
-from tools.objects import Disc
-from tools.omni.platform import OmniPlatform
-from tools.pushing.inverse import FaceGeometry
+from tooltransfer.dmp.qp.constraints.base import Constraint
+from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.planner.oe.constraints import ContactOnFace, HeadingCone, reach_constraints, reach_entry
+from tooltransfer.planner.oe.contacts import PushRefused, realise_pushes, usable_range
+from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.planner.oe.objectives import RollingPenalty
+from tooltransfer.planner.oe.push_plan import Push, PushPlan
+from tooltransfer.planner.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
+from tooltransfer.planner.scene import Scene
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pushing.inverse import FaceGeometry
 
 FINAL_TRIES = 3
 """Screened candidates solved on the full grid, in order of cost, before the search gives up."""
@@ -241,7 +241,7 @@ class _Scene:
         travel beyond ``max_contacts`` contacts per push are only measured, for the cost. With them
         (the final fit), the fit is repeated with the contact rows (:class:`ContactOnFace`, first
         linearised at that path) when a push needs more than ``max_contacts`` contacts. Every fit
-        carries the rolling penalty (:class:`planner.oe.objectives.RollingPenalty`), so the number of
+        carries the rolling penalty (:class:`tooltransfer.planner.oe.objectives.RollingPenalty`), so the number of
         contacts is priced, not only bounded. A candidate the first stage finds infeasible is so for
         the second.
         """
@@ -318,7 +318,7 @@ def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.
              for face, lo, hi in zip(best.faces, edges[:-1], edges[1:], strict=True)]
     pushes = realise_pushes(scene.tool, spans[:spans_wanted], t, x, scene.scene, scene.platform, s_first)
     if scene.free_start:  # the fit's reach rows started late: the realised tool poses, exactly
-        from tools.omni.ik import joint_path
+        from tooltransfer.tools.omni.ik import joint_path
 
         for p in pushes:
             jp = joint_path(scene.platform, p.tool_pose[:, :2])
@@ -408,7 +408,7 @@ def condense_qp(
 
     grid, ref = resample(opts.n_samples)
     if not isinstance(scene, Scene):
-        raise InputError("scene", "a planner.scene.Scene", type(scene).__name__)
+        raise InputError("scene", "a tooltransfer.planner.scene.Scene", type(scene).__name__)
     fine = _Scene(grid, ref, tool, platform, target, scene, opts, free_start)
     # ranking needs no 1e-8 accuracy: the screening fits stop at 1e-5 (the final one at ``tol``)
     screen_opts = replace(opts, tol=max(opts.tol, 1e-5), accept=max(opts.accept, 1e-5),
@@ -485,7 +485,7 @@ def condense_qp(
         n_qp = sum(sc.result.scp_iterations for sc in scored)
         cands = tuple((sc.faces, sc.switches, None if not sc.feasible else screen.cost(sc)) for sc in scored)
         plan = PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, n_qp=n_qp, candidates=cands)
-        from planner.oe.metrics import plan_metrics  # local: metrics import the plan types
+        from tooltransfer.planner.oe.metrics import plan_metrics  # local: metrics import the plan types
 
         metrics = plan_metrics(plan, fine.frames, target, scene)
         metrics["compute_time"] = time.perf_counter() - start_time

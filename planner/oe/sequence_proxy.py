@@ -15,8 +15,8 @@ from itertools import pairwise, product
 import numpy as np
 from numpy.typing import NDArray
 
-from planner.oe.constraints import reach_constraints
-from planner.oe.face_frame import FaceFrame
+from tooltransfer.planner.oe.constraints import reach_constraints
+from tooltransfer.planner.oe.face_frame import FaceFrame
 
 Sequence_ = tuple[tuple[str, ...], tuple[int, ...], float]
 """(faces, switch segment boundaries (P-1,), proxy cost)."""

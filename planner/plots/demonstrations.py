@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from planner.segmentation import Segmentation
-from problems.dataset import Dataset
-from tools.model import Tool
+from tooltransfer.planner.segmentation import Segmentation
+from tooltransfer.problems.dataset import Dataset
+from tooltransfer.tools.model import Tool
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

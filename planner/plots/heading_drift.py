@@ -1,4 +1,4 @@
-"""The heading drift on the simulated Omni, drawn: ``python -m planner.plots.heading_drift OUT.png``.
+"""The heading drift on the simulated Omni, drawn: ``python -m tooltransfer.planner.plots.heading_drift OUT.png``.
 
 The Omni's last joints are fixed, so the tool's heading follows the waist angle q1 (DESIGN
 section 7): it cannot be held while the tool moves sideways. Tool 1's left face starts 5 mm right
@@ -30,10 +30,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
-from tools import OBJECT_RADIUS, load_tool
-from tools.pose import Pose2D
-from tools.sim import Rates, SimPlatform
-from tools.sim.scenarios import sideways_sweep
+from tooltransfer.tools import OBJECT_RADIUS, load_tool
+from tooltransfer.tools.pose import Pose2D
+from tooltransfer.tools.sim import Rates, SimPlatform
+from tooltransfer.tools.sim.scenarios import sideways_sweep
 
 
 def main(argv: list[str] | None = None) -> Path:

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.oe.push_plan import PushPlan
-from planner.plots.save import save_figure
-from tools.model import Tool
-from tools.objects import Disc, Obstacle
-from tools.pose import rotation
+from tooltransfer.planner.oe.push_plan import PushPlan
+from tooltransfer.planner.plots.save import save_figure
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc, Obstacle
+from tooltransfer.tools.pose import rotation
 
 MM = 1e3  # the figures draw lengths in mm (the plans are in m)
 

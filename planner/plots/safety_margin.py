@@ -13,10 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.oe.mapping_variant import avoid_obstacles
-from planner.oe.push_plan import PushPlan
-from planner.plots.save import save_figure
-from tools.objects import Disc
+from tooltransfer.planner.oe.mapping_variant import avoid_obstacles
+from tooltransfer.planner.oe.push_plan import PushPlan
+from tooltransfer.planner.plots.save import save_figure
+from tooltransfer.tools.objects import Disc
 
 MM = 1e3  # the figures draw lengths in mm (the paths are in m)
 

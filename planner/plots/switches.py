@@ -8,14 +8,14 @@ from pathlib import Path
 
 import numpy as np
 
-from planner.plots.save import save_figure
-from planner.ss.demo import DemoSwitch
-from planner.ss.generalize import recombine
-from planner.ss.learn import SwitchSkill, decompose
-from planner.ss.opt import optimize
-from planner.ss.task import SwitchTask
-from tools.objects import Disc
-from tools.pose import Pose2D
+from tooltransfer.planner.plots.save import save_figure
+from tooltransfer.planner.ss.demo import DemoSwitch
+from tooltransfer.planner.ss.generalize import recombine
+from tooltransfer.planner.ss.learn import SwitchSkill, decompose
+from tooltransfer.planner.ss.opt import optimize
+from tooltransfer.planner.ss.task import SwitchTask
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.pose import Pose2D
 
 
 def _figure(ncols: int, nrows: int = 1, size: float = 4.2):
@@ -98,7 +98,7 @@ def plot_generalized_switches(skill: SwitchSkill, tasks: Mapping[str, SwitchTask
     (right): the tool at the start (blue, its first face thick), five internal steps (grey) and the end
     (orange, the second face in yellow), the tool centre point's path, the object (dark red) and the
     obstacles, and for ``opt`` the path the NLP started from (green dotted: the ``dmp`` path or a
-    path round the object, :mod:`planner.ss.initial`); each title gives the penetration measured with
+    path round the object, :mod:`tooltransfer.planner.ss.initial`); each title gives the penetration measured with
     shapely [mm]."""
     fig, axes = _figure(2, len(tasks))
     for row, (name, task) in enumerate(tasks.items()):
@@ -107,7 +107,7 @@ def plot_generalized_switches(skill: SwitchSkill, tasks: Mapping[str, SwitchTask
             path = recombine(skill, task, n_samples=40) if variant == "dmp" else optimize(skill, task)
             if path.ok:
                 _draw_path(ax, task, path.xy, path.yaw)
-                if variant == "opt" and "x_start" in path.info:  # the NLP's start (planner.ss.initial)
+                if variant == "opt" and "x_start" in path.info:  # the NLP's start (tooltransfer.planner.ss.initial)
                     start = np.asarray(path.info["x_start"])
                     ax.plot(*(1e3 * start).T, ":", color="tab:green", lw=1.0,
                             label=f"NLP start ({path.info['attempts'][-1]['start']})")

@@ -20,9 +20,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Circle, Polygon, Wedge
 
-from planner.plots.save import save_figure
-from tools import OBJECT_RADIUS, Tool, contact_on_platform, load_library, tool_polygon
-from tools.omni import OmniPlatform, reach_sector, reachable_polygon
+from tooltransfer.planner.plots.save import save_figure
+from tooltransfer.tools import OBJECT_RADIUS, Tool, contact_on_platform, load_library, tool_polygon
+from tooltransfer.tools.omni import OmniPlatform, reach_sector, reachable_polygon
 
 MM = 1000.0
 

@@ -1,8 +1,8 @@
 """Checks of loaded recordings against what their dataset declares, before segmenting them.
 
-:func:`problems.dataset.load_dataset` checks the format and what needs no geometry (rates,
+:func:`tooltransfer.problems.dataset.load_dataset` checks the format and what needs no geometry (rates,
 joint ranges, positions inside the Omni's reach). Here, for a demonstration loaded from files
-(it carries its :class:`problems.dataset.Origin`):
+(it carries its :class:`tooltransfer.problems.dataset.Origin`):
 
 * **Kinematics.** The tool poses are the forward kinematics of the joints on the declared platform
   (the encoders give both): within :data:`FK_TOL` and :data:`YAW_TOL`, else the platform (``a_t``,
@@ -26,10 +26,10 @@ from numpy.typing import NDArray
 from scipy.ndimage import median_filter
 from scipy.signal import savgol_filter
 
-from planner.segmentation.geometry import ToolGeometry, table_poses, to_tool_frame
-from planner.segmentation.rest import camera_noise
-from problems.dataset import DatasetError, Demonstration
-from tools.model import Tool
+from tooltransfer.planner.segmentation.geometry import ToolGeometry, table_poses, to_tool_frame
+from tooltransfer.planner.segmentation.rest import camera_noise
+from tooltransfer.problems.dataset import DatasetError, Demonstration
+from tooltransfer.tools.model import Tool
 
 FK_TOL, YAW_TOL = 0.002, 0.02
 """Tool pose against the joints' forward kinematics [m, rad]."""

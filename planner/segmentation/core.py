@@ -40,7 +40,7 @@ of a second), so timing comes from the encoders, and the camera only says where 
    point (a corner where the active face changes) unless the caller gives the fixed points.
 
 The rest estimates use only the camera samples after the last change of the object's mean
-position (:func:`planner.segmentation.rest.still_tail`, a change-point test whose false alarms are
+position (:func:`tooltransfer.planner.segmentation.rest.still_tail`, a change-point test whose false alarms are
 bounded), so a push that is not found does not spoil the ones after it.
 
 The precision of a contact start is that of the rest position along the face's normal divided
@@ -70,14 +70,14 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import savgol_filter
 
-from dmp.errors import InputError
-from planner.oe.learn import DemoPush
-from planner.segmentation.checks import check_recording
-from planner.segmentation.geometry import ToolGeometry, nearest_on_segments, to_tool_frame, to_world
-from planner.segmentation.rest import camera_noise, still_tail
-from problems.dataset import Demonstration
-from tools.model import Tool
-from tools.objects import OBJECT_RADIUS
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.oe.learn import DemoPush
+from tooltransfer.planner.segmentation.checks import check_recording
+from tooltransfer.planner.segmentation.geometry import ToolGeometry, nearest_on_segments, to_tool_frame, to_world
+from tooltransfer.planner.segmentation.rest import camera_noise, still_tail
+from tooltransfer.problems.dataset import Demonstration
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import OBJECT_RADIUS
 
 
 @dataclass(frozen=True)
@@ -122,7 +122,7 @@ class Segmentation:
     object_at_tool: NDArray[np.float64]
 
     def demo_pushes(self, demo: Demonstration, track: str = "object") -> list[DemoPush]:
-        """The pushes as learning input (:class:`planner.oe.learn.DemoPush`): the object track during
+        """The pushes as learning input (:class:`tooltransfer.planner.oe.learn.DemoPush`): the object track during
         each push (camera samples, raw) with the tool heading interpolated at those times; each
         push starts where the previous one ended (the object stands still between pushes)."""
         out: list[DemoPush] = []
@@ -314,7 +314,8 @@ def segment(
         radius off the outline at pose ``after`` (1, 3) when the rest follows a contact. With
         fewer than 3 samples: None, or with a ``fallback`` pose the smoothed track at ``t0``
         projected onto the outline at that pose. Only the samples after the object's last move count
-        (:func:`planner.segmentation.rest.still_tail`), so a push not found does not spoil the next rest."""
+        (:func:`tooltransfer.planner.segmentation.rest.still_tail`), so a push not found does not spoil the next
+        rest."""
         idx = np.flatnonzero((t_o >= t0) & (t_o <= t1))
         if idx.size >= 3:
             idx, whole = still_tail(demo.object_xy, idx, sigma)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tools.model import Face, Tool
+from tooltransfer.tools.model import Face, Tool
 
 
 def to_tool_frame(points: ArrayLike, pose: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -82,11 +82,11 @@ def _inside(q: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float6
 
 def table_poses(q: ArrayLike, a_t: float, base_xy: ArrayLike = (0.0, 0.0), base_yaw: float = np.pi / 2,
                 table_height: float = 0.0) -> NDArray[np.float64]:
-    """Forward kinematics of the Omni (DH Table I, :func:`tools.omni.ik.table_pose`) vectorized: the
+    """Forward kinematics of the Omni (DH Table I, :func:`tooltransfer.tools.omni.ik.table_pose`) vectorized: the
     planar tool poses (N, 3) (x, y [m], heading [rad]) of joints ``q`` (N, 3) [rad] on a platform
     with tool length ``a_t`` [m], base at ``base_xy`` [m] turned by ``base_yaw`` [rad], and
     ``table_height`` [m] (it moves the tool up or down, not across)."""
-    from tools.omni.dh import D_TOOL, L1, L2, THETA_TOOL
+    from tooltransfer.tools.omni.dh import D_TOOL, L1, L2, THETA_TOOL
 
     del table_height  # the pushing plane's height does not move the tool's projection on it
     qv = np.asarray(q, dtype=np.float64).reshape(-1, 3)

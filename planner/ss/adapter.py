@@ -1,5 +1,5 @@
-"""From the segmentation of recorded demonstrations (:mod:`planner.segmentation`) to the SS skill's
-input: one :class:`~planner.ss.demo.DemoSwitch` per switch segment.
+"""From the segmentation of recorded demonstrations (:mod:`tooltransfer.planner.segmentation`) to the SS skill's
+input: one :class:`~tooltransfer.planner.ss.demo.DemoSwitch` per switch segment.
 
 A switch segment gives its time span and the contact points (tool frame and world) where the first
 face leaves and the second arrives; the tool track inside the span (encoder samples: tool centre
@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from dmp.errors import InputError
-from planner.ss.demo import DemoSwitch
-from problems.dataset import Demonstration
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.ss.demo import DemoSwitch
+from tooltransfer.problems.dataset import Demonstration
 
 
 def demo_switches(demo: Demonstration, segmentation: object, radius: float,
@@ -21,7 +21,7 @@ def demo_switches(demo: Demonstration, segmentation: object, radius: float,
     ``faces[1]``); segments with fewer than ``min_samples`` tool samples are skipped.
 
     Args:
-        demo: the recordings; segmentation: its :class:`planner.segmentation.Segmentation`;
+        demo: the recordings; segmentation: its :class:`tooltransfer.planner.segmentation.Segmentation`;
         radius: the object's radius [m].
     """
     out = []
@@ -46,10 +46,10 @@ def demo_switches(demo: Demonstration, segmentation: object, radius: float,
 
 
 def dataset_switches(folder: str | Path, faces: tuple[str, str] | None = ("upper", "left")) -> list[DemoSwitch]:
-    """Load a dataset (:func:`problems.dataset.load_dataset`), segment every demonstration with its
+    """Load a dataset (:func:`tooltransfer.problems.dataset.load_dataset`), segment every demonstration with its
     tool, and return its switches (from ``faces[0]`` to ``faces[1]``; None: all), in order."""
-    from planner.segmentation import segment
-    from problems.dataset import load_dataset
+    from tooltransfer.planner.segmentation import segment
+    from tooltransfer.problems.dataset import load_dataset
 
     ds = load_dataset(folder)
     tool = ds.tool()

@@ -2,7 +2,7 @@
 
 A body is a disc (centre, radius) or a convex polygon (its vertices); a non-convex polygonal
 obstacle becomes several bodies, one per convex piece. Lengths here are in millimetres, the NLP's
-internal unit (:mod:`planner.ss.nlp`).
+internal unit (:mod:`tooltransfer.planner.ss.nlp`).
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tools.decompose import convex_decomposition
-from tools.objects import Disc, Obstacle
+from tooltransfer.tools.decompose import convex_decomposition
+from tooltransfer.tools.objects import Disc, Obstacle
 
 #: The NLP's length unit, in metres (millimetres: constraint rows and variables of order 1-100).
 UNIT = 1e-3

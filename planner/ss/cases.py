@@ -1,7 +1,7 @@
 """Named switch cases (the paper's Fig. 11) and random switches (tests, benchmark).
 
 Fig. 11 gives no coordinates; the object sits 160 mm in front of the Omni (inside its reach, as the
-paper scenarios of :mod:`problems.paper_cases`), contact points in the middle of the faces' ranges:
+paper scenarios of :mod:`tooltransfer.problems.paper_cases`), contact points in the middle of the faces' ranges:
 
 * ``fig11a``: T-shape, the object contact moves from the object's right (the crossbar's ``left``
   end pushing leftward) to its bottom (the crossbar's ``top`` pushing forward);
@@ -17,10 +17,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from planner.ss.task import SwitchTask
-from tools.library import load_tool
-from tools.objects import Disc
-from tools.omni.platform import OmniPlatform
+from tooltransfer.planner.ss.task import SwitchTask
+from tooltransfer.tools.library import load_tool
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.platform import OmniPlatform
 
 #: The object's centre in the Fig. 11 cases [m].
 FIG11_CENTRE = (0.0, 0.16)

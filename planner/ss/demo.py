@@ -2,8 +2,9 @@
 
 During a switch the object rests; the tool leaves its first contact (tool point ``p_A`` on the
 first face touching object point ``q_A``) and arrives at its second (``p_B`` touching ``q_B``).
-The segmentation of recorded demonstrations (:mod:`planner.segmentation`) yields these; see
-:mod:`planner.ss.adapter` for the conversion, and :mod:`planner.ss.synthetic` for generated ones.
+The segmentation of recorded demonstrations (:mod:`tooltransfer.planner.segmentation`) yields these; see
+:mod:`tooltransfer.planner.ss.adapter` for the conversion, and :mod:`tooltransfer.planner.ss.synthetic` for generated
+ones.
 """
 
 from __future__ import annotations
@@ -13,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array, check_positive, check_time
-from tools.omni.heading import rot
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array, check_positive, check_time
+from tooltransfer.tools.omni.heading import rot
 
 
 @dataclass(frozen=True)

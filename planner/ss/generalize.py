@@ -15,8 +15,8 @@ For the task's contacts ``(p_A, q_A)`` and ``(p_B, q_B)`` (with the headings the
 A DMP approaches its goal asymptotically; the few micrometres left at ``t = T`` are removed by adding
 ``(g - x(T)) s(t)`` with the minimum-jerk ``s`` (reported as ``info["end_correction"]``), so the path
 starts and ends exactly at the contacts. The tool centre point follows from the heading the Omni
-imposes (fixed point, :func:`tools.omni.heading.centre_path`). The swept tool is then measured
-exactly against the object and the obstacles (:mod:`planner.ss.verify`): this variant does not
+imposes (fixed point, :func:`tooltransfer.tools.omni.heading.centre_path`). The swept tool is then measured
+exactly against the object and the obstacles (:mod:`tooltransfer.planner.ss.verify`): this variant does not
 avoid penetration, it reports it.
 """
 
@@ -27,15 +27,15 @@ import time
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InfeasibleError, InputError
-from planner.ss.learn import SwitchSkill
-from planner.ss.recombination import dmp_settings, linear_recombination, recombination_map
-from planner.ss.result import SwitchPath
-from planner.ss.task import SwitchTask
-from planner.ss.verify import sweep_checks
-from planner.ss.virtual import Way, min_jerk, virtual_motion
-from tools.omni.heading import centre_path, heading, rot
-from tools.omni.ik import joint_path
+from tooltransfer.dmp.errors import InfeasibleError, InputError
+from tooltransfer.planner.ss.learn import SwitchSkill
+from tooltransfer.planner.ss.recombination import dmp_settings, linear_recombination, recombination_map
+from tooltransfer.planner.ss.result import SwitchPath
+from tooltransfer.planner.ss.task import SwitchTask
+from tooltransfer.planner.ss.verify import sweep_checks
+from tooltransfer.planner.ss.virtual import Way, min_jerk, virtual_motion
+from tooltransfer.tools.omni.heading import centre_path, heading, rot
+from tooltransfer.tools.omni.ik import joint_path
 
 #: Share of the steps at each end of a path that count as "near the contacts" for the clearance report.
 END_SHARE = 0.15
@@ -57,7 +57,8 @@ def middle_steps(n_steps: int, share: float = END_SHARE) -> NDArray[np.bool_]:
 
 
 def measure(path: SwitchPath, task: SwitchTask) -> SwitchPath:
-    """``path`` with its clearances and penetrations measured exactly (shapely, :mod:`planner.ss.verify`)."""
+    """``path`` with its clearances and penetrations measured exactly (shapely,
+    :mod:`tooltransfer.planner.ss.verify`)."""
     from dataclasses import replace
 
     obj, obs = sweep_checks(task.tool, path.xy, path.yaw, task.shape, task.obstacles)
@@ -78,8 +79,8 @@ def recombine(
     """The ``dmp`` switch path of ``task`` (module docstring) at ``n_samples`` times, measured with
     shapely unless ``measured`` is False; never raises for an impossible switch (status
     ``infeasible`` with the reason). ``fast``: the fit of ``f^o`` and the rollout as one cached
-    linear map per time grid (:mod:`planner.ss.recombination`; the same numbers to round-off), when
-    the skill's DMPs are linear (scaling ``"none"``); False: :meth:`dmp.primitive.DMP.fit` and
+    linear map per time grid (:mod:`tooltransfer.planner.ss.recombination`; the same numbers to round-off), when
+    the skill's DMPs are linear (scaling ``"none"``); False: :meth:`tooltransfer.dmp.primitive.DMP.fit` and
     ``rollout`` on every call."""
     t0 = time.perf_counter()
     if not isinstance(skill, SwitchSkill):
@@ -99,7 +100,7 @@ def recombine(
     k2 = np.ones(2)
     g = (q_b - q_a) + tool_shift
     if fast and linear_recombination(skill.dmp_t) and dmp_settings(skill.dmp_t) == dmp_settings(skill.dmp_x):
-        # the same maths as below as one cached linear map per grid (planner.ss.recombination)
+        # the same maths as below as one cached linear map per grid (tooltransfer.planner.ss.recombination)
         x = recombination_map(skill.dmp_t, t).path(skill.dmp_t.weights * k1, x_virtual * k2, g)
     else:
         dmp_o = skill.new_dmp().fit(t, x_virtual)

@@ -25,12 +25,12 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from planner.ss.verify import point_hulls, tool_geometry
-from planner.ss.virtual import min_jerk
-from tools.decompose import convex_decomposition
-from tools.model import Tool
-from tools.objects import Disc
-from tools.omni.heading import rot
+from tooltransfer.planner.ss.verify import point_hulls, tool_geometry
+from tooltransfer.planner.ss.virtual import min_jerk
+from tooltransfer.tools.decompose import convex_decomposition
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.heading import rot
 
 
 def c_obstacle(tool: Tool, psi: float, shapes: Sequence[Disc | shapely.Polygon], margin: float,

@@ -12,7 +12,7 @@ Steps:
    kind of virtual motion, ``x^o - x_o`` on the same times;
 2. in the demonstrated case ``k1 = k2 = I`` (DESIGN section 6; the printed (11) is not used);
 3. alignment: every demonstration is mapped onto the one phase by its own duration (each keeps its
-   ``tau``; :meth:`dmp.primitive.DMP.fit`), and DMPs of ``x`` (f) and of ``x^o`` (f^o) are fitted
+   ``tau``; :meth:`tooltransfer.dmp.primitive.DMP.fit`), and DMPs of ``x`` (f) and of ``x^o`` (f^o) are fitted
    on all demonstrations at once, with the same basis, gains and phase;
 4. the pure tool skill from (18): ``f^t = k1^-1 (f - k2 f^o) = f - f^o``, i.e. ``W^t = W - W^o``.
    (Because the forcing targets and the ridge fit are linear in the path, this equals the DMP
@@ -27,11 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from dmp.primitive import DMP
-from planner.ss.demo import DemoSwitch
-from planner.ss.virtual import VIRTUAL_KINDS, VirtualKind, virtual_motion
-from tools.objects import Disc
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.primitive import DMP
+from tooltransfer.planner.ss.demo import DemoSwitch
+from tooltransfer.planner.ss.virtual import VIRTUAL_KINDS, VirtualKind, virtual_motion
+from tooltransfer.tools.objects import Disc
 
 
 @dataclass
@@ -75,15 +75,15 @@ class SwitchSkill:
                    ridge=d.ridge)
 
     def save(self, path: str) -> None:
-        """Save as a versioned skills file (:mod:`planner.ss.skill_file`)."""
-        from planner.ss.skill_file import save_switch_skill
+        """Save as a versioned skills file (:mod:`tooltransfer.planner.ss.skill_file`)."""
+        from tooltransfer.planner.ss.skill_file import save_switch_skill
 
         save_switch_skill(self, path)
 
     @classmethod
     def load(cls, path: str) -> SwitchSkill:
-        """Load a skill saved by :meth:`save`; raises :class:`~dmp.errors.SkillFileError`."""
-        from planner.ss.skill_file import load_switch_skill
+        """Load a skill saved by :meth:`save`; raises :class:`~tooltransfer.dmp.errors.SkillFileError`."""
+        from tooltransfer.planner.ss.skill_file import load_switch_skill
 
         return load_switch_skill(path)
 
@@ -125,9 +125,10 @@ def learn_switch_skill(
 
     Args:
         demos: the demonstrated switches (at least one), all of the same pair of faces.
-        virtual: the kind of virtual object motion (:mod:`planner.ss.virtual`).
+        virtual: the kind of virtual object motion (:mod:`tooltransfer.planner.ss.virtual`).
         clearance: the arch's offset from the outline [m].
-        n_basis, alpha_z, ridge: DMP settings (:class:`dmp.primitive.DMP`; scaling ``"none"`` as the paper).
+        n_basis, alpha_z, ridge: DMP settings (:class:`tooltransfer.dmp.primitive.DMP`; scaling ``"none"`` as the
+        paper).
         tool: name of the demonstration tool (recorded in the skill).
     """
     demos = list(demos)

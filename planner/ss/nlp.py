@@ -1,6 +1,6 @@
 """The switch NLP (the ``opt`` variant's solver problem), built once per structure and reused.
 
-Decision variables (millimetres, :data:`planner.ss.bodies.UNIT`): the tool centre points ``X_k``
+Decision variables (millimetres, :data:`tooltransfer.planner.ss.bodies.UNIT`): the tool centre points ``X_k``
 (N, 2) at N knots, plus separating variables where a row needs them (:data:`SEPARATORS`):
 
 * ``"distance"`` (the default): none for a disc body; the row is the exact signed distance from the
@@ -15,7 +15,7 @@ Decision variables (millimetres, :data:`planner.ss.bodies.UNIT`): the tool centr
   11a the first start ran out of iterations: the angle must turn round where the vector can shrink
   through zero).
 
-Heading: **a function of position through the Omni's waist** (:func:`tools.omni.heading.heading_casadi`,
+Heading: **a function of position through the Omni's waist** (:func:`tooltransfer.tools.omni.heading.heading_casadi`,
 smooth inside the reach annulus), not fixed over the move: the tool's yaw at knot k is
 ``yaw(X_k)``, exactly the heading the arm will have there, so the vertices ``w = X_k + R(yaw(X_k)) v``
 the constraints see are the ones the arm will place.
@@ -44,7 +44,7 @@ Rows (all smooth and analytic; no shapely inside the solver):
   between two knots (without it, paths tracking a ``dmp`` reference through the object put one knot
   on each side: 36 mm steps, 8 mm penetration between the knots);
 * Omni reach at the interior knots: ``r_in^2 <= |X - b|^2 <= r_out^2`` (the annulus) and the two
-  half-planes of the waist range (exact, :func:`tools.omni.reach.wedge_rows`), each tightened by
+  half-planes of the waist range (exact, :func:`tooltransfer.tools.omni.reach.wedge_rows`), each tightened by
   ``reach_margin``; each of the three families only when asked (the caller includes those whose
   boundary the path comes near).
 
@@ -78,12 +78,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from planner.ss.bodies import UNIT, Body
-from tools.model import Tool
-from tools.omni.heading import heading_casadi
-from tools.omni.platform import OmniPlatform
-from tools.omni.reach import reach_sector, wedge_rows
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.ss.bodies import UNIT, Body
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.omni.heading import heading_casadi
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.omni.reach import reach_sector, wedge_rows
 
 
 @dataclass(frozen=True)

@@ -1,10 +1,10 @@
 """The ``opt`` variant: a smooth, non-penetrating switch path near the ``dmp`` one, solved with CasADi
-and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`planner.ss.nlp`).
+and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`tooltransfer.planner.ss.nlp`).
 
-1. The ``dmp`` path (:func:`planner.ss.generalize.recombine`) at the N knots' times is the reference.
+1. The ``dmp`` path (:func:`tooltransfer.planner.ss.generalize.recombine`) at the N knots' times is the reference.
    The primal initial guess (separating directions from its geometry) is the ``dmp`` path when it
    keeps out of the C-obstacle (``init="auto"``), else a path round the C-obstacle
-   (:mod:`planner.ss.initial`; the ``dmp`` path of a new tool often goes right through the object,
+   (:mod:`tooltransfer.planner.ss.initial`; the ``dmp`` path of a new tool often goes right through the object,
    and IPOPT started there used to run out of iterations); when the NLP ends without a solution the
    next start is tried (the other way round; ``max_starts``), each try an attempt in ``info``.
    Optionally the dual values of the cached solver's last successful solve (``warm_duals``, off by
@@ -18,7 +18,8 @@ and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`planner.ss.
    its boundary, an obstacle when they keep the tool ``body_band`` from it. Steps between knots are
    bounded (``step_factor``, ``min_step``): no tunnelling.
 4. After the solve, the swept outline between knots is measured exactly with shapely
-   (:mod:`planner.ss.verify`) and the reach on a path 4 times denser (:func:`tools.omni.ik.joint_path`).
+   (:mod:`tooltransfer.planner.ss.verify`) and the reach on a path 4 times denser
+   (:func:`tooltransfer.tools.omni.ik.joint_path`).
    A penetration deeper than ``touch_tol`` (the two contacts touch, so a few micrometres of swept
    hull at the contact steps is contact, not penetration) or a reach violation triggers a refinement:
    1.5 times the knots and 1.5 times the margin plus the depth found, up to ``max_refine`` times; if
@@ -41,22 +42,22 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from planner.ss.bodies import UNIT, all_bodies
-from planner.ss.generalize import measure, recombine
-from planner.ss.initial import c_obstacle, round_paths
-from planner.ss.learn import SwitchSkill
-from planner.ss.nlp import MODELS, SOLVERS, SwitchNLP, get_nlp, initial_separators
-from planner.ss.result import SwitchPath
-from planner.ss.task import SwitchTask
-from planner.ss.verify import pose_depth_and_gap, tool_geometry
-from planner.ss.virtual import Way
-from tools.contact import Contact
-from tools.objects import Disc
-from tools.omni.heading import heading
-from tools.omni.ik import joint_path
-from tools.omni.platform import OmniPlatform
-from tools.omni.reach import LinearRows, ReachSector, reach_sector, wedge_rows
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.planner.ss.bodies import UNIT, all_bodies
+from tooltransfer.planner.ss.generalize import measure, recombine
+from tooltransfer.planner.ss.initial import c_obstacle, round_paths
+from tooltransfer.planner.ss.learn import SwitchSkill
+from tooltransfer.planner.ss.nlp import MODELS, SOLVERS, SwitchNLP, get_nlp, initial_separators
+from tooltransfer.planner.ss.result import SwitchPath
+from tooltransfer.planner.ss.task import SwitchTask
+from tooltransfer.planner.ss.verify import pose_depth_and_gap, tool_geometry
+from tooltransfer.planner.ss.virtual import Way
+from tooltransfer.tools.contact import Contact
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.heading import heading
+from tooltransfer.tools.omni.ik import joint_path
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.omni.reach import LinearRows, ReachSector, reach_sector, wedge_rows
 
 
 def _contact_checks(task: SwitchTask, contacts: tuple[Contact, Contact], touch_tol: float
@@ -129,7 +130,8 @@ def _objective(x: NDArray[np.float64], ref: NDArray[np.float64], smooth: float) 
 
 def _starts(task: SwitchTask, ref: SwitchPath, shapes: tuple, margin: float, smooth: float, init: str
             ) -> Iterator[tuple[str, NDArray[np.float64]]]:
-    """Initial paths (label, (N, 2) [m]) to start the NLP from, in order, lazily (:mod:`planner.ss.initial`):
+    """Initial paths (label, (N, 2) [m]) to start the NLP from, in order, lazily
+    (:mod:`tooltransfer.planner.ss.initial`):
     the ``dmp`` path first when it stays out of the C-obstacle (at the middle heading, within
     ``margin``), else the paths round the C-obstacle, the one with the smaller objective first, and
     the others after."""
@@ -199,7 +201,7 @@ def optimize(
         margin: clearance [m] demanded over the middle of the path (first try).
         model: ``"pieces"`` (the tool's convex pieces with separating directions) or ``"capsule"``
             (the capsule enclosing the tool, disc bodies only).
-        solver: a name in :data:`planner.ss.nlp.SOLVERS` (``"ipopt"``, ``"sqp"``).
+        solver: a name in :data:`tooltransfer.planner.ss.nlp.SOLVERS` (``"ipopt"``, ``"sqp"``).
         touch_tol: penetration depth [m] accepted as touching at the two contacts.
         ramp_share: share of the knots over which the margin ramps up at each end.
         max_refine: refinements after a failed exact check.
@@ -214,19 +216,19 @@ def optimize(
             smaller NLP); the exact check still tests reach, and a violation puts all rows back for
             the refinement. None: always in.
         init: the NLP's initial path: ``"auto"`` (the ``dmp`` path when it keeps out of the
-            C-obstacle, else a path round it, :mod:`planner.ss.initial`), ``"dmp"`` (always the
+            C-obstacle, else a path round it, :mod:`tooltransfer.planner.ss.initial`), ``"dmp"`` (always the
             ``dmp`` path, as before).
         max_starts: initial paths tried (in the order of ``init``) when the NLP ends without a solution
             (each try is an attempt in ``info["attempts"]``, timed).
         step_factor, min_step: the largest step between knots [m] is ``max(step_factor * L / (N - 1),
-            min_step)`` with ``L`` the length of the start path (:mod:`planner.ss.nlp`, no tunnelling).
+            min_step)`` with ``L`` the length of the start path (:mod:`tooltransfer.planner.ss.nlp`, no tunnelling).
         body_band: an obstacle is left out of the NLP when every knot of the ``dmp`` path and of the
             start keeps the tool (its radius about the reference point) this far [m] from it; the
             exact check still tests it, and a penetration puts every obstacle back for the
             refinement. None: always in.
         separators: the non-penetration rows of disc bodies, ``"distance"`` (exact signed distance, no
             extra variables), ``"vector"`` or ``"angle"`` (separating directions);
-            :data:`planner.ss.nlp.SEPARATORS` and the module docstring there give the measurements.
+            :data:`tooltransfer.planner.ss.nlp.SEPARATORS` and the module docstring there give the measurements.
     """
     t_start = time.perf_counter()
     if solver not in SOLVERS:

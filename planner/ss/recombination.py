@@ -1,14 +1,14 @@
 """Recombination (eq. 18) as one linear map per time grid, for the ``dmp`` variant's speed.
 
 With the forcing-term scaling ``"none"`` (``M = I``, as the paper and the SS skill use) every step of
-:func:`planner.ss.generalize.recombine` between the new virtual motion and the rolled-out path is
+:func:`tooltransfer.planner.ss.generalize.recombine` between the new virtual motion and the rolled-out path is
 linear:
 
 * fitting ``f^o`` to the virtual motion ``x^o - x_o`` (T, 2) on the grid ``t`` (T,) is a linear map
-  ``W^o = L (x^o - x_o)`` (:meth:`dmp.primitive.DMP.fit`: numerical derivatives, forcing targets with
+  ``W^o = L (x^o - x_o)`` (:meth:`tooltransfer.dmp.primitive.DMP.fit`: numerical derivatives, forcing targets with
   the goal ``x^o(T)``, ridge least squares whose regularisation depends on the basis only);
 * the rollout from ``x0 = 0``, ``v0 = 0`` towards ``g`` with weights ``W`` is
-  ``x = a g^T + Gx W`` (:mod:`dmp.exact`: ``a`` (T,) the unforced response to a unit goal).
+  ``x = a g^T + Gx W`` (:mod:`tooltransfer.dmp.exact`: ``a`` (T,) the unforced response to a unit goal).
 
 So ``x = a g^T + Gx (k1 * W^t) + (Gx L) (x^o - x_o)``. :class:`RecombinationMap` holds ``a``, ``Gx``
 and ``Gx L`` for one (DMP settings, grid); ``L`` is obtained by probing ``DMP.fit`` itself with unit
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.primitive import DMP
+from tooltransfer.dmp.primitive import DMP
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from tools.contact import Contact
+from tooltransfer.tools.contact import Contact
 
 Status = Literal["solved", "infeasible", "failed"]
 

@@ -1,4 +1,4 @@
-"""Versioned SS skills file: the three DMPs of a :class:`~planner.ss.learn.SwitchSkill` and the
+"""Versioned SS skills file: the three DMPs of a :class:`~tooltransfer.planner.ss.learn.SwitchSkill` and the
 choice of virtual object motion, as JSON.
 
 Format ``tooltransfer.ss/1``::
@@ -8,7 +8,7 @@ Format ``tooltransfer.ss/1``::
      "virtual": "arch" | "line", "clearance" [m],
      "tool_shift" [m] (2,), "object_shift" [m] (2,), "winding" [rad],
      "tool", "faces" [from, to], "n_demos",
-     "dmp_x", "dmp_o", "dmp_t": each a ``tooltransfer.dmp/1`` dictionary (:mod:`dmp.skill_file`)}
+     "dmp_x", "dmp_o", "dmp_t": each a ``tooltransfer.dmp/1`` dictionary (:mod:`tooltransfer.dmp.skill_file`)}
 """
 
 from __future__ import annotations
@@ -19,10 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from dmp.errors import InputError, SkillFileError
-from dmp.skill_file import dmp_from_dict, dmp_to_dict
-from planner.ss.learn import SwitchSkill
-from planner.ss.virtual import VIRTUAL_KINDS
+from tooltransfer.dmp.errors import InputError, SkillFileError
+from tooltransfer.dmp.skill_file import dmp_from_dict, dmp_to_dict
+from tooltransfer.planner.ss.learn import SwitchSkill
+from tooltransfer.planner.ss.virtual import VIRTUAL_KINDS
 
 FORMAT = "tooltransfer.ss"
 VERSION = 1
@@ -95,6 +95,6 @@ def save_switch_skill(skill: SwitchSkill, path: str | Path) -> None:
 
 def load_switch_skill(path: str | Path) -> SwitchSkill:
     """Read a skill written by :func:`save_switch_skill`."""
-    from dmp.skill_file import read_json
+    from tooltransfer.dmp.skill_file import read_json
 
     return switch_skill_from_dict(read_json(path), str(path))

@@ -12,15 +12,15 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from dmp.errors import InfeasibleError, InputError
-from dmp.validation import check_array, check_positive
-from tools.contact import Contact, contact_pose
-from tools.model import Tool
-from tools.objects import Disc, DiscObject, ObjectModel, Obstacle, PolygonObject
-from tools.omni.heading import heading_scalar
-from tools.omni.ik import inverse_kinematics
-from tools.omni.platform import OmniPlatform
-from tools.pose import Pose2D
+from tooltransfer.dmp.errors import InfeasibleError, InputError
+from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.tools.contact import Contact, contact_pose
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc, DiscObject, ObjectModel, Obstacle, PolygonObject
+from tooltransfer.tools.omni.heading import heading_scalar
+from tooltransfer.tools.omni.ik import inverse_kinematics
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pose import Pose2D
 
 
 @dataclass(frozen=True)
@@ -52,7 +52,7 @@ class SwitchTask:
 
     def __post_init__(self) -> None:
         if not isinstance(self.tool, Tool):
-            raise InputError("tool", "a tools.model.Tool", type(self.tool).__name__)
+            raise InputError("tool", "a tooltransfer.tools.model.Tool", type(self.tool).__name__)
         for f in (self.face_from, self.face_to):
             self.tool.face(f)  # UnknownFaceError lists the faces
         object.__setattr__(self, "centre", check_array(self.centre, "centre", shape=(2,)))
@@ -93,7 +93,7 @@ class SwitchTask:
         """
         face, s = (self.face_from, self.s_from) if which == "from" else (self.face_to, self.s_to)
         f = self.tool.face(face)
-        # the heading fixed point yaw = heading(x(yaw)) of tools.contact.contact_on_platform, with the
+        # the heading fixed point yaw = heading(x(yaw)) of tooltransfer.tools.contact.contact_on_platform, with the
         # closed-form heading (a contraction: |p| / |x - b| << 1), then the exact contact and the IK
         s0, s1 = f.contact_range
         px, py = (float(v) for v in f.point(0.5 * (s0 + s1) if s is None else float(s)))

@@ -1,13 +1,13 @@
 """Exact check of a switch path with shapely: the swept tool outline against the object and obstacles.
 
 Between consecutive samples the tool moves with position and yaw interpolated linearly (as
-:mod:`tools.clearance`). The region a convex piece sweeps over one step is covered by the convex
+:mod:`tooltransfer.tools.clearance`). The region a convex piece sweeps over one step is covered by the convex
 hull of the piece at the step's two poses, grown by ``rho * dyaw^2 / 8`` (``rho``: the farthest
 outline vertex from the tool origin) for the rotation; that growth is subtracted from the hull's
 distance, so the clearances here are lower bounds within that bound (below 1 um for the headings of
 a switch). The hulls of all steps and pieces are built and measured in one vectorized shapely call.
 Steps whose hull reaches into a shape get their penetration depth by the construction of
-:func:`tools.clearance.swept_penetration_depth` (sub-steps, grown hulls, their union; exact for a
+:func:`tooltransfer.tools.clearance.swept_penetration_depth` (sub-steps, grown hulls, their union; exact for a
 disc): for a disc vectorized over all such steps (:func:`disc_depths`, the same numbers), for a
 polygon step by step.
 """
@@ -21,11 +21,11 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tools.clearance import swept_penetration_depth
-from tools.model import Tool
-from tools.objects import Disc, Obstacle
-from tools.omni.heading import rot
-from tools.pose import Pose2D
+from tooltransfer.tools.clearance import swept_penetration_depth
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc, Obstacle
+from tooltransfer.tools.omni.heading import rot
+from tooltransfer.tools.pose import Pose2D
 
 _PIECES: dict[int, tuple[shapely.Polygon, tuple[NDArray[np.float64], ...], float]] = {}
 
@@ -89,7 +89,7 @@ def disc_depths(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], s
                 disc: Disc, tol: float = 1e-5) -> NDArray[np.float64]:
     """Penetration depths [m] (len(steps),) into ``disc`` of the tool swept over the ``steps``
     (indices k of the steps k -> k + 1 of ``xy`` (K, 2) / ``yaw`` (K,)), by the construction of
-    :func:`tools.clearance.swept_penetration_depth` vectorized over the steps: each step cut into
+    :func:`tooltransfer.tools.clearance.swept_penetration_depth` vectorized over the steps: each step cut into
     ``n = ceil(|dyaw| / sqrt(8 tol / rho))`` sub-steps, the hull of each convex piece over each
     sub-step grown by ``rho (dyaw / n)^2 / 8``, their union ``U``; the depth is ``R - sd(c, U)``
     (``sd`` negative inside)."""
@@ -122,10 +122,10 @@ def disc_depths(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], s
 def pose_depth_and_gap(tool: Tool, pose: Pose2D, shape: Disc | shapely.Polygon) -> tuple[float, float]:
     """Penetration depth and clearance [m] of the tool at ``pose`` and ``shape``: for a disc from the
     cached pieces (:func:`disc_depths` on a step of zero length, and the pieces' distance to the
-    centre), the same as :func:`tools.clearance.penetration_depth` / ``clearance``; for a polygon,
+    centre), the same as :func:`tooltransfer.tools.clearance.penetration_depth` / ``clearance``; for a polygon,
     those functions."""
     if not isinstance(shape, Disc):
-        from tools.clearance import clearance, penetration_depth
+        from tooltransfer.tools.clearance import clearance, penetration_depth
 
         return penetration_depth(tool, pose, shape), clearance(tool, pose, shape)
     verts, _ = tool_geometry(tool)
@@ -143,12 +143,12 @@ def sweep_check(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], s
                 hulls: tuple[NDArray, NDArray] | None = None, depth_tol: float = 1e-6,
                 exact_disc: str = "union", sub_tol: float = 1e-5) -> SweepCheck:
     """Clearance and penetration of the tool swept along ``xy`` (K, 2) [m] / ``yaw`` (K,) [rad]
-    against ``shape`` (a :class:`~tools.objects.Disc` or a shapely polygon). ``hulls`` from
+    against ``shape`` (a :class:`~tooltransfer.tools.objects.Disc` or a shapely polygon). ``hulls`` from
     :func:`step_hulls` may be passed to share them between shapes. Steps reaching into a disc by
     more than ``depth_tol`` [m], or intersecting a polygon, get their exact depth (and ``gap = -depth``);
     elsewhere the depth is ``max(0, -gap)``. For a disc, ``exact_disc`` ``"union"`` measures those
     depths with :func:`disc_depths` (all steps in one vectorized pass); ``"substeps"``: one
-    :func:`tools.clearance.swept_penetration_depth` per step (the same construction, step by step)."""
+    :func:`tooltransfer.tools.clearance.swept_penetration_depth` per step (the same construction, step by step)."""
     h, grow = hulls if hulls is not None else step_hulls(tool, xy, yaw)
     if isinstance(shape, Disc):
         d = shapely.distance(h, shapely.Point(shape.centre)).min(axis=1) - shape.radius - grow

@@ -21,9 +21,9 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array
-from tools.objects import Disc
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array
+from tooltransfer.tools.objects import Disc
 
 VirtualKind = Literal["arch", "line"]
 VIRTUAL_KINDS: tuple[str, ...] = ("arch", "line")
@@ -96,7 +96,7 @@ def virtual_motion(
     Args:
         kind: ``"arch"`` or ``"line"``.
         q_a, q_b: shape (2,), first and second object contact points (world) [m].
-        shape: the placed object (a :class:`~tools.objects.Disc` or a convex shapely polygon); the
+        shape: the placed object (a :class:`~tooltransfer.tools.objects.Disc` or a convex shapely polygon); the
             arch goes round its centre (the polygon's centroid).
         clearance: the arch's largest offset from the outline [m] (>= 0).
         way: which way round the arch goes (:func:`sweep_angle`).

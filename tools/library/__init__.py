@@ -27,8 +27,8 @@ from typing import Any
 import shapely
 import yaml
 
-from tools.errors import ToolSpecError, UnknownToolError
-from tools.model import Face, Tool
+from tooltransfer.tools.errors import ToolSpecError, UnknownToolError
+from tooltransfer.tools.model import Face, Tool
 
 _PI_EXPR = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)?)\s*\*?\s*pi\s*(?:/\s*(\d+\.?\d*))?\s*$")
 _TOOL_KEYS = {"name", "a_t", "description", "notes", "outline", "faces"}
@@ -204,7 +204,7 @@ def library_names() -> tuple[str, ...]:
 
 def read_tool_file(path: str | Path) -> Tool:
     """Load and validate one tool file."""
-    from tools.yaml_file import read_yaml
+    from tooltransfer.tools.yaml_file import read_yaml
 
     p = Path(path)
 

@@ -1,9 +1,9 @@
 """The Phantom Omni with a fixed tool: DH kinematics (paper Table I), IK on the table, reach."""
 
-from tools.omni.dh import dh_transform, forward_kinematics, jacobian
-from tools.omni.ik import IKBranch, IKResult, inverse_kinematics, table_pose, tool_pose_world
-from tools.omni.platform import DEFAULT_LIMITS, JointLimits, OmniPlatform
-from tools.omni.reach import (
+from tooltransfer.tools.omni.dh import dh_transform, forward_kinematics, jacobian
+from tooltransfer.tools.omni.ik import IKBranch, IKResult, inverse_kinematics, table_pose, tool_pose_world
+from tooltransfer.tools.omni.platform import DEFAULT_LIMITS, JointLimits, OmniPlatform
+from tooltransfer.tools.omni.reach import (
     LinearRows,
     ReachSector,
     inner_row,

@@ -1,6 +1,6 @@
 """Closed-form inverse kinematics of the Omni for a tool centre point on the pushing plane.
 
-The tool centre point is ``p = o1 + u x1 + v y1 + d_t z1`` (see :mod:`tools.omni.dh`): in the base
+The tool centre point is ``p = o1 + u x1 + v y1 + d_t z1`` (see :mod:`tooltransfer.tools.omni.dh`): in the base
 frame its horizontal part is ``R(q1) (u, d_t)`` and its height ``d1 - v``. Given a table point:
 
 1. ``u = +-sqrt(rho^2 - d_t^2)`` with ``rho`` its horizontal distance from the joint-1 axis, and
@@ -22,9 +22,9 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.validation import check_array
-from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL, forward_kinematics
-from tools.omni.platform import OmniPlatform
+from tooltransfer.dmp.validation import check_array
+from tooltransfer.tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL, forward_kinematics
+from tooltransfer.tools.omni.platform import OmniPlatform
 
 Reason = Literal["radius", "angle", "joint limit"]
 

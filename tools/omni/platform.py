@@ -10,7 +10,7 @@ forward (+y), and ``table_height = 0``: the Omni stands on the table with DH fra
 surface, so the shoulder (joint 2) is d1 = 133.35 mm above the table, and the tool's outline and
 the object's centre are taken to lie in the table plane (tool and puck are a few mm thick). With
 the default limits and tool 1 the reachable table region is an annular sector of radii 90-217 mm
-spanning +-57 degrees about +y, area 0.039 m^2 (see :func:`tools.omni.reach.reachable_polygon`).
+spanning +-57 degrees about +y, area 0.039 m^2 (see :func:`tooltransfer.tools.omni.reach.reachable_polygon`).
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array, check_positive
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array, check_positive
 
 
 @dataclass(frozen=True)

@@ -1,5 +1,5 @@
 """Calibration recordings: straight pushes at several angles off a face's normal, for identifying
-the push mechanics ``mu`` and ``c`` (DESIGN section 10, :mod:`tools.pushing.identify`).
+the push mechanics ``mu`` and ``c`` (DESIGN section 10, :mod:`tooltransfer.tools.pushing.identify`).
 
 Why: the demonstrations push near the faces' normals, where the puck goes along the normal
 whatever ``c`` is, and their contacts stick, where ``mu`` does not act. A calibration pushes the
@@ -32,15 +32,15 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from problems.dataset import Demonstration, Meta, PlatformMeta, write_dataset
-from tools.contact import contact_on_platform
-from tools.library import load_tool
-from tools.model import Tool
-from tools.objects import OBJECT_RADIUS
-from tools.omni.platform import OmniPlatform
-from tools.operator.generate import JOINT_STEP, OBJECT_NOISE, RATES, record
-from tools.operator.operator import (
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.problems.dataset import Demonstration, Meta, PlatformMeta, write_dataset
+from tooltransfer.tools.contact import contact_on_platform
+from tooltransfer.tools.library import load_tool
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import OBJECT_RADIUS
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.operator.generate import JOINT_STEP, OBJECT_NOISE, RATES, record
+from tooltransfer.tools.operator.operator import (
     APPROACH,
     BACK_OFF,
     DemonstrationFailed,
@@ -50,7 +50,7 @@ from tools.operator.operator import (
     _spans,
     _stroke,
 )
-from tools.sim import Execution, SimPlatform
+from tooltransfer.tools.sim import Execution, SimPlatform
 
 ANGLES_DEG = (0, 15, -15, 30, -30, 45, -45)
 """Sticking trials' angles off the normal [deg], on every face."""
@@ -100,7 +100,7 @@ def default_trials(tool: Tool, angles_deg: tuple[float, ...] = ANGLES_DEG,
 
 
 class CalibrationOperator(ScriptedOperator):
-    """The scripted operator of :mod:`tools.operator.operator` running calibration trials.
+    """The scripted operator of :mod:`tooltransfer.tools.operator.operator` running calibration trials.
 
     Args:
         tool: the tool (default tool 1); platform: the Omni; speed: nominal stroke speed [m/s];

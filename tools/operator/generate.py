@@ -1,5 +1,5 @@
 """Generate a demonstration dataset: the scripted operator on the simulated platform, recorded as
-sensors give it, written in the dataset format (:mod:`problems.dataset`).
+sensors give it, written in the dataset format (:mod:`tooltransfer.problems.dataset`).
 
 Sensors:
 
@@ -22,15 +22,15 @@ from pathlib import Path
 
 import numpy as np
 
-from dmp.errors import InputError
-from problems.dataset import Demonstration, Meta, PlatformMeta, Rates, write_dataset
-from problems.scenes import DEMO_SCENE
-from tools.library import load_tool
-from tools.objects import OBJECT_RADIUS
-from tools.omni.ik import table_pose
-from tools.omni.platform import OmniPlatform
-from tools.operator.operator import DemonstrationFailed, ScriptedOperator
-from tools.sim import Execution
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.problems.dataset import Demonstration, Meta, PlatformMeta, Rates, write_dataset
+from tooltransfer.problems.scenes import DEMO_SCENE
+from tooltransfer.tools.library import load_tool
+from tooltransfer.tools.objects import OBJECT_RADIUS
+from tooltransfer.tools.omni.ik import table_pose
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.operator.operator import DemonstrationFailed, ScriptedOperator
+from tooltransfer.tools.sim import Execution
 
 OBJECT_NOISE = 0.0015
 """Camera noise [m], standard deviation per axis."""

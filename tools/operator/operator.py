@@ -1,6 +1,6 @@
 """A scripted, human-like operator pushing the puck with tool 1 on the simulated Omni.
 
-The script follows the demonstration task (:data:`problems.scenes.DEMO_SCENE`): forward pushes with
+The script follows the demonstration task (:data:`tooltransfer.problems.scenes.DEMO_SCENE`): forward pushes with
 the upper face, leftward pushes with the left face, a corner where the face changes, and between two
 faces an arching tool move round the puck (Fig. 9a: back off, go round, approach the other face's
 contact point), bulging out until the swept tool outline keeps its clearance from the puck and from
@@ -29,16 +29,16 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 
-from dmp.errors import InputError
-from problems.scenes import DEMO_SCENE, DemoScene
-from tools.arch import swept_clearance
-from tools.contact import contact_on_platform
-from tools.library import load_tool
-from tools.model import Tool
-from tools.omni.ik import joint_path
-from tools.omni.platform import OmniPlatform
-from tools.pose import Pose2D
-from tools.sim import ContactEvent, Execution, Rates, SimPlatform
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.problems.scenes import DEMO_SCENE, DemoScene
+from tooltransfer.tools.arch import swept_clearance
+from tooltransfer.tools.contact import contact_on_platform
+from tooltransfer.tools.library import load_tool
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.omni.ik import joint_path
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pose import Pose2D
+from tooltransfer.tools.sim import ContactEvent, Execution, Rates, SimPlatform
 
 BACK_OFF = 0.012
 """How far [m] the tool backs off a face's contact before going round the puck."""
@@ -58,7 +58,7 @@ TREMOR = 0.00015
 MIN_CONTACT, MERGE_GAP = 0.05, 0.2
 """Ground truth of a push: the simulator's contact events of one face, with breaks shorter than
 ``MERGE_GAP`` [s] bridged; spans shorter than ``MIN_CONTACT`` [s] are touches, not pushes (the same
-rules as :func:`planner.segmentation.segment`'s defaults)."""
+rules as :func:`tooltransfer.planner.segmentation.segment`'s defaults)."""
 SNAG = 0.02
 """Joint tracking error [rad] above which the arm is held by something (a failed demonstration)."""
 
@@ -169,7 +169,7 @@ class ScriptedOperator:
     def _switch_path(self, here: NDArray[np.float64], a_back: NDArray[np.float64], b_back: NDArray[np.float64],
                      b: NDArray[np.float64], obj: NDArray[np.float64]) -> NDArray[np.float64]:
         """Whole switch path (K, 2): retreat ``here`` -> ``a_back``, arch round the puck at ``obj`` to
-        ``b_back``, approach ``b``. The arch is polar about the puck (as :func:`tools.arch.arch_path`),
+        ``b_back``, approach ``b``. The arch is polar about the puck (as :func:`tooltransfer.tools.arch.arch_path`),
         the short way round first, bulging out until the swept tool keeps its clearance from the puck
         and from the obstacles (the tool's body reaches 30 mm behind its head, so an arch that clears
         the puck can still sweep the body over an obstacle)."""
@@ -204,7 +204,7 @@ class ScriptedOperator:
 
     rates = Rates(object_hz=1000.0, tool_hz=1000.0)
     """Every physics step is recorded; the sensors' own clocks pick their samples from it
-    (:func:`tools.operator.generate.record`), so their rates do not depend on how the operator's
+    (:func:`tooltransfer.tools.operator.generate.record`), so their rates do not depend on how the operator's
     moves are cut into executions."""
 
     def demonstrate(self, seed: int) -> tuple[Execution, Truth]:

@@ -4,7 +4,7 @@ The tool (a polygon in the tool frame) follows the given poses ``(x, y, yaw)``; 
 the pose is interpolated linearly and the motion cut into substeps so that no outline point moves
 more than ``max_step`` [m]. At each substep the tool moves with the puck held where it was; if the
 outline then overlaps the disc by ``a`` (the pusher's advance along the contact normal), the puck
-moves by the contact law of :mod:`tools.pushing.mechanics` (sticking or sliding, with the pusher's
+moves by the contact law of :mod:`tooltransfer.tools.pushing.mechanics` (sticking or sliding, with the pusher's
 sideways displacement at the contact point), and is then pushed out along the contact normal of
 its new place if a sliver of overlap remains (a corner, or a face turning with the heading). A puck
 the tool does not press stays where it is (quasi-static: no inertia, no sliding on).
@@ -21,11 +21,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array, check_positive
-from tools.model import Tool
-from tools.pushing.geometry import Outline
-from tools.pushing.mechanics import FREE, MODE_NAMES, SLIDE, STICK, PushMechanics, object_displacement
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.pushing.geometry import Outline
+from tooltransfer.tools.pushing.mechanics import FREE, MODE_NAMES, SLIDE, STICK, PushMechanics, object_displacement
 
 #: Default substep bound [m] on the motion of any outline point (0.1 mm: forward and inverse agree
 #: to about 1e-3 mm per 50 mm of push, see ``tests/test_pushing.py``).
@@ -111,7 +111,7 @@ def simulate_batch(
         (B, K, 2) contact points in the tool frame [m] (NaN free).
     """
     if not isinstance(tool, Tool):
-        raise InputError("tool", "a tools.model.Tool", type(tool).__name__)
+        raise InputError("tool", "a tooltransfer.tools.model.Tool", type(tool).__name__)
     if not isinstance(mech, PushMechanics):
         raise InputError("mech", "a PushMechanics", type(mech).__name__)
     p = check_array(poses, "poses", shape=(None, None, 3))
@@ -278,7 +278,7 @@ def simulate(
     contact events.
     """
     if not isinstance(tool, Tool):
-        raise InputError("tool", "a tools.model.Tool", type(tool).__name__)
+        raise InputError("tool", "a tooltransfer.tools.model.Tool", type(tool).__name__)
     if not isinstance(mech, PushMechanics):
         raise InputError("mech", "a PushMechanics", type(mech).__name__)
     p = check_array(poses, "poses", shape=(None, 3))

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from tools.model import Tool
+from tooltransfer.tools.model import Tool
 
 #: Fraction of an edge's length within which a nearest point counts as the edge's end (a vertex).
 VERTEX_TOL = 1e-9

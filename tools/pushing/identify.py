@@ -2,7 +2,7 @@
 
 The paper's Assumption 1 leaves the object's and the contact's properties to "parameter
 identification methods"; here they are fitted by least squares of the forward model
-(:mod:`tools.pushing.forward`) to what the sensors recorded:
+(:mod:`tooltransfer.tools.pushing.forward`) to what the sensors recorded:
 
 * **Data.** Per push (:class:`RecordedPush`) the tool poses from the encoders over the push, the
   camera's samples of the puck over the push and a short rest after it, and the puck's rest
@@ -35,7 +35,7 @@ identification methods"; here they are fitted by least squares of the forward mo
   excited keeps its initial value exactly (the prior holds it within noise of it anyway) and is
   reported through a large standard deviation (the prior's) and a message, not an error.
 
-Speed: all pushes run in one :func:`tools.pushing.forward.simulate_batch` call (shorter ones padded
+Speed: all pushes run in one :func:`tooltransfer.tools.pushing.forward.simulate_batch` call (shorter ones padded
 by repeating their last pose, which moves nothing) with substeps of at most ``max_step`` = 0.2 mm
 (end positions within 0.02 mm of 0.02 mm substeps, far below the camera's noise); about 12
 evaluations of the model, see ``tests/test_pushing_identify.py`` and the README for timings.
@@ -51,11 +51,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array, check_positive, check_time
-from tools.model import Tool
-from tools.pushing.forward import simulate_batch
-from tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array, check_positive, check_time
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.pushing.forward import simulate_batch
+from tooltransfer.tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
 
 #: Bounds of the fit (mu, c).
 MU_BOUNDS, C_BOUNDS = (0.05, 5.0), (0.2, 1.5)
@@ -259,7 +259,7 @@ class _Batch:
 
 def _check_inputs(tool: Tool, radius: float, pushes: Sequence[RecordedPush], initial: PushMechanics) -> float:
     if not isinstance(tool, Tool):
-        raise InputError("tool", "a tools.model.Tool", type(tool).__name__)
+        raise InputError("tool", "a tooltransfer.tools.model.Tool", type(tool).__name__)
     r = check_positive(radius, "radius")
     if isinstance(pushes, RecordedPush) or not isinstance(pushes, Sequence) or len(pushes) == 0:
         raise InputError("pushes", "a non-empty sequence of RecordedPush", type(pushes).__name__)

@@ -5,10 +5,10 @@ so with the contact at arc length ``s`` along the face (from its ``start``, dire
 normal ``n``; tool frame) the puck's centre sits at ``c_T(s) = start + s e + R n`` in the tool
 frame, and the tool pose follows from the centre ``c`` and the heading ``psi`` the Omni imposes
 there: ``x_tool = c - R(psi) c_T(s)`` with ``psi = heading(x_tool)``
-(:func:`tools.omni.heading.centre_path`).
+(:func:`tooltransfer.tools.omni.heading.centre_path`).
 
 While the contact sticks, the tool's contact point moves with the puck's rim point: the same normal
-speed as the centre and ``kappa = 1 + 1/c^2`` times its sideways speed (:mod:`tools.pushing.mechanics`).
+speed as the centre and ``kappa = 1 + 1/c^2`` times its sideways speed (:mod:`tooltransfer.tools.pushing.mechanics`).
 In the tool frame the contact therefore rolls along the face,
 
     ds/dt = -(1/c^2) (v_c . e_w) - sigma R dpsi/dt,      sigma = e . (J n) = +-1,
@@ -28,12 +28,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array, check_positive
-from tools.model import Tool
-from tools.omni.heading import centre_path, heading
-from tools.omni.platform import OmniPlatform
-from tools.pushing.mechanics import PushMechanics, cone_margin, perp
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.omni.heading import centre_path, heading
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pushing.mechanics import PushMechanics, cone_margin, perp
 
 #: Steps of the object shorter than this [m] are not judged against the friction cone (a path
 #: standing still at a switch has steps of nanometres in arbitrary directions).

@@ -17,17 +17,17 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array
-from tools.model import Tool
-from tools.objects import Obstacle
-from tools.omni.platform import OmniPlatform
-from tools.sim.config import SimConfig
-from tools.sim.execution import Execution, Rates
-from tools.sim.model import SimModel
-from tools.sim.platform import check_obstacles
-from tools.sim.recorder import record
-from tools.sim.reference import joint_reference, tool_path_joints
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Obstacle
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.sim.config import SimConfig
+from tooltransfer.tools.sim.execution import Execution, Rates
+from tooltransfer.tools.sim.model import SimModel
+from tooltransfer.tools.sim.platform import check_obstacles
+from tooltransfer.tools.sim.recorder import record
+from tooltransfer.tools.sim.reference import joint_reference, tool_path_joints
 
 
 @dataclass(frozen=True)

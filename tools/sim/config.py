@@ -4,15 +4,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from dmp.errors import InputError
-from dmp.validation import check_positive
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_positive
 
 
 @dataclass(frozen=True)
 class SimConfig:
     """Settings of the simulated platform (SI units).
 
-    Physics (see :mod:`tools.sim.mjcf` for why each numerical setting has its value):
+    Physics (see :mod:`tooltransfer.tools.sim.mjcf` for why each numerical setting has its value):
 
     Attributes:
         timestep: physics step [s]; 1-2 ms were measured to give the same push.

@@ -1,14 +1,14 @@
 """What an execution on the simulated platform recorded: tracks at sensor rates and contact events.
 
-Times are on the platform's clock [s] (0 at :meth:`tools.sim.platform.SimPlatform.reset`), on the
+Times are on the platform's clock [s] (0 at :meth:`tooltransfer.tools.sim.platform.SimPlatform.reset`), on the
 physics steps: an execution of ``n`` steps starting at step ``k`` records the steps ``k .. k + n - 1``
 (the state at the start of each step), so consecutive executions concatenate without duplicates
-(:meth:`Execution.concat`) and :meth:`~tools.sim.platform.SimPlatform.observe` gives the state
+(:meth:`Execution.concat`) and :meth:`~tooltransfer.tools.sim.platform.SimPlatform.observe` gives the state
 after the last step. A stream at ``rate`` [Hz] is sampled at the first physics step at or after
 each multiple of ``1 / rate`` on that clock, so chunks share one time grid.
 
-Poses follow :mod:`tools.pose`: the tool pose ``(x, y, yaw)`` is the planar tool frame of
-:mod:`tools.model` in the world (origin at the tool centre point, yaw its heading, which follows
+Poses follow :mod:`tooltransfer.tools.pose`: the tool pose ``(x, y, yaw)`` is the planar tool frame of
+:mod:`tooltransfer.tools.model` in the world (origin at the tool centre point, yaw its heading, which follows
 q1 on the Omni); the object's ``(x, y)`` is the puck's centre, its yaw the puck's rotation about z.
 """
 
@@ -20,8 +20,8 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_positive
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_positive
 
 #: Breaks in tool-object contact shorter than this [s] (the puck chattering on the face) are
 #: bridged: they stay one :class:`ContactEvent`.
@@ -48,11 +48,11 @@ class ContactEvent:
 
     Attributes:
         t_start, t_end: first and last physics step in contact [s].
-        piece: index of the tool's convex piece (:attr:`tools.model.Tool.convex_pieces`) touching
+        piece: index of the tool's convex piece (:attr:`tooltransfer.tools.model.Tool.convex_pieces`) touching
             the object at most steps.
         max_penetration: deepest tool-object penetration during the event [m].
-        face: name of the tool face (:attr:`tools.model.Tool.faces`) nearest the contact point at
-            most steps (within :data:`tools.sim.recorder.FACE_TOL`), None when the contact was mostly
+        face: name of the tool face (:attr:`tooltransfer.tools.model.Tool.faces`) nearest the contact point at
+            most steps (within :data:`tooltransfer.tools.sim.recorder.FACE_TOL`), None when the contact was mostly
             off every face (e.g. on a rounded corner).
     """
 
@@ -81,7 +81,7 @@ class Execution:
         joints: shape (N, 3), measured joints ``(q1, q2, q3)`` [rad].
         joints_ref: shape (N, 3), the PD reference at the same times [rad].
         contact: shape (N,), whether each tool sample lies in a contact event (the tool touching
-            the object, breaks under :data:`CONTACT_GAP` bridged; see :mod:`tools.sim.recorder`).
+            the object, breaks under :data:`CONTACT_GAP` bridged; see :mod:`tooltransfer.tools.sim.recorder`).
         penetration: shape (N,), tool-object penetration depth at each tool sample [m] (0 when the
             collision detection finds no contact at that step).
         contacts: the contact events (every physics step, not only the samples).

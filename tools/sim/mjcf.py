@@ -1,10 +1,10 @@
 """The simulated platform's MuJoCo model, written as MJCF text from the DH table, the tool and the scene.
 
-Kinematics. Each DH row ``Rz(theta) Tz(d) Tx(a) Rx(alpha)`` of :mod:`tools.omni.dh` becomes a body
+Kinematics. Each DH row ``Rz(theta) Tz(d) Tx(a) Rx(alpha)`` of :mod:`tooltransfer.tools.omni.dh` becomes a body
 whose hinge turns about its local z (the joint), with the next body at ``(a, 0, d)`` turned by
 ``Rx(alpha)``; the tool centre point is the origin of the tool-row body, exactly as in
-:func:`tools.omni.dh.forward_kinematics`. The Omni base sits at the platform's ``base_xy`` and
-``base_yaw``, ``table_height`` below its frame (:class:`tools.omni.platform.OmniPlatform`); the
+:func:`tooltransfer.tools.omni.dh.forward_kinematics`. The Omni base sits at the platform's ``base_xy`` and
+``base_yaw``, ``table_height`` below its frame (:class:`tooltransfer.tools.omni.platform.OmniPlatform`); the
 joints have the platform's limits as mechanical stops.
 
 The tool. The Omni's last three joints are fixed, so the tool turns in the table plane with q1
@@ -12,7 +12,7 @@ only (DESIGN section 7): a planar tool stays flat on the table while the shoulde
 move. The tool body hangs from the tool centre point on two hinges about the arm-plane normal held
 by joint equalities at ``-q2`` and ``-q3`` (a parallelogram, as the real holder keeps the tool
 level), so its orientation is ``Rz(base_yaw + q1 - pi/2)`` (:meth:`OmniPlatform.heading`) whatever
-the arm's pitch. Its outline's convex pieces (:attr:`tools.model.Tool.convex_pieces`) become prisms
+the arm's pitch. Its outline's convex pieces (:attr:`tooltransfer.tools.model.Tool.convex_pieces`) become prisms
 from ``tool_gap`` to ``tool_gap + tool_thickness`` above the table, so the tool meets the puck's side
 and never the table.
 
@@ -60,12 +60,12 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tools.decompose import convex_decomposition
-from tools.model import Tool
-from tools.objects import Disc, Obstacle
-from tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
-from tools.omni.platform import OmniPlatform
-from tools.sim.config import SimConfig
+from tooltransfer.tools.decompose import convex_decomposition
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc, Obstacle
+from tooltransfer.tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.sim.config import SimConfig
 
 #: Names of the model's joints driven by the PD actuators, in DH order.
 ARM_JOINTS = ("q1", "q2", "q3")
@@ -73,7 +73,7 @@ ARM_JOINTS = ("q1", "q2", "q3")
 LEVEL_JOINTS = ("level2", "level3")
 #: Body whose origin is the tool centre point (the DH tool frame's origin).
 TCP_BODY = "tcp_row"
-#: Body carrying the tool's prisms; its frame is the planar tool frame of :mod:`tools.model`.
+#: Body carrying the tool's prisms; its frame is the planar tool frame of :mod:`tooltransfer.tools.model`.
 TOOL_BODY = "tool_plane"
 PUCK = "puck"
 
@@ -156,7 +156,7 @@ def build_mjcf(
 
     Returns:
         The MJCF document (compile it with ``mujoco.MjModel.from_xml_string``). The puck starts at
-        the origin; :class:`tools.sim.platform.SimPlatform` places it.
+        the origin; :class:`tooltransfer.tools.sim.platform.SimPlatform` places it.
     """
     c = config or SimConfig()
     # the planar tool frame in the tool-row body once the two level-keeping hinges have acted:

@@ -1,7 +1,7 @@
 """The compiled MuJoCo model of the platform and where its quantities live (state, controls, sensors).
 
-:class:`SimModel` is shared by the stateful :class:`tools.sim.platform.SimPlatform` and the batch
-runner :mod:`tools.sim.batch`: it builds a full physics state from a puck position and joint
+:class:`SimModel` is shared by the stateful :class:`tooltransfer.tools.sim.platform.SimPlatform` and the batch
+runner :mod:`tooltransfer.tools.sim.batch`: it builds a full physics state from a puck position and joint
 angles, turns joint references into the actuators' controls, and reads recorded sensor rows back
 as named arrays.
 """
@@ -18,11 +18,19 @@ import mujoco.rollout
 import numpy as np
 from numpy.typing import NDArray
 
-from tools.model import Tool
-from tools.objects import Obstacle
-from tools.omni.platform import OmniPlatform
-from tools.sim.config import SimConfig
-from tools.sim.mjcf import ARM_JOINTS, LEVEL_JOINTS, PUCK, TCP_BODY, TOOL_BODY, build_mjcf, tool_piece_names
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Obstacle
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.sim.config import SimConfig
+from tooltransfer.tools.sim.mjcf import (
+    ARM_JOINTS,
+    LEVEL_JOINTS,
+    PUCK,
+    TCP_BODY,
+    TOOL_BODY,
+    build_mjcf,
+    tool_piece_names,
+)
 
 #: State components a simulation is saved and restored with (time, qpos, qvel, activations...).
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -30,7 +38,8 @@ STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 #: ``mj_step``, so rollouts chain); the contact settings were measured with MuJoCo 4.0.0.
 MIN_MUJOCO = (3, 3, 6)
 if tuple(int(p) for p in re.findall(r"\d+", mujoco.__version__)[:3]) < MIN_MUJOCO:  # pragma: no cover
-    raise ImportError(f"tools.sim needs mujoco >= {'.'.join(map(str, MIN_MUJOCO))}, found {mujoco.__version__}")
+    raise ImportError(f"tooltransfer.tools.sim needs mujoco >= {'.'.join(map(str, MIN_MUJOCO))}, "
+                      f"found {mujoco.__version__}")
 
 
 class SensorRows(NamedTuple):
@@ -75,7 +84,7 @@ class SimModel:
     def build(
         tool: Tool, platform: OmniPlatform, obstacles: Sequence[Obstacle] = (), config: SimConfig | None = None
     ) -> SimModel:
-        """Write the MJCF (:func:`tools.sim.mjcf.build_mjcf`) and compile it."""
+        """Write the MJCF (:func:`tooltransfer.tools.sim.mjcf.build_mjcf`) and compile it."""
         cfg = config or SimConfig()
         xml = build_mjcf(tool, platform, obstacles, cfg)
         return SimModel(tool, platform, tuple(obstacles), cfg, xml, mujoco.MjModel.from_xml_string(xml))

@@ -4,7 +4,7 @@
 (:meth:`SimPlatform.observe`) and correct; executing a path in chunks gives the recording of
 executing it at once (up to the rounding of step times, when the chunks share the velocity
 reference at the cut: pass ``qd``, as finite differences differ there). Recordings
-(:class:`tools.sim.execution.Execution`) come at requested rates: the object centre as a camera
+(:class:`tooltransfer.tools.sim.execution.Execution`) come at requested rates: the object centre as a camera
 sees it, the tool pose and joints as the encoders give them, plus the tool-object contact events.
 
 Example::
@@ -24,17 +24,17 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array
-from tools.model import Tool
-from tools.objects import Disc, Obstacle
-from tools.omni.platform import OmniPlatform
-from tools.sim.config import SimConfig
-from tools.sim.execution import Execution, Rates
-from tools.sim.mjcf import PUCK, tool_piece_names
-from tools.sim.model import STATE_SPEC, SimModel
-from tools.sim.recorder import record
-from tools.sim.reference import joint_reference, tool_path_joints
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc, Obstacle
+from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.sim.config import SimConfig
+from tooltransfer.tools.sim.execution import Execution, Rates
+from tooltransfer.tools.sim.mjcf import PUCK, tool_piece_names
+from tooltransfer.tools.sim.model import STATE_SPEC, SimModel
+from tooltransfer.tools.sim.recorder import record
+from tooltransfer.tools.sim.reference import joint_reference, tool_path_joints
 
 #: Largest jump [rad] allowed between the arm's joints and the first reference sample of an
 #: execution (a larger one would be a step input to the PD loop, not a path to track).
@@ -52,7 +52,8 @@ def check_obstacles(obstacles: object) -> tuple[Obstacle, ...]:
         raise InputError("obstacles", "a sequence of discs and polygons", type(obstacles).__name__)
     for i, o in enumerate(obstacles):
         if not isinstance(o, Disc | shapely.Polygon) or (isinstance(o, shapely.Polygon) and not o.is_valid):
-            raise InputError(f"obstacles[{i}]", "a tools.objects.Disc or a valid shapely Polygon", repr(o)[:60])
+            raise InputError(f"obstacles[{i}]", "a tooltransfer.tools.objects.Disc or a valid shapely Polygon",
+                             repr(o)[:60])
     return tuple(obstacles)
 
 
@@ -62,7 +63,7 @@ class SimPlatform:
     Args:
         tool: the tool.
         platform: the Omni (default: :class:`OmniPlatform` with the tool's ``a_t``).
-        obstacles: discs (:class:`tools.objects.Disc`) and polygons on the table (world frame [m]).
+        obstacles: discs (:class:`tooltransfer.tools.objects.Disc`) and polygons on the table (world frame [m]).
         config: physical settings (default :class:`SimConfig`).
 
     Attributes:

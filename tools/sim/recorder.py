@@ -15,10 +15,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from tools.model import Tool
-from tools.sim.execution import CONTACT_GAP, ContactEvent, Execution, Rates
-from tools.sim.model import SensorRows
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.sim.execution import CONTACT_GAP, ContactEvent, Execution, Rates
+from tooltransfer.tools.sim.model import SensorRows
 
 #: A contact point within this distance [m] of a face's segment (tool frame) is on that face.
 FACE_TOL = 0.001

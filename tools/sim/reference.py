@@ -8,10 +8,10 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.validation import check_array, check_time
-from tools.omni.ik import inverse_kinematics, joint_path
-from tools.omni.platform import OmniPlatform
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.validation import check_array, check_time
+from tooltransfer.tools.omni.ik import inverse_kinematics, joint_path
+from tooltransfer.tools.omni.platform import OmniPlatform
 
 #: Tolerance [rad] on the joint limits for a reference (the planner's paths touch them).
 LIMIT_TOL = 1e-6
@@ -61,7 +61,7 @@ def joint_reference(
 def tool_path_joints(platform: OmniPlatform, tool_xy: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
     """Joints (T, 3) [rad] placing the tool centre point on ``tool_xy`` (T, 2) [m] (world, table
     plane) at the times ``t`` (T,) [s], one inverse-kinematics branch throughout
-    (:func:`tools.omni.ik.joint_path`); the tool's heading is then the one q1 gives.
+    (:func:`tooltransfer.tools.omni.ik.joint_path`); the tool's heading is then the one q1 gives.
 
     Raises:
         InputError: naming the first sample the Omni cannot reach within its joint limits, and why.

@@ -5,7 +5,7 @@ A constraint describes, at each sample time, ``m`` rows of the form
     a_pos[k, j] . x(t_k) + a_vel[k, j] . v(t_k)  <=  bound[k, j]      (or ``==`` for equalities)
 
 through :meth:`Constraint.coefficients`. Because the rollout is affine in the weights
-(:class:`dmp.affine.AffineRollout`), each row becomes one linear row ``G w <= h``; the solver only
+(:class:`tooltransfer.dmp.affine.AffineRollout`), each row becomes one linear row ``G w <= h``; the solver only
 stacks them. A new constraint type is a new small subclass. Non-convex constraints (a disc to
 stay out of) give coefficients that depend on a linearisation trajectory ``x_lin``; evaluated
 with ``x_lin = x`` they measure the true violation.
@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.affine import AffineRollout
+from tooltransfer.dmp.affine import AffineRollout
 
 
 class Rows(NamedTuple):

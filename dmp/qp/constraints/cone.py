@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from dmp.errors import InputError
-from dmp.qp.constraints.base import Coefficients, Constraint
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
 
 
 class VelocityCone(Constraint):

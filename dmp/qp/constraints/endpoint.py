@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.qp.constraints.base import Coefficients, Constraint
-from dmp.validation import check_array
+from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
+from tooltransfer.dmp.validation import check_array
 
 
 class _AtEnd(Constraint):

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from dmp.errors import InputError
-from dmp.qp.constraints.base import Coefficients, Constraint
-from dmp.validation import check_array
+from tooltransfer.dmp.errors import InputError
+from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
+from tooltransfer.dmp.validation import check_array
 
 
 class PositionPolygon(Constraint):

@@ -1,0 +1,82 @@
+"""tooltransfer: learn pushing skills (DMPs) from demonstrations with one tool, plan with a new one.
+
+The repository's root is this package (``pyproject.toml`` maps it): its folders are the
+subpackages ``tooltransfer.dmp`` (the DMP core), ``tooltransfer.tools`` (tools, the object, the
+Omni, the simulated platform, the push mechanics), ``tooltransfer.problems`` (task files and
+datasets) and ``tooltransfer.planner`` (skills, planning, plans, execution, the CLI, batch runs).
+
+What a user needs first is here::
+
+    import tooltransfer as tt
+
+    task = tt.load_task("problems/paper/transfer_tool2.yaml")
+    plan = tt.solve(task)  # a tt.Plan; plan.status is "solved" only when every hard check holds
+    plan.write("plan.json")
+    same = tt.read_plan("plan.json")
+
+The names are imported on first use, so ``import tooltransfer`` (and every ``tooltransfer`` command)
+stays light.
+"""
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from tooltransfer.dmp.errors import InfeasibleError, InputError, ToolTransferError
+    from tooltransfer.dmp.primitive import DMP
+    from tooltransfer.planner.plan import Plan, read_plan
+    from tooltransfer.planner.solve import solve
+    from tooltransfer.problems.task import Task, load_task
+
+__all__ = [
+    "DMP",
+    "InfeasibleError",
+    "InputError",
+    "Plan",
+    "Task",
+    "ToolTransferError",
+    "__version__",
+    "load_task",
+    "read_plan",
+    "solve",
+]
+
+#: Where each public name lives (imported when first asked for).
+_HOMES = {
+    "DMP": "tooltransfer.dmp.primitive",
+    "InfeasibleError": "tooltransfer.dmp.errors",
+    "InputError": "tooltransfer.dmp.errors",
+    "ToolTransferError": "tooltransfer.dmp.errors",
+    "Plan": "tooltransfer.planner.plan",
+    "read_plan": "tooltransfer.planner.plan",
+    "solve": "tooltransfer.planner.solve",
+    "Task": "tooltransfer.problems.task",
+    "load_task": "tooltransfer.problems.task",
+}
+
+
+def _version() -> str:
+    """The installed distribution's version (``pyproject.toml`` is its one source)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("tooltransfer")
+    except PackageNotFoundError:  # the sources on sys.path without an install
+        return "0+unknown"
+
+
+def __getattr__(name: str) -> Any:
+    if name == "__version__":
+        value = _version()
+    elif name in _HOMES:
+        value = getattr(import_module(_HOMES[name]), name)
+    else:
+        raise AttributeError(f"module 'tooltransfer' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *__all__])
