@@ -11,7 +11,7 @@ $(PY):
 
 demo: $(PY)
 	$(PY) -m pip install -q -e .
-	$(VENV)/bin/tooltransfer demo --out out
+	$(VENV)/bin/tooltransfer paper --out out
 
 test: $(PY)
 	$(PY) -m pip install -q -e ".[test]"
@@ -41,7 +41,7 @@ docs: $(PY)
 # Deterministic (the same bytes on the same versions of the dependencies); about 10 s.
 figures: $(PY)
 	$(PY) -m pip install -q -e .
-	$(PY) -m tooltransfer.planner.figures docs/images
+	$(PY) -m tooltransfer.planner.plots.paper_figures docs/images
 
 bench: $(PY)
 	$(PY) -m pip install -q -e ".[bench]"

@@ -24,8 +24,8 @@ from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from tooltransfer.dmp.errors import InfeasibleError, InputError, ToolTransferError
     from tooltransfer.dmp.primitive import DMP
+    from tooltransfer.errors import InfeasibleError, InputError, ToolTransferError
     from tooltransfer.planner.plan import Plan, read_plan
     from tooltransfer.planner.solve import solve
     from tooltransfer.problems.task import Task, load_task
@@ -46,9 +46,9 @@ __all__ = [
 #: Where each public name lives (imported when first asked for).
 _HOMES = {
     "DMP": "tooltransfer.dmp.primitive",
-    "InfeasibleError": "tooltransfer.dmp.errors",
-    "InputError": "tooltransfer.dmp.errors",
-    "ToolTransferError": "tooltransfer.dmp.errors",
+    "InfeasibleError": "tooltransfer.errors",
+    "InputError": "tooltransfer.errors",
+    "ToolTransferError": "tooltransfer.errors",
     "Plan": "tooltransfer.planner.plan",
     "read_plan": "tooltransfer.planner.plan",
     "solve": "tooltransfer.planner.solve",

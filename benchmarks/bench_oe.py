@@ -18,7 +18,7 @@ import numpy as np
 from tooltransfer.planner.oe import condense_qp
 from tooltransfer.planner.oe.mapping_variant import condense_mapping
 from tooltransfer.planner.scene import Scene
-from tooltransfer.problems.paper_cases import transfer_case
+from tooltransfer.planner.ss.paper_cases import transfer_case
 
 
 def main(reps: int = 7) -> None:

@@ -6,7 +6,9 @@ functions ``psi_i(s)`` per dimension, weights ``W`` of shape (N, n), flattened r
 """
 
 from tooltransfer.dmp.affine import AffineRollout
-from tooltransfer.dmp.errors import (
+from tooltransfer.dmp.primitive import DMP
+from tooltransfer.dmp.trajectory import Rollout
+from tooltransfer.errors import (
     InfeasibleError,
     InputError,
     SkillFileError,
@@ -14,8 +16,6 @@ from tooltransfer.dmp.errors import (
     ToolTransferError,
     UnknownSolverError,
 )
-from tooltransfer.dmp.primitive import DMP
-from tooltransfer.dmp.trajectory import Rollout
 
 __all__ = [
     "DMP",

@@ -13,12 +13,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.dmp.affine import AffineRollout
 from tooltransfer.dmp.basis import DEFAULT_GAMMA, basis, centres_and_widths, phase
-from tooltransfer.dmp.errors import InputError
 from tooltransfer.dmp.exact import RESPONSE_CACHE, SystemParams, free_response
 from tooltransfer.dmp.integrate import rk4_rollout
 from tooltransfer.dmp.scaling import SCALING_MODES, ScalingMode, scaling_matrix
 from tooltransfer.dmp.trajectory import Rollout
-from tooltransfer.dmp.validation import check_array, check_positive, check_time
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_array, check_positive, check_time
 
 FitMethod = Literal["forcing", "trajectory"]
 
@@ -292,7 +292,7 @@ class DMP:
 
     @classmethod
     def load(cls, path: str) -> DMP:
-        """Load a skill saved by :meth:`save`; raises :class:`~tooltransfer.dmp.errors.SkillFileError`."""
+        """Load a skill saved by :meth:`save`; raises :class:`~tooltransfer.errors.SkillFileError`."""
         from tooltransfer.dmp.skill_file import load_dmp
 
         return load_dmp(path)

@@ -18,7 +18,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 
 ScalingMode = Literal["none", "amplitude", "similarity"]
 SCALING_MODES: tuple[str, ...] = ("none", "amplitude", "similarity")

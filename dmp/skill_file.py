@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tooltransfer.dmp.errors import InputError, SkillFileError
+from tooltransfer.errors import InputError, SkillFileError
 
 if TYPE_CHECKING:
     from tooltransfer.dmp.primitive import DMP

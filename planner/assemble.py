@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from tooltransfer.errors import ToolTransferError
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration, stretch_factor
 from tooltransfer.tools.model import Tool
@@ -178,7 +179,7 @@ def assemble(
                   tuple(push_spans), tuple(switch_spans), c)
 
 
-class SwitchFailed(Exception):
+class SwitchFailed(ToolTransferError):
     """A switch between two pushes has no admissible tool path."""
 
     def __init__(self, face_a: str, face_b: str, reason: str) -> None:

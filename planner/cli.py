@@ -86,10 +86,10 @@ def _execute(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str,
     return summary, executions
 
 
-def _cmd_demo(args: argparse.Namespace) -> int:
-    from tooltransfer.planner.demo import run_demo
+def _cmd_paper(args: argparse.Namespace) -> int:
+    from tooltransfer.planner.paper_run import run_paper
 
-    print(run_demo(args.out))
+    print(run_paper(args.out))
     print(f"wrote the figures, plan files and report.txt to {args.out}/")
     return EXIT_OK
 
@@ -100,7 +100,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    from tooltransfer.planner.demo import compare
+    from tooltransfer.planner.paper_run import compare
 
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), transient=True,
                   disable=args.json) as bar:
@@ -120,15 +120,15 @@ def _cmd_demos(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     if args.calibration:
+        from tooltransfer.planner.operator.calibration import generate_calibration
         from tooltransfer.problems.dataset import load_meta
-        from tooltransfer.tools.operator.calibration import generate_calibration
 
         out = generate_calibration(args.out, seed=args.seed, tool=args.tool)
         n = len(load_meta(out).demonstrations)
         print(f"wrote a calibration recording ({n} trials of straight pushes) to {out} in "
               f"{time.perf_counter() - t0:.1f} s")
         return EXIT_OK
-    from tooltransfer.tools.operator.generate import generate_demonstrations
+    from tooltransfer.planner.operator.generate import generate_demonstrations
 
     out = generate_demonstrations(args.out, n=args.n, seed=args.seed, tool=args.tool)
     print(f"wrote {args.n} demonstrations to {out} in {time.perf_counter() - t0:.1f} s")
@@ -189,7 +189,7 @@ def _cmd_segment(args: argparse.Namespace) -> int:
 def _cmd_solve(args: argparse.Namespace) -> int:
     import json
 
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
     from tooltransfer.planner.solve import solve
     from tooltransfer.problems.task import load_task
 
@@ -225,7 +225,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
         outcome, executions = _execute(plan, closed_loop=True, quiet=args.json)
         summary.update(outcome)
     if args.plot and plan.status == "solved":
-        from tooltransfer.planner.figures import fig12
+        from tooltransfer.planner.plots.paper_figures import fig12
 
         with _written(figure) as tmp:
             fig12(plan, tmp, executions)
@@ -259,13 +259,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         print(f"tooltransfer: warning: {exc}; running it anyway (--force)", file=sys.stderr)
     summary, executions = _execute(plan, closed_loop=args.closed_loop, quiet=args.json)
     if args.figure:
-        from tooltransfer.planner.figures import fig12
+        from tooltransfer.planner.plots.paper_figures import fig12
 
         with _written(args.figure) as tmp:
             fig12(plan, tmp, executions)
         summary["figure"] = str(args.figure)
     if args.gif:
-        from tooltransfer.planner.figures import execution_gif
+        from tooltransfer.planner.plots.paper_figures import execution_gif
 
         with _spinner(f"writing {args.gif}", quiet=args.json), _written(args.gif) as tmp:
             execution_gif(plan, list(executions.values())[-1], tmp)
@@ -349,10 +349,10 @@ def _writable(folder: Path) -> str:
 
 
 def check_output(option: str, path: Path, kind: str = "file", *, make_folders: bool = False) -> None:
-    """Check an output path before any work is done; raise :class:`~tooltransfer.dmp.errors.InputError` naming
+    """Check an output path before any work is done; raise :class:`~tooltransfer.errors.InputError` naming
     ``option`` and ``path``. ``kind``: ``"file"`` (its folder must exist, unless ``make_folders``),
     ``"folder"`` (made with its parents when missing)."""
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
 
     path = Path(path)
     if len(os.fsencode(str(path))) > 4000 or any(len(os.fsencode(part)) > 255 for part in path.parts):
@@ -391,7 +391,7 @@ OUTPUTS: dict[str, tuple[tuple[str, str, str], ...]] = {
     "schema": (("out", "--out", "file"),),
     "tools": (("out", "--out", "file"),),
     "compare": (("out", "--out", "folder"),),
-    "demo": (("out", "--out", "folder"),),
+    "paper": (("out", "--out", "folder"),),
     "demos": (("out", "--out", "folder"),),
     "batch generate": (("out", "--out", "folder"),),
     "batch run": (("db", "--db", "store"),),
@@ -414,7 +414,7 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 def _message(exc: BaseException) -> str:
     """The error's message on one line, a long value in it cut (the field and the file stay)."""
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
     from tooltransfer.tools.yaml_file import clip
 
     text = str(exc)
@@ -471,8 +471,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="tooltransfer", description="DMP skill transfer for multi-tool pushing on a Phantom Omni."
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    p = _add(sub, "demo", "the main job: learn from the committed demos, compare the variants on the transfer "
-             "to tool 2, simulate the qp plan", "tooltransfer demo --out out", _cmd_demo)
+    p = _add(sub, "paper", "the paper's transfer scenario (the job of `make demo`): learn from the committed "
+             "demonstrations, compare the variants on the transfer to tool 2, simulate the qp plan",
+             "tooltransfer paper --out out", _cmd_paper)
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     p = _add(sub, "compare", "solve a task with every variant pair (oe mapping|qp x ss dmp|opt): a metrics table "
              "and one figure", "tooltransfer compare problems/paper/transfer_tool2.yaml --out out", _cmd_compare)
@@ -583,7 +584,7 @@ def main(argv: list[str] | None = None) -> int:
         _handled_interrupt()
         return EXIT_INTERRUPTED
     except Exception as exc:  # one line, whatever went wrong (-v: the traceback too)
-        from tooltransfer.dmp.errors import ToolTransferError
+        from tooltransfer.errors import ToolTransferError
 
         if verbose:
             traceback.print_exc()

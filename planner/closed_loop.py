@@ -34,14 +34,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError, ToolTransferError
 from tooltransfer.planner.oe.contacts import MIN_PIECE
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.plan import Plan
 from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.ss.arch_variant import swept_clearance
 from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration
 from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
-from tooltransfer.tools.arch import swept_clearance
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.pose import rotation
 
@@ -418,7 +418,7 @@ def _unit(angle: float) -> NDArray[np.float64]:
     return np.array([np.cos(angle), np.sin(angle)])
 
 
-class _Stop(Exception):
+class _Stop(ToolTransferError):
     def __init__(self, status: str, reason: str) -> None:
         self.status, self.reason = status, reason
         super().__init__(reason)

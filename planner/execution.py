@@ -21,7 +21,7 @@ into the world frame of DESIGN section 2 (origin under joint 1, metres), ``tool_
 kinematics of the encoder angles (:func:`tooltransfer.tools.omni.ik.table_pose`), and ``move_tool`` turns the
 path into joints with :func:`tooltransfer.tools.sim.reference.tool_path_joints` (which checks the joint limits)
 and streams them to the device's PD loop at its rate, blocking until the last sample. Any
-:class:`~tooltransfer.dmp.errors.ToolTransferError` it raises ends the closed loop with that reason.
+:class:`~tooltransfer.errors.ToolTransferError` it raises ends the closed loop with that reason.
 """
 
 from __future__ import annotations
@@ -31,13 +31,13 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pushing.forward import simulate
 from tooltransfer.tools.pushing.mechanics import PushMechanics
+from tooltransfer.validation import check_array
 
 
 @runtime_checkable
@@ -115,7 +115,7 @@ class ModelPlant:
         tool: the tool; radius: the object's radius [m]; mechanics: the plant's push parameters.
         object_xy: (2,) the object's start [m]; tool_pose: (3,) the tool's start.
         platform: when given, commanded paths are checked against the Omni's reach and joint limits
-            (as a real device would refuse them: :class:`~tooltransfer.dmp.errors.InputError`).
+            (as a real device would refuse them: :class:`~tooltransfer.errors.InputError`).
         camera_noise, seed: as :class:`SimPlant`'s.
     """
 

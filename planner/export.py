@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.plan import JOINT_NAMES, Plan
 
 FORMATS = ("csv", "npz", "joint-trajectory")
@@ -63,7 +63,7 @@ class Trajectory:
 
 def check_joint_names(names: tuple[str, ...] | list[str], field: str = "--joint-names") -> tuple[str, ...]:
     """``names`` if they are 3 distinct names of 1-100 printable characters without commas, else
-    :class:`~tooltransfer.dmp.errors.InputError` naming ``field``."""
+    :class:`~tooltransfer.errors.InputError` naming ``field``."""
     expected = "3 distinct joint names (1 to 100 printable characters, no commas), e.g. waist,shoulder,elbow"
     if len(names) != 3 or len(set(names)) != 3 or not all(
             isinstance(n, str) and 0 < len(n) <= 100 and n.isprintable() and "," not in n for n in names):

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_positive
+from tooltransfer.errors import InputError
 from tooltransfer.problems.dataset import Dataset, load_dataset
 from tooltransfer.tools.pushing.identify import Identification, RecordedPush, identify_mechanics
 from tooltransfer.tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
+from tooltransfer.validation import check_positive
 
 LEAD, TAIL, REST = 0.15, 0.05, 0.3
 """Default windows [s]: tool poses from ``LEAD`` before the contact starts to ``TAIL`` after it ends

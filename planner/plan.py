@@ -30,7 +30,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 
 FORMAT = "tooltransfer.plan/1"
 PHASES = ("approach", "push", "switch", "retreat")

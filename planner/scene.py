@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.tools.objects import Obstacle
 from tooltransfer.tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
 

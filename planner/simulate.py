@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.plan import Plan, PlanFileError, joint_rates
 from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
 from tooltransfer.tools.sim import Execution, SimPlatform

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from tooltransfer.dmp.errors import InputError, SkillFileError
 from tooltransfer.dmp.skill_file import read_json
+from tooltransfer.errors import InputError, SkillFileError
 from tooltransfer.planner.oe.learn import OESkill
 from tooltransfer.planner.ss.learn import SwitchSkill
 from tooltransfer.tools.pushing.mechanics import PushMechanics
@@ -92,7 +92,7 @@ class Skills:
     @classmethod
     def load(cls, path: str | Path) -> Skills:
         """Read a skills file; a missing or damaged file or another format raises
-        :class:`~tooltransfer.dmp.errors.SkillFileError` naming the file."""
+        :class:`~tooltransfer.errors.SkillFileError` naming the file."""
         from tooltransfer.planner.ss.skill_file import switch_skill_from_dict
 
         doc = read_json(path)

@@ -14,7 +14,7 @@ tool path from the start and must reproduce the planned object path within
 deliver, fail here with the time and place).
 
 Switch variants (:mod:`tooltransfer.planner.switches`): ``arch`` (the geometric reference of
-:mod:`tooltransfer.tools.arch`),
+:mod:`tooltransfer.planner.ss.arch_variant`),
 ``dmp`` (the SS skill recombined, eq. 18; its penetration is reported, not avoided) and ``opt`` (the
 CasADi NLP, non-penetrating, checked with shapely).
 """
@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.assemble import SwitchFailed, assemble
 from tooltransfer.planner.oe.generalize import generalize
 from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping

@@ -1,7 +1,7 @@
 """Switch planners for :func:`tooltransfer.planner.assemble.assemble`: the tool path between two pushes while the
 object rests, by variant.
 
-* ``arch``: the geometric reference (:mod:`tooltransfer.tools.arch`): back off, arch round the object (and
+* ``arch``: the geometric reference (:mod:`tooltransfer.planner.ss.arch_variant`): back off, arch round the object (and
   disc obstacles; a polygon obstacle is taken as its enclosing disc), approach;
 * ``dmp``: the SS skill generalized by recombination (paper section III.B, eq. 18;
   :func:`tooltransfer.planner.ss.recombine`); it may penetrate the object or an obstacle: the penetration is
@@ -24,10 +24,10 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.assemble import SwitchPath, SwitchPlanner
 from tooltransfer.planner.ss import SwitchSkill, SwitchTask, optimize, recombine
-from tooltransfer.tools.arch import NoArch, swept_clearance, switch_path
+from tooltransfer.planner.ss.arch_variant import NoArch, swept_clearance, switch_path
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, DiscObject
 from tooltransfer.tools.omni.ik import joint_path

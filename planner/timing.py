@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.validation import check_array, check_positive
 
 PEAK_SPEED = 1.875
 PEAK_ACCEL = 10.0 / np.sqrt(3.0)

@@ -18,7 +18,7 @@ import numpy as np
 import shapely
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.tools.errors import ToolSpecError, UnknownToolError
 
 if TYPE_CHECKING:

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.batch.spec import load_batch
 from tooltransfer.planner.batch.store import ResultStore, lock_store
 from tooltransfer.planner.cli import main

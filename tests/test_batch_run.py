@@ -17,8 +17,9 @@ import pytest
 import yaml
 
 from tooltransfer.planner.batch.executors import open_executor
-from tooltransfer.planner.batch.report import summarize, wilson, write_report
+from tooltransfer.planner.batch.report import summarize, write_report
 from tooltransfer.planner.batch.runner import run_batch, run_jobs
+from tooltransfer.planner.batch.stats import wilson
 from tooltransfer.planner.batch.store import ResultStore
 from tooltransfer.planner.batch.worker import Job
 from tooltransfer.planner.cli import main

@@ -164,7 +164,7 @@ def test_localize_replaces_only_a_task_s_skills() -> None:
 def test_a_dataset_that_cannot_be_shipped(tmp_path, monkeypatch, ss: str) -> None:
     """Demonstrations that never switch faces have no SS skill, so no skills file: with arch switches only the
     run goes on the old way (None: the workers read the dataset), a variant that needs the SS skill is refused."""
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
     from tooltransfer.planner.batch.generate import generate_task
     from tooltransfer.planner.batch.spec import load_batch
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.batch.report import EXEC_TOLS, summarize, write_report
 from tooltransfer.planner.batch.runner import batch_jobs, open_batch_store
 from tooltransfer.planner.batch.spec import batch_from_dict, load_batch

@@ -7,7 +7,7 @@ from tooltransfer.planner.cli import main
 
 
 def test_demo_runs_the_transfer_job(tmp_path, capsys) -> None:
-    assert main(["demo", "--out", str(tmp_path)]) == 0
+    assert main(["paper", "--out", str(tmp_path)]) == 0
     names = ["skills.json", "fig8a_demonstrations.png", "fig8b_universal_skill.png", "fig9_switching_skills.png",
              "fig10_condensed_paths.png", "fig11_generalized_switches.png", "fig12_plan_and_execution.png",
              "fig14_safety_margin.png", "execution.gif", "compare_transfer_tool2.png"]

@@ -103,7 +103,7 @@ def test_a_plant_that_refuses_a_move_ends_the_run_with_its_reason(plan_file: Pat
             return plan.tool_pose[0]
 
         def move_tool(self, t: np.ndarray, tool_pose: np.ndarray) -> None:
-            from tooltransfer.dmp.errors import InputError
+            from tooltransfer.errors import InputError
 
             raise InputError("tool_pose", "a reachable path", "the arm is jammed")
 

@@ -310,7 +310,7 @@ def test_export_of_an_infeasible_or_violated_plan(plan_path: Path, tmp_path: Pat
 
 
 def test_read_trajectory_names_the_file_of_a_bad_export(tmp_path: Path) -> None:
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
 
     cases = {"a.csv": "t,a\n1,2\n", "b.trajectory.json": '{"points": [{"positions": [1, 2, 3]}]}',
              "c.npz": "not a zip", "d.txt": "x"}

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 import yaml
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.cli import main
 from tooltransfer.planner.segmentation import load_fixed_points, segment
 from tooltransfer.problems import dataset as dataset_module

@@ -30,7 +30,7 @@ INTERRUPTED = "tooltransfer: interrupted (Ctrl-C)"
 def _argv(tmp: Path) -> dict[str, list[str]]:
     """A valid command line of every command."""
     return {
-        "demo": ["demo", "--out", str(tmp / "demo")],
+        "paper": ["paper", "--out", str(tmp / "paper")],
         "compare": ["compare", str(TASK), "--out", str(tmp / "cmp")],
         "demos": ["demos", "--n", "1", "--out", str(tmp / "demos")],
         "learn": ["learn", str(DATA), "-o", str(tmp / "skills.json")],

@@ -45,7 +45,7 @@ FILE_OUTPUTS = [
 ]
 FOLDER_OUTPUTS = [
     (["compare", str(TASK)], "--out", "--out"),
-    (["demo"], "--out", "--out"),
+    (["paper"], "--out", "--out"),
     (["demos", "--n", "1"], "--out", "--out"),
     (["batch", "generate", str(BATCH)], "--out", "--out"),
     (["batch", "report", "results.sqlite"], "--out", "--out"),

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.cli import main
 from tooltransfer.planner.plan import PlanFileError, read_plan
 from tooltransfer.planner.segmentation.geometry import table_poses

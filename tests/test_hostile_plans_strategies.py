@@ -1,6 +1,6 @@
 """Hostile plan files drawn by hypothesis (derandomized, bounded): a sample, a metric, a segment or a
 top-level field replaced by junk of any JSON type, arrays cut short, time scaled. Reading and checking
-the plan either passes or raises an :class:`~tooltransfer.dmp.errors.InputError` whose one-line message names the
+the plan either passes or raises an :class:`~tooltransfer.errors.InputError` whose one-line message names the
 file (never another exception); a plan timed faster than its tool's limits never passes."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.plan import read_plan
 from tooltransfer.planner.simulate import check_plan
 

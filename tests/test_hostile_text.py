@@ -20,7 +20,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.cli import main
 from tooltransfer.tools.yaml_file import MAX_ALIAS_EXPANSION, MAX_DEPTH, parse_yaml, read_yaml
 

@@ -1,4 +1,4 @@
-"""Property tests for tooltransfer.dmp.mappings: eqs. (6) and (7) of the paper, their exact inverses, clipping.
+"""Property tests for tooltransfer.planner.oe.mappings: eqs. (6) and (7) of the paper, their exact inverses, clipping.
 
 Accuracy statements tested here (see the module docstring for the derivations):
 
@@ -22,8 +22,8 @@ import pytest
 from hypothesis import event, example, given, settings
 from hypothesis import strategies as st
 
-from tooltransfer.dmp import mappings as mp
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
+from tooltransfer.planner.oe import mappings as mp
 
 pytestmark = pytest.mark.filterwarnings("error")  # any warning (overflow, invalid, divide) fails a test
 

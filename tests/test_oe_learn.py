@@ -92,7 +92,7 @@ def test_skill_fitted_on_all_recovered_demonstrations(n_demos: int) -> None:
 
 
 def test_skill_file_round_trip_and_refusals(tmp_path) -> None:
-    from tooltransfer.dmp.errors import SkillFileError
+    from tooltransfer.errors import SkillFileError
     from tooltransfer.planner.oe.learn import OESkill
 
     skill = learn_oe_skill([demo(np.random.default_rng(5))], load_tool("finger"), k=0.5, n_basis=20)

@@ -11,8 +11,8 @@ from tooltransfer.planner.oe.learn import condense_recovered
 from tooltransfer.planner.oe.mapping_variant import condense_mapping
 from tooltransfer.planner.scene import Scene
 from tooltransfer.planner.segmentation import segment
+from tooltransfer.planner.ss.paper_cases import DEFAULT_DATASET, default_oe_skill, transfer_case
 from tooltransfer.problems.dataset import load_dataset
-from tooltransfer.problems.paper_cases import DEFAULT_DATASET, default_oe_skill, transfer_case
 from tooltransfer.tools import load_tool
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import shapely
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.tools.omni import (
     OmniPlatform,
     inner_row,

@@ -15,16 +15,16 @@ import numpy as np
 import pytest
 import yaml
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.cli import main
+from tooltransfer.planner.operator.generate import JOINT_STEP, generate_demonstrations
+from tooltransfer.planner.operator.operator import MIN_CONTACT
 from tooltransfer.planner.segmentation.geometry import nearest_on_segments, to_tool_frame
 from tooltransfer.problems.dataset import Dataset, load_dataset
 from tooltransfer.problems.scenes import DEMO_SCENE
 from tooltransfer.tools.omni.ik import joint_path, table_pose
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.omni.reach import reach_sector
-from tooltransfer.tools.operator.generate import JOINT_STEP, generate_demonstrations
-from tooltransfer.tools.operator.operator import MIN_CONTACT
 
 DATA = Path(__file__).resolve().parents[1] / "problems" / "data" / "finger_demos"
 CSV_TOLERANCE = 1e-6

@@ -22,7 +22,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, example, given, settings
 from hypothesis import strategies as st
 
-from tooltransfer.dmp.errors import InputError, SkillFileError
+from tooltransfer.errors import InputError, SkillFileError
 from tooltransfer.planner.cli import main
 from tooltransfer.problems.dataset import load_dataset
 from tooltransfer.tools.library import load_tool

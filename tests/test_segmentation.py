@@ -10,14 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.cli import main
+from tooltransfer.planner.operator.generate import generate_demonstrations
 from tooltransfer.planner.segmentation import Segmentation, segment
 from tooltransfer.planner.segmentation.rest import camera_noise, still_tail
 from tooltransfer.problems.dataset import Dataset, Demonstration, load_dataset
 from tooltransfer.tools import load_tool
 from tooltransfer.tools.objects import OBJECT_RADIUS
-from tooltransfer.tools.operator.generate import generate_demonstrations
 
 DATA = Path(__file__).resolve().parents[1] / "problems" / "data" / "finger_demos"
 TIMING = 0.05

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.tools import contact_on_platform, load_tool
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.sim import Job, Rates, SimPlatform, execute_many

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import shapely
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.tools import Disc, load_tool
 from tooltransfer.tools.library import library_names
 from tooltransfer.tools.omni.ik import tool_pose_world

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.tools import load_tool
 from tooltransfer.tools.pose import Pose2D
 from tooltransfer.tools.sim import Rates, SimPlatform

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.tools import load_tool
 from tooltransfer.tools.omni.ik import tool_pose_world
 from tooltransfer.tools.sim import Execution, Rates, SimPlatform

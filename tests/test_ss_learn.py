@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from tooltransfer.dmp.errors import InputError, SkillFileError
 from tooltransfer.dmp.primitive import DMP
+from tooltransfer.errors import InputError, SkillFileError
 from tooltransfer.planner.ss import DemoSwitch, SwitchSkill, learn_switch_skill
 from tooltransfer.planner.ss.learn import decompose
 from tooltransfer.planner.ss.synthetic import synthetic_switches

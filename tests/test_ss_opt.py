@@ -159,7 +159,7 @@ def test_every_separator_form_solves_the_fig11_cases(skill: SwitchSkill, separat
                                               ("min_step", float("nan")), ("body_band", -0.01),
                                               ("reach_band", float("inf")), ("separators", "polar")])
 def test_bad_options_raise_input_error(skill: SwitchSkill, field: str, value: object) -> None:
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
 
     with pytest.raises(InputError, match=field):
         optimize(skill, fig11_task("fig11b"), **{field: value})

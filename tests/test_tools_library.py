@@ -11,7 +11,7 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tooltransfer.dmp.errors import ToolTransferError
+from tooltransfer.errors import ToolTransferError
 from tooltransfer.tools import (
     Face,
     Tool,

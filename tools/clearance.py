@@ -27,12 +27,12 @@ import shapely
 from numpy.typing import NDArray
 from shapely.ops import unary_union
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_positive
+from tooltransfer.errors import InputError
 from tooltransfer.tools.decompose import convex_decomposition
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, Obstacle
 from tooltransfer.tools.pose import Pose2D
+from tooltransfer.validation import check_positive
 
 
 def tool_polygon(tool: Tool, pose: Pose2D) -> shapely.Polygon:

@@ -19,13 +19,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
 from tooltransfer.tools.model import Tool, wrap_angle
 from tooltransfer.tools.objects import DiscObject, ObjectModel
 from tooltransfer.tools.omni.ik import IKResult, inverse_kinematics
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pose import Pose2D
+from tooltransfer.validation import check_array
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import shapely
 from shapely.ops import unary_union
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 
 
 def is_convex(poly: shapely.Polygon, rtol: float = 1e-12) -> bool:

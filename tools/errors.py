@@ -1,10 +1,10 @@
-"""Errors of the tool library and the Omni model, below :class:`tooltransfer.dmp.errors.ToolTransferError`."""
+"""Errors of the tool library and the Omni model, below :class:`tooltransfer.errors.ToolTransferError`."""
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 
-from tooltransfer.dmp.errors import ToolTransferError
+from tooltransfer.errors import ToolTransferError
 
 
 class ToolSpecError(ToolTransferError, ValueError):

@@ -23,7 +23,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.tools.decompose import convex_decomposition
 from tooltransfer.tools.errors import ToolSpecError, UnknownFaceError
 

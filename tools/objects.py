@@ -9,9 +9,9 @@ import shapely
 import shapely.affinity
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
 from tooltransfer.tools.decompose import is_convex
+from tooltransfer.validation import check_array, check_positive
 
 #: Radius of the paper's object [m] (Table II: 17.5 mm).
 OBJECT_RADIUS = 0.0175

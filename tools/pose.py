@@ -9,7 +9,7 @@ import shapely
 import shapely.affinity
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 
 
 def rotation(yaw: float) -> NDArray[np.float64]:

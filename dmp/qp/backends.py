@@ -15,7 +15,7 @@ import qpsolvers
 import scipy.sparse as sp
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import SolverError, UnknownSolverError
+from tooltransfer.errors import SolverError, UnknownSolverError
 
 DEFAULT_OPTIONS: dict[str, dict[str, Any]] = {
     # plain OSQP calls ("full" strategy); the cutting-plane seed overrides eps to 1e-4 (tooltransfer.dmp.qp.solve)

@@ -32,12 +32,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.dmp.qp.native import INFEASIBLE, MAX_ITER, GIWork, core
+from tooltransfer.errors import ToolTransferError
 
 RowSource = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64]]]
 """``oracle(z) -> (G_new, h_new)``: rows violated at ``z`` that the candidates lack (empty if none)."""
 
 
-class DualInfeasible(Exception):
+class DualInfeasible(ToolTransferError):
     """The rows are inconsistent; ``rows`` lists the candidate rows involved, ``equalities`` whether
     the equality rows take part."""
 

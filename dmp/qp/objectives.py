@@ -13,8 +13,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.dmp.affine import AffineRollout
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_array, check_positive
 
 
 class Quadratic(NamedTuple):

@@ -18,11 +18,11 @@ import qpsolvers
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.dmp.affine import AffineRollout
-from tooltransfer.dmp.errors import InputError
 from tooltransfer.dmp.primitive import DMP
 from tooltransfer.dmp.qp.constraints.base import Constraint
 from tooltransfer.dmp.qp.objectives import Objective, Quadratic
-from tooltransfer.dmp.validation import check_array, check_positive, check_time
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_array, check_positive, check_time
 
 
 @dataclass

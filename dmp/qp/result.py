@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InfeasibleError
 from tooltransfer.dmp.trajectory import Rollout
+from tooltransfer.errors import InfeasibleError
 
 
 @dataclass
@@ -30,7 +31,7 @@ class FitResult:
         outer linearisation rounds; families/reason: for infeasible problems.
     """
 
-    status: str
+    status: Literal["solved", "inaccurate", "infeasible"]
     solver: str
     strategy: str
     weights: NDArray[np.float64] | None = None

@@ -50,14 +50,14 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from tooltransfer.dmp.affine import AffineRollout
-from tooltransfer.dmp.errors import InputError, SolverError
 from tooltransfer.dmp.qp.backends import QPOutcome, check_solver, solve_qp
 from tooltransfer.dmp.qp.dual_active_set import DualActiveSet, DualInfeasible
 from tooltransfer.dmp.qp.pool import RowPool, Samples
 from tooltransfer.dmp.qp.problem import FitProblem, stack_rows, unconstrained_weights
 from tooltransfer.dmp.qp.result import FitResult
 from tooltransfer.dmp.trajectory import Rollout
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError, SolverError, ToolTransferError
+from tooltransfer.validation import check_array
 
 Strategy = Literal["cutting_planes", "full"]
 
@@ -72,7 +72,7 @@ SEED_DUAL_FRACTION = 1e-3
 """Seed rows whose multiplier exceeds this fraction of the largest become candidates."""
 
 
-class _Infeasible(Exception):
+class _Infeasible(ToolTransferError):
     def __init__(self, families: tuple[str, ...], reason: str) -> None:
         self.families, self.reason = families, reason
 

@@ -8,7 +8,7 @@ long-lived
 - :mod:`tooltransfer.planner.batch.executors`: a process pool or Dask distributed, one code path;
 - :mod:`tooltransfer.planner.batch.store`: the SQLite store (WAL, one row per task and variant, resumable);
 - :mod:`tooltransfer.planner.batch.runner`: submit, store as each finishes, progress, Ctrl-C;
-- :mod:`tooltransfer.planner.batch.report` and :mod:`tooltransfer.planner.batch.figures`: tables, CSV, figures;
+- :mod:`tooltransfer.planner.batch.report` and :mod:`tooltransfer.planner.plots.batch_figures`: tables, CSV, figures;
 - :mod:`tooltransfer.planner.batch.cli`: ``tooltransfer batch generate|run|report|schema``.
 
 Scripts that call :func:`run_batch` must guard their entry point with ``if __name__ ==

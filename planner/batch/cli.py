@@ -22,7 +22,7 @@ MAX_TASK_FILES = 100_000
 
 
 def _cmd_generate(args: argparse.Namespace) -> int:
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
     from tooltransfer.planner.batch.generate import write_tasks
     from tooltransfer.planner.batch.spec import load_batch
 
@@ -46,7 +46,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     retry = tuple(s for s in (args.retry or "").split(",") if s)
     bad = [s for s in retry if s not in ("error", "timeout", "infeasible", "violated")]
     if bad:
-        from tooltransfer.dmp.errors import InputError
+        from tooltransfer.errors import InputError
 
         raise InputError("--retry", "a comma-separated list of error, timeout, infeasible, violated", bad[0])
     s = run_batch(args.batch, args.db, workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local,

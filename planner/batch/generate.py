@@ -22,7 +22,7 @@ import numpy as np
 import shapely
 import yaml
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.batch.spec import BatchSpec, Region, dataset_folder
 from tooltransfer.problems.task import task_from_dict
 

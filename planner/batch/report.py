@@ -31,22 +31,14 @@ import numpy as np
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
-from scipy.stats import binomtest
+
+from tooltransfer.planner.batch.stats import wilson
 
 CONE_TOL = 0.01
 REACH_TOL = 1e-3
 PENETRATION_TOL = 1e-6
-CONFIDENCE = 0.95
 #: Executed success thresholds [m] (final object-to-target distance).
 EXEC_TOLS = (0.002, 0.005)
-
-
-def wilson(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float]:
-    """Wilson score interval of a success rate ``k / n`` (``(nan, nan)`` for n = 0)."""
-    if n == 0:
-        return (float("nan"), float("nan"))
-    ci = binomtest(k, n).proportion_ci(confidence_level=confidence, method="wilson")
-    return (float(ci.low), float(ci.high))
 
 
 def is_valid(r: dict[str, Any]) -> bool:
@@ -300,7 +292,7 @@ def write_csv(path: Path, rows: Sequence[dict[str, Any]], columns: Sequence[str]
 def write_report(db: str | Path, out: str | Path | None, console: Console | None = None) -> list[Path]:
     """Print the report of the store ``db``; with ``out``, write ``results.csv``, ``summary.csv``,
     ``reasons.csv`` and the figures there. Returns the written paths."""
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
     from tooltransfer.planner.batch.store import ResultStore
 
     p = Path(db)
@@ -326,7 +318,7 @@ def write_report(db: str | Path, out: str | Path | None, console: Console | None
     written = [write_csv(folder / "results.csv", [{**r, "valid": int(is_valid(r))} for r in rows]),
                write_csv(folder / "summary.csv", [asdict(s) for s in stats], [f.name for f in fields(GroupStats)]),
                write_csv(folder / "reasons.csv", reasons, ["variant", "status", "count", "reason"])]
-    from tooltransfer.planner.batch.figures import plot_batch
+    from tooltransfer.planner.plots.batch_figures import plot_batch
 
     written += plot_batch(rows, folder)
     return written

@@ -45,7 +45,7 @@ from rich.progress import (
 )
 from rich.text import Text
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.batch.executors import Slots
 from tooltransfer.planner.batch.generate import GeneratedTask, generate_tasks
 from tooltransfer.planner.batch.spec import BatchSpec

@@ -137,7 +137,7 @@ def batch_skills(spec: Any, batch_path: str | Path, first: Any) -> ShippedSkills
     """
     import json
 
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
     from tooltransfer.planner.batch.spec import dataset_folder
     from tooltransfer.planner.skills import learn_skills
     from tooltransfer.problems.dataset import DatasetError

@@ -27,7 +27,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 
 SCHEMA_VERSION = "2"
 #: Schemas :class:`ResultStore` can read (only the current one is resumed).

@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
 from tooltransfer.dmp.qp.constraints import OutsideDisc, PositionPolygon
 from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
+from tooltransfer.errors import InputError
 from tooltransfer.planner.oe.face_frame import FaceFrame
 from tooltransfer.tools.pushing.inverse import FaceGeometry
 from tooltransfer.tools.pushing.mechanics import PushMechanics

@@ -22,6 +22,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from tooltransfer.errors import ToolTransferError
 from tooltransfer.planner.oe.push_plan import Push
 from tooltransfer.planner.scene import Scene
 from tooltransfer.tools.model import Tool
@@ -37,7 +38,7 @@ MIN_PIECE = 0.001
 CLEAR = 0.003
 
 
-class PushRefused(Exception):
+class PushRefused(ToolTransferError):
     """A span cannot be pushed by its face under the mechanics (the reason says where and why)."""
 
 

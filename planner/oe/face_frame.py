@@ -28,13 +28,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
 from tooltransfer.planner.scene import Scene
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.omni.dh import D_TOOL
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.omni.reach import reach_sector
+from tooltransfer.validation import check_array
 
 
 @dataclass(frozen=True)

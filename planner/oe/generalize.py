@@ -6,8 +6,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.dmp import DMP
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_array, check_positive
 
 
 def generalize(

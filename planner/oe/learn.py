@@ -31,10 +31,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.dmp import DMP
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.mappings import angle_inverse, wrap_angle
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
+from tooltransfer.planner.oe.mappings import angle_inverse, wrap_angle
 from tooltransfer.tools.model import Tool
+from tooltransfer.validation import check_array
 
 OE_FORMAT = "tooltransfer.oe/1"
 
@@ -116,7 +116,7 @@ def _map_steps(
 ) -> NDArray[np.float64]:
     """Steps (K-1, 2) turned about the push directions ``phi`` by (6) (condensing) or by its
     inverse (recovering), lengths kept: exact inverses of each other step by step."""
-    from tooltransfer.dmp.mappings import angle_map
+    from tooltransfer.planner.oe.mappings import angle_map
 
     theta = wrap_angle(np.arctan2(steps[:, 1], steps[:, 0]) - phi)
     if inverse:
@@ -202,9 +202,9 @@ class OESkill:
     @classmethod
     def from_dict(cls, doc: Any, source: str = "<dict>") -> OESkill:
         """Rebuild a skill from :meth:`to_dict` output; another format or damaged data raises
-        :class:`~tooltransfer.dmp.errors.SkillFileError`."""
-        from tooltransfer.dmp.errors import SkillFileError
+        :class:`~tooltransfer.errors.SkillFileError`."""
         from tooltransfer.dmp.skill_file import dmp_from_dict
+        from tooltransfer.errors import SkillFileError
 
         if not isinstance(doc, dict) or doc.get("format") != OE_FORMAT:
             got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
@@ -228,7 +228,7 @@ class OESkill:
     @classmethod
     def load(cls, path: str | Path) -> OESkill:
         """Read a skill written by :meth:`save`; another format or a damaged file raises
-        :class:`~tooltransfer.dmp.errors.SkillFileError`."""
+        :class:`~tooltransfer.errors.SkillFileError`."""
         from tooltransfer.dmp.skill_file import read_json
 
         return cls.from_dict(read_json(path), str(path))

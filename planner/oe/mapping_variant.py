@@ -36,17 +36,17 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.mappings import angle_map, inner_map_points, outer_map_points, wrap_angle
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
 from tooltransfer.planner.oe.contacts import PushRefused, realise_pushes
 from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.planner.oe.mappings import angle_map, inner_map_points, outer_map_points, wrap_angle
 from tooltransfer.planner.oe.metrics import plan_metrics
 from tooltransfer.planner.oe.push_plan import PushPlan
 from tooltransfer.planner.scene import Scene
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, Obstacle
 from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.validation import check_array, check_positive
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.dmp import DMP
-from tooltransfer.dmp.errors import InputError
 from tooltransfer.dmp.qp import (
     FitProblem,
     FitResult,
@@ -55,7 +54,7 @@ from tooltransfer.dmp.qp import (
     solve_fit,
 )
 from tooltransfer.dmp.qp.constraints.base import Constraint
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
 from tooltransfer.planner.oe.constraints import ContactOnFace, HeadingCone, reach_constraints, reach_entry
 from tooltransfer.planner.oe.contacts import PushRefused, realise_pushes, usable_range
 from tooltransfer.planner.oe.face_frame import FaceFrame
@@ -67,6 +66,7 @@ from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pushing.inverse import FaceGeometry
+from tooltransfer.validation import check_array, check_positive
 
 FINAL_TRIES = 3
 """Screened candidates solved on the full grid, in order of cost, before the search gives up."""

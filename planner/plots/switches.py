@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from tooltransfer.planner.plots.save import save_figure
-from tooltransfer.planner.ss.demo import DemoSwitch
-from tooltransfer.planner.ss.generalize import recombine
+from tooltransfer.planner.ss.demonstrated import DemoSwitch
+from tooltransfer.planner.ss.dmp_variant import recombine
 from tooltransfer.planner.ss.learn import SwitchSkill, decompose
-from tooltransfer.planner.ss.opt import optimize
+from tooltransfer.planner.ss.opt_variant import optimize
 from tooltransfer.planner.ss.task import SwitchTask
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.pose import Pose2D

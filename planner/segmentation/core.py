@@ -70,7 +70,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.signal import savgol_filter
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.oe.learn import DemoPush
 from tooltransfer.planner.segmentation.checks import check_recording
 from tooltransfer.planner.segmentation.geometry import ToolGeometry, nearest_on_segments, to_tool_frame, to_world

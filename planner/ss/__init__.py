@@ -12,10 +12,10 @@
   :mod:`tooltransfer.planner.ss.cases`.
 """
 
-from tooltransfer.planner.ss.demo import DemoSwitch
-from tooltransfer.planner.ss.generalize import recombine
+from tooltransfer.planner.ss.demonstrated import DemoSwitch
+from tooltransfer.planner.ss.dmp_variant import recombine
 from tooltransfer.planner.ss.learn import SwitchSkill, learn_switch_skill
-from tooltransfer.planner.ss.opt import optimize
+from tooltransfer.planner.ss.opt_variant import optimize
 from tooltransfer.planner.ss.result import SwitchPath
 from tooltransfer.planner.ss.skill_file import load_switch_skill, save_switch_skill
 from tooltransfer.planner.ss.task import SwitchTask

@@ -1,5 +1,5 @@
 """From the segmentation of recorded demonstrations (:mod:`tooltransfer.planner.segmentation`) to the SS skill's
-input: one :class:`~tooltransfer.planner.ss.demo.DemoSwitch` per switch segment.
+input: one :class:`~tooltransfer.planner.ss.demonstrated.DemoSwitch` per switch segment.
 
 A switch segment gives its time span and the contact points (tool frame and world) where the first
 face leaves and the second arrives; the tool track inside the span (encoder samples: tool centre
@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.planner.ss.demo import DemoSwitch
+from tooltransfer.errors import InputError
+from tooltransfer.planner.ss.demonstrated import DemoSwitch
+from tooltransfer.problems import FINGER_DEMOS
 from tooltransfer.problems.dataset import Demonstration
 
 
@@ -62,4 +63,4 @@ def dataset_switches(folder: str | Path, faces: tuple[str, str] | None = ("upper
 
 def default_dataset() -> Path:
     """The committed default dataset's folder (tool 1's demonstrations)."""
-    return Path(__file__).resolve().parents[2] / "problems" / "data" / "finger_demos"
+    return FINGER_DEMOS

@@ -1,7 +1,7 @@
 """Named switch cases (the paper's Fig. 11) and random switches (tests, benchmark).
 
 Fig. 11 gives no coordinates; the object sits 160 mm in front of the Omni (inside its reach, as the
-paper scenarios of :mod:`tooltransfer.problems.paper_cases`), contact points in the middle of the faces' ranges:
+paper scenarios of :mod:`tooltransfer.planner.ss.paper_cases`), contact points in the middle of the faces' ranges:
 
 * ``fig11a``: T-shape, the object contact moves from the object's right (the crossbar's ``left``
   end pushing leftward) to its bottom (the crossbar's ``top`` pushing forward);

@@ -27,9 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
 from tooltransfer.dmp.primitive import DMP
-from tooltransfer.planner.ss.demo import DemoSwitch
+from tooltransfer.errors import InputError
+from tooltransfer.planner.ss.demonstrated import DemoSwitch
 from tooltransfer.planner.ss.virtual import VIRTUAL_KINDS, VirtualKind, virtual_motion
 from tooltransfer.tools.objects import Disc
 
@@ -82,7 +82,7 @@ class SwitchSkill:
 
     @classmethod
     def load(cls, path: str) -> SwitchSkill:
-        """Load a skill saved by :meth:`save`; raises :class:`~tooltransfer.dmp.errors.SkillFileError`."""
+        """Load a skill saved by :meth:`save`; raises :class:`~tooltransfer.errors.SkillFileError`."""
         from tooltransfer.planner.ss.skill_file import load_switch_skill
 
         return load_switch_skill(path)

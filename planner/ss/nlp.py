@@ -78,7 +78,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.ss.bodies import UNIT, Body
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.omni.heading import heading_casadi

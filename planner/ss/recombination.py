@@ -1,7 +1,7 @@
 """Recombination (eq. 18) as one linear map per time grid, for the ``dmp`` variant's speed.
 
 With the forcing-term scaling ``"none"`` (``M = I``, as the paper and the SS skill use) every step of
-:func:`tooltransfer.planner.ss.generalize.recombine` between the new virtual motion and the rolled-out path is
+:func:`tooltransfer.planner.ss.dmp_variant.recombine` between the new virtual motion and the rolled-out path is
 linear:
 
 * fitting ``f^o`` to the virtual motion ``x^o - x_o`` (T, 2) on the grid ``t`` (T,) is a linear map

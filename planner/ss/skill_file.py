@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from tooltransfer.dmp.errors import InputError, SkillFileError
 from tooltransfer.dmp.skill_file import dmp_from_dict, dmp_to_dict
+from tooltransfer.errors import InputError, SkillFileError
 from tooltransfer.planner.ss.learn import SwitchSkill
 from tooltransfer.planner.ss.virtual import VIRTUAL_KINDS
 

@@ -2,8 +2,8 @@
 
 Tool 1 (the finger) switches from its ``upper`` face touching the bottom of the puck to its
 ``left`` face touching the puck's right side, as in the paper's Fig. 9: the geometric switch path of
-:func:`tooltransfer.tools.arch.switch_path` (back off, arch round the puck, approach), timed by a minimum-jerk
-profile along its length, with a smooth hand tremor (low-pass filtered noise, zero at the two
+:func:`tooltransfer.planner.ss.arch_variant.switch_path` (back off, arch round the puck, approach), timed by a
+minimum-jerk profile along its length, with a smooth hand tremor (low-pass filtered noise, zero at the two
 contacts) on top. The heading follows the Omni's waist; contact points come from
 :func:`tooltransfer.tools.contact.contact_on_platform`.
 """
@@ -13,17 +13,17 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InfeasibleError, InputError
-from tooltransfer.dmp.validation import check_array, check_positive
-from tooltransfer.planner.ss.demo import DemoSwitch
+from tooltransfer.errors import InfeasibleError, InputError
+from tooltransfer.planner.ss.arch_variant import switch_path
+from tooltransfer.planner.ss.demonstrated import DemoSwitch
 from tooltransfer.planner.ss.virtual import min_jerk
-from tooltransfer.tools.arch import switch_path
 from tooltransfer.tools.contact import Contact, contact_on_platform
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import OBJECT_RADIUS
 from tooltransfer.tools.omni.heading import heading
 from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.validation import check_array, check_positive
 
 
 def platform_contact(tool: Tool, face: str, centre: NDArray[np.float64], platform: OmniPlatform,

@@ -12,8 +12,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InfeasibleError, InputError
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InfeasibleError, InputError
 from tooltransfer.tools.contact import Contact, contact_pose
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, DiscObject, ObjectModel, Obstacle, PolygonObject
@@ -21,6 +20,7 @@ from tooltransfer.tools.omni.heading import heading_scalar
 from tooltransfer.tools.omni.ik import inverse_kinematics
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pose import Pose2D
+from tooltransfer.validation import check_array, check_positive
 
 
 @dataclass(frozen=True)

@@ -21,9 +21,9 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
 from tooltransfer.tools.objects import Disc
+from tooltransfer.validation import check_array
 
 VirtualKind = Literal["arch", "line"]
 VIRTUAL_KINDS: tuple[str, ...] = ("arch", "line")

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.validation import check_array
 
 #: Shoulder height above the base frame origin, d1 [m] (Table I).
 D1 = 0.13335

@@ -22,9 +22,9 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.validation import check_array
 from tooltransfer.tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL, forward_kinematics
 from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.validation import check_array
 
 Reason = Literal["radius", "angle", "joint limit"]
 

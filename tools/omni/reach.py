@@ -22,11 +22,11 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
 from tooltransfer.tools.omni.dh import D1, D_TOOL, L1
 from tooltransfer.tools.omni.ik import LIMIT_ATOL, effective_link, planar_2r
 from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.validation import check_array, check_positive
 
 
 class LinearRows(NamedTuple):

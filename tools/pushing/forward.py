@@ -21,11 +21,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.pushing.geometry import Outline
 from tooltransfer.tools.pushing.mechanics import FREE, MODE_NAMES, SLIDE, STICK, PushMechanics, object_displacement
+from tooltransfer.validation import check_array, check_positive
 
 #: Default substep bound [m] on the motion of any outline point (0.1 mm: forward and inverse agree
 #: to about 1e-3 mm per 50 mm of push, see ``tests/test_pushing.py``).

@@ -51,11 +51,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_positive, check_time
+from tooltransfer.errors import InputError
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.pushing.forward import simulate_batch
 from tooltransfer.tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
+from tooltransfer.validation import check_array, check_positive, check_time
 
 #: Bounds of the fit (mu, c).
 MU_BOUNDS, C_BOUNDS = (0.05, 5.0), (0.2, 1.5)

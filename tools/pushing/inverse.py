@@ -28,12 +28,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.omni.heading import centre_path, heading
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pushing.mechanics import PushMechanics, cone_margin, perp
+from tooltransfer.validation import check_array, check_positive
 
 #: Steps of the object shorter than this [m] are not judged against the friction cone (a path
 #: standing still at a switch has steps of nanometres in arbitrary directions).

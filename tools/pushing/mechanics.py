@@ -34,7 +34,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 
 #: Contact modes of :func:`object_displacement` (``mode`` arrays hold these codes).
 FREE, STICK, SLIDE = 0, 1, 2

@@ -17,8 +17,7 @@ import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Obstacle
 from tooltransfer.tools.omni.platform import OmniPlatform
@@ -28,6 +27,7 @@ from tooltransfer.tools.sim.model import SimModel
 from tooltransfer.tools.sim.platform import check_obstacles
 from tooltransfer.tools.sim.recorder import record
 from tooltransfer.tools.sim.reference import joint_reference, tool_path_joints
+from tooltransfer.validation import check_array
 
 
 @dataclass(frozen=True)

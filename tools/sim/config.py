@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_positive
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_positive
 
 
 @dataclass(frozen=True)

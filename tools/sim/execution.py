@@ -20,8 +20,8 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_positive
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_positive
 
 #: Breaks in tool-object contact shorter than this [s] (the puck chattering on the face) are
 #: bridged: they stay one :class:`ContactEvent`.

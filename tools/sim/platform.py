@@ -24,8 +24,7 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, Obstacle
 from tooltransfer.tools.omni.platform import OmniPlatform
@@ -35,6 +34,7 @@ from tooltransfer.tools.sim.mjcf import PUCK, tool_piece_names
 from tooltransfer.tools.sim.model import STATE_SPEC, SimModel
 from tooltransfer.tools.sim.recorder import record
 from tooltransfer.tools.sim.reference import joint_reference, tool_path_joints
+from tooltransfer.validation import check_array
 
 #: Largest jump [rad] allowed between the arm's joints and the first reference sample of an
 #: execution (a larger one would be a step input to the PD loop, not a path to track).

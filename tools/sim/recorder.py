@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.sim.execution import CONTACT_GAP, ContactEvent, Execution, Rates
 from tooltransfer.tools.sim.model import SensorRows

@@ -8,10 +8,10 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_time
+from tooltransfer.errors import InputError
 from tooltransfer.tools.omni.ik import inverse_kinematics, joint_path
 from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.validation import check_array, check_time
 
 #: Tolerance [rad] on the joint limits for a reference (the planner's paths touch them).
 LIMIT_TOL = 1e-6

@@ -14,11 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
 from tooltransfer.tools.contact import contact_on_platform
 from tooltransfer.tools.sim.execution import Execution, Rates
 from tooltransfer.tools.sim.platform import SimPlatform
+from tooltransfer.validation import check_array, check_positive
 
 #: Tool path samples per second of a scripted push.
 SAMPLES_PER_S = 100

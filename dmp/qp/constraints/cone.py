@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
 from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
+from tooltransfer.errors import InputError
 
 
 class VelocityCone(Constraint):

@@ -7,9 +7,9 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
 from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
-from tooltransfer.dmp.validation import check_array, check_positive
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_array, check_positive
 
 Side = Literal["left", "right"]
 

@@ -6,7 +6,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.validation import check_array
 
 
 class _AtEnd(Constraint):

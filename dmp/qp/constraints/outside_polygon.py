@@ -6,9 +6,9 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
 from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_array
 
 
 class OutsidePolygon(Constraint):

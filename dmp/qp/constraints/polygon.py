@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
 from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_array
 
 
 class PositionPolygon(Constraint):

@@ -43,7 +43,7 @@ Parameters shared by every function: ``k`` in the open interval (0, 1) (the pape
 dimensionless), ``theta_b`` in (0, pi/2] [rad] (a cone no wider than a half-plane; the paper gives no range),
 ``r_b`` in (0, MAX_RADIUS] [m], ``delta`` in [0, MAX_RADIUS] [m]. ``k``, ``theta_b`` and ``r_b`` must be
 normal doubles (>= 2.2e-308): a subnormal bound leaves no room for the image. Inputs must be finite; radii
-must be >= 0. Invalid parameters or inputs raise :class:`tooltransfer.dmp.errors.InputError` naming the argument; there
+must be >= 0. Invalid parameters or inputs raise :class:`tooltransfer.errors.InputError` naming the argument; there
 is no ``assert`` on user input.
 
 Numerics. All radial and angle maps are vectorized: an array of any shape in, float64 array of the same
@@ -89,8 +89,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import lambertw
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array
+from tooltransfer.errors import InputError
+from tooltransfer.validation import check_array
 
 __all__ = [
     "MAX_RADIUS",

@@ -14,6 +14,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from tooltransfer.errors import ToolTransferError
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import OBJECT_RADIUS, Disc
 from tooltransfer.tools.omni.ik import joint_path
@@ -21,7 +22,7 @@ from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pose import rotation
 
 
-class NoArch(Exception):
+class NoArch(ToolTransferError):
     """No arch within reach keeps the clearance."""
 
 

@@ -22,14 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
+from tooltransfer.planner.operator.operator import DemonstrationFailed, ScriptedOperator
 from tooltransfer.problems.dataset import Demonstration, Meta, PlatformMeta, Rates, write_dataset
 from tooltransfer.problems.scenes import DEMO_SCENE
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.objects import OBJECT_RADIUS
 from tooltransfer.tools.omni.ik import table_pose
 from tooltransfer.tools.omni.platform import OmniPlatform
-from tooltransfer.tools.operator.operator import DemonstrationFailed, ScriptedOperator
 from tooltransfer.tools.sim import Execution
 
 OBJECT_NOISE = 0.0015

@@ -116,7 +116,7 @@ def fig11(skills: Skills, out: str | Path) -> Path:
     from tooltransfer.planner.ss.cases import FIG11, fig11_task
 
     if skills.ss is None:
-        from tooltransfer.dmp.errors import InputError
+        from tooltransfer.errors import InputError
 
         raise InputError("skills.ss", "an SS skill", None)
     return plot_generalized_switches(skills.ss, {name: fig11_task(name) for name in FIG11}, out)
@@ -132,7 +132,7 @@ def fig12(plan: Plan, out: str | Path, executions: Mapping[str, Execution] | Non
 def fig14(task_path: str | Path, out: str | Path, margins: tuple[float, ...] = (0.0, 0.005, 0.01)) -> Path:
     """Fig. 14: the outer map (7) with several safety margins round the task's first disc obstacle
     (left) and the mapping and qp condensed paths with the task's margin (right)."""
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
     from tooltransfer.planner.plots.safety_margin import plot_safety_margin
     from tooltransfer.tools.objects import Disc
 
@@ -174,7 +174,7 @@ def readme_figures(out: str | Path = "docs/images") -> tuple[Path, Path]:
     (``fig12_transfer_tool2.png``). Deterministic (the planner, the simulation and the closed loop's
     camera noise are); small palette PNGs. ``make figures`` writes them to ``docs/images``."""
     from tooltransfer.planner.closed_loop import execute_closed_loop
-    from tooltransfer.planner.demo import PAIRS, TRANSFER
+    from tooltransfer.planner.paper_run import PAIRS, TRANSFER
     from tooltransfer.planner.plots.execution import plot_plan, plot_plans
     from tooltransfer.planner.simulate import simulate_plan
     from tooltransfer.planner.solve import solve
@@ -196,7 +196,7 @@ def readme_figures(out: str | Path = "docs/images") -> tuple[Path, Path]:
     return fig12_path, compare_path
 
 
-if __name__ == "__main__":  # make figures: python -m tooltransfer.planner.figures [OUT]
+if __name__ == "__main__":  # make figures: python -m tooltransfer.planner.plots.paper_figures [OUT]
     import sys
     import time
 

@@ -9,22 +9,22 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.planner.oe.generalize import generalize
 from tooltransfer.planner.oe.learn import OESkill, learn_oe_skill
+from tooltransfer.planner.operator.scene import DEMO_SCENE
 from tooltransfer.planner.segmentation import segment
+from tooltransfer.problems import FINGER_DEMOS
 from tooltransfer.problems.dataset import load_dataset
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.platform import OmniPlatform
-from tooltransfer.tools.operator.scene import DEMO_SCENE
 
-DEFAULT_DATASET = Path(__file__).resolve().parent / "data" / "finger_demos"
+DEFAULT_DATASET = FINGER_DEMOS
 
 
 @cache

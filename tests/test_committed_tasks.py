@@ -64,7 +64,7 @@ def test_start_touching_keeps_the_starting_clearance() -> None:
 
 
 def test_object_overlapping_an_obstacle_is_bad_input(tmp_path: Path) -> None:
-    from tooltransfer.dmp.errors import InputError
+    from tooltransfer.errors import InputError
 
     text = (ROOT / "hard/start_touching_obstacle.yaml").read_text().replace("[0.0225, 0.12]", "[0.03, 0.12]")
     bad = tmp_path / "overlap.yaml"

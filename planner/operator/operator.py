@@ -29,9 +29,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError, ToolTransferError
+from tooltransfer.planner.ss.arch_variant import swept_clearance
 from tooltransfer.problems.scenes import DEMO_SCENE, DemoScene
-from tooltransfer.tools.arch import swept_clearance
 from tooltransfer.tools.contact import contact_on_platform
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.model import Tool
@@ -63,7 +63,7 @@ SNAG = 0.02
 """Joint tracking error [rad] above which the arm is held by something (a failed demonstration)."""
 
 
-class DemonstrationFailed(Exception):
+class DemonstrationFailed(ToolTransferError):
     """The scripted operator could not finish a demonstration (a seed to skip)."""
 
 
@@ -169,7 +169,8 @@ class ScriptedOperator:
     def _switch_path(self, here: NDArray[np.float64], a_back: NDArray[np.float64], b_back: NDArray[np.float64],
                      b: NDArray[np.float64], obj: NDArray[np.float64]) -> NDArray[np.float64]:
         """Whole switch path (K, 2): retreat ``here`` -> ``a_back``, arch round the puck at ``obj`` to
-        ``b_back``, approach ``b``. The arch is polar about the puck (as :func:`tooltransfer.tools.arch.arch_path`),
+        ``b_back``, approach ``b``. The arch is polar about the puck
+        (as :func:`tooltransfer.planner.ss.arch_variant.arch_path`),
         the short way round first, bulging out until the swept tool keeps its clearance from the puck
         and from the obstacles (the tool's body reaches 30 mm behind its head, so an arch that clears
         the puck can still sweep the body over an obstacle)."""
@@ -204,7 +205,7 @@ class ScriptedOperator:
 
     rates = Rates(object_hz=1000.0, tool_hz=1000.0)
     """Every physics step is recorded; the sensors' own clocks pick their samples from it
-    (:func:`tooltransfer.tools.operator.generate.record`), so their rates do not depend on how the operator's
+    (:func:`tooltransfer.planner.operator.generate.record`), so their rates do not depend on how the operator's
     moves are cut into executions."""
 
     def demonstrate(self, seed: int) -> tuple[Execution, Truth]:

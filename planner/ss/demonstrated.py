@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.dmp.validation import check_array, check_positive, check_time
+from tooltransfer.errors import InputError
 from tooltransfer.tools.omni.heading import rot
+from tooltransfer.validation import check_array, check_positive, check_time
 
 
 @dataclass(frozen=True)

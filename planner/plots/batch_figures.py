@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from tooltransfer.planner.batch.report import wilson
+from tooltransfer.planner.batch.stats import wilson
 from tooltransfer.planner.plots.save import save_figure
 
 

@@ -1,7 +1,7 @@
 """The ``opt`` variant: a smooth, non-penetrating switch path near the ``dmp`` one, solved with CasADi
 and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`tooltransfer.planner.ss.nlp`).
 
-1. The ``dmp`` path (:func:`tooltransfer.planner.ss.generalize.recombine`) at the N knots' times is the reference.
+1. The ``dmp`` path (:func:`tooltransfer.planner.ss.dmp_variant.recombine`) at the N knots' times is the reference.
    The primal initial guess (separating directions from its geometry) is the ``dmp`` path when it
    keeps out of the C-obstacle (``init="auto"``), else a path round the C-obstacle
    (:mod:`tooltransfer.planner.ss.initial`; the ``dmp`` path of a new tool often goes right through the object,
@@ -42,9 +42,9 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 from tooltransfer.planner.ss.bodies import UNIT, all_bodies
-from tooltransfer.planner.ss.generalize import measure, recombine
+from tooltransfer.planner.ss.dmp_variant import measure, recombine
 from tooltransfer.planner.ss.initial import c_obstacle, round_paths
 from tooltransfer.planner.ss.learn import SwitchSkill
 from tooltransfer.planner.ss.nlp import MODELS, SOLVERS, SwitchNLP, get_nlp, initial_separators

@@ -32,15 +32,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InputError
-from tooltransfer.problems.dataset import Demonstration, Meta, PlatformMeta, write_dataset
-from tooltransfer.tools.contact import contact_on_platform
-from tooltransfer.tools.library import load_tool
-from tooltransfer.tools.model import Tool
-from tooltransfer.tools.objects import OBJECT_RADIUS
-from tooltransfer.tools.omni.platform import OmniPlatform
-from tooltransfer.tools.operator.generate import JOINT_STEP, OBJECT_NOISE, RATES, record
-from tooltransfer.tools.operator.operator import (
+from tooltransfer.errors import InputError
+from tooltransfer.planner.operator.generate import JOINT_STEP, OBJECT_NOISE, RATES, record
+from tooltransfer.planner.operator.operator import (
     APPROACH,
     BACK_OFF,
     DemonstrationFailed,
@@ -50,6 +44,12 @@ from tooltransfer.tools.operator.operator import (
     _spans,
     _stroke,
 )
+from tooltransfer.problems.dataset import Demonstration, Meta, PlatformMeta, write_dataset
+from tooltransfer.tools.contact import contact_on_platform
+from tooltransfer.tools.library import load_tool
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import OBJECT_RADIUS
+from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.sim import Execution, SimPlatform
 
 ANGLES_DEG = (0, 15, -15, 30, -30, 45, -45)
@@ -100,7 +100,7 @@ def default_trials(tool: Tool, angles_deg: tuple[float, ...] = ANGLES_DEG,
 
 
 class CalibrationOperator(ScriptedOperator):
-    """The scripted operator of :mod:`tooltransfer.tools.operator.operator` running calibration trials.
+    """The scripted operator of :mod:`tooltransfer.planner.operator.operator` running calibration trials.
 
     Args:
         tool: the tool (default tool 1); platform: the Omni; speed: nominal stroke speed [m/s];

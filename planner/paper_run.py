@@ -1,9 +1,9 @@
-"""The main job (``make demo``) and ``tooltransfer compare``.
+"""The paper's transfer scenario (``tooltransfer paper``, the job of ``make demo``) and ``tooltransfer compare``.
 
 ``compare``: solve a task with every variant pair (OE ``mapping``/``qp`` x SS ``dmp``/``opt``), write
 the plans, one figure with a panel per pair and a table of the shared metrics.
 
-``run_demo``: the paper's transfer scenario end to end: learn the skills from the committed
+``run_paper``: the paper's transfer scenario end to end: learn the skills from the committed
 demonstrations (``problems/data/finger_demos``) into a skills file, compare the variants on the
 transfer to tool 2 (``problems/paper/transfer_tool2.yaml``), execute the ``qp``/``opt`` plan on the
 simulated platform open loop (as the paper did) and closed loop (re-planning from the observed
@@ -18,11 +18,12 @@ from collections.abc import Callable
 from pathlib import Path
 
 from tooltransfer.planner.plan import Plan
+from tooltransfer.problems import FINGER_DEMOS
 from tooltransfer.problems.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
 TRANSFER = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
-DATASET = ROOT / "problems" / "data" / "finger_demos"
+DATASET = FINGER_DEMOS
 
 PAIRS = (("mapping", "dmp"), ("mapping", "opt"), ("qp", "dmp"), ("qp", "opt"))
 
@@ -117,12 +118,12 @@ def compare(
     return metrics_table(plans, f"{task.name}: variant pairs (oe/ss)"), plans
 
 
-def run_demo(out: Path) -> str:
+def run_paper(out: Path) -> str:
     """Run the main job; returns the report text (also written to ``out/report.txt``)."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    from tooltransfer.planner import figures
     from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.plots import paper_figures as figures
     from tooltransfer.planner.simulate import simulate_plan
     from tooltransfer.planner.skills import Skills, learn_skills
 

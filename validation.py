@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from tooltransfer.dmp.errors import InputError
+from tooltransfer.errors import InputError
 
 
 def check_array(

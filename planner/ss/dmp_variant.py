@@ -27,7 +27,7 @@ import time
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.errors import InfeasibleError, InputError
+from tooltransfer.errors import InfeasibleError, InputError
 from tooltransfer.planner.ss.learn import SwitchSkill
 from tooltransfer.planner.ss.recombination import dmp_settings, linear_recombination, recombination_map
 from tooltransfer.planner.ss.result import SwitchPath
