@@ -470,6 +470,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="tooltransfer", description="DMP skill transfer for multi-tool pushing on a Phantom Omni."
     )
+    import tooltransfer
+
+    parser.add_argument("--version", action="version", version=f"tooltransfer {tooltransfer.__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = _add(sub, "paper", "the paper's transfer scenario (the job of `make demo`): learn from the committed "
              "demonstrations, compare the variants on the transfer to tool 2, simulate the qp plan",

@@ -1,4 +1,4 @@
-"""The demo job runs end to end through the CLI and writes every figure, plan and the report; every
+"""The paper job (`make demo`) runs end to end through the CLI and writes every figure, plan and the report; every
 command has --help with an example; compare covers every variant pair."""
 
 from __future__ import annotations
@@ -61,3 +61,16 @@ def test_bad_usage_exits_2(capsys) -> None:
         main(["solve-everything"])
     assert exc.value.code == 2
     assert "invalid choice" in capsys.readouterr().err
+
+
+def test_version_is_the_distributions(capsys) -> None:
+    import tomllib
+    from pathlib import Path
+
+    import pytest
+
+    version = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())["project"]["version"]
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.strip() == f"tooltransfer {version}"
