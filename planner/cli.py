@@ -455,6 +455,29 @@ def _unexpected(exc: BaseException) -> str:
 
 
 
+def _task_file(value: str) -> Path:
+    """A task argument: a file, or the name of a bundled task (:mod:`tooltransfer.problems.named`)."""
+    from tooltransfer.problems.named import task_file
+
+    return task_file(value)
+
+
+def _cmd_tasks(args: argparse.Namespace) -> int:
+    from tooltransfer.problems.named import bundled_tasks
+    from tooltransfer.problems.task import TaskFileError
+    from tooltransfer.tools.yaml_file import read_yaml
+
+    for name, path in bundled_tasks().items():
+        doc = read_yaml(path, TaskFileError, "task file")
+        text = " ".join(str(doc.get("description", "")).split()) if isinstance(doc, dict) else ""
+        if not text:  # the hard cases say what they are in their first comment line
+            comments = [ln.lstrip("# ").strip() for ln in path.read_text(encoding="utf-8").splitlines()
+                        if ln.startswith("#")]
+            text = comments[0] if comments else ""
+        print(f"{name:34s} {text[:120]}" if not args.paths else f"{name:34s} {path}")
+    return EXIT_OK
+
+
 def _add(sub: argparse._SubParsersAction, name: str, helptext: str, example: str,
          func: Callable[[argparse.Namespace], int]) -> argparse.ArgumentParser:
     p = sub.add_parser(name, help=helptext, description=helptext, epilog=f"example:\n  {example}",
@@ -480,7 +503,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     p = _add(sub, "compare", "solve a task with every variant pair (oe mapping|qp x ss dmp|opt): a metrics table "
              "and one figure", "tooltransfer compare problems/paper/transfer_tool2.yaml --out out", _cmd_compare)
-    p.add_argument("task", type=Path, help="task file (YAML)")
+    p.add_argument("task", type=_task_file, help="task file (YAML) or a bundled task's name (tooltransfer tasks)")
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     p.add_argument("--json", action="store_true", help="print every plan's status and metrics as JSON")
     p = _add(sub, "demos", "generate demonstrations (or a calibration recording) with the scripted operator on the "
@@ -510,9 +533,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--figure", type=Path, default=None, help="write the figure (Figs. 4b/8a style) here")
     p.add_argument("--fixed-points", type=Path, default=None,
                    help="JSON file {demo name: [[x, y], ...]} [m] overriding the automatic corners")
+    p = _add(sub, "tasks", "list the bundled task files by name (solve and compare take a name or a file)",
+             "tooltransfer tasks\n  tooltransfer solve paper/transfer_tool2", _cmd_tasks)
+    p.add_argument("--paths", action="store_true", help="print each task's file instead of its description")
     p = _add(sub, "solve", "plan a task file: pushes, switches, approach, timing, joints",
              "tooltransfer solve problems/paper/transfer_tool2.yaml -o out/plan.json", _cmd_solve)
-    p.add_argument("task", type=Path, help="task file (YAML)")
+    p.add_argument("task", type=_task_file, help="task file (YAML) or a bundled task's name (tooltransfer tasks)")
     p.add_argument("-o", "--out", type=Path, default=None, help="write the plan (JSON) here")
     p.add_argument("--oe", choices=("qp", "mapping"), default=None, help="override the task's OE variant")
     p.add_argument("--ss", choices=("arch", "dmp", "opt"), default=None, help="override the task's switch variant")

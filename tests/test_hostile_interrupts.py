@@ -40,6 +40,7 @@ def _argv(tmp: Path) -> dict[str, list[str]]:
         "export": ["export", str(tmp / "plan.json"), "--format", "csv", "-o", str(tmp / "plan.csv")],
         "schema": ["schema", "--out", str(tmp / "schema.json")],
         "tools": ["tools", "--out", str(tmp / "tools.png")],
+        "tasks": ["tasks"],
         "batch generate": ["batch", "generate", str(BATCH), "--out", str(tmp / "tasks")],
         "batch run": ["batch", "run", str(BATCH), "--db", str(tmp / "r.sqlite"), "-q"],
         "batch report": ["batch", "report", str(tmp / "r.sqlite"), "--out", str(tmp / "rep")],
