@@ -53,6 +53,9 @@ BACK_OFF = 0.002
 ADAPT_ERROR = 0.001
 #: The adaptation identifies the model from at most this many of the last push chunks.
 ADAPT_CHUNKS = 6
+#: A re-plan may use this many times the share of the friction cone the nominal plan uses (the task's
+#: ``oe.friction_cone_fraction``), up to the whole cone (:meth:`_Loop.scene_at`).
+REPLAN_CONE_WIDENING = 1.5
 #: Once the model has mispredicted two chunks, the last this many metres are pushed along the faces'
 #: normals (:meth:`_Loop.correction`).
 STAGE = 0.025
@@ -240,9 +243,11 @@ class _Loop:
     def scene_at(self, o: NDArray[np.float64]) -> Scene:
         """The scene for a re-plan from ``o``: the safety margin at most the object's clearance there
         (an object pushed closer to an obstacle than the margin keeps that clearance, as a start
-        touching one does: :func:`tooltransfer.planner.solve.effective_margin`). (Narrowing the friction cone
-        once the model mispredicts was tried: on the 0.6 x mu, c plant it ended fewer runs within
-        3 mm, the re-plans more often infeasible.)"""
+        touching one does: :func:`tooltransfer.planner.solve.effective_margin`), and the friction cone's
+        share widened by :data:`REPLAN_CONE_WIDENING`: the nominal plan keeps part of the cone in
+        reserve so that it survives an error in the mechanics, and a re-plan, made from where the
+        object was seen, spends that reserve on the correction (a plant whose object drifts toward the
+        face's normal needs directions beyond the nominal share to come back)."""
         import shapely
 
         from tooltransfer.tools.objects import Disc
@@ -250,7 +255,8 @@ class _Loop:
         disc = shapely.Point(o).buffer(self.scene.radius, quad_segs=64)
         gap = min((float(shapely.distance(disc, ob.polygon() if isinstance(ob, Disc) else ob))
                    for ob in self.scene.obstacles), default=np.inf)
-        return self.scene if gap >= self.scene.margin else replace(self.scene, margin=max(0.0, gap - 1e-4))
+        scene = self.scene if gap >= self.scene.margin else replace(self.scene, margin=max(0.0, gap - 1e-4))
+        return replace(scene, cone_fraction=min(1.0, REPLAN_CONE_WIDENING * scene.cone_fraction))
 
     def contact_s(self, o: NDArray[np.float64]) -> float | None:
         """Where the face in contact touches the object at ``o`` [m along the face], if it does."""
