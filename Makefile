@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test docs figures bench bench-sim bench-ss bench-batch bench-exec lint clean
+.PHONY: demo test typecheck docs figures bench bench-sim bench-ss bench-batch bench-exec lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -17,6 +17,15 @@ test: $(PY)
 	$(PY) -m pip install -q -e ".[test]"
 	$(PY) -m ruff check .
 	$(PY) -m pytest
+
+# mypy on the DMP core and the public entry points ([tool.mypy] in pyproject.toml says why the link)
+TYPED := -p tooltransfer.dmp -m tooltransfer -m tooltransfer.errors -m tooltransfer.validation \
+	-m tooltransfer.problems.task -m tooltransfer.problems.named -m tooltransfer.planner.solve \
+	-m tooltransfer.planner.plan -m tooltransfer.planner.closed_loop -m tooltransfer.planner.execution \
+	-m tooltransfer.planner.export
+typecheck: $(PY)
+	@mkdir -p build/mypy && ln -sfn "$(CURDIR)" build/mypy/tooltransfer
+	cd build/mypy && MYPYPATH=. ../../$(PY) -m mypy --config-file ../../pyproject.toml $(TYPED)
 
 # The suite on the floors of pyproject.toml: uv's lowest-direct resolution (every direct dependency
 # at the lowest version its specifier admits, the others at their newest) in a separate venv,

@@ -58,7 +58,7 @@ class AffineRollout:
 
     def position_matrix(self) -> NDArray[np.float64]:
         """``D`` of shape (T*n, N*n) with ``positions(w).ravel() = x_free.ravel() + D @ w``."""
-        return np.kron(self.Gx, self.M)
+        return np.asarray(np.kron(self.Gx, self.M), dtype=np.float64)
 
     def rows(
         self,

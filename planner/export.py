@@ -217,7 +217,7 @@ def _checked(p: Path, t: Any, pos: Any, vel: Any, acc: Any, names: list[Any], ph
         raise _fail(p, "<arrays>", "finite numbers")
     if phase and len(phase) != len(tt):
         raise _fail(p, "phase", f"{len(tt)} phases like t", len(phase))
-    return Trajectory(tt, *arrays, check_joint_names(names, f"{p}: joint_names"), tuple(phase))
+    return Trajectory(tt, arrays[0], arrays[1], arrays[2], check_joint_names(names, f"{p}: joint_names"), tuple(phase))
 
 
 def run_export(args: Any) -> int:

@@ -77,8 +77,8 @@ def joint_rates(t: NDArray[np.float64], joints: NDArray[np.float64]) -> tuple[ND
     q = np.asarray(joints, dtype=np.float64).reshape(len(t), -1)
     if t.size < 2:
         return np.zeros_like(q), np.zeros_like(q)
-    v = np.gradient(q, t, axis=0)
-    return v, np.gradient(v, t, axis=0)
+    v = np.asarray(np.gradient(q, t, axis=0), dtype=np.float64)
+    return v, np.asarray(np.gradient(v, t, axis=0), dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -328,7 +328,7 @@ def read_plan(path: str | Path) -> Plan:
                 raise PlanFileError(where, f"{key}[{i}]", "a mapping with t_start, t_end and faces", _kind(e))
             for k in ("t_start", "t_end"):
                 v = e.get(k)
-                if type(v) not in (int, float) or not np.isfinite(v):
+                if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v):
                     raise PlanFileError(where, f"{key}[{i}].{k}", "a finite time [s]", _kind(v))
             if e["t_end"] < e["t_start"]:
                 raise PlanFileError(where, f"{key}[{i}].t_end", f"a time not before t_start = {e['t_start']}",

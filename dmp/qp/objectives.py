@@ -49,7 +49,7 @@ class TrackPath(Objective):
         s = self.weight / aff.t.size
         p = s * np.kron(aff.Gx.T @ aff.Gx, aff.M.T @ aff.M)
         q = s * (aff.Gx.T @ (aff.x_free - self.reference) @ aff.M).ravel()
-        return Quadratic(p, q)
+        return Quadratic(np.asarray(p, dtype=np.float64), np.asarray(q, dtype=np.float64))
 
 
 class MatchForcing(Objective):
@@ -81,7 +81,7 @@ class MatchForcing(Objective):
         s = self.weight / aff.t.size
         p = s * np.kron(aff.psi.T @ aff.psi, aff.M.T @ aff.M)
         q = -s * (aff.psi.T @ self.target @ aff.M).ravel()
-        return Quadratic(p, q)
+        return Quadratic(np.asarray(p, dtype=np.float64), np.asarray(q, dtype=np.float64))
 
 
 class Ridge(Objective):

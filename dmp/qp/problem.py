@@ -127,7 +127,7 @@ class FitQP:
 
 def unconstrained_weights(p: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
     """Minimiser of ``0.5 w'Pw + q'w`` (least-squares solve, robust to a singular P)."""
-    return np.linalg.lstsq(p, -q, rcond=None)[0]
+    return np.asarray(np.linalg.lstsq(p, -q, rcond=None)[0], dtype=np.float64)
 
 
 def stack_rows(
