@@ -1,4 +1,4 @@
-"""Constrained DMP fitting as a QP (DESIGN section 4): build with :func:`build_fit_qp`, solve with
+"""Constrained DMP fitting as a QP (docs/design.md section 4): build with :func:`build_fit_qp`, solve with
 :func:`solve_fit`; constraints in :mod:`tooltransfer.dmp.qp.constraints`, objectives in
 :mod:`tooltransfer.dmp.qp.objectives`."""
 

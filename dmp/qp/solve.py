@@ -1,4 +1,4 @@
-"""Solving the constrained DMP fit (DESIGN section 4).
+"""Solving the constrained DMP fit (docs/design.md section 4).
 
 Strategy ``"cutting_planes"`` (default), the fast and exact way:
 

@@ -1,4 +1,4 @@
-"""The ``qp`` variant of OE condensing (this project, DESIGN section 5 step 5).
+"""The ``qp`` variant of OE condensing (this project, docs/design.md section 5 step 5).
 
 For a new tool, the generalized universal object path is condensed into pushes the tool can make
 on the Omni. A candidate push sequence (faces in order, switch times) is scored by the constrained

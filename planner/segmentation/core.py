@@ -1,4 +1,4 @@
-"""Segmenting one demonstration into pushes and switches (DESIGN section 5, step 1).
+"""Segmenting one demonstration into pushes and switches (docs/design.md section 5, step 1).
 
 The recordings: the object centre from a camera (about 30 Hz, 1-2 mm noise) and the tool pose from
 the Omni's encoders (at least 100 Hz, precise to a few hundredths of a millimetre). A face of the

@@ -1,5 +1,5 @@
 """The ``opt`` variant: a smooth, non-penetrating switch path near the ``dmp`` one, solved with CasADi
-and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`tooltransfer.planner.ss.nlp`).
+and checked exactly with shapely (docs/design.md section 6; the NLP in :mod:`tooltransfer.planner.ss.nlp`).
 
 1. The ``dmp`` path (:func:`tooltransfer.planner.ss.dmp_variant.recombine`) at the N knots' times is the reference.
    The primal initial guess (separating directions from its geometry) is the ``dmp`` path when it

@@ -8,7 +8,7 @@ whose hinge turns about its local z (the joint), with the next body at ``(a, 0, 
 joints have the platform's limits as mechanical stops.
 
 The tool. The Omni's last three joints are fixed, so the tool turns in the table plane with q1
-only (DESIGN section 7): a planar tool stays flat on the table while the shoulder and the elbow
+only (docs/design.md section 7): a planar tool stays flat on the table while the shoulder and the elbow
 move. The tool body hangs from the tool centre point on two hinges about the arm-plane normal held
 by joint equalities at ``-q2`` and ``-q3`` (a parallelogram, as the real holder keeps the tool
 level), so its orientation is ``Rz(base_yaw + q1 - pi/2)`` (:meth:`OmniPlatform.heading`) whatever
