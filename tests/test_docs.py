@@ -88,7 +88,7 @@ def test_the_api_reference_documents_the_entry_points(site: Path) -> None:
 
 @needs_mkdocs
 def test_pages_carry_the_repository_text(site: Path) -> None:
-    """The README and batch README sections, the design copy and the schema table are in the pages."""
+    """The README and batch README sections, the design document and the schema table are in the pages."""
     mechanics = _text(site / "mechanics" / "index.html")
     assert "sticking while" in mechanics and "What to push." in mechanics
     assert "receding-horizon" in _text(site / "closed-loop" / "index.html")
