@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from tooltransfer.errors import SolverError, UnknownSolverError
 
 DEFAULT_OPTIONS: dict[str, dict[str, Any]] = {
-    # plain OSQP calls ("full" strategy); the cutting-plane seed uses looser settings (dmp.qp.solve.SEED_OPTIONS)
+    # plain OSQP calls ("full" strategy); the cutting-plane seed uses its own (tooltransfer.dmp.qp.solve.SEED_OPTIONS)
     "osqp": {"eps_abs": 1e-7, "eps_rel": 1e-7, "max_iter": 20000, "polishing": True, "verbose": False},
     "clarabel": {"verbose": False},
 }
