@@ -1,6 +1,6 @@
 """DMP core of tooltransfer: discrete DMPs with exact affine rollout and constrained fitting.
 
-Notation used throughout (paper eqs. 1-5, DESIGN section 3): positions ``x`` [m], velocities
+Notation used throughout (paper eqs. 1-5, docs/design.md section 3): positions ``x`` [m], velocities
 ``v = dx/dt`` [m/s], goal ``g``, start ``x0``, duration ``tau`` [s], phase ``s``, ``N`` basis
 functions ``psi_i(s)`` per dimension, weights ``W`` of shape (N, n), flattened row-major into ``w``.
 """

@@ -1,4 +1,4 @@
-"""Rollout as an affine map of the weights, on one time grid (DESIGN section 3).
+"""Rollout as an affine map of the weights, on one time grid (docs/design.md section 3).
 
 With ``w = W.ravel()`` (W of shape (N, n), row-major so ``w[i*n + e] = W[i, e]``), positions and
 velocities at the samples are ``x(t_k) = x_free[k] + M @ W.T @ Gx[k]`` and likewise with ``Gv``,

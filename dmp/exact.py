@@ -1,4 +1,4 @@
-"""Exact discretization of the DMP transformation system (DESIGN section 3).
+"""Exact discretization of the DMP transformation system (docs/design.md section 3).
 
 For fixed ``alpha_z``, ``beta_z``, ``tau`` each dimension is a linear time-invariant system in
 ``z = [x - g, tau * xdot]`` driven by the forcing term:

@@ -36,7 +36,7 @@ def my_recordings() -> tuple[Meta, list[Demonstration]]:
 
     Per demonstration: the camera's object centres ``object_xy`` (M, 2) [m] at times ``t_object``
     (M,) [s], and the encoders' tool poses ``tool_pose`` (N, 3) (``x, y`` [m], ``yaw`` [rad]) and
-    joints ``joints`` (N, 3) [rad] at times ``t_tool`` (N,) [s], all in the world frame of DESIGN
+    joints ``joints`` (N, 3) [rad] at times ``t_tool`` (N,) [s], all in the world frame of docs/design.md
     section 2 (origin under the Omni's first joint axis, x right, y forward) and on one clock.
     """
     source = load_dataset(DEMOS)

@@ -1,6 +1,6 @@
 """From a push plan to the whole tool motion: approach, pushes, switches, retreat, timed and jointed.
 
-Timeline (DESIGN section 1; the object stands still outside the pushes):
+Timeline (docs/design.md section 1; the object stands still outside the pushes):
 
 1. approach: from ``approach_distance`` behind the first contact pose (along the face's normal
    there, so the tool meets the object where the push starts; halved until the move is within the

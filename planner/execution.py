@@ -17,7 +17,7 @@ the true error rather than the camera's.
 
 Wrapping a real device: implement the three methods over its drivers, e.g. for a Phantom Omni with
 a camera, ``observe_object`` returns the latest camera estimate of the puck's centre transformed
-into the world frame of DESIGN section 2 (origin under joint 1, metres), ``tool_pose`` the forward
+into the world frame of docs/design.md section 2 (origin under joint 1, metres), ``tool_pose`` the forward
 kinematics of the encoder angles (:func:`tooltransfer.tools.omni.ik.table_pose`), and ``move_tool`` turns the
 path into joints with :func:`tooltransfer.tools.sim.reference.tool_path_joints` (which checks the joint limits)
 and streams them to the device's PD loop at its rate, blocking until the last sample. Any

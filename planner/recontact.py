@@ -1,7 +1,7 @@
 """Re-contacts: the same face leaves the resting object and touches it again elsewhere along the face.
 
 When one contact cannot carry a push (the contact rolls along the face as the object moves sideways
-and the heading turns, DESIGN section 10), the push is split (:mod:`tooltransfer.planner.oe.contacts`) and the
+and the heading turns, docs/design.md section 10), the push is split (:mod:`tooltransfer.planner.oe.contacts`) and the
 tool moves, while the object rests, from the contact pose where one piece ends to the one where the
 next begins: it backs off along the face's normal by ``back_off``, shifts (the heading following
 the Omni's waist on the way) and approaches along the new normal. The move is checked like a

@@ -11,7 +11,7 @@ memory and as skill files in :func:`cache_dir`) or from a saved skills file writ
      "mechanics": {"mu", "c", "source", "mu_std", "c_std"},      (optional)
      "identification": {<what the mechanics were identified from and how well they fit>}}  (optional)
 
-The mechanics (``mu``, ``c`` of DESIGN section 10) are identified by :mod:`tooltransfer.planner.identify` from
+The mechanics (``mu``, ``c`` of docs/design.md section 10) are identified by :mod:`tooltransfer.planner.identify` from
 the dataset's pushes, or from a calibration recording (``tooltransfer demos --calibration``) when
 one is given; a file without them (written before they existed) loads with ``mechanics`` None.
 """

@@ -2,7 +2,7 @@
 
 Format ``tooltransfer.dataset/1`` (documented in the README so users can bring real recordings):
 
-* ``meta.yaml``: ``format``, ``units`` (SI: m, rad, s), ``frame`` (the world frame of DESIGN
+* ``meta.yaml``: ``format``, ``units`` (SI: m, rad, s), ``frame`` (the world frame of docs/design.md
   section 2), ``tool`` (a library name or a path to a tool YAML, relative to the folder),
   ``object_radius`` [m], ``rates`` (``object_hz``, ``tool_hz``: nominal, for information),
   ``platform`` (``a_t``, ``base_xy``, ``base_yaw``, ``table_height``), ``demonstrations`` (the CSV
@@ -89,7 +89,7 @@ class Rates(_Model):
 
 
 class PlatformMeta(_Model):
-    """The Omni the demonstrations were recorded on (DESIGN section 7)."""
+    """The Omni the demonstrations were recorded on (docs/design.md section 7)."""
 
     a_t: Number = Field(gt=0, le=0.5, description="DH tool length a_t [m] (the declared tool's a_t)")
     base_xy: tuple[Number, Number] = Field((0.0, 0.0), description="world position of the joint-1 axis [m]")

@@ -1,6 +1,6 @@
-"""Named scenes of the paper's tasks, in the world frame of DESIGN section 2 (SI units: metres).
+"""Named scenes of the paper's tasks, in the world frame of docs/design.md section 2 (SI units: metres).
 
-The paper prints no start, target or obstacle coordinates (DESIGN section 9). :data:`DEMO_SCENE`
+The paper prints no start, target or obstacle coordinates (docs/design.md section 9). :data:`DEMO_SCENE`
 is this project's choice for the demonstration task of Figs. 2, 4 and 8, keeping the figures'
 qualitative layout inside the default Omni's reach with tool 1 (``finger``): the puck starts in
 front of the arm to the right, is pushed forward with the upper face, leftward with the left face,

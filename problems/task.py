@@ -119,7 +119,7 @@ class InlineTool(_Model):
 
 
 class MechanicsSpec(_Model):
-    """The push model's parameters (DESIGN section 10), overriding the ones identified from the
+    """The push model's parameters (docs/design.md section 10), overriding the ones identified from the
     demonstrations (or the platform's nominal values when none were identified)."""
 
     mu: float = Field(gt=0, le=10, allow_inf_nan=False, strict=True,

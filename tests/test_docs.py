@@ -88,7 +88,7 @@ def test_the_api_reference_documents_the_entry_points(site: Path) -> None:
 
 @needs_mkdocs
 def test_pages_carry_the_repository_text(site: Path) -> None:
-    """The README and batch README sections, the design copy and the schema table are in the pages."""
+    """The README and batch README sections, the design document and the schema table are in the pages."""
     mechanics = _text(site / "mechanics" / "index.html")
     assert "sticking while" in mechanics and "What to push." in mechanics
     assert "receding-horizon" in _text(site / "closed-loop" / "index.html")
@@ -157,3 +157,60 @@ def test_changelog_has_this_version_and_unreleased() -> None:
     text = _text(ROOT / "CHANGELOG.md")
     assert "## [Unreleased]" in text
     assert re.search(rf"^## \[{re.escape(VERSION)}\] - \d{{4}}-\d{{2}}-\d{{2}}$", text, re.MULTILINE)
+
+
+DESIGN_SECTION = re.compile(r"^## (\d+)\. \S", re.MULTILINE)
+CITATION = re.compile(r"design\.md(?:\]\([^)\s]*\))?\s+(?:#\s*)?sections?\s+(\d+)(?:\s*-\s*(\d+))?")
+CITING_SUFFIXES = {".py", ".md", ".yml", ".yaml", ".toml", ".cff", ".c"}
+
+
+def _repository_texts() -> dict[str, str]:
+    """The repository's text files by path (not build output, caches or the venv)."""
+    skip = {".git", ".venv", "out", "site", "__pycache__", ".pytest_cache", ".ruff_cache", "build", "dist"}
+    texts = {}
+    for path in ROOT.rglob("*"):
+        rel = path.relative_to(ROOT)
+        if any(part in skip or part.endswith(".egg-info") for part in rel.parts):
+            continue
+        if path.is_file() and path.suffix in CITING_SUFFIXES:
+            try:
+                texts[rel.as_posix()] = _text(path)
+            except UnicodeDecodeError:  # the hostile-input fixtures hold other encodings on purpose
+                continue
+    return texts
+
+
+def test_design_sections_are_numbered_in_order() -> None:
+    numbers = [int(n) for n in DESIGN_SECTION.findall(_text(ROOT / "docs" / "design.md"))]
+    assert numbers == list(range(1, len(numbers) + 1)), numbers
+    assert len(numbers) >= 10, numbers
+
+
+def test_every_design_citation_names_a_section_that_exists() -> None:
+    """A citation "docs/design.md section N" (or "sections N-M") in the code, the tests or the docs
+    names a numbered section of docs/design.md; the old external steering file is not cited."""
+    sections = {int(n) for n in DESIGN_SECTION.findall(_text(ROOT / "docs" / "design.md"))}
+    texts = _repository_texts()
+    cited, wrong = 0, []
+    for rel, text in texts.items():
+        for m in CITATION.finditer(text):
+            lo = int(m[1])
+            hi = int(m[2]) if m[2] else lo
+            cited += 1
+            if lo > hi or not set(range(lo, hi + 1)) <= sections:
+                wrong.append(f"{rel}: {m[0]!r}")
+        if rel != "tests/test_docs.py":
+            assert not re.search(r"DESIGN\s+(?:#\s*)?section", text), f"{rel} cites the external DESIGN file"
+    assert not wrong, wrong
+    assert cited >= 40, cited
+
+
+def test_the_citation_check_catches_a_missing_section() -> None:
+    sections = {int(n) for n in DESIGN_SECTION.findall(_text(ROOT / "docs" / "design.md"))}
+    missing = max(sections) + 1
+    for text in (f"(docs/design.md section {missing})", f"docs/design.md sections 2-{missing}",
+                 f"[docs/design.md](design.md) section {missing}", f"docs/design.md\n    # section {missing}"):
+        m = CITATION.search(text)
+        assert m, text
+        hi = int(m[2] or m[1])
+        assert not set(range(int(m[1]), hi + 1)) <= sections, text

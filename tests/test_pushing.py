@@ -1,5 +1,5 @@
 """The quasi-static push model (tooltransfer.tools.pushing): the contact law, the forward simulator, the inverse,
-and their agreement with the MuJoCo platform (DESIGN section 10)."""
+and their agreement with the MuJoCo platform (docs/design.md section 10)."""
 
 from __future__ import annotations
 
@@ -158,7 +158,7 @@ def test_inverse_of_forward_recovers_the_tool_path(angle: float, c: float) -> No
 
 
 def test_model_agrees_with_the_mujoco_platform_on_straight_pushes() -> None:
-    """DESIGN section 10's table: a 100 mm face pushed 45 mm at 50 mm/s, 0-60 degrees off its normal,
+    """docs/design.md section 10's table: a 100 mm face pushed 45 mm at 50 mm/s, 0-60 degrees off its normal,
     on the MuJoCo platform (tool friction 0.8); the model (mu 0.8, c 0.59) replays the recorded tool
     poses: the puck's direction within 2 degrees and its end within 1 mm."""
     from tooltransfer.tools.sim.execution import Rates

@@ -10,7 +10,7 @@
 * :mod:`tooltransfer.tools.omni`: DH kinematics, inverse kinematics and reachable region of the Omni.
 * :mod:`tooltransfer.tools.sim`: the Omni with a tool, the puck and obstacles in MuJoCo (imported on demand).
 
-Frames and units follow DESIGN section 2: SI units, world frame in the table plane with the
+Frames and units follow docs/design.md section 2: SI units, world frame in the table plane with the
 origin under the Omni's first joint axis, x right, y forward, z up.
 """
 

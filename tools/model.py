@@ -2,7 +2,7 @@
 
 Tool frame: origin at the DH tool frame's origin (the paper's "tool centre point") projected on
 the pushing plane; +y points along the arm away from the Omni base, +x to its right, so with the
-tool's heading at 0 the tool frame is parallel to the world frame (DESIGN section 2). Lengths in
+tool's heading at 0 the tool frame is parallel to the world frame (docs/design.md section 2). Lengths in
 metres, angles in radians measured from +x counter-clockwise.
 
 A face is a straight piece of the outline. It carries the push direction ``push_angle`` (the

@@ -1,12 +1,12 @@
-"""Constrained DMP fitting as a QP (DESIGN section 4): build with :func:`build_fit_qp`, solve with
+"""Constrained DMP fitting as a QP (docs/design.md section 4): build with :func:`build_fit_qp`, solve with
 :func:`solve_fit`; constraints in :mod:`tooltransfer.dmp.qp.constraints`, objectives in
 :mod:`tooltransfer.dmp.qp.objectives`."""
 
 import os
 
 # OSQP picks its linear-algebra backend for every solver it creates by trying to import each
-# optional one (CUDA, MKL) before the built-in: about 0.5 ms per call when they are absent, a
-# quarter of the constrained fit's seed QP. OSQP's documented switch fixes the choice; it is read
+# optional one (CUDA, MKL) before the built-in, a large part of the constrained fit's seed QP when
+# they are absent. OSQP's documented switch fixes the choice; it is read
 # when osqp is first imported (so here, before qpsolvers), and a user's own setting wins.
 os.environ.setdefault("OSQP_ALGEBRA_BACKEND", "builtin")
 

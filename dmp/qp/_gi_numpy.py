@@ -12,8 +12,8 @@ orthogonal, and ``d``, ``r`` (the step directions) do not depend on which such f
 kept, so the iterates agree to round-off. The scan and the row builder are the vectorised forms of
 ``RowPool.residuals`` / ``RowPool.peaks`` and of ``gi_rows``.
 
-Per add/drop step this costs about 30-60 us of interpreter and call overhead against a few us
-compiled (``benchmarks/bench_dmp.py`` measures the whole fit both ways).
+Per add/drop step this costs interpreter and call overhead that the compiled core does not pay
+(``benchmarks/bench_dmp.py`` measures the whole fit both ways).
 """
 
 from __future__ import annotations

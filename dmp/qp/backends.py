@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from tooltransfer.errors import SolverError, UnknownSolverError
 
 DEFAULT_OPTIONS: dict[str, dict[str, Any]] = {
-    # plain OSQP calls ("full" strategy); the cutting-plane seed overrides eps to 1e-4 (tooltransfer.dmp.qp.solve)
+    # plain OSQP calls ("full" strategy); the cutting-plane seed uses its own (tooltransfer.dmp.qp.solve.SEED_OPTIONS)
     "osqp": {"eps_abs": 1e-7, "eps_rel": 1e-7, "max_iter": 20000, "polishing": True, "verbose": False},
     "clarabel": {"verbose": False},
 }
@@ -73,7 +73,7 @@ def _status(solver: str, found: bool, extras: dict[str, Any]) -> tuple[str, bool
 def _dense_csc(m: NDArray[np.float64]) -> sp.csc_matrix:
     """The dense array ``m`` as a CSC matrix keeping every entry (zeros too: the rows here are
     dense), built from its column-major values directly (scipy's generic conversion goes through
-    COO and took about 0.3 ms per matrix of a small QP)."""
+    COO, a large part of a small QP's time)."""
     a = np.asarray(m, dtype=np.float64)
     r, c = a.shape
     return sp.csc_matrix(

@@ -11,8 +11,8 @@ reached nor made room for proves the problem infeasible (Goldfarb & Idnani 1983)
 
 The add/drop steps run in a small C core (``_gi_core.c``, built with the package and called
 through ctypes): the DMP fits are degenerate (constraints active along stretches of time, touched
-by the path at isolated instants), so the method takes hundreds of cheap steps, and interpreter
-overhead per step was the cost (about 30-60 us in NumPy against a few us compiled). Without the
+by the path at isolated instants), so the method takes hundreds of cheap steps, and in NumPy the
+interpreter overhead of each step costs far more than its arithmetic. Without the
 compiled core (an install without a C compiler, or ``TOOLTRANSFER_NO_NATIVE=1``) the same steps run
 in NumPy (:mod:`tooltransfer.dmp.qp._gi_numpy`, chosen by :func:`tooltransfer.dmp.qp.native.core`), to the same optimum.
 

@@ -19,8 +19,8 @@ and that the indices it hands over are in range, so a wrong argument raises :cla
 instead of reading or writing out of bounds. The long-lived arrays (a :class:`GIWork`'s
 factorisation, a pool's coefficient arrays, :class:`PoolArrays`) carry their dimensions: they are
 checked against them once, at creation, cannot be rebound afterwards, and their addresses are
-taken then (taking an address costs 2 us, and NumPy's ``ndpointer`` checks about 7 us per
-argument and call, which added up to about 1 ms per fit).
+taken then (taking an address and NumPy's ``ndpointer`` checks cost microseconds per argument and
+call, which add up over the many calls of one fit).
 
 The library is the extension module ``tooltransfer.dmp.qp._gi_core`` built against the stable ABI (``abi3``,
 ``Py_LIMITED_API`` 3.11): one file, ``_gi_core.abi3.so``, for every CPython >= 3.11. It carries no

@@ -27,7 +27,7 @@ from tooltransfer.validation import check_array, check_positive, check_time
 
 @dataclass
 class FitProblem:
-    """A constrained DMP fit (DESIGN section 4).
+    """A constrained DMP fit (docs/design.md section 4).
 
     Attributes:
         dmp: the primitive whose weights are decided (its parameters fix the basis).

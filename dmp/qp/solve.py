@@ -1,4 +1,4 @@
-"""Solving the constrained DMP fit (DESIGN section 4).
+"""Solving the constrained DMP fit (docs/design.md section 4).
 
 Strategy ``"cutting_planes"`` (default), the fast and exact way:
 
@@ -10,28 +10,25 @@ Strategy ``"cutting_planes"`` (default), the fast and exact way:
    constraint grid, then on the dense samples the grid residuals point at, then on every dense
    sample, until no dense row is violated: the result is the exact optimum over all dense rows,
    and a row the method cannot take proves infeasibility and names the families involved
-   (without the compiled core both run in NumPy, :mod:`tooltransfer.dmp.qp.native`: the same optimum, about
-   2-3.5 times the fit's time, ``benchmarks/bench_dmp.py``);
+   (without the compiled core both run in NumPy, :mod:`tooltransfer.dmp.qp.native`: the same optimum, more
+   slowly; ``benchmarks/bench_dmp.py`` compares the two);
 3. non-convex rows (discs) are re-linearised at the solution and step 2 repeated (sequential
    convex programming) until the path moves less than ``scp_tol``; each repetition starts from
    the previous active rows (warm start: taken at once, rows with negative multipliers dropped)
-   with the previous candidates, so it takes a few oracle rounds instead of ~15.
+   with the previous candidates, so it needs far fewer oracle rounds than a cold start.
 
-Where the time goes (``benchmarks/bench_dmp.py``, L-push case, one linearisation): about 16
-oracle rounds (a compiled scan plus building the new rows, ~0.2 ms each at 2 x 30 / 200 samples)
-and 385 add/drop steps (~1 ms in all); at 2 x 60 / 1,000 samples 15 rounds (~0.5 ms each, the
-dense rollouts are memory-bound) and 606 steps (~4.5 ms).
+The cost is in the oracle rounds (a compiled scan of the dense residuals plus building the new
+rows) and the add/drop steps of the exact method; ``benchmarks/bench_dmp.py`` measures both
+(figures in ``benchmarks/README.md``).
 
 The default path runs the backend first (``seed_with_backend=True``): OSQP solves, at eps 1e-3
 without polishing, the whitened QP over the rows of a coarse subset (one sample per basis
 function) that the unconstrained optimum violates, and the rows it finds active are the exact
-step's first candidates. OSQP's answer is never returned as such: the exact step finishes. Measured
-on the L-push case (``benchmarks/bench_dmp.py``): the seed (35 rows at 2 x 30 / 200 samples,
-25 OSQP iterations) costs about 1.5 ms there and 3 ms at 2 x 60 / 1,000, mostly the Python side of
-qpsolvers and osqp, and does not shorten the exact step (as many add/drop steps with it as
-without); ``seed_with_backend=False`` skips it. Seeding on every coarse row, or
-taking OSQP's active rows as a warm-start guess of the active set, cost more (the guess made the
-active set's factorisation ill-conditioned).
+step's first candidates. OSQP's answer is never returned as such: the exact step finishes, so
+the seed changes the cost, not the optimum; ``seed_with_backend=False`` skips it (the seed's cost
+is mostly the Python side of qpsolvers and osqp, ``benchmarks/README.md``). Taking OSQP's active
+rows as a warm-start guess of the active set is not done: it made the active set's factorisation
+ill-conditioned.
 
 Strategy ``"full"`` is the plain condensed formulation: every row on the constraint grid at
 once, weights as variables, one backend call per linearisation; kept as the reference peer.
@@ -277,8 +274,7 @@ def solve_fit(
         seed_with_backend: first let the backend (OSQP by default) solve the coarse rows the
             unconstrained optimum violates at moderate accuracy; its active rows become the exact
             step's first candidates. On by default (the backend takes part in every fit); off, the
-            exact step starts from the unconstrained optimum alone (measured 1.5-3 ms faster on the
-            L-push case, the same optimum).
+            exact step starts from the unconstrained optimum alone (faster, the same optimum).
         options: backend options passed through qpsolvers.
         x_start: the path (T_dense, n) [m] on the dense grid (:attr:`FitProblem.t_dense`) the
             non-convex rows are first linearised at (default the unconstrained optimum's), e.g. the

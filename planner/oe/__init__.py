@@ -1,4 +1,4 @@
-"""OE skill condensing for a new tool (DESIGN section 5): push plans, the ``qp`` variant, metrics."""
+"""OE skill condensing for a new tool (docs/design.md section 5): push plans, the ``qp`` variant, metrics."""
 
 from tooltransfer.planner.oe.face_frame import FaceFrame
 from tooltransfer.planner.oe.push_plan import Push, PushPlan

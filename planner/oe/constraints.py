@@ -8,7 +8,7 @@
   exact half-planes, its outer arc is replaced by chords inside it and its inner arc by a tangent
   half-plane linearised at the current path (conservative), family ``"reach"``.
 * :class:`ContactOnFace`: the contact stays on the face's usable segment while the object moves
-  (DESIGN section 10): sticking, the contact rolls along the face by ``1/c^2`` times the object's
+  (docs/design.md section 10): sticking, the contact rolls along the face by ``1/c^2`` times the object's
   sideways travel in the face frame and by ``R`` per radian the heading turns, a condition on the
   object's positions over the push, linearised at the current path (family ``"contact"``).
 """

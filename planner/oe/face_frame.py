@@ -1,6 +1,6 @@
 """Where the object sits relative to the Omni when a face of the tool pushes it.
 
-On the Omni the tool heading follows the waist: ``yaw = base_yaw + q1 - pi/2`` (DESIGN section 7),
+On the Omni the tool heading follows the waist: ``yaw = base_yaw + q1 - pi/2`` (docs/design.md section 7),
 and the tool centre point is ``p_t = b + R(a) (u, d_t)`` with ``a = base_yaw + q1``, ``u`` the
 arm-plane reach and ``d_t`` the tool row's offset. A face touching the object puts the object's
 centre at ``c`` in the tool frame (contact point plus the object radius along the face's normal),
@@ -14,7 +14,7 @@ form the same kind of annular sector as the tool centre point's: reach ``u + c_y
 direction in the world: :class:`FaceFrame`.
 
 The directions a face may push the object in are those of its friction cone about the face's
-outward normal (DESIGN section 10: a round object under a flat face moves inside
+outward normal (docs/design.md section 10: a round object under a flat face moves inside
 ``|phi_c| <= atan(mu)`` about the normal, whatever the tool does), narrowed to the scene's
 ``cone_fraction`` of it and intersected with the tool file's ``push_angle +- theta_b`` (the
 operator's preference): :attr:`FaceFrame.push_angle` and :attr:`FaceFrame.theta_b` describe that

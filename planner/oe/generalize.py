@@ -1,4 +1,4 @@
-"""Generalizing the universal OE skill to a new start and target (DESIGN section 5, step 4)."""
+"""Generalizing the universal OE skill to a new start and target (docs/design.md section 5, step 4)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Learning the universal OE skill from demonstrations with tool 1 (DESIGN section 5, steps 1-3).
+"""Learning the universal OE skill from demonstrations with tool 1 (docs/design.md section 5, steps 1-3).
 
 A demonstration, for the OE skill, is its ordered pushes (:class:`DemoPush`): which face pushed,
 the object track during the push and the tool heading. Switches are left out of the OE time axis
@@ -137,7 +137,7 @@ def recover(pushes: Sequence[DemoPush], tool: Tool, k: float, fixed: Sequence[in
         pushes: the demonstration's pushes; push ``i+1`` starts where push ``i`` ends (a corner).
         tool: the demonstration tool; k: adjusting factor of (6).
         fixed: indices of the corners kept as fixed points (corner ``i`` is where push ``i`` ends,
-            ``0 <= i < P - 1``); default every corner (DESIGN section 5). The start and the end are
+            ``0 <= i < P - 1``); default every corner (docs/design.md section 5). The start and the end are
             always fixed. Between two fixed points the universal steps of the pushes in between are
             integrated and the stretch is pinned onto its end. With every corner fixed
             a straight push comes back as itself (only the curvature within a push opens up); with
@@ -243,7 +243,7 @@ def learn_oe_skill(
     scaling: str = "similarity",
     fixed: Sequence[Sequence[int] | None] | None = None,
 ) -> OESkill:
-    """Recover every demonstration and fit one DMP on all of them (DESIGN section 5, steps 2-3).
+    """Recover every demonstration and fit one DMP on all of them (docs/design.md section 5, steps 2-3).
 
     Args:
         demos: per demonstration, its pushes in order.

@@ -1,4 +1,4 @@
-"""The ``mapping`` variant of OE condensing: the paper's method (section III.A, DESIGN section 5).
+"""The ``mapping`` variant of OE condensing: the paper's method (section III.A, docs/design.md section 5).
 
 Along the generalized universal path:
 

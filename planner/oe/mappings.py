@@ -1,7 +1,7 @@
 """Paper eqs. (6)-(8): exponential maps between the universal space and a tool's condensed space.
 
 The OE skill is learned in the *universal space* (free of tool 1's pushing limits) and condensed
-into the *constrained space* of a tool or an environment by two saturating maps (DESIGN section 5):
+into the *constrained space* of a tool or an environment by two saturating maps (docs/design.md section 5):
 
 - **Angle map, eq. (6).** ``theta_g`` [rad] is a step direction measured from the active face's push
   direction (any real, e.g. ``wrap_angle(phi - phi_face)``); ``theta`` [rad] is the condensed
@@ -15,7 +15,7 @@ into the *constrained space* of a tool or an environment by two saturating maps 
 
       r_g = r_b * (1 - exp(-k r_p / r_b)),        inverse  r_p = -(r_b / k) * ln(1 - r_g / r_b)
 
-- **Outer space, monotone form (DESIGN section 5).** Keeps points outside a disc of radius ``R`` about
+- **Outer space, monotone form (docs/design.md section 5).** Keeps points outside a disc of radius ``R`` about
   ``x_o`` (an obstacle), identity far away (the paper's "tail effect")::
 
       r_g = r_p + R * exp(-k r_p / R),            R = r_b + delta
@@ -28,13 +28,13 @@ into the *constrained space* of a tool or an environment by two saturating maps 
 
   (substitute ``z = r_g - r_p = R exp(-k r_p / R)``: ``(-k z / R) exp(-k z / R) = -k exp(-k r_g / R)``,
   and ``-k z / R`` lies in ``[-k, 0)``, inside ``W_0``'s range ``[-1, 0)``). ``delta >= 0`` [m] is the
-  safety margin of the paper's section IV.E, applied as DESIGN states: ``r_b -> r_b + delta`` (the paper's
-  text says "changing r_g to r_g + delta"; adding delta to the image alone would also shift far points
-  and lose the identity tail, so the project follows DESIGN).
+  safety margin of the paper's section IV.E, applied as ``r_b -> r_b + delta`` (docs/design.md section 9:
+  the paper's text says "changing r_g to r_g + delta", but adding delta to the image alone would also
+  shift far points and lose the identity tail).
 - **Outer space as printed in (7)** (``outer_radius_printed``), kept for comparison only:
   ``r_g = r_b + r_b * exp(-k r_p / r_b)`` maps ``[0, inf)`` onto ``(r_b, 2 r_b]`` but is strictly
   *decreasing*: the reference point ``r_p = 0`` goes to ``2 r_b`` and far points come to ``r_b``, so it
-  reverses the order of radii and turns a path inside out around the obstacle (DESIGN section 9).
+  reverses the order of radii and turns a path inside out around the obstacle (docs/design.md section 9).
 
 The paper's eq. (8), ``|theta_g| = k +- sqrt(0.25 theta_b^2 - theta theta_b) / k``, is a second-order
 Taylor inverse with four roots; it is not implemented, the exact inverses above are.
@@ -307,7 +307,7 @@ def inner_radius_inverse(r_g: ArrayLike, r_b: float, k: float, *, clip: bool = F
 
 
 # --------------------------------------------------------------------------------------------------
-# eq. (7), outer space: the monotone form of DESIGN section 5, and the printed form
+# eq. (7), outer space: the monotone form of docs/design.md section 5, and the printed form
 
 
 def _expm1_neg_plus(u: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -356,7 +356,7 @@ def _outer_sum(R: float, excess: NDArray[np.float64], field: str) -> NDArray[np.
 
 
 def outer_radius(r_p: ArrayLike, r_b: float, k: float, *, delta: float = 0.0) -> NDArray[np.float64]:
-    """Eq. (7), outer space, monotone form (DESIGN section 5): ``r_g = r_p + R exp(-k r_p / R)``.
+    """Eq. (7), outer space, monotone form (docs/design.md section 5): ``r_g = r_p + R exp(-k r_p / R)``.
 
     ``R = r_b + delta``: the safety margin of section IV.E. Strictly increasing, ``r_g(0) = R``,
     ``r_g - r_p -> 0`` far away (tail effect).
@@ -418,7 +418,7 @@ def outer_radius_printed(r_p: ArrayLike, r_b: float, k: float) -> NDArray[np.flo
     """Eq. (7), outer space *as printed*: ``r_g = r_b + r_b exp(-k r_p / r_b)``. For comparison only.
 
     Strictly **decreasing** (order-reversing): ``r_p = 0`` maps to ``2 r_b`` and far points approach
-    ``r_b`` from above. The project uses :func:`outer_radius` instead (DESIGN section 9).
+    ``r_b`` from above. The project uses :func:`outer_radius` instead (docs/design.md section 9).
 
     Args:
         r_p: Universal radii [m], ``>= 0``, any shape.

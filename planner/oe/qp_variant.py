@@ -1,4 +1,4 @@
-"""The ``qp`` variant of OE condensing (this project, DESIGN section 5 step 5).
+"""The ``qp`` variant of OE condensing (this project, docs/design.md section 5 step 5).
 
 For a new tool, the generalized universal object path is condensed into pushes the tool can make
 on the Omni. A candidate push sequence (faces in order, switch times) is scored by the constrained
@@ -89,15 +89,14 @@ class QPOptions:
         max_pushes: longest push sequence considered.
         candidates: push sequences scored by the QP before refinement.
         switch_price: cost of one face change [m^2], in the units of the objective (half the mean
-            squared deviation): 2e-7 weighs a face change like 0.63 mm of RMS deviation. On the
-            transfer case the push count turns on it: 4 pushes up to 2e-7, 3 at 5e-7 (near tie).
+            squared deviation): 2e-7 weighs a face change like 0.63 mm of RMS deviation; on the
+            transfer case the push count depends on it (benchmarks/README.md).
         ridge: weight of a ridge on the weights [m^2 per weight^2]; 0 by default (tracking on more
             samples than basis functions is already well posed; weights are O(100), so even 1e-10
             outweighs a millimetre of deviation).
         tol: violation [m, m/s] the fit aims at (rows violated by more are added). 1e-6 (1 um/s,
-            10 um over a 10 s push): at 1e-8 the linearised cone and contact rows of a later
-            sequential round were measured to admit spurious infeasibility proofs (the demonstration
-            task with tool 1: feasible at 1e-6, "infeasible" at 1e-7 and 1e-8);
+            10 um over a 10 s push): at 1e-7 and below the linearised cone and contact rows of a later
+            sequential round admit spurious infeasibility proofs (benchmarks/README.md);
         accept: largest true violation [m, m/s] of a candidate still counted feasible (the heading
             cone is exact only where it was linearised, so rounds stop a little short of ``tol``);
         max_scp: sequential-convex rounds per candidate.

@@ -1,5 +1,5 @@
 """Calibration recordings: straight pushes at several angles off a face's normal, for identifying
-the push mechanics ``mu`` and ``c`` (DESIGN section 10, :mod:`tooltransfer.tools.pushing.identify`).
+the push mechanics ``mu`` and ``c`` (docs/design.md section 10, :mod:`tooltransfer.tools.pushing.identify`).
 
 Why: the demonstrations push near the faces' normals, where the puck goes along the normal
 whatever ``c`` is, and their contacts stick, where ``mu`` does not act. A calibration pushes the

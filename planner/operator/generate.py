@@ -4,7 +4,7 @@ sensors give it, written in the dataset format (:mod:`tooltransfer.problems.data
 Sensors:
 
 * the object track as a depth camera gives it: 30 Hz, Gaussian noise of ``OBJECT_NOISE`` = 1.5 mm
-  per axis (the paper's Kinect-class camera; DESIGN section 9 asks for 1-2 mm);
+  per axis (the paper's Kinect-class camera; docs/design.md section 9 says 1-2 mm);
 * the joints as the Omni's encoders give them: 100 Hz, quantized to ``JOINT_STEP`` = 2e-4 rad (the
   device's nominal position resolution, about 0.055 mm, over its reach of about 0.27 m); the tool
   pose is what the device reports, the forward kinematics of those quantized joints (so it also

@@ -1,6 +1,6 @@
 """The heading drift on the simulated Omni, drawn: ``python -m tooltransfer.planner.plots.heading_drift OUT.png``.
 
-The Omni's last joints are fixed, so the tool's heading follows the waist angle q1 (DESIGN
+The Omni's last joints are fixed, so the tool's heading follows the waist angle q1 (docs/design.md
 section 7): it cannot be held while the tool moves sideways. Tool 1's left face starts 5 mm right
 of the puck at (40, 160) mm and sweeps 80 mm to the left. Panels:
 

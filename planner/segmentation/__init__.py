@@ -1,4 +1,4 @@
-"""Segmenting demonstrations into pushes and switches (DESIGN section 5, step 1): see
+"""Segmenting demonstrations into pushes and switches (docs/design.md section 5, step 1): see
 :mod:`tooltransfer.planner.segmentation.core` for the method."""
 
 from tooltransfer.planner.segmentation.core import PushSegment, Segmentation, SwitchSegment, load_fixed_points, segment

@@ -11,10 +11,9 @@ joint ranges, positions inside the Omni's reach). Here, for a demonstration load
   outline may not overlap the object (the camera track smoothed over half a second, the overlap's
   running median over half a second) by more than :data:`OVERLAP_TOL` (plus the camera noise above
   1.5 mm); and the object moves only when the tool touches it: while it moves, the median gap
-  between the declared outline and the object stays within :data:`MOVING_GAP_TOL`. On the
-  committed demonstrations the finger's worst overlap is 1.4 mm and its median gap while the
-  object moves at most 0.3 mm; declared as any other library tool, the overlap is 4.5-23 mm; a
-  finger 2 mm smaller leaves a 2.2-2.6 mm gap while the object moves.
+  between the declared outline and the object stays within :data:`MOVING_GAP_TOL`. Both
+  tolerances lie between what the committed demonstrations give with the tool they were recorded
+  with and what they give with a wrong one declared (figures in ``benchmarks/README.md``).
 
 Errors name the file (the CSV, or ``meta.yaml``'s ``tool`` field) and the row or the time.
 """

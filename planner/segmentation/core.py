@@ -1,4 +1,4 @@
-"""Segmenting one demonstration into pushes and switches (DESIGN section 5, step 1).
+"""Segmenting one demonstration into pushes and switches (docs/design.md section 5, step 1).
 
 The recordings: the object centre from a camera (about 30 Hz, 1-2 mm noise) and the tool pose from
 the Omni's encoders (at least 100 Hz, precise to a few hundredths of a millimetre). A face of the
@@ -27,8 +27,7 @@ of a second), so timing comes from the encoders, and the camera only says where 
    sliding along the object), and when the contact ends inside that stall the encoders cannot
    tell (their step is about 0.055 mm): the end is the middle of the stall, from the farthest
    advance to where the face has fallen back by ``end_tol``, so the error is at most half the
-   stall's length whichever end is the true one (on 10 generated datasets, 1222 pushes, the
-   worst end is 40 ms off with ``end_tol`` 0.03 mm, 49 ms with 0.05 mm, 34 ms with 0.01 mm).
+   stall's length whichever end is the true one.
 4. **Spans and motion.** Contacts of one face less than ``merge_gap`` apart are one push (tremor
    can break a contact for a moment, or touch the object again just after the push); then what
    is shorter than ``min_contact`` is a touch; a push must move the object by ``min_move``
@@ -47,16 +46,10 @@ The precision of a contact start is that of the rest position along the face's n
 by the speed at which the face approaches it: ``sigma / sqrt(n) / v`` for ``n`` camera samples of
 noise ``sigma`` where no earlier contact pins that position (the first push of a demonstration;
 after a switch, the new face's normal runs along the old face, where the last contact does not
-pin it). For a slow first approach (7 mm/s, 90 samples of 1.5 mm) that is about 20 ms (one
+pin it). For a slow first approach (7 mm/s, 90 samples of 1.5 mm) that is about 23 ms (one
 standard deviation); a push that follows one of the same face is pinned by where that one ended.
-
-Measured on the committed default dataset and on datasets of seeds 1 to 9 (8 demonstrations each,
-1222 pushes in all): every push and switch found, none spurious. On the committed dataset contact
-starts lie within 30 ms of the simulator's contacts and ends within 17 ms (medians 1.3 ms and
-2.4 ms); over all ten, within 47 ms and 40 ms (the worst starts: slow first approaches, 2.3-2.6
-standard deviations of the precision above). With more camera noise (two noise draws on the
-committed dataset and on seed 1) still every push and switch found, none spurious, but starts
-after a slow approach off by up to 67 ms with 2 mm, 113 ms with 3.8 mm (medians 1.3-1.7 ms).
+How close the found contacts come to the simulator's is recorded in ``benchmarks/README.md``
+(segmentation); ``tests/test_segmentation.py`` holds every push of the committed dataset to 50 ms.
 """
 
 from __future__ import annotations

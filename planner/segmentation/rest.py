@@ -1,4 +1,4 @@
-"""Where the object rests between pushes, from the camera samples (DESIGN section 5, step 1).
+"""Where the object rests between pushes, from the camera samples (docs/design.md section 5, step 1).
 
 Between pushes the object stands still (quasi-static pushing), so its camera samples scatter about
 one position with the camera's noise; their mean gives the rest position to ``sigma / sqrt(n)``.

@@ -1,4 +1,4 @@
-"""The SS (state switching) skill (paper section III.B; DESIGN section 6).
+"""The SS (state switching) skill (paper section III.B; docs/design.md section 6).
 
 * learning (steps 1-4): :class:`DemoSwitch` (input; :mod:`tooltransfer.planner.ss.adapter` converts the
   segmentation's switches, :mod:`tooltransfer.planner.ss.synthetic` generates some), virtual object motions

@@ -1,5 +1,5 @@
 """The ``dmp`` variant: generalize the SS skill to a new tool, contacts and object by recombination
-(paper section III.B, steps 5-6; DESIGN section 6).
+(paper section III.B, steps 5-6; docs/design.md section 6).
 
 For the task's contacts ``(p_A, q_A)`` and ``(p_B, q_B)`` (with the headings the Omni imposes there):
 

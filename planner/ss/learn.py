@@ -1,6 +1,6 @@
-"""Learning the SS skill from demonstrated switches (paper section III.B, steps 1-4; DESIGN section 6).
+"""Learning the SS skill from demonstrated switches (paper section III.B, steps 1-4; docs/design.md section 6).
 
-Notation (DESIGN section 6): ``x`` is the world path of the tool's first contact point ``p_A``
+Notation (docs/design.md section 6): ``x`` is the world path of the tool's first contact point ``p_A``
 (the paper's point 2), ``x_o = q_A`` the first object contact point, ``x^o`` the virtual object
 motion from ``q_A`` to ``q_B``, ``x^t`` the pure tool motion from ``x_o`` to ``x_o - R_B (p_B - p_A)``,
 and (10) ``x - x_o = k1 (x^t - x_o) + k2 (x^o - x_o)`` with diagonal ``k1, k2``. Every path is
@@ -10,7 +10,7 @@ Steps:
 
 1. each demonstration gives ``x - x_o`` (from the tool track and its heading) and, for the chosen
    kind of virtual motion, ``x^o - x_o`` on the same times;
-2. in the demonstrated case ``k1 = k2 = I`` (DESIGN section 6; the printed (11) is not used);
+2. in the demonstrated case ``k1 = k2 = I`` (docs/design.md section 6; the printed (11) is not used);
 3. alignment: every demonstration is mapped onto the one phase by its own duration (each keeps its
    ``tau``; :meth:`tooltransfer.dmp.primitive.DMP.fit`), and DMPs of ``x`` (f) and of ``x^o`` (f^o) are fitted
    on all demonstrations at once, with the same basis, gains and phase;

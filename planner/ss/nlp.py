@@ -4,16 +4,15 @@ Decision variables (millimetres, :data:`tooltransfer.planner.ss.bodies.UNIT`): t
 (N, 2) at N knots, plus separating variables where a row needs them (:data:`SEPARATORS`):
 
 * ``"distance"`` (the default): none for a disc body; the row is the exact signed distance from the
-  disc's centre to each convex piece, computed in the tool frame (module rows below). Over 200
-  random switches (``benchmarks/bench_ss.py``, same run): median NLP solve 8.1 vs 12.8 ms, median 8
-  vs 13 IPOPT iterations (p90 13 vs 22), the same 188 solved and 12 infeasible as ``"vector"``.
-  Polygonal bodies keep the vector separators.
+  disc's centre to each convex piece, computed in the tool frame (module rows below): fewer
+  variables and IPOPT iterations than ``"vector"`` with the same switches solved
+  (``benchmarks/bench_ss.py``; figures in ``benchmarks/README.md``). Polygonal bodies keep the
+  vector separators.
 * ``"vector"``: per interior knot, convex piece of the tool and body, a separating direction ``n``
   (2,) with ``|n|^2 <= 1`` (plus an offset ``beta`` for a polygonal body);
 * ``"angle"``: ``n = (cos phi, sin phi)``: one variable and no norm row, a smaller KKT system than
-  ``"vector"`` (median NLP solve 11 vs 14 ms) but a worse tail (p90 53 vs 22 iterations; on Fig.
-  11a the first start ran out of iterations: the angle must turn round where the vector can shrink
-  through zero).
+  ``"vector"`` but a worse tail of iteration counts (the angle must turn round where the vector can
+  shrink through zero).
 
 Heading: **a function of position through the Omni's waist** (:func:`tooltransfer.tools.omni.heading.heading_casadi`,
 smooth inside the reach annulus), not fixed over the move: the tool's yaw at knot k is
@@ -54,18 +53,13 @@ the ``dmp`` path (a parameter).
 Solvers (:data:`SOLVERS`): ``"ipopt"`` (interior point; warm start with primal and dual values and
 ``warm_start_init_point``) and ``"sqp"`` (CasADi's ``sqpmethod`` with the ``qrqp`` active-set QP,
 fast on the small capsule model; ``qpOASES`` is not used: it keeps state between calls).
-Building costs milliseconds, so :func:`get_nlp` caches one per structure (tool, model, N, platform,
-body kinds, solver) and solves change only parameters, bounds and the initial guess.
-
-Build cost in a fresh process (Fig. 11a structure, N = 40, ``benchmarks/bench_ss.py``): the rows are
-built vectorized over the knots (12 ms; 115 ms one knot at a time), ``nlpsol`` (derivatives and
-sparsity, mostly the Lagrangian's Hessian) 30-55 ms, plus about 20 ms once per process to load the
-IPOPT plugin: 46-53 ms per structure (vector separators, a quiet machine). With the signed-distance
-rows, in a slower phase of this shared machine: 85-145 ms, the same as the vector form measured
-alongside. Not cached on disk: deserializing the built solver (``Function.serialize``, 4.7-9.3 MB)
-took 47-165 ms, no less than building it; a generated and compiled
-NLP (``generate_dependencies``, gcc) loads in 4 ms and solves 5-10 % faster, but compiling it took
-5-11 s and needs a C compiler at run time.
+Building an NLP (the rows, vectorized over the knots, then ``nlpsol``: derivatives and sparsity,
+mostly the Lagrangian's Hessian) costs tens of milliseconds, far more than a solve, so
+:func:`get_nlp` caches one per structure (tool, model, N, platform, body kinds, solver) and solves
+change only parameters, bounds and the initial guess. It is not cached on disk: deserializing a
+built solver (``Function.serialize``) is no faster than building it, and a generated, compiled NLP
+would need a C compiler at run time. The build and solve times are in ``benchmarks/README.md``
+(``benchmarks/bench_ss.py``).
 """
 
 from __future__ import annotations
@@ -121,14 +115,10 @@ def _ipopt(nlp: dict[str, Any], max_iter: int) -> Any:
     import casadi as ca
 
     # tol 1e-4 on the (mm, mm^2) scaled NLP error; the constraint violation keeps IPOPT's default
-    # constr_viol_tol (1e-4 mm), and the exact shapely check decides penetration anyway. With the
-    # adaptive barrier update: median 13 instead of 18 iterations over 200 random switches.
-    # calc_lam_p off: the parameters' multipliers are not used (one evaluation less per solve).
-    # Most of IPOPT's time per iteration is the adaptive mu oracle (quality function: 9 of 14 ms on
-    # Fig. 11b), yet none of these was faster over 97 captured solves (min-of-3 CPU medians, same run):
-    # mu_oracle loqo / probing (16-17 instead of 13 iterations), mu_strategy monotone (17),
-    # quality_function_max_section_steps 3, max_soc 0, adaptive_mu_globalization never-monotone-mode /
-    # kkt-error, nlp_scaling_method none, MUMPS scaling off or pivot order 0.
+    # constr_viol_tol (1e-4 mm), and the exact shapely check decides penetration anyway. The
+    # adaptive barrier update takes fewer iterations than the monotone one (the other IPOPT settings
+    # tried are listed in benchmarks/README.md). calc_lam_p off: the parameters' multipliers are not
+    # used (one evaluation less per solve).
     return ca.nlpsol("ss_ipopt", "ipopt", nlp, {
         "print_time": False, "error_on_fail": False, "calc_lam_p": False,
         "ipopt": {"print_level": 0, "sb": "yes", "max_iter": max_iter, "tol": 1e-4, "acceptable_tol": 1e-3,
@@ -253,7 +243,7 @@ def build_nlp(
     bpar = [ca.SX.sym(f"body{i}", b.data.size) for i, b in enumerate(bodies)]
     s_max = ca.SX.sym("s_max")
     # Rows are built vectorized over the interior knots (each expression a (1, N - 2) row: a few
-    # hundred CasADi operations instead of one per knot, 115 -> ~10 ms), then stacked knot by knot
+    # hundred CasADi operations instead of one per knot: much faster to build), then stacked knot by knot
     # (``ca.vec`` of the (rows per knot, N - 2) matrix), the same order as one knot at a time.
     K = N - 2
     Xi, Yi = X[0, 1:N - 1], X[1, 1:N - 1]

@@ -1,5 +1,5 @@
 """The ``opt`` variant: a smooth, non-penetrating switch path near the ``dmp`` one, solved with CasADi
-and checked exactly with shapely (DESIGN section 6; the NLP in :mod:`tooltransfer.planner.ss.nlp`).
+and checked exactly with shapely (docs/design.md section 6; the NLP in :mod:`tooltransfer.planner.ss.nlp`).
 
 1. The ``dmp`` path (:func:`tooltransfer.planner.ss.dmp_variant.recombine`) at the N knots' times is the reference.
    The primal initial guess (separating directions from its geometry) is the ``dmp`` path when it
@@ -208,8 +208,8 @@ def optimize(
         smooth: weight of the squared second differences against the squared distance to the
             ``dmp`` path (both in mm^2).
         warm_duals: pass the cached solver's last dual values (primal: the start, ``init``). Off by
-            default: over 200 random switches the duals of the previous, different switch did not help
-            (median 25.9 vs 21.1 ms, at most 206 vs 123 iterations; benchmarks/bench_ss.py).
+            default: the duals of the previous, different switch make solves slower
+            (``benchmarks/bench_ss.py``; figures in benchmarks/README.md).
         way: which way round the object the virtual motion goes.
         reach_band: each family of reach rows (inner circle, outer circle, waist wedge) is left out of
             the NLP when the ``dmp`` path and the start keep this distance [m] from its boundary (a

@@ -1,4 +1,4 @@
-"""The paper's cases built from the committed demonstrations (DESIGN section 5, Figs. 8 and 10).
+"""The paper's cases built from the committed demonstrations (docs/design.md section 5, Figs. 8 and 10).
 
 :func:`default_oe_skill` learns the universal OE skill from ``problems/data/finger_demos`` (tool 1):
 segmentation, recovery with the face-change corners as fixed points, one DMP. :func:`transfer_case`

@@ -33,7 +33,7 @@ _PIECES: dict[int, tuple[shapely.Polygon, tuple[NDArray[np.float64], ...], float
 def tool_geometry(tool: Tool) -> tuple[tuple[NDArray[np.float64], ...], float]:
     """The vertices (V, 2) [m] of each convex piece of ``tool`` (tool frame) and its radius ``rho``
     [m], cached per outline object (``Tool.convex_pieces`` decomposes and checks the outline on every
-    access, about 0.2 ms; the cache keeps the outline alive, so its id is not reused)."""
+    access; the cache keeps the outline alive, so its id is not reused)."""
     hit = _PIECES.get(id(tool.outline))
     if hit is None or hit[0] is not tool.outline:
         verts = tuple(np.asarray(p.exterior.coords, dtype=np.float64)[:-1] for p in tool.convex_pieces)

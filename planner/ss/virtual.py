@@ -1,4 +1,4 @@
-"""Virtual object motions x^o (paper section III.B, Fig. 9b/9c; DESIGN section 6).
+"""Virtual object motions x^o (paper section III.B, Fig. 9b/9c; docs/design.md section 6).
 
 The virtual object motion travels from the first object contact point ``q_A`` to the second,
 ``q_B``, while the object itself rests. Two kinds, as the paper tries:

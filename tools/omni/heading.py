@@ -1,4 +1,4 @@
-"""The tool heading the Omni imposes at a tool position (DESIGN section 7), in numpy and CasADi.
+"""The tool heading the Omni imposes at a tool position (docs/design.md section 7), in numpy and CasADi.
 
 The tool centre point at world position ``x`` (2,) is reached with the waist angle (forward branch)
 ``a = phi(x - b) - atan2(d_t, u)``, ``u = sqrt(|x - b|^2 - d_t^2)``, where ``b`` is the joint-1 axis,

@@ -1,6 +1,6 @@
 """The Omni platform's placement on the table and its joint limits, in one frozen dataclass.
 
-World frame (DESIGN section 2): in the table plane, origin under the Omni's first joint axis,
+World frame (docs/design.md section 2): in the table plane, origin under the Omni's first joint axis,
 ``x`` to the operator's right, ``y`` forward (away from the Omni base), ``z`` up. The Omni base
 frame (DH frame 0) has its origin on the joint-1 axis; ``base_yaw`` is the angle of its ``x``
 axis in the world, and ``table_height`` is the height of the pushing plane in the base frame.

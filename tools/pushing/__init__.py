@@ -1,1 +1,1 @@
-"""Quasi-static push mechanics of a round object under a tool (DESIGN section 10)."""
+"""Quasi-static push mechanics of a round object under a tool (docs/design.md section 10)."""

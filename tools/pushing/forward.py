@@ -183,8 +183,8 @@ def simulate_batch(
 def _run_scalar(
     tool: Tool, p: NDArray[np.float64], start: NDArray[np.float64], r: float, mech: PushMechanics, h: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.int8], NDArray[np.intp], NDArray[np.float64]]:
-    """:func:`simulate_batch` for one run in scalar arithmetic (about 20x faster than the batch code
-    at B = 1: no array overhead per substep)."""
+    """:func:`simulate_batch` for one run in scalar arithmetic (faster than the batch code at B = 1:
+    no array overhead per substep)."""
     outline = Outline.of(tool)
     edges = [(float(a[0]), float(a[1]), float(d[0]), float(d[1]), float(l2), float(n[0]), float(n[1]))
              for a, d, l2, n in zip(outline.start, outline.direction, outline.length2, outline.normal, strict=True)]

@@ -1,4 +1,4 @@
-"""Identification of the push model's parameters ``mu`` and ``c`` from recorded pushes (DESIGN section 10).
+"""Identification of the push model's parameters ``mu`` and ``c`` from recorded pushes (docs/design.md section 10).
 
 The paper's Assumption 1 leaves the object's and the contact's properties to "parameter
 identification methods"; here they are fitted by least squares of the forward model

@@ -1,4 +1,4 @@
-"""The quasi-static contact law of a pusher on a round slider (DESIGN section 10).
+"""The quasi-static contact law of a pusher on a round slider (docs/design.md section 10).
 
 The puck (radius ``R``) slides on the table; with an ellipsoidal limit surface
 ``f^2 / f_max^2 + m^2 / m_max^2 = 1`` its twist lies along the surface's normal, ``v = k f / f_max^2``

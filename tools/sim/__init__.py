@@ -13,7 +13,7 @@
 * :mod:`tooltransfer.tools.sim.scenarios`: scripted pushes (a straight push, the sideways sweep that shows the
   heading drift) used by the tests, the benchmark and ``planner/plots/heading_drift.py``.
 
-SI units and the world frame of DESIGN section 2 throughout.
+SI units and the world frame of docs/design.md section 2 throughout.
 """
 
 from tooltransfer.tools.sim.batch import Job, execute_many

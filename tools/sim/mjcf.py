@@ -8,7 +8,7 @@ whose hinge turns about its local z (the joint), with the next body at ``(a, 0, 
 joints have the platform's limits as mechanical stops.
 
 The tool. The Omni's last three joints are fixed, so the tool turns in the table plane with q1
-only (DESIGN section 7): a planar tool stays flat on the table while the shoulder and the elbow
+only (docs/design.md section 7): a planar tool stays flat on the table while the shoulder and the elbow
 move. The tool body hangs from the tool centre point on two hinges about the arm-plane normal held
 by joint equalities at ``-q2`` and ``-q3`` (a parallelogram, as the real holder keeps the tool
 level), so its orientation is ``Rz(base_yaw + q1 - pi/2)`` (:meth:`OmniPlatform.heading`) whatever
@@ -24,20 +24,20 @@ Contact settings measured to matter with MuJoCo 4.0 on exactly this push (a forw
 puck with tool 1's upper face) in the issue's prototype:
 
 * ``<flag multiccd="disable"/>``: with it on, contacts on the prism's edges got a wrong normal
-  (22 mm final error and 5 mm penetration).
-* ``cone="elliptic"``: pyramidal cones let the puck slide off the tool (103 mm error).
-* contact ``solref="0.005 1"``: damping ratio 1 (0.3 gave 30 mm error) with a 5 ms time constant.
+  (a large final error and penetration).
+* ``cone="elliptic"``: pyramidal cones let the puck slide off the tool.
+* contact ``solref="0.005 1"``: damping ratio 1 (lower ratios gave large errors) with a 5 ms time
+  constant.
 * ``timestep`` 1 ms (1-2 ms give the same push), ``integrator="implicitfast"`` (stable with the
   velocity actuators' damping), ``solver="Newton"``.
 * ``priority`` on the table, obstacle and tool geoms, so their friction is the one used against
   the puck (not the larger of the two geoms').
 
-Measured again on this model (the tests' 60 mm forward push and 80 mm sideways sweep, final puck
-position against the settings above): pyramidal cones 35 mm and 15 mm off (the puck slides on
-the face); multiccd on, damping ratio 0.3, a 2 ms step or the Euler integrator 0.2-0.4 mm and
-0.3-2.3 mm off (the sweep's end is sensitive, see tests/test_sim_push.py); without priority no
-change, as the puck's own friction equals the table's. The settings are kept as the prototype
-found them.
+On the current model the pyramidal cones still matter most (the puck slides on the face); the
+other settings move the final puck by fractions of a millimetre to a few millimetres (the
+sideways sweep's end is sensitive, see tests/test_sim_push.py), and priority changes nothing
+while the puck's own friction equals the table's. The settings are kept as the prototype found
+them; the figures are in ``benchmarks/README.md``.
 
 The arm: gravity compensation on every moving body (``gravcomp="1"``), and a position plus a
 velocity actuator per joint: ``tau = kp (q_ref - q) + kv (qd_ref - qd)``, PD tracking of a joint

@@ -1,4 +1,4 @@
-"""Constraints on a DMP motion that are linear in the weights (DESIGN section 4).
+"""Constraints on a DMP motion that are linear in the weights (docs/design.md section 4).
 
 A constraint describes, at each sample time, ``m`` rows of the form
 
