@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, cast
 
 import numpy as np
 import scipy.linalg
@@ -124,8 +124,8 @@ class DMP:
         multi = isinstance(t, list | tuple)
         if multi != isinstance(x, list | tuple):
             raise InputError("t, X", "both arrays or both lists of the same length")
-        ts: list[ArrayLike] = list(t) if multi else [t]  # type: ignore[arg-type]
-        xs: list[ArrayLike] = list(x) if multi else [x]  # type: ignore[arg-type]
+        ts = cast(list[ArrayLike], list(t) if multi else [t])  # type: ignore[arg-type]
+        xs = cast(list[ArrayLike], list(x) if multi else [x])  # type: ignore[arg-type]
         if len(ts) != len(xs) or not ts:
             raise InputError("t, X", "lists of equal, non-zero length", f"{len(ts)} and {len(xs)}")
         demos = []
