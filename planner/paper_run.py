@@ -19,6 +19,7 @@ from pathlib import Path
 
 from tooltransfer.planner.plan import Plan
 from tooltransfer.problems import FINGER_DEMOS
+from tooltransfer.problems.atomic import write_text
 from tooltransfer.problems.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -169,5 +170,5 @@ def run_paper(out: Path) -> str:
         fig14_task = ROOT / "problems" / "paper" / "fig14_safety_margin.yaml"
         report.append(f"wrote {figures.fig14(fig14_task, out / 'fig14_safety_margin.png')}")
     text = "\n".join(report)
-    (out / "report.txt").write_text(text + "\n")
+    write_text(out / "report.txt", text + "\n")
     return text

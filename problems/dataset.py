@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator
 
 from tooltransfer.errors import InputError
+from tooltransfer.problems.atomic import write_text
 from tooltransfer.tools.model import Tool
 
 FORMAT = "tooltransfer.dataset/1"
@@ -203,24 +204,26 @@ def write_demonstration(path: str | Path, demo: Demonstration) -> None:
         rows.setdefault(_fmt(t), [""] * 8)[0:2] = [_fmt(x), _fmt(y)]
     for t, pose, q in zip(demo.t_tool, demo.tool_pose, demo.joints, strict=True):
         rows.setdefault(_fmt(t), [""] * 8)[2:8] = [_fmt(v) for v in (*pose, *q)]
-    with Path(path).open("w", newline="") as fh:
-        w = csv.writer(fh, lineterminator="\n")
-        w.writerow(COLUMNS)
-        w.writerows([stamp, *cells] for stamp, cells in sorted(rows.items(), key=lambda r: float(r[0])))
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(COLUMNS)
+    w.writerows([stamp, *cells] for stamp, cells in sorted(rows.items(), key=lambda r: float(r[0])))
+    write_text(path, buf.getvalue())
 
 
 def write_dataset(folder: str | Path, meta: Meta, demos: list[Demonstration], truth: dict | None = None) -> Path:
-    """Write ``meta.yaml``, the CSVs (named as in ``meta.demonstrations``) and ``truth.yaml``;
-    returns the folder."""
+    """Write the CSVs (named as in ``meta.demonstrations``), ``truth.yaml`` and, last, ``meta.yaml``, each
+    atomically: a writer stopped half-way leaves no ``meta.yaml`` that names a missing or half-written
+    recording. Returns the folder."""
     if len(demos) != len(meta.demonstrations):
         raise InputError("demos", f"{len(meta.demonstrations)} demonstrations (as meta.demonstrations)", len(demos))
     root = Path(folder)
     root.mkdir(parents=True, exist_ok=True)
-    (root / "meta.yaml").write_text(yaml.safe_dump(meta.model_dump(mode="json"), sort_keys=False))
     for name, demo in zip(meta.demonstrations, demos, strict=True):
         write_demonstration(root / name, demo)
     if truth is not None:
-        (root / "truth.yaml").write_text(yaml.safe_dump(truth, sort_keys=False))
+        write_text(root / "truth.yaml", yaml.safe_dump(truth, sort_keys=False))
+    write_text(root / "meta.yaml", yaml.safe_dump(meta.model_dump(mode="json"), sort_keys=False))
     return root
 
 

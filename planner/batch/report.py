@@ -20,6 +20,7 @@ not enforce the cone, so its solved plans can break it; the table shows by how m
 from __future__ import annotations
 
 import csv
+import io
 import re
 from collections import Counter, defaultdict
 from collections.abc import Iterable, Sequence
@@ -33,6 +34,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from tooltransfer.planner.batch.stats import wilson
+from tooltransfer.problems.atomic import write_bytes
 
 CONE_TOL = 0.01
 REACH_TOL = 1e-3
@@ -281,12 +283,11 @@ def print_execution(stats: Sequence[GroupStats], console: Console) -> None:
 def write_csv(path: Path, rows: Sequence[dict[str, Any]], columns: Sequence[str] | None = None) -> Path:
     """Write ``rows`` as CSV (``columns`` default: the first row's keys)."""
     cols = list(columns) if columns is not None else (list(rows[0]) if rows else [])
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=cols, extrasaction="ignore")
-        w.writeheader()
-        w.writerows(rows)
-    return path
+    buf = io.StringIO(newline="")
+    w = csv.DictWriter(buf, fieldnames=cols, extrasaction="ignore")
+    w.writeheader()
+    w.writerows(rows)
+    return write_bytes(path, buf.getvalue().encode())  # atomically: never half a table (CRLF rows as csv writes)
 
 
 def write_report(db: str | Path, out: str | Path | None, console: Console | None = None) -> list[Path]:

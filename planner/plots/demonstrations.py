@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from tooltransfer.planner.plots.save import save_figure
 from tooltransfer.planner.segmentation import Segmentation
 from tooltransfer.problems.dataset import Dataset
 from tooltransfer.tools.model import Tool
@@ -94,9 +95,4 @@ def plot_demonstrations(ds: Dataset, segs: Sequence[Segmentation], tool: Tool, o
     ax2.set_xlabel("t [s]")
     ax2.set_title("(c) pushes per demonstration: segmented (top)" + (", truth (bottom)" if truth else ""),
                   fontsize=9)
-    fig.tight_layout()
-    path = Path(out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, out, dpi=110)

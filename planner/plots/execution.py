@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.planner.plan import Plan
 from tooltransfer.planner.plots.save import save_figure
+from tooltransfer.problems.atomic import atomic_path
 from tooltransfer.tools.sim.execution import Execution
 
 PHASE_COLOURS = {"approach": "0.6", "push": "tab:blue", "switch": "tab:orange", "retreat": "0.6"}
@@ -174,7 +175,9 @@ def animate_execution(plan: Plan, ex: Execution, out: str | Path, *, fps: int = 
 
     anim = FuncAnimation(fig, frame, frames=len(times), blit=False)
     path = Path(out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(path, writer=PillowWriter(fps=fps), dpi=70)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:
+            anim.save(tmp, writer=PillowWriter(fps=fps), dpi=70)
+    finally:
+        plt.close(fig)
     return path

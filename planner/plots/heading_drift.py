@@ -30,6 +30,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+from tooltransfer.planner.plots.save import save_figure
 from tooltransfer.tools import OBJECT_RADIUS, load_tool
 from tooltransfer.tools.pose import Pose2D
 from tooltransfer.tools.sim import Rates, SimPlatform
@@ -89,11 +90,7 @@ def main(argv: list[str] | None = None) -> Path:
     ax.set_title("(c) pushed left, the puck drifts forward")
     ax.legend(fontsize=8)
 
-    path = args.out
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    path = save_figure(fig, args.out, dpi=120)
     dx, dy = mm * push.object_motion
     print(f"heading change {np.degrees(push.heading_change):.1f} deg over an {mm * 0.08:.0f} mm sweep; "
           f"puck moved {dx:.1f} mm in x and drifted {dy:.1f} mm in y; contact "

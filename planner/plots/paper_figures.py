@@ -27,6 +27,7 @@ import numpy as np
 
 from tooltransfer.planner.plan import Plan
 from tooltransfer.planner.skills import Skills
+from tooltransfer.problems.atomic import atomic_path
 from tooltransfer.tools.sim.execution import Execution
 
 
@@ -163,7 +164,8 @@ def _palette_png(path: Path, colours: int = 128) -> Path:
     with Image.open(path) as im:
         small = im.convert("RGB").quantize(colors=colours, method=Image.Quantize.MEDIANCUT,
                                            dither=Image.Dither.NONE)
-    small.save(path, optimize=True)
+    with atomic_path(path) as tmp:
+        small.save(tmp, optimize=True)
     return path
 
 

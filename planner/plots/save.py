@@ -1,9 +1,12 @@
-"""Writing a figure: make the folder, save, close (no display is needed anywhere)."""
+"""Writing a figure: make the folder, save atomically (never half a file, :mod:`tooltransfer.problems.atomic`),
+close (no display is needed anywhere)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
+
+from tooltransfer.problems.atomic import atomic_path
 
 
 def save_figure(fig: Any, out: str | Path, dpi: int = 120) -> Path:
@@ -12,7 +15,9 @@ def save_figure(fig: Any, out: str | Path, dpi: int = 120) -> Path:
 
     fig.tight_layout()
     path = Path(out)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=dpi)
+    finally:
+        plt.close(fig)
     return path
