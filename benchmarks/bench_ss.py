@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from tooltransfer.planner.ss import SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
+from tooltransfer.planner.ss import OptOptions, SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
 from tooltransfer.planner.ss.adapter import dataset_switches, default_dataset
 from tooltransfer.planner.ss.cases import FIG11, fig11_task, random_task
 from tooltransfer.planner.ss.nlp import Capsule
@@ -48,10 +48,10 @@ def _timed(fn: Callable[..., Any], *args: Any, **kw: Any) -> tuple[Any, float, f
 def run_opt(skill: SwitchSkill, tasks: list[SwitchTask], label: str, **kw: Any) -> None:
     """The opt variant over ``tasks`` with a reused solver (each structure built once before)."""
     for t in tasks:
-        optimize(skill, t, **kw)
+        optimize(skill, t, OptOptions(**kw))
     wall, cpu, solve, ver, its, status, starts = [], [], [], [], [], collections.Counter(), collections.Counter()
     for t in tasks:
-        r, w, c = _timed(optimize, skill, t, **kw)
+        r, w, c = _timed(optimize, skill, t, OptOptions(**kw))
         status[r.status if r.ok else f"{r.status} ({_kind(r.reason)})"] += 1
         if r.ok:
             wall.append(w)
@@ -100,10 +100,10 @@ def main(n_random: int = 200, seed: int = 0) -> None:
               for a in np.pi / 2 + rng.uniform(-0.4, 0.4, 40)]
     for solver in ("sqp", "ipopt"):
         for t in ctasks[:1]:
-            optimize(skill, t, model="capsule", solver=solver)
+            optimize(skill, t, OptOptions(model="capsule", solver=solver))
         tot, cpu, its, ok = [], [], [], 0
         for t in ctasks:
-            r, w, c = _timed(optimize, skill, t, model="capsule", solver=solver)
+            r, w, c = _timed(optimize, skill, t, OptOptions(model="capsule", solver=solver))
             ok += r.ok
             if r.ok:
                 tot.append(w)

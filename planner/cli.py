@@ -192,6 +192,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     from tooltransfer.errors import InputError
     from tooltransfer.planner.solve import solve
     from tooltransfer.problems.task import load_task
+    from tooltransfer.problems.variants import OEVariant, SSVariant, choices
 
     task = load_task(args.task)
     figure = None
@@ -202,9 +203,9 @@ def _cmd_solve(args: argparse.Namespace) -> int:
     chosen = {"oe": args.oe, "ss": args.ss}
     if args.variant:
         oe, _, ss = args.variant.partition("/")
-        if oe not in ("qp", "mapping") or ss not in ("opt", "dmp", "arch"):
-            raise InputError("--variant", "OE/SS with OE in {qp, mapping} and SS in {opt, dmp, arch}, e.g. qp/opt",
-                             args.variant)
+        if oe not in choices(OEVariant) or ss not in choices(SSVariant):
+            raise InputError("--variant", f"OE/SS with OE in {{{', '.join(choices(OEVariant))}}} and SS in "
+                             f"{{{', '.join(choices(SSVariant))}}}, e.g. qp/opt", args.variant)
         chosen = {"oe": args.oe or oe, "ss": args.ss or ss}
     if any(chosen.values()):
         variants = task.variants.model_copy(update={k: v for k, v in chosen.items() if v})
@@ -490,6 +491,8 @@ def _add(sub: argparse._SubParsersAction, name: str, helptext: str, example: str
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from tooltransfer.problems.variants import MAPPING_K, VIRTUAL_MOTION, OEVariant, SSVariant, VirtualMotion, choices
+
     parser = argparse.ArgumentParser(
         prog="tooltransfer", description="DMP skill transfer for multi-tool pushing on a Phantom Omni."
     )
@@ -522,8 +525,9 @@ def build_parser() -> argparse.ArgumentParser:
              _cmd_learn)
     p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs)")
     p.add_argument("-o", "--out", type=Path, required=True, help="skills file to write (JSON)")
-    p.add_argument("--k", type=float, default=0.5, help="adjusting factor of the mappings (6)-(7), in (0, 1)")
-    p.add_argument("--virtual", choices=("arch", "line"), default="arch", help="virtual object motion of the SS skill")
+    p.add_argument("--k", type=float, default=MAPPING_K, help="adjusting factor of the mappings (6)-(7), in (0, 1)")
+    p.add_argument("--virtual", choices=choices(VirtualMotion), default=VIRTUAL_MOTION,
+                   help="virtual object motion of the SS skill")
     p.add_argument("--calibration", type=Path, default=None,
                    help="identify the push mechanics from this calibration recording (tooltransfer demos "
                    "--calibration) instead of the dataset's pushes")
@@ -540,8 +544,8 @@ def build_parser() -> argparse.ArgumentParser:
              "tooltransfer solve problems/paper/transfer_tool2.yaml -o out/plan.json", _cmd_solve)
     p.add_argument("task", type=_task_file, help="task file (YAML) or a bundled task's name (tooltransfer tasks)")
     p.add_argument("-o", "--out", type=Path, default=None, help="write the plan (JSON) here")
-    p.add_argument("--oe", choices=("qp", "mapping"), default=None, help="override the task's OE variant")
-    p.add_argument("--ss", choices=("arch", "dmp", "opt"), default=None, help="override the task's switch variant")
+    p.add_argument("--oe", choices=choices(OEVariant), default=None, help="override the task's OE variant")
+    p.add_argument("--ss", choices=choices(SSVariant), default=None, help="override the task's switch variant")
     p.add_argument("--variant", default=None, help="override both as OE/SS, e.g. qp/opt or mapping/dmp")
     p.add_argument("--plot", nargs="?", const=True, default=None,
                    help="draw the plan (Fig. 12; with --simulate also the executions) to PATH (default: next to -o)")

@@ -176,7 +176,7 @@ class _Loop:
     def __init__(self, plan: Plan, task: Task, plant: object, frames: int, tolerance: float,
                  adapt: bool = True) -> None:
         from tooltransfer.planner.recontact import recontact_planner
-        from tooltransfer.planner.solve import effective_margin, qp_options, task_scene, task_skills
+        from tooltransfer.planner.solve import effective_margin, mapping_options, qp_options, task_scene, task_skills
         from tooltransfer.planner.switches import arch_planner, skill_planner, with_fallback
 
         self.plan, self.task, self.plant, self.frames, self.tolerance = plan, task, plant, frames, tolerance
@@ -194,8 +194,9 @@ class _Loop:
         self.recontact = with_fallback(recontact_planner(self.tool, self.platform, r, obstacles), self.switch, "switch")
         self.target = np.array(task.target)
         self.variant = plan.variant.get("oe", "qp")
-        self.options = replace(qp_options(task), n_samples=40, screen_samples=30, n_basis=15, candidates=2,
-                               alternatives=0)
+        self.options = qp_options(task).model_copy(update={"n_samples": 40, "screen_samples": 30, "n_basis": 15,
+                                                            "candidates": 2, "alternatives": 0})
+        self.mapping = mapping_options(task)
         self.v, self.a = task.timing.max_tool_speed, task.timing.max_tool_accel
         self.face: str | None = None
         self.adapt = adapt
@@ -270,7 +271,7 @@ class _Loop:
     def replan(self, t: NDArray[np.float64], ref: NDArray[np.float64], faces: tuple[str, ...],
                switches: tuple[float, ...], o: NDArray[np.float64]) -> PushPlan:
         """The rest of the task from the observed object ``o``: the sequence, else a new search."""
-        from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping
+        from tooltransfer.planner.oe.mapping_variant import condense_mapping
         from tooltransfer.planner.oe.qp_variant import condense_qp, condense_sequence
 
         start = time.perf_counter()
@@ -278,7 +279,7 @@ class _Loop:
         scene = self.scene_at(o)
         if self.variant == "mapping":
             pp = condense_mapping(t, ref, self.tool, self.platform, scene, self.target,
-                                  MappingOptions(k=self.task.oe.k, tube=self.task.oe.tube))
+                                  self.mapping)
         elif faces:
             pp = condense_sequence(t, ref, self.tool, self.platform, scene, self.target, faces, switches,
                                    self.options, s_first=s_first, free_start=True)

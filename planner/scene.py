@@ -13,15 +13,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tooltransfer.errors import InputError
+from tooltransfer.problems.task import SAFETY_MARGIN, OEOptions, schema_default
 from tooltransfer.tools.objects import Obstacle
 from tooltransfer.tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
 
-#: Default share of the friction cone's half-angle a plan may use (``oe.friction_cone_fraction``).
-CONE_FRACTION = 0.5
+#: Default share of the friction cone's half-angle a plan may use (``oe.friction_cone_fraction``, the task schema's).
+CONE_FRACTION: float = schema_default(OEOptions, "friction_cone_fraction")
 #: Default distance [m] the contact keeps from the ends of a face's usable range (``oe.contact_margin``).
-CONTACT_MARGIN = 0.0002
+CONTACT_MARGIN: float = schema_default(OEOptions, "contact_margin")
 #: Default longest stretch [m] of a face the contact may use, about its middle (``oe.contact_span``).
-CONTACT_SPAN = 0.012
+CONTACT_SPAN: float = schema_default(OEOptions, "contact_span")
 
 
 @dataclass(frozen=True)
@@ -45,7 +46,7 @@ class Scene:
     radius: float
     mechanics: PushMechanics = field(default_factory=lambda: PLATFORM_MECHANICS)
     obstacles: tuple[Obstacle, ...] = ()
-    margin: float = 0.005
+    margin: float = SAFETY_MARGIN
     cone_fraction: float = CONE_FRACTION
     contact_margin: float = CONTACT_MARGIN
     contact_span: float = CONTACT_SPAN

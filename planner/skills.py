@@ -30,6 +30,7 @@ from tooltransfer.dmp.skill_file import read_json
 from tooltransfer.errors import InputError, SkillFileError
 from tooltransfer.planner.oe.learn import OESkill
 from tooltransfer.planner.ss.learn import SwitchSkill
+from tooltransfer.problems.variants import MAPPING_K, VIRTUAL_MOTION
 from tooltransfer.tools.pushing.mechanics import PushMechanics
 
 if TYPE_CHECKING:
@@ -175,7 +176,7 @@ def learn_oe_from_dataset(folder: Path, k: float) -> OESkill:
     return learn_oe_skill(demos, tool, k=k, fixed=fixed)
 
 
-def learn_ss_from_dataset(folder: Path, virtual: str = "arch") -> SwitchSkill:
+def learn_ss_from_dataset(folder: Path, virtual: str = VIRTUAL_MOTION) -> SwitchSkill:
     """Learn the SS skill from a dataset's switches (the most frequent pair of faces)."""
     from tooltransfer.planner.ss import learn_switch_skill
     from tooltransfer.planner.ss.adapter import dataset_switches
@@ -197,7 +198,7 @@ def oe_skill_from_dataset(folder: Path, k: float) -> OESkill:
                    lambda: learn_oe_from_dataset(folder, k))
 
 
-def ss_skill_from_dataset(folder: Path, virtual: str = "arch") -> SwitchSkill:
+def ss_skill_from_dataset(folder: Path, virtual: str = VIRTUAL_MOTION) -> SwitchSkill:
     """The SS skill of a dataset, cached by the dataset's content hash and the virtual motion."""
     from tooltransfer.planner.ss import load_switch_skill, save_switch_skill
 
@@ -237,7 +238,7 @@ def identification_from_dataset(folder: str | Path) -> Identification:
                    _save_identification, lambda: identify_dataset(folder))
 
 
-def learn_skills(folder: str | Path, k: float = 0.5, virtual: str = "arch", *, with_ss: bool = True,
+def learn_skills(folder: str | Path, k: float = MAPPING_K, virtual: str = VIRTUAL_MOTION, *, with_ss: bool = True,
                  calibration: str | Path | None = None, with_mechanics: bool = True) -> Skills:
     """The skills of a dataset (through the cache): the OE skill learned with ``k``, the SS skill with
     the ``virtual`` object motion (``"arch"`` or ``"line"``) unless ``with_ss`` is False, and the push

@@ -100,10 +100,13 @@ def task_skills(task: Task, task_path: str | Path | None = None, *, need_ss: boo
 
 
 def qp_options(task: Task) -> QPOptions:
-    """The ``qp`` variant's options from the task's ``oe`` section."""
-    o = task.oe
-    return QPOptions(n_samples=o.n_samples, n_basis=o.n_basis, segments=o.segments, max_pushes=o.max_pushes,
-                     candidates=o.candidates, switch_price=o.switch_price, max_contacts=o.max_contacts)
+    """The ``qp`` variant's options from the task's ``oe`` section (:meth:`QPOptions.from_task`)."""
+    return QPOptions.from_task(task.oe)
+
+
+def mapping_options(task: Task) -> MappingOptions:
+    """The ``mapping`` variant's options from the task's ``oe`` section (:meth:`MappingOptions.from_task`)."""
+    return MappingOptions.from_task(task.oe)
 
 
 def task_mechanics(task: Task, skills: Skills | None = None) -> PushMechanics:
@@ -179,7 +182,7 @@ def solve(task: Task, task_path: str | Path | None = None) -> Plan:
         push_plan = condense_qp(t, x, tool, platform, scene, target, qp_options(task))
     else:
         push_plan = condense_mapping(t, x, tool, platform, scene, target,
-                                     MappingOptions(k=task.oe.k, tube=task.oe.tube))
+                                     mapping_options(task))
     lap("oe")
     if push_plan.status != "solved":
         return Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base)

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.assemble import SwitchPath, SwitchPlanner
-from tooltransfer.planner.ss import SwitchSkill, SwitchTask, optimize, recombine
+from tooltransfer.planner.ss import OptOptions, SwitchSkill, SwitchTask, optimize, recombine
 from tooltransfer.planner.ss.arch_variant import NoArch, swept_clearance, switch_path
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, DiscObject
@@ -114,7 +114,7 @@ def skill_planner(variant: str, skill: SwitchSkill, tool: Tool, platform: OmniPl
             res = recombine(skill, task)
         else:
             # the NLP needs a positive margin; 1 um stands for "touching allowed" (clearance 0)
-            res = optimize(skill, task, n_knots=n_knots, margin=max(clearance, 1e-6))
+            res = optimize(skill, task, OptOptions(n_knots=n_knots, margin=max(clearance, 1e-6)))
         info = {"object_penetration": float(res.object_penetration),
                 "obstacle_penetration": float(res.obstacle_penetration),
                 "obstacle_clearance": float(res.obstacle_clearance) if obs else float("inf"),

@@ -19,6 +19,14 @@ import shapely
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
 from tooltransfer.errors import InputError
+from tooltransfer.problems.variants import (
+    MAPPING_K,
+    SAFETY_MARGIN,
+    VIRTUAL_MOTION,
+    OEVariant,
+    SSVariant,
+    VirtualMotion,
+)
 from tooltransfer.tools.errors import ToolSpecError, UnknownToolError
 
 if TYPE_CHECKING:
@@ -174,15 +182,18 @@ class SkillsSpec(_Model):
 
 
 class Variants(_Model):
-    oe: Literal["mapping", "qp"] = Field("qp", description="OE condensing: the paper's mapping or the QP search")
-    ss: Literal["arch", "dmp", "opt"] = Field(
+    oe: OEVariant = Field("qp", description="OE condensing: the paper's mapping or the QP search")
+    ss: SSVariant = Field(
         "opt", description="switch paths: the CasADi NLP (default), DMP recombination (the paper) or the "
         "geometric arch (a reference)",
     )
 
 
 class OEOptions(_Model):
-    """Options of OE condensing (see :class:`tooltransfer.planner.oe.QPOptions`)."""
+    """Options of OE condensing (:class:`tooltransfer.planner.oe.QPOptions` takes its fields from here)."""
+
+    # the one source of these defaults, bounds and descriptions: QPOptions and MappingOptions reuse
+    # the fields, Scene its cone fraction and contact defaults (tests/test_options_once.py)
 
     # the bounds keep one solve within seconds and well under 1 GB: n_samples 2000 takes about 2 s and
     # 300 MB; n_basis 800 takes 9 s (100,000 asked for 1.2 TiB); n_knots 320 takes 9 s; the push-sequence
@@ -198,7 +209,7 @@ class OEOptions(_Model):
     candidates: int = Field(3, ge=1, le=20, strict=True, description="push sequences scored by a QP each")
     switch_price: float = Field(2e-7, ge=0, le=1.0, allow_inf_nan=False, strict=True,
                                 description="cost per face change [m^2]")
-    k: float = Field(0.5, gt=0, lt=1, allow_inf_nan=False, strict=True,
+    k: float = Field(MAPPING_K, gt=0, lt=1, allow_inf_nan=False, strict=True,
                      description="adjusting factor of the mappings (6)-(7)")
     tube: float = Field(0.01, gt=0, le=1.0, allow_inf_nan=False, strict=True,
                         description="tube radius around the universal path, mapping variant [m]")
@@ -223,7 +234,9 @@ class OEOptions(_Model):
 class SSOptions(_Model):
     """Options of the switch paths."""
 
-    virtual_motion: Literal["arch", "line"] = "arch"
+    # the one source of these defaults: the opt variant's OptOptions takes n_knots from here
+
+    virtual_motion: VirtualMotion = VIRTUAL_MOTION
     n_knots: int = Field(40, ge=4, le=100, strict=True,
                          description="knots of a switch path (the CasADi NLP's size grows with it)")
     clearance: float = Field(
@@ -257,7 +270,7 @@ class Task(_Model):
     start: Point
     target: Point
     obstacles: list[Obstacle] = Field([], max_length=32)
-    safety_margin: float = Field(0.005, ge=0, le=0.1, allow_inf_nan=False, strict=True,
+    safety_margin: float = Field(SAFETY_MARGIN, ge=0, le=0.1, allow_inf_nan=False, strict=True,
                                  description="delta of the paper's section IV.E [m]")
     platform: PlatformSpec = PlatformSpec()
     skills: SkillsSpec
@@ -281,6 +294,12 @@ class Task(_Model):
         if v.strip(".") == "" or any(c in "/\\" or ord(c) < 32 or ord(c) == 127 for c in v):
             raise ValueError("a name without '/', '\\' or control characters, not only dots (it names output files)")
         return v
+
+
+def schema_default(model: type[BaseModel], name: str) -> Any:
+    """The default of field ``name`` of the schema section ``model`` (e.g. ``OEOptions``, ``"n_samples"``):
+    what the planner's own options types take as theirs, so that a default is written once."""
+    return model.model_fields[name].default
 
 
 def min_jerk_time(length: float, v_max: float, a_max: float) -> float:
@@ -433,17 +452,25 @@ def resolve(task_path: str | Path, relative: str) -> Path:
 
 __all__ = [
     "FORMAT",
+    "MAPPING_K",
     "MAX_PLAN_DURATION",
     "MAX_SEARCH_STEPS",
+    "SAFETY_MARGIN",
     "DiscObstacle",
+    "OEOptions",
+    "OEVariant",
     "PolygonObstacle",
+    "SSOptions",
+    "SSVariant",
     "Task",
     "TaskFileError",
     "UnknownToolError",
+    "VirtualMotion",
     "load_task",
     "min_jerk_time",
     "push_search_steps",
     "resolve",
+    "schema_default",
     "task_from_dict",
     "task_json_schema",
     "task_obstacles",

@@ -10,7 +10,7 @@ import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tooltransfer.planner.ss import SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
+from tooltransfer.planner.ss import OptOptions, SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
 from tooltransfer.planner.ss.cases import fig11_task, random_task
 from tooltransfer.planner.ss.synthetic import synthetic_switches
 from tooltransfer.tools.clearance import swept_penetration_depth
@@ -100,7 +100,7 @@ def test_solver_is_reused_and_capsule_model_solves(skill: SwitchSkill) -> None:
     optimize(skill, task)
     again = optimize(skill, SwitchTask(load_tool("finger"), "upper", "left", np.array([-0.02, 0.17])))
     assert again.ok and not again.info["attempts"][0]["built"]
-    cap = optimize(skill, task, model="capsule", solver="sqp")
+    cap = optimize(skill, task, OptOptions(model="capsule", solver="sqp"))
     check_solved(task, cap, 5e-6)
 
 
@@ -152,7 +152,7 @@ def test_round_paths_join_the_contacts_outside_the_c_obstacle() -> None:
 def test_every_separator_form_solves_the_fig11_cases(skill: SwitchSkill, separators: str) -> None:
     for name in ("fig11a", "fig11b"):
         task = fig11_task(name)
-        check_solved(task, optimize(skill, task, separators=separators), 1e-4)
+        check_solved(task, optimize(skill, task, OptOptions(separators=separators)), 1e-4)
 
 
 @pytest.mark.parametrize(("field", "value"), [("init", "nope"), ("max_starts", 0), ("step_factor", -1.0),
@@ -162,7 +162,7 @@ def test_bad_options_raise_input_error(skill: SwitchSkill, field: str, value: ob
     from tooltransfer.errors import InputError
 
     with pytest.raises(InputError, match=field):
-        optimize(skill, fig11_task("fig11b"), **{field: value})
+        optimize(skill, fig11_task("fig11b"), OptOptions(**{field: value}))
 
 
 def test_polygon_object_with_disc_and_polygon_obstacles(skill: SwitchSkill) -> None:

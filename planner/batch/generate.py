@@ -25,7 +25,7 @@ import yaml
 from tooltransfer.errors import InputError
 from tooltransfer.planner.batch.spec import BatchSpec, Region, dataset_folder
 from tooltransfer.problems.atomic import write_text
-from tooltransfer.problems.task import task_from_dict
+from tooltransfer.problems.task import SAFETY_MARGIN, ObjectSpec, schema_default, task_from_dict
 
 _TRIES = 2000
 
@@ -158,8 +158,8 @@ def generate_task(spec: BatchSpec, index: int, dataset: str) -> GeneratedTask:
     else:
         raise GenerationError(f"task {index}: no target at a distance in [{lo}, {hi}] m (and within the heading "
                               "range) of any start")
-    radius = float(spec.task.get("object", {}).get("radius", 0.0175))
-    keep = radius + float(spec.task.get("safety_margin", 0.005)) + spec.obstacles.clearance
+    radius = float(spec.task.get("object", {}).get("radius", schema_default(ObjectSpec, "radius")))
+    keep = radius + float(spec.task.get("safety_margin", SAFETY_MARGIN)) + spec.obstacles.clearance
     obstacles = _obstacles(rng, spec, start, target, keep)
     task_id = f"{spec.name}-{index:05d}"
     data = _base(spec, tool, dataset)

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from tooltransfer.dmp import DMP
 from tooltransfer.errors import InputError
 from tooltransfer.planner.oe.mappings import angle_inverse, wrap_angle
+from tooltransfer.problems.task import MAPPING_K
 from tooltransfer.tools.model import Tool
 from tooltransfer.validation import check_array
 
@@ -238,7 +239,7 @@ def learn_oe_skill(
     demos: Sequence[Sequence[DemoPush]],
     tool: Tool,
     *,
-    k: float = 0.5,
+    k: float = MAPPING_K,
     n_basis: int = 30,
     scaling: str = "similarity",
     fixed: Sequence[Sequence[int] | None] | None = None,

@@ -31,10 +31,10 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.oe.contacts import PushRefused, realise_pushes
@@ -43,15 +43,19 @@ from tooltransfer.planner.oe.mappings import angle_map, inner_map_points, outer_
 from tooltransfer.planner.oe.metrics import plan_metrics
 from tooltransfer.planner.oe.push_plan import PushPlan
 from tooltransfer.planner.scene import Scene
+from tooltransfer.problems.task import OEOptions
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, Obstacle
 from tooltransfer.tools.omni.platform import OmniPlatform
-from tooltransfer.validation import check_array, check_positive
+from tooltransfer.validation import check_array
+
+_TASK = OEOptions.model_fields
 
 
-@dataclass(frozen=True)
-class MappingOptions:
-    """Options of the ``mapping`` variant.
+class MappingOptions(BaseModel):
+    """Options of the ``mapping`` variant: ``k`` and ``tube`` are the task's ``oe`` fields (defaults,
+    bounds and descriptions of :class:`tooltransfer.problems.task.OEOptions`, reused), validated
+    once by pydantic when built (:meth:`from_task` takes the task's validated values).
 
     Attributes:
         k: adjusting factor of (6) and (7), in (0, 1).
@@ -60,19 +64,17 @@ class MappingOptions:
         n_samples: samples of the condensed path.
     """
 
-    k: float = 0.5
-    tube: float = 0.01
-    min_push: int = 5
-    n_samples: int = 400
+    model_config = ConfigDict(extra="forbid", frozen=True)
 
-    def __post_init__(self) -> None:
-        if not 0.0 < self.k < 1.0:
-            raise InputError("oe.k", "a number in (0, 1)", repr(self.k))
-        check_positive(self.tube, "oe.tube")
-        for name in ("min_push", "n_samples"):
-            v = getattr(self, name)
-            if not isinstance(v, int) or v < 1:
-                raise InputError(f"oe.{name}", "a positive integer", repr(v))
+    k: float = _TASK["k"]
+    tube: float = _TASK["tube"]
+    min_push: int = Field(5, ge=1, strict=True)
+    n_samples: int = Field(400, ge=1, strict=True)
+
+    @classmethod
+    def from_task(cls, oe: OEOptions) -> MappingOptions:
+        """The options of a task's ``oe`` section (validated by the task schema, so not again)."""
+        return cls.model_construct(k=oe.k, tube=oe.tube)
 
 
 def _as_disc(o: Obstacle) -> Disc:

@@ -40,6 +40,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
 
 from tooltransfer.dmp import DMP
 from tooltransfer.dmp.qp import (
@@ -62,11 +63,12 @@ from tooltransfer.planner.oe.objectives import RollingPenalty
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
 from tooltransfer.planner.scene import Scene
+from tooltransfer.problems.task import OEOptions
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pushing.inverse import FaceGeometry
-from tooltransfer.validation import check_array, check_positive
+from tooltransfer.validation import check_array
 
 FINAL_TRIES = 3
 """Screened candidates solved on the full grid, in order of cost, before the search gives up."""
@@ -76,20 +78,23 @@ SCREEN_RTOL = 1e-3
 changed by the last per-mille; the final fit runs to ``QPOptions.scp_rtol``)."""
 
 
-@dataclass(frozen=True)
-class QPOptions:
-    """Options of the ``qp`` variant.
+_TASK = OEOptions.model_fields
+#: The task's ``oe`` fields the ``qp`` variant uses: their defaults, bounds and descriptions are the
+#: task schema's (:class:`tooltransfer.problems.task.OEOptions`), reused, not written again.
+TASK_FIELDS = ("n_samples", "n_basis", "segments", "max_pushes", "candidates", "switch_price", "max_contacts")
+
+
+class QPOptions(BaseModel):
+    """Options of the ``qp`` variant: the task's ``oe`` fields of :data:`TASK_FIELDS` (defaults,
+    bounds and descriptions of :class:`tooltransfer.problems.task.OEOptions`) and the search's own.
+    Validated once, by pydantic, when built (:meth:`from_task` takes the task's already validated
+    values); ``model_copy(update=...)`` makes a variant of it.
 
     Attributes:
-        n_samples: constraint-grid samples of the final fit (violations are measured 10x denser).
         screen_samples: constraint-grid samples while candidates are ranked (a coarser grid; the
             best candidates are then solved again on the full grid, the first feasible one wins).
-        n_basis: basis functions per dimension of the condensed DMP.
-        segments: switch times lie on this many equal phases of the motion.
-        max_pushes: longest push sequence considered.
-        candidates: push sequences scored by the QP before refinement.
         switch_price: cost of one face change [m^2], in the units of the objective (half the mean
-            squared deviation): 2e-7 weighs a face change like 0.63 mm of RMS deviation; on the
+            squared deviation): the default weighs a face change like 0.63 mm of RMS deviation; on the
             transfer case the push count depends on it (benchmarks/README.md).
         ridge: weight of a ridge on the weights [m^2 per weight^2]; 0 by default (tracking on more
             samples than basis functions is already well posed; weights are O(100), so even 1e-10
@@ -106,43 +111,32 @@ class QPOptions:
         recontact_price: cost of one re-contact [m^2] (half a face change by default: a short move
             of the same face, no switch round the object);
         alternatives: further screened candidates a plan may hand out (``PushPlan.next_best``) when a
-            later stage fails on it (a switch that finds no path, a check that fails);
-        max_contacts: most contacts one push may use (re-contacts of the same face in between, when
-            one contact cannot carry the push's sideways travel and heading turn).
+            later stage fails on it (a switch that finds no path, a check that fails).
     """
 
-    n_samples: int = 120
-    screen_samples: int = 60
-    n_basis: int = 25
-    segments: int = 10
-    max_pushes: int = 4
-    candidates: int = 3
-    switch_price: float = 2e-7
-    ridge: float = 0.0
-    tol: float = 1e-6
-    accept: float = 1e-6
-    max_scp: int = 12
-    max_contacts: int = 6
-    alternatives: int = 4
-    recontact_price: float = 1e-7
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    n_samples: int = _TASK["n_samples"]
+    screen_samples: int = Field(60, ge=1, strict=True)
+    n_basis: int = _TASK["n_basis"]
+    segments: int = _TASK["segments"]
+    max_pushes: int = _TASK["max_pushes"]
+    candidates: int = _TASK["candidates"]
+    switch_price: float = _TASK["switch_price"]
+    ridge: float = Field(0.0, ge=0, allow_inf_nan=False)
+    tol: float = Field(1e-6, gt=0, allow_inf_nan=False)
+    accept: float = Field(1e-6, gt=0, allow_inf_nan=False)
+    max_scp: int = Field(12, ge=1, strict=True)
+    max_contacts: int = _TASK["max_contacts"]
+    alternatives: int = Field(4, ge=0, strict=True)
+    recontact_price: float = Field(1e-7, ge=0, allow_inf_nan=False)
     scp_rtol: float = 1e-6
 
-    def __post_init__(self) -> None:
-        for name in ("n_samples", "screen_samples", "n_basis", "segments", "max_pushes", "candidates", "max_scp",
-                     "max_contacts"):
-            v = getattr(self, name)
-            if not isinstance(v, int) or v < 1:
-                raise InputError(f"oe.{name}", "a positive integer", repr(v))
-        if not isinstance(self.alternatives, int) or self.alternatives < 0:
-            raise InputError("oe.alternatives", "an integer >= 0", repr(self.alternatives))
-        if self.n_samples < 10:
-            raise InputError("oe.n_samples", "at least 10", repr(self.n_samples))
-        for name in ("switch_price", "ridge", "recontact_price"):
-            v = getattr(self, name)
-            if not np.isfinite(v) or v < 0:
-                raise InputError(f"oe.{name}", "a finite number >= 0", repr(v))
-        check_positive(self.tol, "oe.tol")
-        check_positive(self.accept, "oe.accept")
+    @classmethod
+    def from_task(cls, oe: OEOptions) -> QPOptions:
+        """The options of a task's ``oe`` section (validated by the task schema, so not again), the
+        search's own fields at their defaults."""
+        return cls.model_construct(**oe.model_dump(include=set(TASK_FIELDS)))
 
 
 @dataclass(frozen=True)
@@ -410,8 +404,8 @@ def condense_qp(
         raise InputError("scene", "a tooltransfer.planner.scene.Scene", type(scene).__name__)
     fine = _Scene(grid, ref, tool, platform, target, scene, opts, free_start)
     # ranking needs no 1e-8 accuracy: the screening fits stop at 1e-5 (the final one at ``tol``)
-    screen_opts = replace(opts, tol=max(opts.tol, 1e-5), accept=max(opts.accept, 1e-5),
-                          scp_rtol=max(opts.scp_rtol, SCREEN_RTOL))
+    screen_opts = opts.model_copy(update={"tol": max(opts.tol, 1e-5), "accept": max(opts.accept, 1e-5),
+                                          "scp_rtol": max(opts.scp_rtol, SCREEN_RTOL)})
     screen = _Scene(*resample(min(opts.screen_samples, opts.n_samples)), tool, platform, target, scene,
                     screen_opts, free_start)
 

@@ -80,9 +80,9 @@ def _condensed(task_path: str | Path) -> tuple:
     """The task's tool, obstacles, margin used, target, generalized universal path (T, 2) [m] and its
     condensed push plans with the mapping and the qp variants."""
     from tooltransfer.planner.oe.generalize import generalize
-    from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping
+    from tooltransfer.planner.oe.mapping_variant import condense_mapping
     from tooltransfer.planner.oe.qp_variant import condense_qp
-    from tooltransfer.planner.solve import effective_margin, qp_options, task_scene, task_skills
+    from tooltransfer.planner.solve import effective_margin, mapping_options, qp_options, task_scene, task_skills
     from tooltransfer.problems.task import load_task, task_obstacles, task_platform, task_tool
 
     task = load_task(task_path)
@@ -95,7 +95,7 @@ def _condensed(task_path: str | Path) -> tuple:
     t, x, _ = generalize(skills.oe.dmp, np.array(task.start), target)
     plans = {
         "mapping (paper)": condense_mapping(t, x, tool, platform, scene, target,
-                                            MappingOptions(k=task.oe.k, tube=task.oe.tube)),
+                                            mapping_options(task)),
         "qp": condense_qp(t, x, tool, platform, scene, target, qp_options(task)),
     }
     return task, tool, obstacles, margin, target, x, plans

@@ -16,6 +16,7 @@ import numpy as np
 from tooltransfer.planner.oe.mapping_variant import avoid_obstacles
 from tooltransfer.planner.oe.push_plan import PushPlan
 from tooltransfer.planner.plots.save import save_figure
+from tooltransfer.problems.task import MAPPING_K
 from tooltransfer.tools.objects import Disc
 
 MM = 1e3  # the figures draw lengths in mm (the paths are in m)
@@ -29,7 +30,7 @@ def plot_safety_margin(
     *,
     radius: float,
     margins: Sequence[float] = (0.0, 0.005, 0.01),
-    k: float = 0.5,
+    k: float = MAPPING_K,
 ) -> Path:
     """Write the figure to ``out``; ``universal`` (T, 2) [m] is the generalized universal path of an
     object of ``radius`` [m]."""

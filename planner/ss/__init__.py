@@ -15,7 +15,7 @@
 from tooltransfer.planner.ss.demonstrated import DemoSwitch
 from tooltransfer.planner.ss.dmp_variant import recombine
 from tooltransfer.planner.ss.learn import SwitchSkill, learn_switch_skill
-from tooltransfer.planner.ss.opt_variant import optimize
+from tooltransfer.planner.ss.opt_variant import OptOptions, optimize
 from tooltransfer.planner.ss.result import SwitchPath
 from tooltransfer.planner.ss.skill_file import load_switch_skill, save_switch_skill
 from tooltransfer.planner.ss.task import SwitchTask
@@ -23,6 +23,7 @@ from tooltransfer.planner.ss.virtual import virtual_motion
 
 __all__ = [
     "DemoSwitch",
+    "OptOptions",
     "SwitchPath",
     "SwitchSkill",
     "SwitchTask",

@@ -36,22 +36,23 @@ import itertools
 import math
 import time
 from collections.abc import Iterator, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.ss.bodies import UNIT, all_bodies
+from tooltransfer.planner.ss.bodies import UNIT, Body, all_bodies
 from tooltransfer.planner.ss.dmp_variant import measure, recombine
 from tooltransfer.planner.ss.initial import c_obstacle, round_paths
 from tooltransfer.planner.ss.learn import SwitchSkill
-from tooltransfer.planner.ss.nlp import MODELS, SOLVERS, SwitchNLP, get_nlp, initial_separators
+from tooltransfer.planner.ss.nlp import MODELS, SEPARATORS, SOLVERS, SwitchNLP, get_nlp, initial_separators
 from tooltransfer.planner.ss.result import SwitchPath
 from tooltransfer.planner.ss.task import SwitchTask
 from tooltransfer.planner.ss.verify import pose_depth_and_gap, tool_geometry
 from tooltransfer.planner.ss.virtual import Way
+from tooltransfer.problems.task import SSOptions, schema_default
 from tooltransfer.tools.contact import Contact
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.heading import heading
@@ -170,34 +171,12 @@ def _near_obstacles(task: SwitchTask, paths: Sequence[NDArray[np.float64]], band
     return out
 
 
-def optimize(
-    skill: SwitchSkill,
-    task: SwitchTask,
-    *,
-    n_knots: int = 40,
-    margin: float = 1e-3,
-    model: str = "pieces",
-    solver: str = "ipopt",
-    touch_tol: float = 5e-6,
-    ramp_share: float = 0.15,
-    max_refine: int = 2,
-    smooth: float = 10.0,
-    warm_duals: bool = False,
-    way: Way | float = "short",
-    reach_band: float | None = 0.03,
-    init: str = "auto",
-    max_starts: int = 2,
-    step_factor: float = 2.5,
-    min_step: float = 3e-3,
-    separators: str = "distance",
-    body_band: float | None = 0.01,
-) -> SwitchPath:
-    """The ``opt`` switch path of ``task`` (module docstring).
+@dataclass(frozen=True)
+class OptOptions:
+    """Options of the ``opt`` variant (module docstring), checked when built.
 
-    Args:
-        skill: the learned SS skill (gives the ``dmp`` reference path).
-        task: the switch.
-        n_knots: N, knots of the NLP (first try).
+    Attributes:
+        n_knots: N, knots of the NLP (first try; the task schema's ``ss.n_knots`` default).
         margin: clearance [m] demanded over the middle of the path (first try).
         model: ``"pieces"`` (the tool's convex pieces with separating directions) or ``"capsule"``
             (the capsule enclosing the tool, disc bodies only).
@@ -217,140 +196,215 @@ def optimize(
             the refinement. None: always in.
         init: the NLP's initial path: ``"auto"`` (the ``dmp`` path when it keeps out of the
             C-obstacle, else a path round it, :mod:`tooltransfer.planner.ss.initial`), ``"dmp"`` (always the
-            ``dmp`` path, as before).
+            ``dmp`` path).
         max_starts: initial paths tried (in the order of ``init``) when the NLP ends without a solution
             (each try is an attempt in ``info["attempts"]``, timed).
         step_factor, min_step: the largest step between knots [m] is ``max(step_factor * L / (N - 1),
             min_step)`` with ``L`` the length of the start path (:mod:`tooltransfer.planner.ss.nlp`, no tunnelling).
+        separators: the non-penetration rows of disc bodies, ``"distance"`` (exact signed distance, no
+            extra variables), ``"vector"`` or ``"angle"`` (separating directions);
+            :data:`tooltransfer.planner.ss.nlp.SEPARATORS` and the module docstring there give the measurements.
         body_band: an obstacle is left out of the NLP when every knot of the ``dmp`` path and of the
             start keeps the tool (its radius about the reference point) this far [m] from it; the
             exact check still tests it, and a penetration puts every obstacle back for the
             refinement. None: always in.
-        separators: the non-penetration rows of disc bodies, ``"distance"`` (exact signed distance, no
-            extra variables), ``"vector"`` or ``"angle"`` (separating directions);
-            :data:`tooltransfer.planner.ss.nlp.SEPARATORS` and the module docstring there give the measurements.
     """
+
+    n_knots: int = schema_default(SSOptions, "n_knots")
+    margin: float = 1e-3
+    model: str = "pieces"
+    solver: str = "ipopt"
+    touch_tol: float = 5e-6
+    ramp_share: float = 0.15
+    max_refine: int = 2
+    smooth: float = 10.0
+    warm_duals: bool = False
+    way: Way | float = "short"
+    reach_band: float | None = 0.03
+    init: str = "auto"
+    max_starts: int = 2
+    step_factor: float = 2.5
+    min_step: float = 3e-3
+    separators: str = "distance"
+    body_band: float | None = 0.01
+
+    def __post_init__(self) -> None:
+        if self.solver not in SOLVERS:
+            raise InputError("solver", f"one of {', '.join(SOLVERS)}", repr(self.solver))
+        if self.model not in MODELS:
+            raise InputError("model", f"one of {', '.join(MODELS)}", repr(self.model))
+        if self.separators not in SEPARATORS:
+            raise InputError("separators", f"one of {', '.join(SEPARATORS)}", repr(self.separators))
+        if not (np.isfinite(self.margin) and self.margin > 0):
+            raise InputError("margin", "a positive length [m]", repr(self.margin))
+        if not (np.isfinite(self.touch_tol) and self.touch_tol >= 0):
+            raise InputError("touch_tol", "a length >= 0 [m]", repr(self.touch_tol))
+        if self.init not in ("auto", "dmp"):
+            raise InputError("init", "'auto' or 'dmp'", repr(self.init))
+        if not isinstance(self.max_starts, int) or self.max_starts < 1:
+            raise InputError("max_starts", "an integer >= 1", repr(self.max_starts))
+        for name, value in (("step_factor", self.step_factor), ("min_step", self.min_step)):
+            if not (np.isfinite(value) and value > 0):
+                raise InputError(name, "a positive number", repr(value))
+        for name, band in (("reach_band", self.reach_band), ("body_band", self.body_band)):
+            if band is not None and not (np.isfinite(band) and band >= 0):
+                raise InputError(name, "None or a length >= 0 [m]", repr(band))
+
+
+@dataclass
+class _Round:
+    """The NLP of one refinement level, set up for ``n_knots`` knots and the margin ``margin`` [m]:
+    the problem, its parameters and bounds, the bodies it keeps and the starts to try, in order."""
+
+    n_knots: int
+    margin: float
+    nlp: SwitchNLP
+    built: bool
+    bodies: list[Body]
+    use_reach: tuple[bool, bool, bool]
+    p: NDArray[np.float64]
+    lbx: NDArray[np.float64]
+    ubx: NDArray[np.float64]
+    starts: Iterator[tuple[str, NDArray[np.float64]]]
+
+
+def _set_up(task: SwitchTask, ref: SwitchPath, every_body: list[Body], obs_gap: float, n_knots: int, margin: float,
+            opts: OptOptions, all_reach: bool, all_obstacles: bool) -> _Round:
+    """The NLP of one level (step 3 of the module docstring): reach rows when the reference or the
+    first start come near the reach boundary (all of them when ``all_reach``), the obstacles the
+    tool comes within ``body_band`` of (all when ``all_obstacles``), the ramped margins."""
+    N, m = n_knots, margin
+    shapes = (task.shape, *task.obstacles)
+    starts = _starts(task, ref, shapes, m, opts.smooth, opts.init)
+    first = next(starts)
+    near = np.minimum(reach_slacks(task.omni, ref.xy), reach_slacks(task.omni, first[1])) < (
+        np.inf if opts.reach_band is None else opts.reach_band)
+    use_reach = (True, True, True) if all_reach else (bool(near[0]), bool(near[1]), bool(near[2]))
+    # obstacles the tool cannot come within body_band of from the reference or the first start are
+    # left out (the exact check still tests them; a penetration puts them all back)
+    keep = _near_obstacles(task, (ref.xy, first[1]), np.inf if all_obstacles else opts.body_band)
+    bodies = [b for b in every_body if b.family == "object" or int(b.family.split()[1]) in keep]
+    nlp, built = get_nlp(task.tool, N, task.omni, bodies, model=opts.model, solver=opts.solver, smooth=opts.smooth,
+                         reach=use_reach, separators=opts.separators)
+    r = ramp(N, opts.ramp_share)
+    m_obj = m * r
+    m_obs = r * m + (1 - r) * min(m, 0.5 * obs_gap)
+    p = np.concatenate([ref.xy.ravel() / UNIT, m_obj / UNIT, m_obs / UNIT, *[b.data for b in bodies], [0.0]])
+    lbx = np.full(nlp.n_vars, -np.inf)
+    ubx = np.full(nlp.n_vars, np.inf)
+    for k in (0, N - 1):
+        lbx[2 * k:2 * k + 2] = ubx[2 * k:2 * k + 2] = ref.xy[k] / UNIT
+    return _Round(N, m, nlp, built, bodies, use_reach, p, lbx, ubx, itertools.chain([first], starts))
+
+
+def _solve(rnd: _Round, task: SwitchTask, ref: SwitchPath, opts: OptOptions, info: dict[str, object]
+           ) -> tuple[NDArray[np.float64] | None, SwitchPath | None]:
+    """The NLP from each start in turn (at most ``max_starts``, step 1), each try appended to
+    ``info["attempts"]``: the solution (or None) and the failure of the last start that failed."""
+    nlp, p, N = rnd.nlp, rnd.p, rnd.n_knots
+    attempts: list[dict[str, object]] = info["attempts"]  # type: ignore[assignment]
+    built = rnd.built
+    failure: SwitchPath | None = None
+    for label, x_init in itertools.islice(rnd.starts, opts.max_starts):
+        # steps up to step_factor times the start's mean step (and at least min_step)
+        p[-1] = max(opts.step_factor * _length(x_init) / (N - 1), opts.min_step) / UNIT
+        xy_mm = x_init / UNIT
+        seps = initial_separators(nlp, xy_mm, heading(task.omni, x_init), rnd.bodies)
+        z0 = np.concatenate([xy_mm.ravel(), seps.ravel(order="F")])
+        args = {"x0": z0, "p": p, "lbx": rnd.lbx, "ubx": rnd.ubx, "lbg": nlp.lbg, "ubg": nlp.ubg}
+        if opts.warm_duals and nlp.last_duals is not None:
+            args["lam_x0"], args["lam_g0"] = nlp.last_duals
+        t0 = time.perf_counter()
+        sol = nlp.solver(**args)
+        t_solve = time.perf_counter() - t0
+        st = nlp.solver.stats()
+        z = np.asarray(sol["x"]).ravel()
+        rec: dict[str, object] = {
+            "n_knots": N, "margin": rnd.margin, "start": label, "built": built, "reach_rows": rnd.use_reach,
+            "build_time": nlp.build_time if built else 0.0, "solve_time": t_solve,
+            "status": st.get("return_status", ""), "iterations": int(st.get("iter_count", -1))}
+        attempts.append(rec)
+        built = False
+        if st.get("success", False):
+            info["x_start"] = x_init
+            nlp.last_duals = (np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel())
+            return z, None
+        viol = _violations(nlp, z, p)
+        status = "infeasible" if viol and viol[0][1] > 1e-7 else "failed"
+        listed = ", ".join(f"{name} by {1e3 * v:.3f} mm" for name, v in viol)
+        tried = ", ".join(str(a["start"]) for a in attempts if a["n_knots"] == N)
+        why = (f"the NLP ({opts.solver}, local) ended with {rec['status']!r}: no feasible switch path found "
+               f"(started from: {tried}); violated at its last iterate: {listed}" if status == "infeasible"
+               else f"the NLP ({opts.solver}) ended with {rec['status']!r} at a feasible point (started from: {tried})")
+        failure = SwitchPath("opt", status, why, start=ref.start, end=ref.end)
+    return None, failure
+
+
+def _check(task: SwitchTask, ref: SwitchPath, z: NDArray[np.float64], n_knots: int, rec: dict[str, object]
+           ) -> tuple[SwitchPath, float]:
+    """The solved path measured exactly (step 4): the swept outline with shapely and the reach on a
+    path 4 times denser; the path and its largest reach violation [rad], both also noted in ``rec``."""
+    assert ref.start is not None and ref.end is not None
+    N = n_knots
+    xy = z[:2 * N].reshape(N, 2) * UNIT
+    xy[0], xy[-1] = ref.start.pose.position, ref.end.pose.position
+    yaw = heading(task.omni, xy)
+    t0 = time.perf_counter()
+    path = measure(SwitchPath("opt", "solved", "", ref.t, xy, yaw, ref.start, ref.end), task)
+    dense = np.vstack([xy[:-1] + f * (xy[1:] - xy[:-1]) for f in (0.0, 0.25, 0.5, 0.75)] + [xy[-1:]])
+    reach = float(np.max(joint_path(task.omni, dense).violation))
+    rec["verify_time"] = time.perf_counter() - t0
+    rec["penetration"] = path.max_penetration
+    rec["reach_violation"] = reach
+    return path, reach
+
+
+def optimize(skill: SwitchSkill, task: SwitchTask, options: OptOptions | None = None) -> SwitchPath:
+    """The ``opt`` switch path of ``task`` (module docstring) from the SS ``skill`` (it gives the
+    ``dmp`` reference path), with ``options`` (default :class:`OptOptions`)."""
     t_start = time.perf_counter()
-    if solver not in SOLVERS:
-        raise InputError("solver", f"one of {', '.join(SOLVERS)}", repr(solver))
-    if model not in MODELS:
-        raise InputError("model", f"one of {', '.join(MODELS)}", repr(model))
-    if not (np.isfinite(margin) and margin > 0):
-        raise InputError("margin", "a positive length [m]", repr(margin))
-    if not (np.isfinite(touch_tol) and touch_tol >= 0):
-        raise InputError("touch_tol", "a length >= 0 [m]", repr(touch_tol))
-    if init not in ("auto", "dmp"):
-        raise InputError("init", "'auto' or 'dmp'", repr(init))
-    if not isinstance(max_starts, int) or max_starts < 1:
-        raise InputError("max_starts", "an integer >= 1", repr(max_starts))
-    for name, value in (("step_factor", step_factor), ("min_step", min_step)):
-        if not (np.isfinite(value) and value > 0):
-            raise InputError(name, "a positive number", repr(value))
-    for name, band in (("reach_band", reach_band), ("body_band", body_band)):
-        if band is not None and not (np.isfinite(band) and band >= 0):
-            raise InputError(name, "None or a length >= 0 [m]", repr(band))
-    ref = recombine(skill, task, n_samples=n_knots, way=way, measured=False)
+    opts = options if options is not None else OptOptions()
+    if not isinstance(opts, OptOptions):
+        raise InputError("options", "an OptOptions", type(opts).__name__)
+    ref = recombine(skill, task, n_samples=opts.n_knots, way=opts.way, measured=False)
     if not ref.ok:
         return replace(ref, variant="opt")
     assert ref.start is not None and ref.end is not None
-    why, obs_gap = _contact_checks(task, (ref.start, ref.end), touch_tol)
+    why, obs_gap = _contact_checks(task, (ref.start, ref.end), opts.touch_tol)
     if why is not None:
         return SwitchPath("opt", "infeasible", why, start=ref.start, end=ref.end)
     every_body = all_bodies(task.shape, task.obstacles)
-    info: dict[str, object] = {"attempts": [], "k1": ref.info["k1"], "model": model, "solver": solver, "init": init}
+    info: dict[str, object] = {"attempts": [], "k1": ref.info["k1"], "model": opts.model, "solver": opts.solver,
+                               "init": opts.init}
     attempts: list[dict[str, object]] = info["attempts"]  # type: ignore[assignment]
-    N, m = n_knots, margin
-    shapes = (task.shape, *task.obstacles)
-    failure: SwitchPath | None = None
+    N, m = opts.n_knots, opts.margin
     any_violation = False
-    all_obstacles = body_band is None
+    all_obstacles = opts.body_band is None
     level = 0
-    while level <= max_refine:
+    while level <= opts.max_refine:
         if len(ref.xy) != N:
-            ref = recombine(skill, task, n_samples=N, way=way, measured=False)
-        starts = _starts(task, ref, shapes, m, smooth, init)
-        first = next(starts)
-        # the reach rows when the reference or the first start come near the reach boundary, or the
-        # exact check found a violation before
-        near = np.minimum(reach_slacks(task.omni, ref.xy), reach_slacks(task.omni, first[1])) < (
-            np.inf if reach_band is None else reach_band)
-        use_reach = (True, True, True) if any_violation else tuple(bool(v) for v in near)
-        # obstacles the tool cannot come within body_band of from the reference or the first start
-        # are left out (the exact check still tests them; a penetration puts them all back)
-        keep = _near_obstacles(task, (ref.xy, first[1]), np.inf if all_obstacles else body_band)
-        bodies = [b for b in every_body if b.family == "object" or int(b.family.split()[1]) in keep]
-        nlp, built = get_nlp(task.tool, N, task.omni, bodies, model=model, solver=solver, smooth=smooth,
-                             reach=use_reach, separators=separators)
-        r = ramp(N, ramp_share)
-        m_obj = m * r
-        m_obs = r * m + (1 - r) * min(m, 0.5 * obs_gap)
-        p = np.concatenate([ref.xy.ravel() / UNIT, m_obj / UNIT, m_obs / UNIT, *[b.data for b in bodies], [0.0]])
-        lbx = np.full(nlp.n_vars, -np.inf)
-        ubx = np.full(nlp.n_vars, np.inf)
-        for k in (0, N - 1):
-            lbx[2 * k:2 * k + 2] = ubx[2 * k:2 * k + 2] = ref.xy[k] / UNIT
-        solved = None
-        for label, x_init in itertools.islice(itertools.chain([first], starts), max_starts):
-            # steps up to step_factor times the start's mean step (and at least min_step)
-            p[-1] = max(step_factor * _length(x_init) / (N - 1), min_step) / UNIT
-            xy_mm = x_init / UNIT
-            seps = initial_separators(nlp, xy_mm, heading(task.omni, x_init), bodies)
-            z0 = np.concatenate([xy_mm.ravel(), seps.ravel(order="F")])
-            args = {"x0": z0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": nlp.lbg, "ubg": nlp.ubg}
-            if warm_duals and nlp.last_duals is not None:
-                args["lam_x0"], args["lam_g0"] = nlp.last_duals
-            t0 = time.perf_counter()
-            sol = nlp.solver(**args)
-            t_solve = time.perf_counter() - t0
-            st = nlp.solver.stats()
-            z = np.asarray(sol["x"]).ravel()
-            rec: dict[str, object] = {
-                "n_knots": N, "margin": m, "start": label, "built": built, "reach_rows": use_reach,
-                "build_time": nlp.build_time if built else 0.0, "solve_time": t_solve,
-                "status": st.get("return_status", ""), "iterations": int(st.get("iter_count", -1))}
-            attempts.append(rec)
-            built = False
-            if st.get("success", False):
-                solved = z
-                info["x_start"] = x_init
-                nlp.last_duals = (np.asarray(sol["lam_x"]).ravel(), np.asarray(sol["lam_g"]).ravel())
-                break
-            viol = _violations(nlp, z, p)
-            status = "infeasible" if viol and viol[0][1] > 1e-7 else "failed"
-            listed = ", ".join(f"{name} by {1e3 * v:.3f} mm" for name, v in viol)
-            tried = ", ".join(str(a["start"]) for a in attempts if a["n_knots"] == N)
-            why = (f"the NLP ({solver}, local) ended with {rec['status']!r}: no feasible switch path found "
-                   f"(started from: {tried}); violated at its last iterate: {listed}" if status == "infeasible"
-                   else f"the NLP ({solver}) ended with {rec['status']!r} at a feasible point (started from: {tried})")
-            failure = SwitchPath("opt", status, why, start=ref.start, end=ref.end)
+            ref = recombine(skill, task, n_samples=N, way=opts.way, measured=False)
+        rnd = _set_up(task, ref, every_body, obs_gap, N, m, opts, any_violation, all_obstacles)
+        solved, failure = _solve(rnd, task, ref, opts, info)
         if solved is None:
             assert failure is not None
             info.update(iterations=sum(int(a["iterations"]) for a in attempts), time=time.perf_counter() - t_start)
             return replace(failure, info=info)
-        xy = solved[:2 * N].reshape(N, 2) * UNIT
-        xy[0], xy[-1] = ref.start.pose.position, ref.end.pose.position
-        yaw = heading(task.omni, xy)
-        t0 = time.perf_counter()
-        path = measure(SwitchPath("opt", "solved", "", ref.t, xy, yaw, ref.start, ref.end), task)
-        dense = np.vstack([xy[:-1] + f * (xy[1:] - xy[:-1]) for f in (0.0, 0.25, 0.5, 0.75)] + [xy[-1:]])
-        reach = float(np.max(joint_path(task.omni, dense).violation))
-        rec["verify_time"] = time.perf_counter() - t0
-        rec["penetration"] = path.max_penetration
-        rec["reach_violation"] = reach
+        path, reach = _check(task, ref, solved, N, attempts[-1])
         any_violation = any_violation or reach > 0.0
-        if path.max_penetration <= touch_tol and reach == 0.0:
+        if path.max_penetration <= opts.touch_tol and reach == 0.0:
             info.update(iterations=sum(int(a["iterations"]) for a in attempts),
                         refinements=level, n_knots=N, margin=m, time=time.perf_counter() - t_start)
             return replace(path, info=info)
-        if len(bodies) < len(every_body) and path.obstacle_penetration > touch_tol:
+        if len(rnd.bodies) < len(every_body) and path.obstacle_penetration > opts.touch_tol:
             all_obstacles = True  # an obstacle left out was hit: the same knots and margin with all of them
             continue
         level += 1
         N, m = math.ceil(1.5 * N), 1.5 * m + path.max_penetration
-    last = info["attempts"][-1]  # type: ignore[index]
+    last = attempts[-1]
     return SwitchPath(
         "opt", "failed",
-        f"the exact check failed after {max_refine} refinements: penetration {1e3 * last['penetration']:.4f} mm, "
+        f"the exact check failed after {opts.max_refine} refinements: penetration {1e3 * last['penetration']:.4f} mm, "
         f"reach violation {last['reach_violation']:.3g} rad",
         start=ref.start, end=ref.end, info={**info, "time": time.perf_counter() - t_start},
     )

@@ -19,6 +19,7 @@ from tooltransfer.planner.operator.scene import DEMO_SCENE
 from tooltransfer.planner.segmentation import segment
 from tooltransfer.problems import FINGER_DEMOS
 from tooltransfer.problems.dataset import load_dataset
+from tooltransfer.problems.task import MAPPING_K
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
@@ -28,7 +29,7 @@ DEFAULT_DATASET = FINGER_DEMOS
 
 
 @cache
-def default_oe_skill(k: float = 0.5, n_basis: int = 30) -> OESkill:
+def default_oe_skill(k: float = MAPPING_K, n_basis: int = 30) -> OESkill:
     """The universal OE skill learned from the default dataset."""
     ds = load_dataset(DEFAULT_DATASET)
     tool = load_tool(ds.meta.tool)
