@@ -107,7 +107,12 @@ class _Reference:
 
     @classmethod
     def of(cls, plan: Plan) -> _Reference:
-        taus, xys, poses, spans, pushes, leads = [], [], [], [], [], []
+        taus: list[NDArray[np.float64]] = []
+        xys: list[NDArray[np.float64]] = []
+        poses: list[NDArray[np.float64]] = []
+        spans: list[tuple[str, float, float]] = []
+        pushes: list[Push] = []
+        leads: list[NDArray[np.float64] | None] = []
         now, n = 0.0, 0
         phase = np.asarray(plan.phase)
         prev_end: float | None = None

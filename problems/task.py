@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Final, Literal
 
 import numpy as np
 import shapely
@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from tooltransfer.tools.objects import Obstacle as ObstacleShape
     from tooltransfer.tools.omni.platform import OmniPlatform
 
-FORMAT = "tooltransfer.task/1"
+FORMAT: Final = "tooltransfer.task/1"
 
 # strict: a YAML true/false or a quoted number is a wrong type, not 1.0 / 0.0 (ints are still taken)
 Finite = Annotated[float, Field(allow_inf_nan=False, strict=True)]
