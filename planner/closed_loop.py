@@ -447,6 +447,130 @@ def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, confi
     return SimPlant(sim, camera_noise, seed)
 
 
+@dataclass(frozen=True)
+class _Pace:
+    """The closed loop's settings (see :func:`execute_closed_loop`): the target ``tolerance`` [m],
+    the re-plan ``threshold`` [m] (the caller's, or three times the averaged camera noise if more),
+    the longest ``chunk`` [m], the ``approach`` share near the end and the correction ``max_rounds``."""
+
+    tolerance: float
+    threshold: float
+    chunk: float
+    approach: float
+    max_rounds: int
+
+
+@dataclass
+class _InForce:
+    """The plan in force (first the plan itself) on its push-time axis from ``base`` [s], the push
+    ``i`` and sample ``k`` reached, and the correction rounds taken so far."""
+
+    plan: PushPlan
+    base: float = 0.0
+    i: int = 0
+    k: int = 0
+    rounds: int = 0
+
+    def switch_to(self, plan: PushPlan, base: float) -> None:
+        """Put ``plan`` in force from push-time ``base`` [s], at its first push's first sample."""
+        self.plan, self.base, self.i, self.k = plan, base, 0, 0
+
+
+def _plan_the_rest(loop: _Loop, ref: _Reference, f: _InForce) -> bool:
+    """A re-plan realised its first face only and the plan in force is used up short of its end:
+    plan the rest from the observed object. Whether a plan was put in force."""
+    current = f.plan
+    partial = (f.i >= len(current.pushes) and bool(current.pushes)
+               and current.pushes[-1].samples[-1] < current.t.size - 1)
+    if not partial:
+        return False
+    o = loop.observe()
+    tau = f.base + float(current.t[current.pushes[-1].samples[-1]] - current.t[0])
+    if tau < ref.end - 0.05:
+        t, r, faces, switches = ref.rest(tau, o, loop.target)
+        pp = loop.replan(t, r, faces, switches, o)
+        if pp.status == "solved":
+            f.switch_to(pp, tau)
+            return True
+    return False
+
+
+def _plan_done(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> tuple[str, str] | None:
+    """The plan in force is done: is the object there (three observations averaged)? If not, a
+    correction round. Returns the run's ``(status, reason)`` when it ends here, None when a
+    correction is in force."""
+    o = np.mean([loop.observe() for _ in range(3)], axis=0)
+    if np.hypot(*(loop.target - o)) <= pace.tolerance:
+        return "reached", ""
+    f.rounds += 1
+    if f.rounds > pace.max_rounds:
+        return "rounds", f"{pace.max_rounds} correction rounds did not reach the target"
+    d = float(np.hypot(*(loop.target - o)))
+    pp = loop.correction(o)
+    if pp.status != "solved":
+        return "closest", f"no push brings the object closer from {np.round(o, 4).tolist()} m " \
+            f"({1e3 * d:.1f} mm from the target): {pp.reason}"
+    f.switch_to(pp, ref.end)
+    return None
+
+
+def _next_chunk(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> bool:
+    """Observe, re-plan if the object strays more than the threshold from where the plan in force
+    puts it, stage the last stretch for a mispredicting plant, then push one chunk. Whether the
+    object was observed at the target (the run ends)."""
+    p = f.plan.pushes[f.i]
+    o = loop.observe()
+    if loop.adapt:
+        loop.learn(o)
+    if np.hypot(*(loop.target - o)) <= pace.tolerance:
+        return True
+    expected = f.plan.object_xy[p.samples[f.k]]
+    tau = f.base + float(f.plan.t[p.samples[f.k]] - f.plan.t[0])
+    if np.hypot(*(o - expected)) > pace.threshold and tau < ref.end - 0.05:
+        t, r, faces, switches = ref.rest(tau, o, loop.target)
+        pp = loop.replan(t, r, faces, switches, o)
+        if pp.status == "solved":
+            f.switch_to(pp, tau)
+            p = f.plan.pushes[0]
+        else:  # nothing better from here: the plan in force goes on
+            loop.log.append(f"no re-plan from {np.round(o, 4).tolist()} m ({pp.reason}); the plan goes on")
+    left = float(np.sum(np.linalg.norm(np.diff(f.plan.object_xy[p.samples[f.k]:], axis=0), axis=1)))
+    if loop.mispredicted >= 2 and not loop.staged and left < STAGE:
+        # a plant the model mispredicts: the last stretch along the faces' normals, where the
+        # object goes where it is aimed whatever its limit surface (an object pushed past the
+        # target by a sideways push that fell short cannot be pushed back)
+        loop.staged = True
+        pp = loop.correction(o)
+        if pp.status == "solved":
+            f.switch_to(pp, ref.end)
+            loop.log.append(f"staged the last {1e3 * left:.0f} mm along the faces' normals: "
+                            f"{' -> '.join(pp.faces)}")
+            return False
+    length = pace.chunk if left > 2 * pace.chunk else max(pace.approach * left, 2e-4)
+    lead = ref.lead_ins[f.i] if f.plan is ref.plan and f.k == 0 else None
+    f.k = loop.push(p, f.plan, o, f.k, length, lead)
+    loop.errors.append(loop.true_error())
+    if f.k >= len(p.samples) - 1:
+        f.i, f.k = f.i + 1, 0
+    return False
+
+
+def _report(status: str, reason: str, loop: _Loop | None, plant: object | None, tolerance: float,
+            start: float) -> ClosedLoopReport:
+    """The run's report; a run that ended otherwise but sees the object within ``tolerance`` [m]
+    (one more observation) counts as reached. ``start``: the run's ``perf_counter`` start [s]."""
+    err = loop.true_error() if loop is not None else float("nan")
+    if loop is not None and status != "reached" and np.hypot(*(loop.target - loop.observe())) <= tolerance:
+        status, reason = "reached", ""
+    execution = getattr(plant, "execution", None) if plant is not None else None
+    return ClosedLoopReport(
+        status, reason, err, loop.n_pushes if loop else 0, loop.n_switches if loop else 0,
+        loop.n_recontacts if loop else 0, len(loop.replan_times) if loop else 0,
+        loop.replan_times if loop else [], loop.errors if loop else [], time.perf_counter() - start,
+        execution, loop.log if loop else [], loop.scene.mechanics if loop else None,
+        loop.adapt_times if loop else [])
+
+
 def execute_closed_loop(
     plan: Plan, plant: object | None = None, *, tolerance: float = 0.001, chunk: float = 0.015,
     approach: float = 0.6, max_rounds: int = 4, max_chunks: int = 120, frames: int = 10,
@@ -487,87 +611,25 @@ def execute_closed_loop(
         loop.move(plan.tool_pose[approach_m, :2])
         loop.face = plan.pushes[0].faces[0]
         ref = _Reference.of(plan)
-        # the plan in force (first the plan itself, on its push-time axis), the push and sample reached
-        current, base, i, k = ref.plan, 0.0, 0, 0
-        threshold = max(replan_threshold, 3.0 * camera_noise / np.sqrt(frames))
-        rounds = 0
+        f = _InForce(ref.plan)
+        pace = _Pace(tolerance, max(replan_threshold, 3.0 * camera_noise / np.sqrt(frames)), chunk, approach,
+                     max_rounds)
         for _ in range(max_chunks):
-            partial = (i >= len(current.pushes) and bool(current.pushes)
-                       and current.pushes[-1].samples[-1] < current.t.size - 1)
-            if partial:  # a re-plan realised its first face only: plan the rest from here
-                o = loop.observe()
-                tau = base + float(current.t[current.pushes[-1].samples[-1]] - current.t[0])
-                if tau < ref.end - 0.05:
-                    t, r, faces, switches = ref.rest(tau, o, loop.target)
-                    pp = loop.replan(t, r, faces, switches, o)
-                    if pp.status == "solved":
-                        current, base, i, k = pp, tau, 0, 0
-                        continue
-            if i >= len(current.pushes):  # the plan in force is done: is the object there?
-                o = np.mean([loop.observe() for _ in range(3)], axis=0)
-                if np.hypot(*(loop.target - o)) <= tolerance:
-                    status = "reached"
-                    break
-                rounds += 1
-                if rounds > max_rounds:
-                    status, reason = "rounds", f"{max_rounds} correction rounds did not reach the target"
-                    break
-                d = float(np.hypot(*(loop.target - o)))
-                pp = loop.correction(o)
-                if pp.status != "solved":
-                    status, reason = "closest", f"no push brings the object closer from {np.round(o, 4).tolist()} m " \
-                        f"({1e3 * d:.1f} mm from the target): {pp.reason}"
-                    break
-                current, base, i, k = pp, ref.end, 0, 0
+            if _plan_the_rest(loop, ref, f):
                 continue
-            p = current.pushes[i]
-            o = loop.observe()
-            if loop.adapt:
-                loop.learn(o)
-            if np.hypot(*(loop.target - o)) <= tolerance:
+            if f.i >= len(f.plan.pushes):
+                ended = _plan_done(loop, ref, f, pace)
+                if ended is not None:
+                    status, reason = ended
+                    break
+                continue
+            if _next_chunk(loop, ref, f, pace):
                 status = "reached"
                 break
-            expected = current.object_xy[p.samples[k]]
-            tau = base + float(current.t[p.samples[k]] - current.t[0])
-            if np.hypot(*(o - expected)) > threshold and tau < ref.end - 0.05:
-                t, r, faces, switches = ref.rest(tau, o, loop.target)
-                pp = loop.replan(t, r, faces, switches, o)
-                if pp.status == "solved":
-                    current, base, i, k = pp, tau, 0, 0
-                    p = current.pushes[0]
-                else:  # nothing better from here: the plan in force goes on
-                    loop.log.append(f"no re-plan from {np.round(o, 4).tolist()} m ({pp.reason}); the plan goes on")
-            left = float(np.sum(np.linalg.norm(np.diff(current.object_xy[p.samples[k]:], axis=0), axis=1)))
-            if loop.mispredicted >= 2 and not loop.staged and left < STAGE:
-                # a plant the model mispredicts: the last stretch along the faces' normals, where the
-                # object goes where it is aimed whatever its limit surface (an object pushed past the
-                # target by a sideways push that fell short cannot be pushed back)
-                loop.staged = True
-                pp = loop.correction(o)
-                if pp.status == "solved":
-                    current, base, i, k = pp, ref.end, 0, 0
-                    loop.log.append(f"staged the last {1e3 * left:.0f} mm along the faces' normals: "
-                                    f"{' -> '.join(pp.faces)}")
-                    continue
-            length = chunk if left > 2 * chunk else max(approach * left, 2e-4)
-            lead = ref.lead_ins[i] if current is ref.plan and k == 0 else None
-            k = loop.push(p, current, o, k, length, lead)
-            loop.errors.append(loop.true_error())
-            if k >= len(p.samples) - 1:
-                i, k = i + 1, 0
         else:
             status, reason = "rounds", f"{max_chunks} chunks did not reach the target"
     except _Stop as stop:
         status, reason = stop.status, stop.reason
     except Exception as exc:  # no exception escapes: a refused move ends the run with its reason
         status, reason = "failed", f"{type(exc).__name__}: {exc}"
-    err = loop.true_error() if loop is not None else float("nan")
-    if loop is not None and status != "reached" and np.hypot(*(loop.target - loop.observe())) <= tolerance:
-        status, reason = "reached", ""
-    execution = getattr(plant, "execution", None) if plant is not None else None
-    return ClosedLoopReport(
-        status, reason, err, loop.n_pushes if loop else 0, loop.n_switches if loop else 0,
-        loop.n_recontacts if loop else 0, len(loop.replan_times) if loop else 0,
-        loop.replan_times if loop else [], loop.errors if loop else [], time.perf_counter() - start,
-        execution, loop.log if loop else [], loop.scene.mechanics if loop else None,
-        loop.adapt_times if loop else [])
+    return _report(status, reason, loop, plant, tolerance, start)

@@ -226,16 +226,9 @@ STATUSES = ("solved", "infeasible", "violated")
 MAX_JOINT_VELOCITY, MAX_JOINT_ACCELERATION = 1e6, 1e9
 
 
-def read_plan(path: str | Path) -> Plan:
-    """Read and check a plan file: the format, a known status, equal-length sample arrays of finite
-    numbers (joints numbers, not booleans), known phases, increasing time, pushes and switches with
-    finite times; errors name the file and the field (e.g. ``samples.joints[12][1]``).
-
-    Raises:
-        PlanFileError: the first problem found.
-    """
-    p = Path(path)
-    where = str(p)
+def _document(where: str, p: Path) -> dict[str, Any]:
+    """The plan file ``p`` read (at most ``MAX_PLAN_BYTES``, UTF-8), parsed as JSON and of this
+    ``FORMAT``; the first problem raised as a :class:`PlanFileError` naming the file."""
     try:
         size = p.stat().st_size
         if size > MAX_PLAN_BYTES:
@@ -256,12 +249,12 @@ def read_plan(path: str | Path) -> Plan:
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         got = _kind(doc.get("format")) if isinstance(doc, dict) else _kind(doc)
         raise PlanFileError(where, "format", f"{FORMAT!r}", got)
-    status = doc.get("status", "")
-    if status not in STATUSES:
-        raise PlanFileError(where, "status", f"one of {', '.join(STATUSES)}", _kind(status))
-    reason = doc.get("reason", "")
-    if not isinstance(reason, str):
-        raise PlanFileError(where, "reason", "a string", _kind(reason))
+    return doc
+
+
+def _parts(where: str, doc: dict[str, Any]) -> dict[str, Any]:
+    """The plan's mappings and lists (variant, task, platform, object, tool, obstacles, metrics),
+    with variant names as strings and metrics as numbers (or strings)."""
     parts: dict[str, Any] = {}
     for key, kind in (("variant", dict), ("task", dict), ("platform", dict), ("object", dict), ("tool", dict),
                       ("obstacles", list), ("metrics", dict)):
@@ -277,14 +270,12 @@ def read_plan(path: str | Path) -> Plan:
     if bad_metric:
         k = bad_metric[0]
         raise PlanFileError(where, f"metrics.{k}", "a number", _kind(parts["metrics"][k]))
-    s = doc.get("samples")
-    if not isinstance(s, dict):
-        raise PlanFileError(where, "samples", "a mapping of arrays t, object_xy, tool_pose, joints, phase, face",
-                            _kind(s))
-    missing = [k for k in ("t", "object_xy", "tool_pose", "joints", "phase", "face") if k not in s]
-    if missing:
-        raise PlanFileError(where, f"samples.{missing[0]}", "an array (samples: t, object_xy, tool_pose, joints, "
-                            "phase, face)", "none")
+    return parts
+
+
+def _sample_arrays(where: str, s: dict[str, Any]) -> tuple[NDArray[np.float64], dict[str, NDArray[np.float64]]]:
+    """The times (T,) [s] and the numeric sample arrays of the mapping ``s`` (each at most
+    ``MAX_SAMPLES`` long, finite and bounded; the joint rates only where the file has them)."""
     for name, v in s.items():
         if isinstance(v, list) and len(v) > MAX_SAMPLES:
             raise PlanFileError(where, f"samples.{name}", f"at most {MAX_SAMPLES} samples", len(v))
@@ -298,7 +289,13 @@ def read_plan(path: str | Path) -> Plan:
                               ("joint_accelerations", "[rad/s^2]", MAX_JOINT_ACCELERATION)):
         if name in s:  # optional: plan files before them lack them (derived from the joints then)
             arrays[name] = _numbers(where, name, s[name], 3, unit, bound)
-    joint_names = _joint_names(where, doc.get("joint_names", list(JOINT_NAMES)))
+    return t, arrays
+
+
+def _labels(where: str, s: dict[str, Any], t: NDArray[np.float64], arrays: dict[str, NDArray[np.float64]],
+            status: str) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+    """The per-sample phase and face labels, after checking that every sample array is as long as
+    ``t``, ``t`` increases, the labels are known and a solved or violated plan has two samples."""
     for name in ("phase", "face"):
         if not isinstance(s[name], list):
             raise PlanFileError(where, f"samples.{name}", "a list", _kind(s[name]))
@@ -317,34 +314,68 @@ def read_plan(path: str | Path) -> Plan:
             raise PlanFileError(where, f"samples.face[{i}]", "a face name or null", _kind(x))
     if status in ("solved", "violated") and t.size < 2:
         raise PlanFileError(where, "samples.t", f"at least 2 samples in a {status} plan", t.size)
+    return phase, face
 
-    def segs(key: str, kind: str) -> tuple[Segment, ...]:
-        items = doc.get(key, [])
-        if not isinstance(items, list):
-            raise PlanFileError(where, key, "a list of {t_start, t_end, faces}", _kind(items))
-        out = []
-        for i, e in enumerate(items):
-            if not isinstance(e, dict):
-                raise PlanFileError(where, f"{key}[{i}]", "a mapping with t_start, t_end and faces", _kind(e))
-            for k in ("t_start", "t_end"):
-                v = e.get(k)
-                if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v):
-                    raise PlanFileError(where, f"{key}[{i}].{k}", "a finite time [s]", _kind(v))
-            if e["t_end"] < e["t_start"]:
-                raise PlanFileError(where, f"{key}[{i}].t_end", f"a time not before t_start = {e['t_start']}",
-                                    e["t_end"])
-            faces = e.get("faces")
-            if not isinstance(faces, list) or not all(isinstance(f, str) for f in faces):
-                raise PlanFileError(where, f"{key}[{i}].faces", "a list of face names", _kind(faces))
-            info = _num({k: v for k, v in e.items() if k not in ("t_start", "t_end", "faces")})
-            out.append(Segment(kind, float(e["t_start"]), float(e["t_end"]), tuple(faces), info))
-        return tuple(out)
 
+def _segments(where: str, doc: dict[str, Any], key: str, kind: str) -> tuple[Segment, ...]:
+    """The segments listed under ``key`` (pushes or switches, of ``kind``): finite times [s], not
+    ending before they start, face names; their other fields kept as numbers."""
+    items = doc.get(key, [])
+    if not isinstance(items, list):
+        raise PlanFileError(where, key, "a list of {t_start, t_end, faces}", _kind(items))
+    out = []
+    for i, e in enumerate(items):
+        if not isinstance(e, dict):
+            raise PlanFileError(where, f"{key}[{i}]", "a mapping with t_start, t_end and faces", _kind(e))
+        for k in ("t_start", "t_end"):
+            v = e.get(k)
+            if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v):
+                raise PlanFileError(where, f"{key}[{i}].{k}", "a finite time [s]", _kind(v))
+        if e["t_end"] < e["t_start"]:
+            raise PlanFileError(where, f"{key}[{i}].t_end", f"a time not before t_start = {e['t_start']}",
+                                e["t_end"])
+        faces = e.get("faces")
+        if not isinstance(faces, list) or not all(isinstance(f, str) for f in faces):
+            raise PlanFileError(where, f"{key}[{i}].faces", "a list of face names", _kind(faces))
+        info = _num({k: v for k, v in e.items() if k not in ("t_start", "t_end", "faces")})
+        out.append(Segment(kind, float(e["t_start"]), float(e["t_end"]), tuple(faces), info))
+    return tuple(out)
+
+
+def read_plan(path: str | Path) -> Plan:
+    """Read and check a plan file: the format, a known status, equal-length sample arrays of finite
+    numbers (joints numbers, not booleans), known phases, increasing time, pushes and switches with
+    finite times; errors name the file and the field (e.g. ``samples.joints[12][1]``).
+
+    Raises:
+        PlanFileError: the first problem found.
+    """
+    p = Path(path)
+    where = str(p)
+    doc = _document(where, p)
+    status = doc.get("status", "")
+    if status not in STATUSES:
+        raise PlanFileError(where, "status", f"one of {', '.join(STATUSES)}", _kind(status))
+    reason = doc.get("reason", "")
+    if not isinstance(reason, str):
+        raise PlanFileError(where, "reason", "a string", _kind(reason))
+    parts = _parts(where, doc)
+    s = doc.get("samples")
+    if not isinstance(s, dict):
+        raise PlanFileError(where, "samples", "a mapping of arrays t, object_xy, tool_pose, joints, phase, face",
+                            _kind(s))
+    missing = [k for k in ("t", "object_xy", "tool_pose", "joints", "phase", "face") if k not in s]
+    if missing:
+        raise PlanFileError(where, f"samples.{missing[0]}", "an array (samples: t, object_xy, tool_pose, joints, "
+                            "phase, face)", "none")
+    t, arrays = _sample_arrays(where, s)
+    joint_names = _joint_names(where, doc.get("joint_names", list(JOINT_NAMES)))
+    phase, face = _labels(where, s, t, arrays, status)
     return Plan(
         status=status, variant=parts["variant"], task=parts["task"], platform=parts["platform"],
         object=parts["object"], tool=parts["tool"], obstacles=parts["obstacles"], t=t, phase=phase, face=face,
-        pushes=segs("pushes", "push"), switches=segs("switches", "switch"), metrics=_num(parts["metrics"]),
-        reason=reason, joint_names=joint_names, **arrays,
+        pushes=_segments(where, doc, "pushes", "push"), switches=_segments(where, doc, "switches", "switch"),
+        metrics=_num(parts["metrics"]), reason=reason, joint_names=joint_names, **arrays,
     )
 
 

@@ -10,14 +10,20 @@ tool's limits or whose joints do not give its tool poses is refused naming the f
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
+from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.plan import Plan, PlanFileError, joint_rates
 from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
 from tooltransfer.tools.sim import Execution, SimPlatform
 from tooltransfer.tools.sim.config import SimConfig
+
+if TYPE_CHECKING:
+    from tooltransfer.tools.model import Tool
+    from tooltransfer.tools.omni.platform import OmniPlatform
 
 
 def task_sim_config(task: Task, **overrides: float) -> SimConfig:
@@ -89,6 +95,122 @@ class PlanLimitError(PlanFileError):
     override it."""
 
 
+def _fail(source: str, field: str, expected: str, got: object | None = None) -> NoReturn:
+    """Raise the :class:`PlanFileError` of ``source``'s ``field``: what was ``expected`` and ``got``."""
+    raise PlanFileError(source, field, expected, got)
+
+
+def _check_joints(plan: Plan, source: str, platform: OmniPlatform) -> None:
+    """The joints [rad] within the Omni's limits, and their forward kinematics the plan's tool poses
+    (within ``FK_TOL`` [m] and ``YAW_TOL`` [rad])."""
+    from tooltransfer.planner.segmentation.geometry import table_poses
+
+    t = plan.t
+    lo, hi = np.asarray(platform.limits.lower), np.asarray(platform.limits.upper)
+    out = (plan.joints < lo - LIMIT_TOL) | (plan.joints > hi + LIMIT_TOL)
+    if out.any():
+        k, j = (int(v) for v in np.argwhere(out)[0])
+        _fail(source, f"samples.joints[{k}][{j}]",
+              f"q{j + 1} within the Omni's joint limits [{lo[j]:.4g}, {hi[j]:.4g}] rad",
+              f"{plan.joints[k, j]:.6g} rad at t = {t[k]:.3f} s")
+    fk = table_poses(plan.joints, platform.a_t, platform.base_xy, platform.base_yaw, platform.table_height)
+    pos = np.hypot(*(fk[:, :2] - plan.tool_pose[:, :2]).T)
+    yaw = np.abs((fk[:, 2] - plan.tool_pose[:, 2] + np.pi) % (2 * np.pi) - np.pi)
+    if pos.max() > FK_TOL or yaw.max() > YAW_TOL:
+        k = int(np.argmax((pos > FK_TOL) | (yaw > YAW_TOL)))
+        _fail(source, f"samples.tool_pose[{k}]", "the tool pose the joints give (forward kinematics of "
+              f"samples.joints, within {1e3 * FK_TOL:g} mm and {YAW_TOL:g} rad)",
+              f"{1e3 * pos[k]:.4g} mm and {yaw[k]:.3g} rad off at t = {t[k]:.3f} s")
+
+
+def _check_clear(plan: Plan, source: str, task: Task, tool: Tool, start: NDArray[np.float64]) -> None:
+    """The tool clear of the object at the task's ``start`` [m], of the planned object path and of
+    every obstacle (overlaps beyond ``OVERLAP_TOL`` [m] fail)."""
+    from tooltransfer.planner.segmentation.geometry import ToolGeometry, to_tool_frame
+    from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
+
+    t = plan.t
+    geo = ToolGeometry(tool, task.object.radius)
+    gap0 = float(geo.outline_gap(to_tool_frame(start, plan.tool_pose[:1]))[0][0])
+    if gap0 < -OVERLAP_TOL:
+        _fail(source, "samples.tool_pose[0]", "a start pose of the tool clear of the object at the task's start",
+              f"the tool outline {1e3 * -gap0:.3g} mm into the object")
+    gap = geo.outline_gap(to_tool_frame(plan.object_xy, plan.tool_pose))[0]
+    if gap.min() < -OVERLAP_TOL:
+        k = int(np.argmax(gap < -OVERLAP_TOL))
+        _fail(source, f"samples.tool_pose[{k}]",
+              "a tool path that never overlaps the planned object (samples.object_xy)",
+              f"the tool outline {1e3 * -gap[k]:.3g} mm into the object at t = {t[k]:.3f} s ({plan.phase[k]})")
+    near = tool_obstacle_clearance(tool, plan.tool_pose, task_obstacles(task))
+    if near.distance <= 0.0:
+        k = near.sample
+        _fail(source, f"samples.tool_pose[{k}]", f"a tool path clear of obstacles[{near.obstacle}]",
+              f"the tool outline overlapping it at t = {t[k]:.3f} s ({plan.phase[k]})")
+
+
+def _check_tool_rates(plan: Plan, source: str, task: Task) -> None:
+    """Tool speeds [m/s] and accelerations [m/s^2] (finite differences) within the task's
+    ``timing`` limits, up to ``SPEED_FACTOR`` and ``ACCEL_FACTOR`` times them."""
+    t = plan.t
+    v_max, a_max = task.timing.max_tool_speed, task.timing.max_tool_accel
+    dt = np.diff(t)
+    speed = np.hypot(*np.diff(plan.tool_pose[:, :2], axis=0).T) / dt
+    if speed.max() > SPEED_FACTOR * v_max:
+        k = int(np.argmax(speed))
+        _fail(source, f"samples.t[{k + 1}]", f"tool speeds within timing.max_tool_speed = {v_max:g} m/s",
+              f"{speed[k]:.4g} m/s ({speed[k] / v_max:.3g} times the limit) at t = {t[k]:.3f} s")
+    if t.size >= 3:
+        acc = np.hypot(*np.gradient(np.gradient(plan.tool_pose[:, :2], t, axis=0), t, axis=0).T)
+        if acc.max() > ACCEL_FACTOR * a_max:
+            k = int(np.argmax(acc))
+            _fail(source, f"samples.t[{k}]", f"tool accelerations within timing.max_tool_accel = {a_max:g} m/s^2 "
+                  f"(finite differences, up to {ACCEL_FACTOR:g} times it at the corners of the sampled path)",
+                  f"{acc[k]:.4g} m/s^2 ({acc[k] / a_max:.3g} times the limit) at t = {t[k]:.3f} s")
+
+
+def _check_replay(plan: Plan, source: str, task: Task, tool: Tool, start: NDArray[np.float64]) -> None:
+    """The planned tool path, replayed through the push model from ``start`` [m] with the plan's
+    mechanics (its metrics, else the task's), moves the object along the planned path."""
+    from tooltransfer.tools.pushing.forward import simulate
+    from tooltransfer.tools.pushing.mechanics import PushMechanics
+
+    t = plan.t
+    mu, c = plan.metrics.get("mechanics_mu"), plan.metrics.get("mechanics_c")
+    if mu is not None and c is not None:
+        try:
+            mech = PushMechanics(float(mu), float(c), "given")
+        except InputError as exc:
+            _fail(source, f"metrics.{exc.field.replace('mechanics.', 'mechanics_')}", exc.expected, exc.got)
+    else:
+        from tooltransfer.planner.solve import task_mechanics
+
+        mech = task_mechanics(task)
+    replay = simulate(tool, plan.tool_pose, start, task.object.radius, mech)
+    off = np.hypot(*(replay.object_xy - plan.object_xy).T)
+    tol = max(REPLAY_TOL, 10 * task.oe.self_consistency_tol)
+    if off.max() > tol:
+        k = int(np.argmax(off > tol))
+        _fail(source, "samples.object_xy", f"the object path the planned tool path gives through the push model "
+              f"(within {1e3 * tol:g} mm)", f"{1e3 * off.max():.3g} mm off, from t = {t[k]:.3f} s ({plan.phase[k]})")
+
+
+def _check_joint_rates(plan: Plan, source: str) -> None:
+    """The joints' velocities [rad/s] and accelerations [rad/s^2] those the joints give on the
+    plan's times (:func:`tooltransfer.planner.plan.joint_rates`, within ``RATES_RTOL`` of the largest)."""
+    t = plan.t
+    v_ref, a_ref = joint_rates(t, plan.joints)
+    for name, of, got, ref, unit in (
+            ("joint_velocities", "joints", plan.joint_velocities, v_ref, "rad/s"),
+            ("joint_accelerations", "joint_velocities", plan.joint_accelerations, a_ref, "rad/s^2")):
+        off = np.abs(got - ref)
+        bad = off > RATES_RTOL * np.abs(ref).max(initial=0.0) + 1e-9
+        if bad.any():
+            k, j = (int(v) for v in np.argwhere(bad)[0])
+            _fail(source, f"samples.{name}[{k}][{j}]", f"the derivative of samples.{of} over samples.t (finite "
+                  "differences, tooltransfer.planner.plan.joint_rates)",
+                  f"{got[k, j]:.6g} {unit} where they give {ref[k, j]:.6g} at t = {t[k]:.3f} s")
+
+
 def check_plan(plan: Plan, source: str = "plan") -> None:
     """Check a solved (or violated) plan against itself and its task before running it: a bounded
     duration starting at 0 s; the task valid; the object path from the task's start to its target;
@@ -102,14 +224,6 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
         PlanFileError: naming ``source`` (the file) and the field of the first problem
             (:class:`PlanLimitError` for the bounds ``--force`` does not lift).
     """
-    from tooltransfer.planner.segmentation.geometry import ToolGeometry, table_poses, to_tool_frame
-    from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
-    from tooltransfer.tools.pushing.forward import simulate
-    from tooltransfer.tools.pushing.mechanics import PushMechanics
-
-    def fail(field: str, expected: str, got: object | None = None) -> None:
-        raise PlanFileError(source, field, expected, got)
-
     t = plan.t
     if t.size < 2:
         raise PlanLimitError(source, "samples.t", "at least 2 samples", t.size)
@@ -117,7 +231,7 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
         raise PlanLimitError(source, f"samples.t[{t.size - 1}]", f"a plan of at most {MAX_PLAN_DURATION:g} s (the "
                              "simulation's bound, --force or not)", f"{t[-1] - t[0]:.6g} s")
     if not 0.0 <= t[0] <= 1.0:
-        fail("samples.t[0]", "a plan starting at 0 s", f"{t[0]:.6g} s")
+        _fail(source, "samples.t[0]", "a plan starting at 0 s", f"{t[0]:.6g} s")
     task = task_from_dict(plan.task, f"{source}: task")
     tool = task_tool(task)
     platform = task_platform(task, tool)
@@ -125,76 +239,10 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
     for k, point, name in ((0, start, "start"), (t.size - 1, target, "target")):
         off = float(np.hypot(*(plan.object_xy[k] - point)))
         if off > END_TOL:
-            fail(f"samples.object_xy[{k}]", f"the task's {name} {point.round(6).tolist()} m (within "
-                 f"{1e3 * END_TOL:g} mm)", f"{plan.object_xy[k].round(6).tolist()} m, {1e3 * off:.3g} mm off")
-    lo, hi = np.asarray(platform.limits.lower), np.asarray(platform.limits.upper)
-    out = (plan.joints < lo - LIMIT_TOL) | (plan.joints > hi + LIMIT_TOL)
-    if out.any():
-        k, j = (int(v) for v in np.argwhere(out)[0])
-        fail(f"samples.joints[{k}][{j}]", f"q{j + 1} within the Omni's joint limits [{lo[j]:.4g}, {hi[j]:.4g}] rad",
-             f"{plan.joints[k, j]:.6g} rad at t = {t[k]:.3f} s")
-    fk = table_poses(plan.joints, platform.a_t, platform.base_xy, platform.base_yaw, platform.table_height)
-    pos = np.hypot(*(fk[:, :2] - plan.tool_pose[:, :2]).T)
-    yaw = np.abs((fk[:, 2] - plan.tool_pose[:, 2] + np.pi) % (2 * np.pi) - np.pi)
-    if pos.max() > FK_TOL or yaw.max() > YAW_TOL:
-        k = int(np.argmax((pos > FK_TOL) | (yaw > YAW_TOL)))
-        fail(f"samples.tool_pose[{k}]", "the tool pose the joints give (forward kinematics of samples.joints, "
-             f"within {1e3 * FK_TOL:g} mm and {YAW_TOL:g} rad)",
-             f"{1e3 * pos[k]:.4g} mm and {yaw[k]:.3g} rad off at t = {t[k]:.3f} s")
-    geo = ToolGeometry(tool, task.object.radius)
-    gap0 = float(geo.outline_gap(to_tool_frame(start, plan.tool_pose[:1]))[0][0])
-    if gap0 < -OVERLAP_TOL:
-        fail("samples.tool_pose[0]", "a start pose of the tool clear of the object at the task's start",
-             f"the tool outline {1e3 * -gap0:.3g} mm into the object")
-    gap = geo.outline_gap(to_tool_frame(plan.object_xy, plan.tool_pose))[0]
-    if gap.min() < -OVERLAP_TOL:
-        k = int(np.argmax(gap < -OVERLAP_TOL))
-        fail(f"samples.tool_pose[{k}]", "a tool path that never overlaps the planned object (samples.object_xy)",
-             f"the tool outline {1e3 * -gap[k]:.3g} mm into the object at t = {t[k]:.3f} s ({plan.phase[k]})")
-    near = tool_obstacle_clearance(tool, plan.tool_pose, task_obstacles(task))
-    if near.distance <= 0.0:
-        k = near.sample
-        fail(f"samples.tool_pose[{k}]", f"a tool path clear of obstacles[{near.obstacle}]",
-             f"the tool outline overlapping it at t = {t[k]:.3f} s ({plan.phase[k]})")
-    v_max, a_max = task.timing.max_tool_speed, task.timing.max_tool_accel
-    dt = np.diff(t)
-    speed = np.hypot(*np.diff(plan.tool_pose[:, :2], axis=0).T) / dt
-    if speed.max() > SPEED_FACTOR * v_max:
-        k = int(np.argmax(speed))
-        fail(f"samples.t[{k + 1}]", f"tool speeds within timing.max_tool_speed = {v_max:g} m/s",
-             f"{speed[k]:.4g} m/s ({speed[k] / v_max:.3g} times the limit) at t = {t[k]:.3f} s")
-    if t.size >= 3:
-        acc = np.hypot(*np.gradient(np.gradient(plan.tool_pose[:, :2], t, axis=0), t, axis=0).T)
-        if acc.max() > ACCEL_FACTOR * a_max:
-            k = int(np.argmax(acc))
-            fail(f"samples.t[{k}]", f"tool accelerations within timing.max_tool_accel = {a_max:g} m/s^2 (finite "
-                 f"differences, up to {ACCEL_FACTOR:g} times it at the corners of the sampled path)",
-                 f"{acc[k]:.4g} m/s^2 ({acc[k] / a_max:.3g} times the limit) at t = {t[k]:.3f} s")
-    mu, c = plan.metrics.get("mechanics_mu"), plan.metrics.get("mechanics_c")
-    if mu is not None and c is not None:
-        try:
-            mech = PushMechanics(float(mu), float(c), "given")
-        except InputError as exc:
-            fail(f"metrics.{exc.field.replace('mechanics.', 'mechanics_')}", exc.expected, exc.got)
-    else:
-        from tooltransfer.planner.solve import task_mechanics
-
-        mech = task_mechanics(task)
-    replay = simulate(tool, plan.tool_pose, start, task.object.radius, mech)
-    off = np.hypot(*(replay.object_xy - plan.object_xy).T)
-    tol = max(REPLAY_TOL, 10 * task.oe.self_consistency_tol)
-    if off.max() > tol:
-        k = int(np.argmax(off > tol))
-        fail("samples.object_xy", f"the object path the planned tool path gives through the push model (within "
-             f"{1e3 * tol:g} mm)", f"{1e3 * off.max():.3g} mm off, from t = {t[k]:.3f} s ({plan.phase[k]})")
-    v_ref, a_ref = joint_rates(t, plan.joints)
-    for name, of, got, ref, unit in (
-            ("joint_velocities", "joints", plan.joint_velocities, v_ref, "rad/s"),
-            ("joint_accelerations", "joint_velocities", plan.joint_accelerations, a_ref, "rad/s^2")):
-        off = np.abs(got - ref)
-        bad = off > RATES_RTOL * np.abs(ref).max(initial=0.0) + 1e-9
-        if bad.any():
-            k, j = (int(v) for v in np.argwhere(bad)[0])
-            fail(f"samples.{name}[{k}][{j}]", f"the derivative of samples.{of} over samples.t (finite "
-                 "differences, tooltransfer.planner.plan.joint_rates)",
-                 f"{got[k, j]:.6g} {unit} where they give {ref[k, j]:.6g} at t = {t[k]:.3f} s")
+            _fail(source, f"samples.object_xy[{k}]", f"the task's {name} {point.round(6).tolist()} m (within "
+                  f"{1e3 * END_TOL:g} mm)", f"{plan.object_xy[k].round(6).tolist()} m, {1e3 * off:.3g} mm off")
+    _check_joints(plan, source, platform)
+    _check_clear(plan, source, task, tool, start)
+    _check_tool_rates(plan, source, task)
+    _check_replay(plan, source, task, tool, start)
+    _check_joint_rates(plan, source)

@@ -221,11 +221,12 @@ def test_misleading_warm_start_is_proved_again_cold(monkeypatch: pytest.MonkeyPa
     inner = S._cutting_planes
 
     def spy(*args: object, **kw: object) -> object:
-        runs.append(args[4] is None)  # seed None: a cold run
+        runs.append(args[3] is None)  # seed None: a cold run
         return inner(*args, **kw)
 
     monkeypatch.setattr(S, "_cutting_planes", spy)
-    z, _, _ = spy(pool, levels, tw, z_c, pool.coarse_ids(20), "osqp", None, 1e-9, 3, S._Counter(), False)
+    qp, run = S._WhitenedQP(pool, levels, tw, z_c), S._ExactRun("osqp", None, 1e-9, 3, False)
+    z, _, _ = spy(qp, run, S._Counter(), pool.coarse_ids(20))
     assert runs == [False, True]  # warm, then cold
     w = tw @ z
     assert abs(0.5 * w @ p @ w + q @ w - cold.objective) <= 1e-9 * abs(cold.objective)

@@ -39,7 +39,7 @@ Either way the true violation of every family is measured afterwards on the dens
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -120,27 +120,6 @@ def _rows_w(
     return _normalise(g @ tw, h)
 
 
-def _seed(
-    pool: RowPool, tw: NDArray[np.float64], z_c: NDArray[np.float64], a_z: NDArray[np.float64],
-    b_z: NDArray[np.float64], stride: int, solver: str, options: dict[str, Any] | None, cnt: _Counter,
-) -> NDArray[np.intp]:
-    """Candidate rows from the backend: it solves, at moderate accuracy, the whitened QP over the
-    rows of a coarse subset that the unconstrained optimum violates; the rows it finds active
-    (multiplier above ``SEED_DUAL_FRACTION`` of the largest) are returned."""
-    ids = pool.coarse_ids(stride)
-    g, h = _rows_w(pool, ids, tw)
-    keep = g @ z_c - h > 0.0
-    if not keep.any():
-        return np.zeros(0, dtype=np.intp)  # the unconstrained optimum meets the coarse rows
-    ids, g, h = ids[keep], g[keep], h[keep]
-    opts = dict(SEED_OPTIONS) if solver == "osqp" else {}
-    out = solve_qp(np.eye(z_c.size), -z_c, g, h, a_z, b_z, solver, options={**opts, **(options or {})})
-    cnt.add(out)
-    if out.x is None or out.z is None or not np.any(out.z > 0):
-        return ids  # infeasible or failed: the exact method decides, and explains
-    return ids[out.z > SEED_DUAL_FRACTION * out.z.max()]
-
-
 @dataclass
 class _Levels:
     """The sample subsets the oracle looks at: the constraint grid, then all dense samples."""
@@ -152,19 +131,64 @@ class _Levels:
     """dense samples the grid says nothing about (see :meth:`RowPool.outside_grid`)."""
 
 
+@dataclass(frozen=True)
+class _WhitenedQP:
+    """One linearisation's fit in whitened coordinates: minimise ``0.5 |z - z_c|^2`` subject to the
+    rows of ``pool`` (taken in weight space, mapped by ``w = tw z``), scanned on ``levels``."""
+
+    pool: RowPool
+    levels: _Levels
+    tw: NDArray[np.float64]
+    z_c: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class _ExactRun:
+    """How the exact step runs: the backend (and its options) that seeds it, the accepted
+    violation ``tol`` [m or m/s] of a dense row, the seed's coarse stride on the constraint grid and
+    whether the backend seeds at all."""
+
+    solver: str
+    options: dict[str, Any] | None
+    tol: float
+    stride: int
+    seed_with_backend: bool
+
+
+def _seed(qp: _WhitenedQP, a_z: NDArray[np.float64], b_z: NDArray[np.float64], run: _ExactRun,
+          cnt: _Counter) -> NDArray[np.intp]:
+    """Candidate rows from the backend: it solves, at moderate accuracy, the whitened QP over the
+    rows of a coarse subset (every ``run.stride * qp.levels.factor``-th dense sample) that the
+    unconstrained optimum violates, with the normalised equality rows ``a_z z = b_z``; the rows it
+    finds active (multiplier above ``SEED_DUAL_FRACTION`` of the largest) are returned."""
+    pool, z_c = qp.pool, qp.z_c
+    ids = pool.coarse_ids(run.stride * qp.levels.factor)
+    g, h = _rows_w(pool, ids, qp.tw)
+    keep = g @ z_c - h > 0.0
+    if not keep.any():
+        return np.zeros(0, dtype=np.intp)  # the unconstrained optimum meets the coarse rows
+    ids, g, h = ids[keep], g[keep], h[keep]
+    opts = dict(SEED_OPTIONS) if run.solver == "osqp" else {}
+    out = solve_qp(np.eye(z_c.size), -z_c, g, h, a_z, b_z, run.solver, options={**opts, **(run.options or {})})
+    cnt.add(out)
+    if out.x is None or out.z is None or not np.any(out.z > 0):
+        return ids  # infeasible or failed: the exact method decides, and explains
+    return ids[out.z > SEED_DUAL_FRACTION * out.z.max()]
+
+
 def _cutting_planes(
-    pool: RowPool, levels: _Levels, tw: NDArray[np.float64], z_c: NDArray[np.float64],
-    seed: NDArray[np.intp] | None, solver: str, options: dict[str, Any] | None, tol: float, stride: int,
-    cnt: _Counter, seed_with_backend: bool, extra: NDArray[np.intp] | None = None,
+    qp: _WhitenedQP, run: _ExactRun, cnt: _Counter, seed: NDArray[np.intp] | None = None,
+    extra: NDArray[np.intp] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.intp], NDArray[np.intp]]:
     """Exact optimum over every dense row, starting from the guessed active rows ``seed`` (plus
     candidates ``extra``); returns ``z``, the ids of the active rows and of every candidate."""
+    pool, levels, tw, z_c, tol = qp.pool, qp.levels, qp.tw, qp.z_c, run.tol
     a, b, eq_fams = pool.equality_rows()
     a_z, b_z = _normalise(a @ tw, b)
     guess = np.unique(seed) if seed is not None else np.zeros(0, dtype=np.intp)
     cand = np.union1d(guess, extra) if extra is not None else guess
-    if seed is None and seed_with_backend:  # the backend's active rows: candidates, not a guess
-        cand = np.unique(_seed(pool, tw, z_c, a_z, b_z, stride * levels.factor, solver, options, cnt))
+    if seed is None and run.seed_with_backend:  # the backend's active rows: candidates, not a guess
+        cand = np.unique(_seed(qp, a_z, b_z, run, cnt))
     known = np.zeros(pool.size, dtype=bool)
     known[cand] = True
     chunks = [cand]
@@ -196,7 +220,7 @@ def _cutting_planes(
     except DualInfeasible as inf:
         ids = np.concatenate(chunks)
         if guess.size:  # a warm start can mislead the proof (near-dependent rows): prove it cold
-            return _cutting_planes(pool, levels, tw, z_c, None, solver, options, tol, stride, cnt, False, ids)
+            return _cutting_planes(qp, replace(run, seed_with_backend=False), cnt, None, ids)
         fams = pool.families(ids[np.asarray(inf.rows, dtype=np.intp)])
         if inf.equalities or not inf.rows:
             fams |= set(eq_fams)
@@ -241,6 +265,69 @@ def _settled(problem: FitProblem, aff: AffineRollout, w: NDArray[np.float64], x:
         return True
     v = aff.velocities(w)
     return all(c.violation(aff.t, x, v) <= tol for c in exact_only_on_path)
+
+
+def _dense_levels(problem: FitProblem, aff_d: AffineRollout, pool: RowPool) -> _Levels:
+    """The oracle's sample subsets of the dense grid: the constraint grid (every ``dense_factor``-th
+    sample), every sample, and the dense samples the grid says nothing about; built once per fit
+    (the grids do not move with the linearisation)."""
+    grid = Samples.of(aff_d, slice(0, None, problem.dense_factor))
+    return _Levels(grid, Samples.of(aff_d, slice(None)), problem.dense_factor, pool.outside_grid(grid))
+
+
+class _Relinearised:
+    """The exact step across re-linearisations of one fit: each path rebuilds the row pool (reusing
+    the previous pool's rows), and after the first the step warm-starts from the previous active
+    rows with every row seen so far as candidates, so it takes a few oracle rounds instead of ~15."""
+
+    def __init__(self, problem: FitProblem, aff_d: AffineRollout, tw: NDArray[np.float64],
+                 z_c: NDArray[np.float64], run: _ExactRun, cnt: _Counter) -> None:
+        self.problem, self.aff_d, self.tw, self.z_c, self.run, self.cnt = problem, aff_d, tw, z_c, run, cnt
+        self.pool: RowPool | None = None
+        self.levels: _Levels | None = None
+        self.active = self.seen = np.zeros(0, dtype=np.intp)
+
+    def step(self, x_lin: NDArray[np.float64], warm: bool) -> NDArray[np.float64]:
+        """The exact optimum's weights with the rows linearised at the dense path ``x_lin`` [m]."""
+        self.pool = RowPool.build(self.problem.constraints, self.aff_d, x_lin, previous=self.pool)
+        if self.levels is None:
+            self.levels = _dense_levels(self.problem, self.aff_d, self.pool)
+        z, self.active, self.seen = _cutting_planes(
+            _WhitenedQP(self.pool, self.levels, self.tw, self.z_c), self.run, self.cnt,
+            self.active if warm else None, self.seen if warm else None,
+        )
+        return self.tw @ z
+
+
+def _rollout(problem: FitProblem, aff_d: AffineRollout, w: NDArray[np.float64], x: NDArray[np.float64]) -> Rollout:
+    """The fitted motion on the dense grid: positions ``x`` [m] (those of the weights ``w``),
+    velocities [m/s] and the DMP's accelerations [m/s^2] (its transformation system with the
+    forcing term of ``w``), so a caller gets the whole state without re-rolling the DMP."""
+    dmp = problem.dmp
+    wmat = w.reshape(dmp.n_basis, dmp.n_dims)
+    v = aff_d.velocities(w)
+    f = aff_d.psi @ wmat @ aff_d.M.T
+    tau = float(problem.tau)  # type: ignore[arg-type]
+    acc = (dmp.alpha_z * (dmp.beta_z * (problem.g - x) - tau * v) + f) / tau**2
+    return Rollout(aff_d.t, x, v, acc)
+
+
+def _dense_violations(problem: FitProblem, rollout: Rollout) -> dict[str, float]:
+    """The true violation [m or m/s] of every constraint family on the dense grid (the largest
+    over its constraints): what the fit's status is judged by, whatever grid the solver saw."""
+    violations: dict[str, float] = {}
+    for c in problem.constraints:
+        violations[c.family] = max(violations.get(c.family, 0.0), c.violation(rollout.t, rollout.x, rollout.v))
+    return violations
+
+
+def _n_grid_rows(problem: FitProblem, x_lin: NDArray[np.float64]) -> int:
+    """How many inequality rows strategy ``"full"`` hands the backend: every one on the constraint
+    grid, linearised at the dense path ``x_lin`` [m]."""
+    return sum(
+        c.coefficients(problem.affine("grid").t, x_lin[:: problem.dense_factor]).bound.size
+        for c in problem.constraints if not c.equality
+    )
 
 
 def solve_fit(
@@ -295,29 +382,15 @@ def solve_fit(
     x_lin = aff_d.positions(w)
     if x_start is not None:
         x_lin = check_array(x_start, "x_start", shape=x_lin.shape)
-    ws_keys = seen = np.zeros(0, dtype=np.intp)
-    levels: _Levels | None = None
-    pool: RowPool | None = None
     obj_prev = np.inf
     n_coarse = coarse_samples if coarse_samples else COARSE_PER_BASIS * problem.dmp.n_basis
-    stride = max(1, round(np.asarray(problem.t).size / n_coarse))
+    run = _ExactRun(solver, options, tol, max(1, round(np.asarray(problem.t).size / n_coarse)), seed_with_backend)
+    exact = _Relinearised(problem, aff_d, tw, -tw.T @ q, run, cnt) if tw is not None else None
     scp = 0
     try:
         for scp in range(1, max_scp + 1):
-            if tw is not None:
-                z_c = -tw.T @ q
-                pool = RowPool.build(problem.constraints, aff_d, x_lin, previous=pool)
-                if levels is None:
-                    grid = Samples.of(aff_d, slice(0, None, problem.dense_factor))
-                    levels = _Levels(grid, Samples.of(aff_d, slice(None)), problem.dense_factor,
-                                     pool.outside_grid(grid))
-                # re-linearised: warm start from the active rows, the other rows seen as candidates
-                seed = ws_keys if scp > 1 else None
-                z, ws_keys, seen = _cutting_planes(
-                    pool, levels, tw, z_c, seed, solver, options, tol, stride, cnt, seed_with_backend,
-                    seen if scp > 1 else None,
-                )
-                w = tw @ z
+            if exact is not None:
+                w = exact.step(x_lin, warm=scp > 1)
             else:
                 w = _full(problem, p, q, x_lin, solver, options, cnt)
             x_new = aff_d.positions(w)
@@ -342,23 +415,14 @@ def solve_fit(
             scp_iterations=scp, families=inf.families, reason=inf.reason,
         )
     solve_time = time.perf_counter() - start
-    dmp = problem.dmp
-    wmat = w.reshape(dmp.n_basis, dmp.n_dims)
-    x, v = x_lin, aff_d.velocities(w)  # x_lin: the positions of the final w
-    f = aff_d.psi @ wmat @ aff_d.M.T
-    tau = float(problem.tau)  # type: ignore[arg-type]
-    acc = (dmp.alpha_z * (dmp.beta_z * (problem.g - x) - tau * v) + f) / tau**2
-    violations: dict[str, float] = {}
-    for c in problem.constraints:
-        violations[c.family] = max(violations.get(c.family, 0.0), c.violation(aff_d.t, x, v))
-    n_rows = ws_keys.size if tw is not None else sum(
-        c.coefficients(problem.affine("grid").t, x_lin[:: problem.dense_factor]).bound.size
-        for c in problem.constraints if not c.equality
-    )
+    rollout = _rollout(problem, aff_d, w, x_lin)  # x_lin: the positions of the final w
+    violations = _dense_violations(problem, rollout)
+    n_rows = exact.active.size if exact is not None else _n_grid_rows(problem, x_lin)
     status = "solved" if max(violations.values(), default=0.0) <= tol else "inaccurate"
     return FitResult(
-        status=status, solver=solver, strategy=strategy, weights=wmat, violations=violations,
-        objective=float(0.5 * w @ p @ w + q @ w), rollout=Rollout(aff_d.t, x, v, acc),
+        status=status, solver=solver, strategy=strategy,
+        weights=w.reshape(problem.dmp.n_basis, problem.dmp.n_dims), violations=violations,
+        objective=float(0.5 * w @ p @ w + q @ w), rollout=rollout,
         build_time=build_time, solve_time=solve_time, iterations=cnt.iterations, n_qp=cnt.n_qp,
         n_rows=n_rows, scp_iterations=scp, exact_finish=cnt.finish, n_exact=cnt.n_exact,
     )

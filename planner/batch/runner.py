@@ -253,6 +253,85 @@ class _Queue:
         return self.peek() is not None
 
 
+class _Dispatch:
+    """The jobs of one run between the queue and the store: those waiting (``queue``), those in
+    flight (future -> the job and the executor it went to) and how often each job was running when
+    the pool broke (``attempts``: such a job is a suspect and runs alone)."""
+
+    def __init__(self, todo: Iterable[Job], slots: Slots, stop: threading.Event) -> None:
+        self.queue = _Queue(todo)
+        self.attempts: Counter = Counter()
+        self.inflight: dict[Future, tuple[Job, Any]] = {}
+        self.slots, self.stop = slots, stop
+
+    def fill(self, window: int) -> None:
+        """Submit jobs until ``window`` are in flight, a suspect is running, the queue is empty or
+        the run is stopping."""
+        while self.queue and not self.stop.is_set() and len(self.inflight) < window:
+            # a job that was running when the pool broke is a suspect: it runs alone, so a job
+            # that breaks the pool again is the culprit and the others are not charged for it
+            if any(self.attempts[j.key] for j, _ in self.inflight.values()):
+                break
+            if self.attempts[self.queue.peek().key] and self.inflight:  # type: ignore[union-attr]
+                break
+            job = self.queue.pop()
+            try:
+                self.inflight[self.slots.executor.submit(run_job, job)] = (job, self.slots.executor)
+            except BrokenProcessPool:
+                self.queue.append(job)
+                self.slots.renew()
+
+    def wind_down(self, console: Console, progress: bool) -> bool:
+        """Stopping: cancel what has not started and forget the queue (the store can be resumed).
+        Whether nothing is left running."""
+        if self.queue and progress:
+            console.print(f"stopping: finishing {len(self.inflight)} running jobs (Ctrl-C again to abandon "
+                          "them); the store can be resumed")
+        for f in [f for f in self.inflight if f.cancel()]:
+            self.inflight.pop(f)
+        self.queue.clear()
+        return not self.inflight
+
+    def outcome(self, f: Future, job: Job, executor: Any) -> tuple[dict[str, Any] | None, bool]:
+        """The row to store for the finished future ``f`` (None: nothing to store, the job is run
+        again or left for a resume) and whether the pool it ran on, the current one, broke."""
+        try:
+            return f.result(), False
+        except CancelledError:
+            if not self.stop.is_set():
+                self.queue.append(job)  # cancelled by a pool replacement, never run
+            return None, False
+        except BrokenProcessPool:
+            broke = executor is self.slots.executor  # a pool already replaced is not renewed
+            self.attempts[job.key] += 1
+            if self.attempts[job.key] < 2 and not self.stop.is_set():
+                self.queue.append(job)
+                return None, broke
+            if self.stop.is_set():
+                return None, broke
+            return {"status": "error", "reason": "the worker process died twice while running this job",
+                    "finished_at": time.time()}, broke
+        except Exception as exc:  # the executor's own failure for this job (e.g. KilledWorker)
+            if self.stop.is_set():
+                return None, False  # not stored: run again on resume
+            return {"status": "error", "reason": f"{type(exc).__name__}: {exc}", "finished_at": time.time()}, False
+
+
+def _extra_fields(info: dict[tuple[str, str], dict] | Callable[[Job], dict] | None) -> Callable[[Job], dict]:
+    """The extra fields of a job's row: ``info`` itself when a function, else its entry for the job's key."""
+    if callable(info):
+        return info
+    table = info or {}
+    return lambda job: table.get(job.key, {})
+
+
+def _progress_bar(console: Console, progress: bool) -> Progress:
+    """The run's progress bar: done of all, rate, elapsed and remaining time, counts per status."""
+    return Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TaskProgressColumn(),
+                    _Rate(), TimeElapsedColumn(), TextColumn("eta"), TimeRemainingColumn(),
+                    TextColumn("{task.fields[counts]}"), console=console, disable=not progress, transient=False)
+
+
 def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slots, *,
              info: dict[tuple[str, str], dict] | Callable[[Job], dict] | None = None,
              progress: bool = True, console: Console | None = None, stop: threading.Event | None = None,
@@ -265,12 +344,7 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
         info: extra fields per key (e.g. tool, oe, ss) added to each row, or a function of the job.
         stop: set it to stop as on Ctrl-C.
     """
-    extra: Callable[[Job], dict]
-    if callable(info):
-        extra = info
-    else:
-        table = info or {}
-        extra = lambda job: table.get(job.key, {})  # noqa: E731
+    extra = _extra_fields(info)
     if isinstance(jobs, Sequence):
         done = store.done()
         todo: Iterable[Job] = [j for j in jobs if j.key not in done]
@@ -293,12 +367,8 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
     if catch_sigint and threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGINT, on_sigint)
     console = console or Console(stderr=True)
-    bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TaskProgressColumn(),
-                   _Rate(), TimeElapsedColumn(), TextColumn("eta"), TimeRemainingColumn(),
-                   TextColumn("{task.fields[counts]}"), console=console, disable=not progress, transient=False)
-    queue = _Queue(todo)
-    attempts: Counter = Counter()
-    inflight: dict[Future, tuple[Job, Any]] = {}  # future -> (job, the executor it went to)
+    bar = _progress_bar(console, progress)
+    d = _Dispatch(todo, slots, stop)
     start = time.perf_counter()
 
     def store_row(job: Job, row: dict[str, Any]) -> None:
@@ -309,56 +379,21 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
     try:
         with bar:
             t = bar.add_task("batch", total=total - skipped, counts="")
-            while queue or inflight:
+            while d.queue or d.inflight:
                 # two jobs per slot in flight; on Dask the slots are counted again as workers join
                 window = 2 * max(1, slots.current())
                 summary.slots = slots.slots
-                while queue and not stop.is_set() and len(inflight) < window:
-                    # a job that was running when the pool broke is a suspect: it runs alone, so a job
-                    # that breaks the pool again is the culprit and the others are not charged for it
-                    if any(attempts[j.key] for j, _ in inflight.values()):
-                        break
-                    if attempts[queue.peek().key] and inflight:  # type: ignore[union-attr]
-                        break
-                    job = queue.pop()
-                    try:
-                        inflight[slots.executor.submit(run_job, job)] = (job, slots.executor)
-                    except BrokenProcessPool:
-                        queue.append(job)
-                        slots.renew()
-                if stop.is_set():
-                    if queue and progress:
-                        console.print(f"stopping: finishing {len(inflight)} running jobs (Ctrl-C again to abandon "
-                                      "them); the store can be resumed")
-                    for f in [f for f in inflight if f.cancel()]:
-                        inflight.pop(f)
-                    queue.clear()
-                    if not inflight:
-                        break
-                finished, _ = wait(list(inflight), timeout=0.25, return_when=FIRST_COMPLETED)
+                d.fill(window)
+                if stop.is_set() and d.wind_down(console, progress):
+                    break
+                finished, _ = wait(list(d.inflight), timeout=0.25, return_when=FIRST_COMPLETED)
                 broken = False
                 for f in finished:
-                    job, executor = inflight.pop(f)
-                    try:
-                        row = f.result()
-                    except CancelledError:
-                        if not stop.is_set():
-                            queue.append(job)  # cancelled by a pool replacement, never run
+                    job, executor = d.inflight.pop(f)
+                    row, broke = d.outcome(f, job, executor)
+                    broken = broken or broke
+                    if row is None:
                         continue
-                    except BrokenProcessPool:
-                        broken = broken or executor is slots.executor  # a pool already replaced is not renewed
-                        attempts[job.key] += 1
-                        if attempts[job.key] < 2 and not stop.is_set():
-                            queue.append(job)
-                            continue
-                        if stop.is_set():
-                            continue
-                        row = {"status": "error", "reason": "the worker process died twice while running this job",
-                               "finished_at": time.time()}
-                    except Exception as exc:  # the executor's own failure for this job (e.g. KilledWorker)
-                        if stop.is_set():
-                            continue  # not stored: run again on resume
-                        row = {"status": "error", "reason": f"{type(exc).__name__}: {exc}", "finished_at": time.time()}
                     store_row(job, row)
                     bar.update(t, advance=1, counts=" ".join(f"{s} {summary.counts[s]}" for s in STATUSES
                                                              if summary.counts[s]))

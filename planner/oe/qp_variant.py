@@ -365,6 +365,117 @@ def condense_sequence(
                     metrics={"compute_time": time.perf_counter() - start_time})
 
 
+def _infeasible(ref: NDArray[np.float64], start_time: float, reason: str, n_qp: int = 0, cands: tuple = ()) -> PushPlan:
+    """The plan when no push sequence works, with the ``reason``, the fits spent and the candidates
+    scored; ``ref`` the resampled universal path, ``start_time`` the condensation's start [s]."""
+    empty = np.zeros((0, 2))
+    return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=reason, n_qp=n_qp,
+                    candidates=cands, metrics={"compute_time": time.perf_counter() - start_time})
+
+
+def _screened(screen: _Scene, grid: NDArray[np.float64], opts: QPOptions) -> list[_Scored]:
+    """Every candidate scored on the screening grid: the best-ranked push sequences of the proxy
+    costs (switches at segment bounds), then the best feasible one's switches moved one segment
+    either way while that lowers its cost (a local search on the cuts)."""
+    v_ref = np.gradient(screen.universal, screen.t, axis=0)
+    names = list(screen.frames)
+    frames = [screen.frames[n] for n in names]
+    costs = segment_costs(screen.t, screen.universal, v_ref, frames, opts.segments)
+    bounds = np.linspace(grid[0], grid[-1], opts.segments + 1)
+    ranked = ranked_sequences(costs, names, opts.max_pushes, opts.switch_price)[: opts.candidates]
+    scored = [screen.score(faces, tuple(float(bounds[c]) for c in cuts), contact_rows=False)
+              for faces, cuts, _ in ranked]
+    feasible = [s for s in scored if s.feasible]
+    if feasible:
+        best = min(feasible, key=screen.cost)
+        cuts = [int(np.argmin(np.abs(bounds - s))) for s in best.switches]
+        for i in range(len(cuts)):
+            for step in (-1, 1):
+                trial = list(cuts)
+                trial[i] += step
+                lo = trial[i - 1] if i > 0 else 0
+                hi = trial[i + 1] if i + 1 < len(trial) else opts.segments
+                if not lo < trial[i] < hi:
+                    continue
+                s = screen.score(best.faces, tuple(float(bounds[c]) for c in trial), contact_rows=False)
+                scored.append(s)
+                if screen.cost(s) < screen.cost(best):
+                    best, cuts = s, trial
+    return scored
+
+
+@dataclass
+class _Finals:
+    """The final stage of one condensation: the candidates the screening grid ranked (``order``)
+    are solved again on the full grid (``fine``), in order; the first feasible one that the push
+    model realises is the plan, which can hand out the next one (``PushPlan.next_best``) when a
+    later stage (a switch) fails on it. ``scored`` gathers every fit, screening and final."""
+
+    screen: _Scene
+    fine: _Scene
+    scored: list[_Scored]
+    order: list[_Scored]
+    grid: NDArray[np.float64]
+    ref: NDArray[np.float64]
+    target: NDArray[np.float64]
+    scene: Scene
+    opts: QPOptions
+    start_time: float
+
+    def _spent(self) -> tuple[int, tuple]:
+        """The fits spent so far and the candidates scored (faces, switches, cost or None)."""
+        n_qp = sum(sc.result.scp_iterations for sc in self.scored)
+        cands = tuple((sc.faces, sc.switches, None if not sc.feasible else self.screen.cost(sc)) for sc in self.scored)
+        return n_qp, cands
+
+    def finalise(self, start: int, tried: int) -> PushPlan:
+        """The plan from the candidates ``order[start:]`` (at most ``FINAL_TRIES`` of them), after
+        ``tried`` final fits; infeasible with the reason when none works."""
+        why = ""
+        for i in range(start, min(len(self.order), start + FINAL_TRIES)):
+            s = self.order[i]
+            final = self.fine.score(s.faces, s.switches)
+            self.scored.append(final)
+            if not final.feasible or final.result.rollout is None:
+                continue
+            roll = final.result.rollout
+            dense_t, x, v = roll.t + self.grid[0], roll.x, roll.v
+            try:
+                pushes = _pushes(self.fine, final, dense_t, x)
+            except PushRefused as exc:
+                why = f"the push sequence {' -> '.join(final.faces)} cannot be realised: {exc}"
+                continue
+            return self._solved(final, dense_t, x, v, pushes, i + 1, tried + i + 1 - start)
+        n_qp, cands = self._spent()
+        if why:
+            return _infeasible(self.ref, self.start_time, why, n_qp, cands)
+        fams = sorted({f for sc in self.scored for f in (sc.result.families or tuple(
+            k for k, val in sc.result.violations.items() if val > self.opts.tol))})
+        return _infeasible(
+            self.ref, self.start_time,
+            f"none of the {len(self.scored)} push sequences scored is feasible "
+            f"(constraint families in conflict: {', '.join(fams) or 'unknown'})", n_qp, cands,
+        )
+
+    def _solved(self, best: _Scored, dense_t: NDArray[np.float64], x: NDArray[np.float64], v: NDArray[np.float64],
+                pushes: tuple[Push, ...], after: int, tried: int) -> PushPlan:
+        """The solved plan of ``best`` (dense path ``x`` [m], ``v`` [m/s] at ``dense_t`` [s]) with its
+        metrics; ``after``: the next candidate's index, ``tried``: final fits so far."""
+        n_qp, cands = self._spent()
+        plan = PushPlan("qp", "solved", dense_t, x, v, self.ref, pushes=pushes, n_qp=n_qp, candidates=cands)
+        from tooltransfer.planner.oe.metrics import plan_metrics  # local: metrics import the plan types
+
+        metrics = plan_metrics(plan, self.fine.frames, self.target, self.scene)
+        metrics["compute_time"] = time.perf_counter() - self.start_time
+        metrics.update({f"violation_{k}": val for k, val in best.result.violations.items()})
+        per_qp = [sc.result.solve_time / max(sc.result.scp_iterations, 1) for sc in self.scored]
+        metrics.update({"n_qp": float(n_qp), "qp_time_median": float(np.median(per_qp)),
+                        "qp_time_max": max(per_qp), "final_candidates": float(tried)})
+        more = after < len(self.order) and tried < self.opts.alternatives + FINAL_TRIES
+        return PushPlan("qp", "solved", dense_t, x, v, self.ref, pushes=pushes, metrics=metrics, n_qp=n_qp,
+                        candidates=cands, next_best=(lambda: self.finalise(after, tried)) if more else None)
+
+
 def condense_qp(
     t: NDArray[np.float64],
     universal: NDArray[np.float64],
@@ -409,85 +520,10 @@ def condense_qp(
     screen = _Scene(*resample(min(opts.screen_samples, opts.n_samples)), tool, platform, target, scene,
                     screen_opts, free_start)
 
-    def infeasible(reason: str, n_qp: int = 0, cands: tuple = ()) -> PushPlan:
-        empty = np.zeros((0, 2))
-        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=reason, n_qp=n_qp,
-                        candidates=cands, metrics={"compute_time": time.perf_counter() - start_time})
-
     why = _precheck(screen, check_start=not free_start)
     if why:
-        return infeasible(why)
-    v_ref = np.gradient(screen.universal, screen.t, axis=0)
-    names = list(screen.frames)
-    frames = [screen.frames[n] for n in names]
-    costs = segment_costs(screen.t, screen.universal, v_ref, frames, opts.segments)
-    bounds = np.linspace(grid[0], grid[-1], opts.segments + 1)
-    ranked = ranked_sequences(costs, names, opts.max_pushes, opts.switch_price)[: opts.candidates]
-    scored = [screen.score(faces, tuple(float(bounds[c]) for c in cuts), contact_rows=False)
-              for faces, cuts, _ in ranked]
-    feasible = [s for s in scored if s.feasible]
-    if feasible:
-        best = min(feasible, key=screen.cost)
-        cuts = [int(np.argmin(np.abs(bounds - s))) for s in best.switches]
-        for i in range(len(cuts)):
-            for step in (-1, 1):
-                trial = list(cuts)
-                trial[i] += step
-                lo = trial[i - 1] if i > 0 else 0
-                hi = trial[i + 1] if i + 1 < len(trial) else opts.segments
-                if not lo < trial[i] < hi:
-                    continue
-                s = screen.score(best.faces, tuple(float(bounds[c]) for c in trial), contact_rows=False)
-                scored.append(s)
-                if screen.cost(s) < screen.cost(best):
-                    best, cuts = s, trial
-    # the screening grid ranked the candidates: the best ones are solved again on the full grid, in
-    # order; the first feasible one that the push model realises is the plan, and the plan can hand
-    # out the next one (``PushPlan.next_best``) when a later stage (a switch) fails on it
+        return _infeasible(ref, start_time, why)
+    scored = _screened(screen, grid, opts)
+    # the screening grid ranked the candidates: the best ones are solved again on the full grid, in order
     order = sorted({(s.faces, s.switches): s for s in scored if s.feasible}.values(), key=screen.cost)
-
-    def finalise(start: int, tried: int) -> PushPlan:
-        why = ""
-        for i in range(start, min(len(order), start + FINAL_TRIES)):
-            s = order[i]
-            final = fine.score(s.faces, s.switches)
-            scored.append(final)
-            if not final.feasible or final.result.rollout is None:
-                continue
-            roll = final.result.rollout
-            dense_t, x, v = roll.t + grid[0], roll.x, roll.v
-            try:
-                pushes = _pushes(fine, final, dense_t, x)
-            except PushRefused as exc:
-                why = f"the push sequence {' -> '.join(final.faces)} cannot be realised: {exc}"
-                continue
-            return _solved(final, dense_t, x, v, pushes, i + 1, tried + i + 1 - start)
-        n_qp = sum(sc.result.scp_iterations for sc in scored)
-        cands = tuple((sc.faces, sc.switches, None if not sc.feasible else screen.cost(sc)) for sc in scored)
-        if why:
-            return infeasible(why, n_qp, cands)
-        fams = sorted({f for sc in scored for f in (sc.result.families or tuple(
-            k for k, val in sc.result.violations.items() if val > opts.tol))})
-        return infeasible(
-            f"none of the {len(scored)} push sequences scored is feasible "
-            f"(constraint families in conflict: {', '.join(fams) or 'unknown'})", n_qp, cands,
-        )
-
-    def _solved(best: _Scored, dense_t: NDArray[np.float64], x: NDArray[np.float64], v: NDArray[np.float64],
-                pushes: tuple[Push, ...], after: int, tried: int) -> PushPlan:
-        n_qp = sum(sc.result.scp_iterations for sc in scored)
-        cands = tuple((sc.faces, sc.switches, None if not sc.feasible else screen.cost(sc)) for sc in scored)
-        plan = PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, n_qp=n_qp, candidates=cands)
-        from tooltransfer.planner.oe.metrics import plan_metrics  # local: metrics import the plan types
-
-        metrics = plan_metrics(plan, fine.frames, target, scene)
-        metrics["compute_time"] = time.perf_counter() - start_time
-        metrics.update({f"violation_{k}": val for k, val in best.result.violations.items()})
-        per_qp = [sc.result.solve_time / max(sc.result.scp_iterations, 1) for sc in scored]
-        metrics.update({"n_qp": float(n_qp), "qp_time_median": float(np.median(per_qp)),
-                        "qp_time_max": max(per_qp), "final_candidates": float(tried)})
-        more = after < len(order) and tried < opts.alternatives + FINAL_TRIES
-        return PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, metrics=metrics, n_qp=n_qp,
-                        candidates=cands, next_best=(lambda: finalise(after, tried)) if more else None)
-
-    return finalise(0, 0)
+    return _Finals(screen, fine, scored, order, grid, ref, target, scene, opts, start_time).finalise(0, 0)

@@ -235,6 +235,141 @@ def _pose_at(t: NDArray[np.float64], pose: NDArray[np.float64], when: float) -> 
     return np.array([[np.interp(when, t, pose[:, j]) for j in range(3)]])
 
 
+@dataclass(frozen=True)
+class _Tracks:
+    """One demonstration's smoothed tracks, what every pass of :func:`segment` reads: tool times
+    ``t`` (N,) [s] with the smoothed pose (N, 3) [m, rad] and velocity (N, 3), camera times ``t_o``
+    (M,) [s] with the smoothed object centre ``obj`` (M, 2) [m] and ``c`` (N, 2) [m] at the tool's
+    times; per face (columns in ``names`` order) the gap to the object ``gaps`` (N, F) [m] and the
+    velocity along the face's normal ``v_n`` (N, F) [m/s]; the camera noise ``sigma`` [m]."""
+
+    demo: Demonstration
+    tool: Tool
+    geo: ToolGeometry
+    radius: float
+    names: list[str]
+    t: NDArray[np.float64]
+    t_o: NDArray[np.float64]
+    dt: float
+    pose: NDArray[np.float64]
+    obj: NDArray[np.float64]
+    c: NDArray[np.float64]
+    gaps: NDArray[np.float64]
+    v_n: NDArray[np.float64]
+    sigma: float
+
+    @classmethod
+    def smoothed(cls, demo: Demonstration, tool: Tool, radius: float, smooth: float, tool_smooth: float) -> _Tracks:
+        """Smooth the recordings (Savitzky-Golay: cubic over ``tool_smooth`` [s] for the encoders,
+        quadratic over ``smooth`` [s] for the camera) and measure each face against the object."""
+        t, t_o = demo.t_tool, demo.t_object
+        raw = demo.tool_pose.copy()
+        raw[:, 2] = np.unwrap(raw[:, 2])
+        dt = float(np.median(np.diff(t)))
+        pose = savgol_filter(raw, _odd_window(t, tool_smooth), 3, axis=0, mode="interp")
+        vel = savgol_filter(raw, _odd_window(t, tool_smooth), 3, deriv=1, delta=dt, axis=0, mode="interp")
+        obj = savgol_filter(demo.object_xy, _odd_window(t_o, smooth), 2, axis=0, mode="interp")
+        c = np.column_stack([np.interp(t, t_o, obj[:, j]) for j in range(2)])
+        geo = ToolGeometry(tool, radius)
+        names = list(tool.face_names)
+        c_tool = to_tool_frame(c, pose)
+        gaps = np.column_stack([geo.face_gap(tool.face(n), c_tool) for n in names])
+        v_n = np.column_stack([_normal_velocity(vel, pose, tool.face(n).normal) for n in names])
+        return cls(demo, tool, geo, radius, names, t, t_o, dt, pose, obj, c, gaps, v_n, camera_noise(demo.object_xy))
+
+    def rest(self, t0: float, t1: float, after: NDArray[np.float64] | None,
+             fallback: NDArray[np.float64] | None = None) -> NDArray[np.float64] | None:
+        """Rest position (2,) from the camera samples in [t0, t1], projected onto the curve one
+        radius off the outline at pose ``after`` (1, 3) when the rest follows a contact. With
+        fewer than 3 samples: None, or with a ``fallback`` pose the smoothed track at ``t0``
+        projected onto the outline at that pose. Only the samples after the object's last move count
+        (:func:`tooltransfer.planner.segmentation.rest.still_tail`), so a push not found does not spoil the next
+        rest."""
+        t_o, obj, demo = self.t_o, self.obj, self.demo
+        idx = np.flatnonzero((t_o >= t0) & (t_o <= t1))
+        if idx.size >= 3:
+            idx, whole = still_tail(demo.object_xy, idx, self.sigma)
+            p = demo.object_xy[idx].mean(axis=0)
+            if not whole:  # the object moved after t0 (a push not found): no longer where it was left
+                after = None
+        elif fallback is not None:
+            p, after = np.array([np.interp(t0, t_o, obj[:, 0]), np.interp(t0, t_o, obj[:, 1])]), fallback
+        else:
+            return None
+        if after is None:
+            return p
+        q = to_tool_frame(p, after)
+        _, near = self.geo.outline_gap(q)
+        u = q - near
+        n = float(np.hypot(*u[0]))
+        return p if n == 0.0 else to_world(near + self.radius * u / n, after)[0]
+
+    def touches_face(self, p: NDArray[np.float64], when: float, j: int, face_tol: float) -> bool:
+        """Whether the outline point nearest the object at ``p`` (2,) lies on face ``j`` (within
+        ``face_tol`` [m]) with the tool at its pose at time ``when`` [s]."""
+        _, near = self.geo.outline_gap(to_tool_frame(p, _pose_at(self.t, self.pose, when)))
+        a, b = self.tool.face(self.names[j]).contact_segment()
+        return float(nearest_on_segments(near, a[None], b[None])[0][0]) <= face_tol
+
+    def start_of(self, before: NDArray[np.float64], s0: int, e0: int) -> float | None:
+        """When [s] the outline first reaches the object resting at ``before`` (2,) during the
+        stroke of samples ``s0..e0`` (None if it never does)."""
+        seg = slice(s0, e0 + 1)
+        return _crossing(self.t[seg], self.geo.outline_gap(to_tool_frame(before, self.pose[seg]))[0])
+
+
+def _contacts(tr: _Tracks, strokes: list[tuple[int, int, int]], *, near_tol: float, end_tol: float, face_tol: float,
+              settle: float) -> list[_Contact]:
+    """Pass 1, in time order: the contacts of the ``strokes`` (first, last sample, face index);
+    each rest lasts from one contact's end to the next one's start (module docstring, steps 2-3)."""
+    t, t_o, obj, v_n = tr.t, tr.t_o, tr.obj, tr.v_n
+    found: list[_Contact] = []
+    prev_end, prev_pose = float(min(t_o[0], t[0])) - settle, None
+    prev_face = -1
+    for s0, e0, j in strokes:
+        s0 = max(s0, int(np.searchsorted(t, prev_end, side="right")))  # after the last contact only
+        if s0 >= e0:
+            continue
+        # a rest needs camera samples, except a short break in one face's push: there the object
+        # is where that push left it (the smoothed track, projected onto the outline)
+        after = prev_pose if j == prev_face else None
+        close = np.flatnonzero(tr.gaps[s0 : e0 + 1, j] < near_tol)  # still short of contact: rest until here
+        t_rest = float(t[s0 + int(close[0]) if close.size else s0])
+        before = tr.rest(prev_end + settle, t_rest, prev_pose, after)
+        if before is None:  # hardly any camera sample yet: start from the smoothed track
+            before = np.array([np.interp(t_rest, t_o, obj[:, 0]), np.interp(t_rest, t_o, obj[:, 1])])
+        t_start = tr.start_of(before, s0, e0)
+        for _ in range(2):  # the rest lasted until contact: use all of it and look again
+            longer = None if t_start is None else tr.rest(prev_end + settle, t_start, prev_pose, after)
+            if longer is None:
+                break
+            before, t_start = longer, tr.start_of(longer, s0, e0)
+        if t_start is None:
+            continue  # the stroke stopped short of the object
+        if not tr.touches_face(before, t_start, j, face_tol):
+            continue  # another part of the tool touches: not this face's push
+        t_top = _zero_down(t, v_n[:, j], e0)  # the farthest advance: the object is left touching here
+        t_end = 0.5 * (t_top + _fall_back(t, np.cumsum(v_n[:, j]) * tr.dt, e0, end_tol))
+        end_pose = _pose_at(t, tr.pose, t_top)
+        found.append((j, t_start, t_end, before, end_pose))
+        prev_end, prev_pose, prev_face = t_end, end_pose, j
+    return found
+
+
+def _pushes(tr: _Tracks, merged: list[_Contact], *, settle: float, min_move: float) -> list[PushSegment]:
+    """Pass 3: the contacts that moved the object by at least ``min_move`` [m] between the rests
+    around them (a touch that moved nothing is not a push)."""
+    pushes: list[PushSegment] = []
+    for i, (j, t_start, t_end, before, end_pose) in enumerate(merged):
+        nxt = merged[i + 1][1] if i + 1 < len(merged) else float(tr.t_o[-1])
+        after = tr.rest(t_end + settle, nxt, end_pose)
+        if after is None or np.hypot(*(after - before)) < min_move:
+            continue  # a touch that moved nothing: not a push
+        samples = np.flatnonzero((tr.t >= t_start) & (tr.t <= t_end))
+        pushes.append(PushSegment(tr.names[j], t_start, t_end, samples, before, after))
+    return pushes
+
+
 def segment(
     demo: Demonstration,
     tool: Tool,
@@ -283,118 +418,30 @@ def segment(
         raise InputError(f"{demo.name}", "a demonstration with at least 10 tool and 10 object samples",
                          f"{t.size} tool, {t_o.size} object")
     check_recording(demo, tool)  # loaded from files: the kinematics and the contacts against the declared tool
-    raw = demo.tool_pose.copy()
-    raw[:, 2] = np.unwrap(raw[:, 2])
-    dt = float(np.median(np.diff(t)))
-    pose = savgol_filter(raw, _odd_window(t, tool_smooth), 3, axis=0, mode="interp")
-    vel = savgol_filter(raw, _odd_window(t, tool_smooth), 3, deriv=1, delta=dt, axis=0, mode="interp")
-    obj = savgol_filter(demo.object_xy, _odd_window(t_o, smooth), 2, axis=0, mode="interp")
-    c = np.column_stack([np.interp(t, t_o, obj[:, j]) for j in range(2)])
-    geo = ToolGeometry(tool, radius)
-    names = list(tool.face_names)
-    c_tool = to_tool_frame(c, pose)
-    gaps = np.column_stack([geo.face_gap(tool.face(n), c_tool) for n in names])
-    v_n = np.column_stack([_normal_velocity(vel, pose, tool.face(n).normal) for n in names])
+    tr = _Tracks.smoothed(demo, tool, radius, smooth, tool_smooth)
     strokes = sorted(
         (s0, e0, j)
-        for j in range(len(names))
-        for s0, e0 in _strokes(v_n[:, j], gaps[:, j] < near_tol, dt, v_on, min_advance, r_back)
+        for j in range(len(tr.names))
+        for s0, e0 in _strokes(tr.v_n[:, j], tr.gaps[:, j] < near_tol, tr.dt, v_on, min_advance, r_back)
     )
-
-    def rest(t0: float, t1: float, after: NDArray[np.float64] | None,
-             fallback: NDArray[np.float64] | None = None) -> NDArray[np.float64] | None:
-        """Rest position (2,) from the camera samples in [t0, t1], projected onto the curve one
-        radius off the outline at pose ``after`` (1, 3) when the rest follows a contact. With
-        fewer than 3 samples: None, or with a ``fallback`` pose the smoothed track at ``t0``
-        projected onto the outline at that pose. Only the samples after the object's last move count
-        (:func:`tooltransfer.planner.segmentation.rest.still_tail`), so a push not found does not spoil the next
-        rest."""
-        idx = np.flatnonzero((t_o >= t0) & (t_o <= t1))
-        if idx.size >= 3:
-            idx, whole = still_tail(demo.object_xy, idx, sigma)
-            p = demo.object_xy[idx].mean(axis=0)
-            if not whole:  # the object moved after t0 (a push not found): no longer where it was left
-                after = None
-        elif fallback is not None:
-            p, after = np.array([np.interp(t0, t_o, obj[:, 0]), np.interp(t0, t_o, obj[:, 1])]), fallback
-        else:
-            return None
-        if after is None:
-            return p
-        q = to_tool_frame(p, after)
-        _, near = geo.outline_gap(q)
-        u = q - near
-        n = float(np.hypot(*u[0]))
-        return p if n == 0.0 else to_world(near + radius * u / n, after)[0]
-
-    sigma = camera_noise(demo.object_xy)
-
-    def touches_face(p: NDArray[np.float64], when: float, j: int) -> bool:
-        """Whether the outline point nearest the object at ``p`` (2,) lies on face ``j`` (within
-        ``face_tol``) with the tool at its pose at time ``when``."""
-        _, near = geo.outline_gap(to_tool_frame(p, _pose_at(t, pose, when)))
-        a, b = tool.face(names[j]).contact_segment()
-        return float(nearest_on_segments(near, a[None], b[None])[0][0]) <= face_tol
-
-    def start_of(before: NDArray[np.float64], s0: int, e0: int) -> float | None:
-        return _crossing(t[s0 : e0 + 1], geo.outline_gap(to_tool_frame(before, pose[s0 : e0 + 1]))[0])
-
-    # pass 1, in time order: contacts; each rest lasts from one contact's end to the next one's start
-    found: list[_Contact] = []
-    prev_end, prev_pose = float(min(t_o[0], t[0])) - settle, None
-    prev_face = -1
-    for s0, e0, j in strokes:
-        s0 = max(s0, int(np.searchsorted(t, prev_end, side="right")))  # after the last contact only
-        if s0 >= e0:
-            continue
-        # a rest needs camera samples, except a short break in one face's push: there the object
-        # is where that push left it (the smoothed track, projected onto the outline)
-        after = prev_pose if j == prev_face else None
-        close = np.flatnonzero(gaps[s0 : e0 + 1, j] < near_tol)  # still short of contact: rest until here
-        t_rest = float(t[s0 + int(close[0]) if close.size else s0])
-        before = rest(prev_end + settle, t_rest, prev_pose, after)
-        if before is None:  # hardly any camera sample yet: start from the smoothed track
-            before = np.array([np.interp(t_rest, t_o, obj[:, 0]), np.interp(t_rest, t_o, obj[:, 1])])
-        t_start = start_of(before, s0, e0)
-        for _ in range(2):  # the rest lasted until contact: use all of it and look again
-            longer = None if t_start is None else rest(prev_end + settle, t_start, prev_pose, after)
-            if longer is None:
-                break
-            before, t_start = longer, start_of(longer, s0, e0)
-        if t_start is None:
-            continue  # the stroke stopped short of the object
-        if not touches_face(before, t_start, j):
-            continue  # another part of the tool touches: not this face's push
-        t_top = _zero_down(t, v_n[:, j], e0)  # the farthest advance: the object is left touching here
-        t_end = 0.5 * (t_top + _fall_back(t, np.cumsum(v_n[:, j]) * dt, e0, end_tol))
-        end_pose = _pose_at(t, pose, t_top)
-        found.append((j, t_start, t_end, before, end_pose))
-        prev_end, prev_pose, prev_face = t_end, end_pose, j
+    found = _contacts(tr, strokes, near_tol=near_tol, end_tol=end_tol, face_tol=face_tol, settle=settle)
     # pass 2: contacts of one face less than merge_gap apart are one push (the hand's tremor can
     # break a contact for a moment, or touch again just after a push), then what is shorter than
     # min_contact is a touch (in this order, as the ground truth's rules); dropping a touch of
     # another face can bring two contacts of one face together
     merged = _merge(found, merge_gap)
     merged = _merge([f for f in merged if f[2] - f[1] >= min_contact], merge_gap)
-    # pass 3: a push moved the object between the rests around it
-    pushes: list[PushSegment] = []
-    for i, (j, t_start, t_end, before, end_pose) in enumerate(merged):
-        nxt = merged[i + 1][1] if i + 1 < len(merged) else float(t_o[-1])
-        after = rest(t_end + settle, nxt, end_pose)
-        if after is None or np.hypot(*(after - before)) < min_move:
-            continue  # a touch that moved nothing: not a push
-        samples = np.flatnonzero((t >= t_start) & (t <= t_end))
-        pushes.append(PushSegment(names[j], t_start, t_end, samples, before, after))
+    pushes = _pushes(tr, merged, settle=settle, min_move=min_move)
     labels: list[str | None] = [None] * t.size
     for p in pushes:
         for k in p.samples:
             labels[k] = p.face
-    switches = [_switch(p, q, t, pose, geo, radius) for p, q in itertools.pairwise(pushes) if p.face != q.face]
+    switches = [_switch(p, q, t, tr.pose, tr.geo, radius) for p, q in itertools.pairwise(pushes) if p.face != q.face]
     if fixed_points is not None:
         fixed = fixed_point_array(fixed_points, f"fixed_points ({demo.name})")
     else:
         fixed = np.array([p.object_after for p, q in itertools.pairwise(pushes) if p.face != q.face]).reshape(-1, 2)
-    return Segmentation(tuple(labels), tuple(pushes), tuple(switches), fixed, c)
+    return Segmentation(tuple(labels), tuple(pushes), tuple(switches), fixed, tr.c)
 
 
 def _switch(p: PushSegment, q: PushSegment, t: NDArray[np.float64], pose: NDArray[np.float64], geo: ToolGeometry,

@@ -196,6 +196,144 @@ def reach_families(reach: bool | tuple[bool, bool, bool]) -> tuple[bool, bool, b
     return inner, outer, wedge
 
 
+def _check_build(n_knots: int, bodies: Sequence[Body], model: str, solver: str, separators: str) -> None:
+    """Reject an unknown solver, model or separator form, too few knots, or a capsule against a
+    polygon (the capsule rows measure discs only), before any CasADi work."""
+    if solver not in SOLVERS:
+        raise InputError("solver", f"one of {', '.join(SOLVERS)}", repr(solver))
+    if model not in MODELS:
+        raise InputError("model", f"one of {', '.join(MODELS)}", repr(model))
+    if not isinstance(n_knots, int) or n_knots < 5:
+        raise InputError("n_knots", "an integer >= 5", repr(n_knots))
+    if model == "capsule" and any(b.kind != "disc" for b in bodies):
+        raise InputError("model", "'pieces' when the object or an obstacle is a polygon", "'capsule'")
+    if separators not in SEPARATORS:
+        raise InputError("separators", f"one of {', '.join(SEPARATORS)}", repr(separators))
+
+
+@dataclass(frozen=True)
+class _ToolRows:
+    """How the tool enters the non-penetration rows: its model, convex ``pieces`` [mm] (tool
+    frame) or ``capsule`` [mm], and the separators: their form (``angle``, or ``distance`` for the
+    signed-distance rows of discs), the per-knot ``(piece, body, offset, has_beta)`` layout and
+    the count ``n_sep`` of separating variables per interior knot."""
+
+    model: str
+    pieces: list[NDArray[np.float64]]
+    capsule: Capsule | None
+    angle: bool
+    distance: bool
+    sep_layout: list[tuple[int, int, int, bool]]
+    n_sep: int
+
+    @classmethod
+    def of(cls, tool: Tool, bodies: Sequence[Body], model: str, separators: str) -> _ToolRows:
+        """The tool's pieces (or capsule) in millimetres and the separating variables each pair of
+        piece and body needs (none for a disc under ``"distance"``)."""
+        angle = separators == "angle"
+        pieces = [np.asarray(p.exterior.coords, dtype=np.float64)[:-1] / UNIT for p in tool.convex_pieces]
+        capsule = None
+        if model == "capsule":
+            c = Capsule.enclosing(tool)
+            capsule = Capsule(c.a / UNIT, c.b / UNIT, c.radius / UNIT)
+        sep_layout: list[tuple[int, int, int, bool]] = []
+        n_sep = 0
+        distance = separators == "distance"
+        if model == "pieces":
+            for j in range(len(pieces)):
+                for bi, b in enumerate(bodies):
+                    poly = b.kind == "poly"
+                    if distance and not poly:
+                        continue  # the signed distance row needs no separating variables
+                    sep_layout.append((j, bi, n_sep, poly))
+                    n_sep += (1 if angle else 2) + (1 if poly else 0)
+        return cls(model, pieces, capsule, angle, distance, sep_layout, n_sep)
+
+
+class _Interior:
+    """The tool at the interior knots, as (1, N - 2) CasADi rows: its centre ``Xi, Yi`` [mm] and the
+    heading's cosine and sine (the heading a function of position through the Omni's waist)."""
+
+    def __init__(self, X: Any, platform: OmniPlatform) -> None:
+        import casadi as ca
+
+        n = X.shape[1]
+        self.Xi, self.Yi = X[0, 1:n - 1], X[1, 1:n - 1]
+        yaw = heading_casadi(platform, self.Xi * UNIT, self.Yi * UNIT)
+        self.cos_k, self.sin_k = ca.cos(yaw), ca.sin(yaw)
+
+    def world(self, v: NDArray[np.float64]) -> tuple[Any, Any]:
+        """The tool-frame point ``v`` (2,) [mm] in the world at each interior knot."""
+        return self.Xi + self.cos_k * v[0] - self.sin_k * v[1], self.Yi + self.sin_k * v[0] + self.cos_k * v[1]
+
+    def tool_frame(self, cx: Any, cy: Any) -> tuple[Any, Any]:
+        """The world point ``(cx, cy)`` in the tool frame at each interior knot (there the tool's
+        outline is constant, so distance expressions and their Hessians stay small)."""
+        rx, ry = cx - self.Xi, cy - self.Yi
+        return self.cos_k * rx + self.sin_k * ry, self.cos_k * ry - self.sin_k * rx
+
+
+def _body_rows(knots: _Interior, tr: _ToolRows, b: Body, bi: int, p: Any, m: Any, S: Any) -> list[Any]:
+    """Non-penetration rows (each (1, N - 2), >= 0) of body ``b`` (number ``bi``, parameters ``p``,
+    margin row ``m`` [mm]) against the tool: the capsule's distance, the signed distance of each
+    piece to a disc, or the separating-line rows of each piece (separating variables ``S``)."""
+    import casadi as ca
+
+    per_knot: list[Any] = []
+    if tr.model == "capsule":
+        assert tr.capsule is not None
+        lx, ly = knots.tool_frame(p[0], p[1])
+        d2 = _clamped_d2(lx, ly, tr.capsule.a, tr.capsule.b - tr.capsule.a)
+        per_knot.append(ca.sqrt(d2) - (p[2] + tr.capsule.radius + m))
+    elif tr.distance and b.kind == "disc":
+        lx, ly = knots.tool_frame(p[0], p[1])
+        for verts in tr.pieces:
+            per_knot.append(_signed_distance(verts, lx, ly) - (p[2] + m))
+    else:
+        for j, verts in enumerate(tr.pieces):
+            off = next(o for (jj, bb, o, _) in tr.sep_layout if jj == j and bb == bi)
+            if tr.angle:
+                n0, n1 = ca.cos(S[off, :]), ca.sin(S[off, :])
+                beta = S[off + 1, :] if b.kind == "poly" else None
+            else:
+                n0, n1 = S[off, :], S[off + 1, :]
+                beta = S[off + 2, :] if b.kind == "poly" else None
+            for v in verts:
+                wx, wy = knots.world(v)
+                if b.kind == "disc":
+                    per_knot.append(n0 * (wx - p[0]) + n1 * (wy - p[1]) - (p[2] + m))
+                else:
+                    per_knot.append(n0 * wx + n1 * wy - beta - m)
+            if b.kind == "poly":
+                for vi in range(b.data.size // 2):
+                    per_knot.append(beta - (n0 * p[2 * vi] + n1 * p[2 * vi + 1]))
+            if not tr.angle:
+                per_knot.append(1 - n0 * n0 - n1 * n1)
+    return per_knot
+
+
+def _reach_rows(knots: _Interior, platform: OmniPlatform, reach: bool | tuple[bool, bool, bool],
+                reach_margin: float) -> list[Any]:
+    """Reach rows (each (1, N - 2), >= 0, scaled to millimetres) of the interior knots: inside the
+    outer radius, outside the inner one and inside the wedge's two half-planes, each
+    ``reach_margin`` [m] inside, as far as :func:`reach_families` keeps them."""
+    sec = reach_sector(platform)
+    wr = wedge_rows(platform)
+    bx0, by0 = sec.centre / UNIT
+    r_in, r_out = (sec.r_in + reach_margin) / UNIT, (sec.r_out - reach_margin) / UNIT
+    Xi, Yi = knots.Xi, knots.Yi
+    inner, outer, wedge = reach_families(reach)
+    r2 = (Xi - bx0) ** 2 + (Yi - by0) ** 2
+    per_knot = []
+    if inner:
+        per_knot.append((r2 - r_in**2) / r_in)
+    if outer:
+        per_knot.append((r_out**2 - r2) / r_out)
+    for gi in range(2 if wedge else 0):
+        per_knot.append(wr.h[gi] / UNIT - reach_margin / UNIT - (wr.G[gi, 0] * Xi + wr.G[gi, 1] * Yi))
+    return per_knot
+
+
 def build_nlp(
     tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
     solver: str = "ipopt", smooth: float = 10.0, reach_margin: float = 1e-4, max_iter: int = 150,
@@ -207,36 +345,11 @@ def build_nlp(
     import casadi as ca
 
     t0 = time.perf_counter()
-    if solver not in SOLVERS:
-        raise InputError("solver", f"one of {', '.join(SOLVERS)}", repr(solver))
-    if model not in MODELS:
-        raise InputError("model", f"one of {', '.join(MODELS)}", repr(model))
-    if not isinstance(n_knots, int) or n_knots < 5:
-        raise InputError("n_knots", "an integer >= 5", repr(n_knots))
-    if model == "capsule" and any(b.kind != "disc" for b in bodies):
-        raise InputError("model", "'pieces' when the object or an obstacle is a polygon", "'capsule'")
-    if separators not in SEPARATORS:
-        raise InputError("separators", f"one of {', '.join(SEPARATORS)}", repr(separators))
-    angle = separators == "angle"
+    _check_build(n_knots, bodies, model, solver, separators)
     N = n_knots
-    pieces = [np.asarray(p.exterior.coords, dtype=np.float64)[:-1] / UNIT for p in tool.convex_pieces]
-    capsule = None
-    if model == "capsule":
-        c = Capsule.enclosing(tool)
-        capsule = Capsule(c.a / UNIT, c.b / UNIT, c.radius / UNIT)
-    sep_layout: list[tuple[int, int, int, bool]] = []
-    n_sep = 0
-    distance = separators == "distance"
-    if model == "pieces":
-        for j in range(len(pieces)):
-            for bi, b in enumerate(bodies):
-                poly = b.kind == "poly"
-                if distance and not poly:
-                    continue  # the signed distance row needs no separating variables
-                sep_layout.append((j, bi, n_sep, poly))
-                n_sep += (1 if angle else 2) + (1 if poly else 0)
+    tr = _ToolRows.of(tool, bodies, model, separators)
     X = ca.SX.sym("X", 2, N)
-    S = ca.SX.sym("S", n_sep, N - 2) if n_sep else None
+    S = ca.SX.sym("S", tr.n_sep, N - 2) if tr.n_sep else None
     Xd = ca.SX.sym("Xd", 2, N)
     m_obj = ca.SX.sym("m_obj", N)
     m_obs = ca.SX.sym("m_obs", N)
@@ -246,78 +359,21 @@ def build_nlp(
     # hundred CasADi operations instead of one per knot: much faster to build), then stacked knot by knot
     # (``ca.vec`` of the (rows per knot, N - 2) matrix), the same order as one knot at a time.
     K = N - 2
-    Xi, Yi = X[0, 1:N - 1], X[1, 1:N - 1]
-    yaw = heading_casadi(platform, Xi * UNIT, Yi * UNIT)
-    cos_k, sin_k = ca.cos(yaw), ca.sin(yaw)
-
-    def world(v: NDArray[np.float64]) -> tuple[Any, Any]:
-        return Xi + cos_k * v[0] - sin_k * v[1], Yi + sin_k * v[0] + cos_k * v[1]
-
-    def tool_frame(cx: Any, cy: Any) -> tuple[Any, Any]:
-        """The world point ``(cx, cy)`` in the tool frame at each interior knot (there the tool's
-        outline is constant, so distance expressions and their Hessians stay small)."""
-        rx, ry = cx - Xi, cy - Yi
-        return cos_k * rx + sin_k * ry, cos_k * ry - sin_k * rx
-
-    def knot_major(per_knot: list[Any]) -> Any:
-        return ca.vec(ca.vertcat(*per_knot))
-
+    knots = _Interior(X, platform)
     blocks: list[Any] = []
     families: list[tuple[str, int, int]] = []
     count = 0
     for bi, b in enumerate(bodies):
         start = count
-        p = bpar[bi]
         m = (m_obj if b.family == "object" else m_obs)[1:N - 1].T
-        per_knot: list[Any] = []
-        if model == "capsule":
-            assert capsule is not None
-            lx, ly = tool_frame(p[0], p[1])
-            d2 = _clamped_d2(lx, ly, capsule.a, capsule.b - capsule.a)
-            per_knot.append(ca.sqrt(d2) - (p[2] + capsule.radius + m))
-        elif distance and b.kind == "disc":
-            lx, ly = tool_frame(p[0], p[1])
-            for verts in pieces:
-                per_knot.append(_signed_distance(verts, lx, ly) - (p[2] + m))
-        else:
-            for j, verts in enumerate(pieces):
-                off = next(o for (jj, bb, o, _) in sep_layout if jj == j and bb == bi)
-                if angle:
-                    n0, n1 = ca.cos(S[off, :]), ca.sin(S[off, :])
-                    beta = S[off + 1, :] if b.kind == "poly" else None
-                else:
-                    n0, n1 = S[off, :], S[off + 1, :]
-                    beta = S[off + 2, :] if b.kind == "poly" else None
-                for v in verts:
-                    wx, wy = world(v)
-                    if b.kind == "disc":
-                        per_knot.append(n0 * (wx - p[0]) + n1 * (wy - p[1]) - (p[2] + m))
-                    else:
-                        per_knot.append(n0 * wx + n1 * wy - beta - m)
-                if b.kind == "poly":
-                    for vi in range(b.data.size // 2):
-                        per_knot.append(beta - (n0 * p[2 * vi] + n1 * p[2 * vi + 1]))
-                if not angle:
-                    per_knot.append(1 - n0 * n0 - n1 * n1)
-        blocks.append(knot_major(per_knot))
+        per_knot = _body_rows(knots, tr, b, bi, bpar[bi], m, S)
+        blocks.append(ca.vec(ca.vertcat(*per_knot)))
         count += len(per_knot) * K
         families.append((b.family, start, count))
-    sec = reach_sector(platform)
-    wr = wedge_rows(platform)
-    bx0, by0 = sec.centre / UNIT
-    r_in, r_out = (sec.r_in + reach_margin) / UNIT, (sec.r_out - reach_margin) / UNIT
     start = count
-    inner, outer, wedge = reach_families(reach)
-    r2 = (Xi - bx0) ** 2 + (Yi - by0) ** 2
-    per_knot = []
-    if inner:
-        per_knot.append((r2 - r_in**2) / r_in)
-    if outer:
-        per_knot.append((r_out**2 - r2) / r_out)
-    for gi in range(2 if wedge else 0):
-        per_knot.append(wr.h[gi] / UNIT - reach_margin / UNIT - (wr.G[gi, 0] * Xi + wr.G[gi, 1] * Yi))
+    per_knot = _reach_rows(knots, platform, reach, reach_margin)
     if per_knot:
-        blocks.append(knot_major(per_knot))
+        blocks.append(ca.vec(ca.vertcat(*per_knot)))
         count += len(per_knot) * K
     families.append(("reach", start, count))
     # step length between consecutive knots at most s_max (no tunnelling through a body between knots)
@@ -336,9 +392,9 @@ def build_nlp(
     lbg = np.zeros(count)
     ubg = np.full(count, np.inf)
     return SwitchNLP(
-        key=(), solver=fn, n_knots=N, model=model, solver_name=solver, n_sep=n_sep, sep_layout=sep_layout,
-        families=families, lbg=lbg, ubg=ubg, pieces=pieces, capsule=capsule,
-        build_time=time.perf_counter() - t0, n_params=int(pv.numel()), rows=g_fn, angle=angle,
+        key=(), solver=fn, n_knots=N, model=model, solver_name=solver, n_sep=tr.n_sep, sep_layout=tr.sep_layout,
+        families=families, lbg=lbg, ubg=ubg, pieces=tr.pieces, capsule=tr.capsule,
+        build_time=time.perf_counter() - t0, n_params=int(pv.numel()), rows=g_fn, angle=tr.angle,
     )
 
 

@@ -143,43 +143,14 @@ def _obstacles(obstacles: Sequence[Obstacle], height: float, friction: str) -> t
     return assets, geoms
 
 
-def build_mjcf(
-    tool: Tool, platform: OmniPlatform, obstacles: Sequence[Obstacle] = (), config: SimConfig | None = None
-) -> str:
-    """The MJCF text of the Omni carrying ``tool``, with the puck and ``obstacles`` on the table.
-
-    Args:
-        tool: the tool (its convex pieces become the colliding prisms).
-        platform: the Omni's placement, joint limits and ``a_t`` (the tool-row length used).
-        obstacles: discs and polygons on the table (world frame [m]), static, twice the puck's height.
-        config: physical settings (default :class:`SimConfig`).
-
-    Returns:
-        The MJCF document (compile it with ``mujoco.MjModel.from_xml_string``). The puck starts at
-        the origin; :class:`tooltransfer.tools.sim.platform.SimPlatform` places it.
-    """
-    c = config or SimConfig()
+def _arm_xml(platform: OmniPlatform, c: SimConfig, tool_geoms: str) -> str:
+    """The Omni's body chain (MJCF ``<body name="base">``, indented for the worldbody): three
+    position-limited, torque-saturated revolute joints, the tool row and the two level-keeping hinges
+    carrying the tool's geoms ``tool_geoms``, placed at the platform's base pose."""
     # the planar tool frame in the tool-row body once the two level-keeping hinges have acted:
     # base-frame orientation Rz(q1) Rx(-pi/2) Rz(theta_t) G must equal Rz(q1 - pi/2)
     g = (_rx(-np.pi / 2) @ _rz(THETA_TOOL)).T @ _rz(-np.pi / 2)
     gq = " ".join(_num(v) for v in _mat_to_quat(g))
-    z0, z1 = c.tool_gap, c.tool_gap + c.tool_thickness
-    pieces = tool.convex_pieces
-    names = tool_piece_names(tool)
-    assets = [_prism_mesh(n, p, z0, z1) for n, p in zip(names, pieces, strict=True)]
-    tool_fric = f"{_num(c.tool_friction)} 0.005 0.0001"
-    tool_geoms = "\n".join(
-        f'<geom name="{n}" type="mesh" mesh="{n}" priority="1" friction="{tool_fric}" '
-        f'rgba="0.3 0.5 0.8 1" mass="0.002" {_STATIC_BITS}/>'
-        for n in names
-    )
-    table_fric = f"{_num(c.table_friction)} 0.005 0.0001"
-    obstacle_assets, obstacle_geoms = _obstacles(obstacles, 2.0 * c.puck_height, table_fric)
-    assets += obstacle_assets
-    contact_sensors = "\n".join(
-        f'<contact name="touch_{n}" geom1="{n}" geom2="{PUCK}" num="1" data="found dist pos" reduce="mindist"/>'
-        for n in names
-    )
     lo, hi = platform.limits.lower, platform.limits.upper
     torque = f'actuatorfrcrange="{_num(-c.torque_limit)} {_num(c.torque_limit)}"'
     limits = [f'range="{_num(lo[j])} {_num(hi[j])}" {torque}' for j in range(3)]
@@ -187,30 +158,8 @@ def build_mjcf(
     link = f'{_VISUAL_BITS} rgba="0.6 0.6 0.6 0.5"'
     inertia = 'mass="0.08" diaginertia="2e-4 2e-4 2e-4"'
     small = 'pos="0 0 0" mass="0.005" diaginertia="1e-6 1e-6 1e-6"'
-    nl = "\n"
-    return f"""<mujoco model="omni_{tool.name}">
-  <compiler angle="radian" autolimits="true"/>
-  <option timestep="{_num(c.timestep)}" integrator="implicitfast" solver="Newton" cone="elliptic"
-          gravity="0 0 -9.81">
-    <flag multiccd="disable"/>
-  </option>
-  <default>
-    <geom solref="{_num(c.contact_timeconst)} {_num(c.contact_dampratio)}" solimp="0.95 0.99 0.001"/>
-    <joint armature="0.001" damping="0.01"/>
-  </default>
-  <asset>
-    {nl.join(assets)}
-  </asset>
-  <worldbody>
-    <geom name="table" type="plane" size="1 1 0.01" priority="1" friction="{table_fric}"
-          rgba="0.9 0.9 0.85 1" {_STATIC_BITS}/>
-    {nl.join(obstacle_geoms)}
-    <body name="{PUCK}" pos="0 0 {_num(c.puck_height / 2)}">
-      <freejoint name="{PUCK}"/>
-      <geom name="{PUCK}" type="cylinder" size="{_num(c.puck_radius)} {_num(c.puck_height / 2)}"
-            mass="{_num(c.puck_mass)}" friction="{table_fric}" rgba="0.2 0.2 0.2 1" {_PUCK_BITS}/>
-    </body>
-    <body name="base" pos="{_num(bx)} {_num(by)} {_num(-platform.table_height)}" quat="{_quat_z(platform.base_yaw)}">
+    at = f'pos="{_num(bx)} {_num(by)} {_num(-platform.table_height)}" quat="{_quat_z(platform.base_yaw)}"'
+    return f"""<body name="base" {at}>
       <body name="link1" gravcomp="1">
         <joint name="q1" axis="0 0 1" {limits[0]}/>
         <inertial pos="0 0 0.05" {inertia}/>
@@ -244,9 +193,14 @@ def build_mjcf(
           </body>
         </body>
       </body>
-    </body>
-  </worldbody>
-  <equality>
+    </body>"""
+
+
+def _drives_xml(c: SimConfig, contact_sensors: str) -> str:
+    """The MJCF ``<equality>`` (the level-keeping hinges follow the arm's joints), ``<actuator>``
+    (PD: position gain ``kp``, velocity gain ``kv``) and ``<sensor>`` sections (joints, tool row,
+    tool axes, puck pose and the ``contact_sensors``), indented for the document's top level."""
+    return f"""<equality>
     <joint joint1="level2" joint2="q2" polycoef="0 -1 0 0 0" solref="0.002 1"/>
     <joint joint1="level3" joint2="q3" polycoef="0 -1 0 0 0" solref="0.002 1"/>
   </equality>
@@ -268,6 +222,67 @@ def build_mjcf(
     <framepos name="puck_pos" objtype="xbody" objname="{PUCK}"/>
     <framequat name="puck_quat" objtype="xbody" objname="{PUCK}"/>
     {contact_sensors}
-  </sensor>
+  </sensor>"""
+
+
+def build_mjcf(
+    tool: Tool, platform: OmniPlatform, obstacles: Sequence[Obstacle] = (), config: SimConfig | None = None
+) -> str:
+    """The MJCF text of the Omni carrying ``tool``, with the puck and ``obstacles`` on the table.
+
+    Args:
+        tool: the tool (its convex pieces become the colliding prisms).
+        platform: the Omni's placement, joint limits and ``a_t`` (the tool-row length used).
+        obstacles: discs and polygons on the table (world frame [m]), static, twice the puck's height.
+        config: physical settings (default :class:`SimConfig`).
+
+    Returns:
+        The MJCF document (compile it with ``mujoco.MjModel.from_xml_string``). The puck starts at
+        the origin; :class:`tooltransfer.tools.sim.platform.SimPlatform` places it.
+    """
+    c = config or SimConfig()
+    z0, z1 = c.tool_gap, c.tool_gap + c.tool_thickness
+    pieces = tool.convex_pieces
+    names = tool_piece_names(tool)
+    assets = [_prism_mesh(n, p, z0, z1) for n, p in zip(names, pieces, strict=True)]
+    tool_fric = f"{_num(c.tool_friction)} 0.005 0.0001"
+    tool_geoms = "\n".join(
+        f'<geom name="{n}" type="mesh" mesh="{n}" priority="1" friction="{tool_fric}" '
+        f'rgba="0.3 0.5 0.8 1" mass="0.002" {_STATIC_BITS}/>'
+        for n in names
+    )
+    table_fric = f"{_num(c.table_friction)} 0.005 0.0001"
+    obstacle_assets, obstacle_geoms = _obstacles(obstacles, 2.0 * c.puck_height, table_fric)
+    assets += obstacle_assets
+    contact_sensors = "\n".join(
+        f'<contact name="touch_{n}" geom1="{n}" geom2="{PUCK}" num="1" data="found dist pos" reduce="mindist"/>'
+        for n in names
+    )
+    nl = "\n"
+    return f"""<mujoco model="omni_{tool.name}">
+  <compiler angle="radian" autolimits="true"/>
+  <option timestep="{_num(c.timestep)}" integrator="implicitfast" solver="Newton" cone="elliptic"
+          gravity="0 0 -9.81">
+    <flag multiccd="disable"/>
+  </option>
+  <default>
+    <geom solref="{_num(c.contact_timeconst)} {_num(c.contact_dampratio)}" solimp="0.95 0.99 0.001"/>
+    <joint armature="0.001" damping="0.01"/>
+  </default>
+  <asset>
+    {nl.join(assets)}
+  </asset>
+  <worldbody>
+    <geom name="table" type="plane" size="1 1 0.01" priority="1" friction="{table_fric}"
+          rgba="0.9 0.9 0.85 1" {_STATIC_BITS}/>
+    {nl.join(obstacle_geoms)}
+    <body name="{PUCK}" pos="0 0 {_num(c.puck_height / 2)}">
+      <freejoint name="{PUCK}"/>
+      <geom name="{PUCK}" type="cylinder" size="{_num(c.puck_radius)} {_num(c.puck_height / 2)}"
+            mass="{_num(c.puck_mass)}" friction="{table_fric}" rgba="0.2 0.2 0.2 1" {_PUCK_BITS}/>
+    </body>
+    {_arm_xml(platform, c, tool_geoms)}
+  </worldbody>
+  {_drives_xml(c, contact_sensors)}
 </mujoco>
 """
