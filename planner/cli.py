@@ -4,7 +4,7 @@ Exit codes: 0 done (solved), 1 infeasible, 2 bad input (a one-line message namin
 field, or the option and the path, never a traceback: ``-v`` adds it for a bug report), 130
 stopped by Ctrl-C (one line). Output paths are checked before any work (a folder where a file is
 expected, a missing folder, a place that cannot be written: exit 2 naming the option), and every
-file is written atomically (:mod:`tooltransfer.problems.atomic`). Every command has ``--help`` with an example.
+file is written atomically (:mod:`tooltransfer.atomic`). Every command has ``--help`` with an example.
 """
 
 from __future__ import annotations
@@ -288,7 +288,7 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 
     text = task_json_schema()
     if args.out:
-        from tooltransfer.problems.atomic import write_text
+        from tooltransfer.atomic import write_text
 
         write_text(args.out, text + "\n")
         print(f"wrote {args.out}")
@@ -310,8 +310,8 @@ def _cmd_tools(args: argparse.Namespace) -> int:
 def _written(path: Path) -> Iterator[Path]:
     """A temporary path beside ``path`` for a writer that takes a path (a figure): it replaces
     ``path`` once the writer is done, and is removed if the writer fails
-    (:func:`tooltransfer.problems.atomic.atomic_path`)."""
-    from tooltransfer.problems.atomic import atomic_path
+    (:func:`tooltransfer.atomic.atomic_path`)."""
+    from tooltransfer.atomic import atomic_path
 
     with atomic_path(path) as tmp:
         yield tmp

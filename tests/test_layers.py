@@ -1,6 +1,6 @@
-"""Arrows point down (issue 17): tooltransfer.errors and .validation at the bottom, then dmp, tools,
-problems, planner; no module imports one of a higher layer (also inside a function), and the
-module-level imports have no circle."""
+"""Arrows point down (issue 17): tooltransfer.errors, .validation, .atomic and .versioned_json at the
+bottom, then dmp, tools, problems, planner; no module imports one of a higher layer (also inside a
+function), and the module-level imports have no circle."""
 
 from __future__ import annotations
 
@@ -9,13 +9,14 @@ from graphlib import CycleError, TopologicalSorter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-LAYERS = {"errors": 0, "validation": 0, "dmp": 1, "tools": 2, "problems": 3, "planner": 4}
+LAYERS = {"errors": 0, "validation": 0, "atomic": 0, "versioned_json": 0,
+          "dmp": 1, "tools": 2, "problems": 3, "planner": 4}
 
 
 def _modules() -> dict[str, Path]:
     out = {}
-    for path in [ROOT / "errors.py", ROOT / "validation.py", *(p for top in ("dmp", "tools", "problems", "planner")
-                                                              for p in (ROOT / top).rglob("*.py"))]:
+    bottom = [ROOT / f"{name}.py" for name in ("errors", "validation", "atomic", "versioned_json")]
+    for path in [*bottom, *(p for top in ("dmp", "tools", "problems", "planner") for p in (ROOT / top).rglob("*.py"))]:
         parts = path.relative_to(ROOT).with_suffix("").parts
         out[".".join(("tooltransfer", *(parts[:-1] if parts[-1] == "__init__" else parts)))] = path
     return out
