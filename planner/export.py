@@ -227,7 +227,7 @@ def run_export(args: Any) -> int:
     plan is infeasible (or violated, without ``--force``); errors raise (the command line's exit 2)."""
     import sys
 
-    from tooltransfer.planner.cli import EXIT_INFEASIBLE, EXIT_OK, check_output
+    from tooltransfer.planner.cli_common import EXIT_INFEASIBLE, EXIT_OK, check_output
     from tooltransfer.planner.plan import PlanFileError, read_plan
 
     names = check_joint_names(args.joint_names.split(",")) if args.joint_names is not None else None
