@@ -234,15 +234,12 @@ def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any
                "mechanics_mu": scene.mechanics.mu, "mechanics_c": scene.mechanics.c}
     sws = [sw for fa, fb, *_, sw in motion.switches if fa != fb]
     recs = [sw for fa, fb, *_, sw in motion.switches if fa == fb]
-    metrics["switch_clearance_min"] = min((sw.min_clearance for sw in sws), default=float("inf"))
-    metrics["recontact_clearance_min"] = min((sw.min_clearance for sw in recs), default=float("inf"))
-    metrics["n_switch_fallbacks"] = float(sum(sw.info.get("fallback", 0.0) for *_, sw in motion.switches))
+    metrics["switch_clearance_min"] = min((sw.object_clearance for sw in sws), default=float("inf"))
+    metrics["recontact_clearance_min"] = min((sw.object_clearance for sw in recs), default=float("inf"))
+    metrics["n_switch_fallbacks"] = float(sum(sw.fallback for *_, sw in motion.switches))
     sws = [sw for *_, sw in motion.switches]
-    metrics["switch_obstacle_clearance_min"] = min(
-        (sw.info.get("obstacle_clearance", np.inf) for sw in sws), default=float("inf"))
-    metrics["switch_penetration_max"] = max(
-        (max(sw.info.get("object_penetration", 0.0), sw.info.get("obstacle_penetration", 0.0)) for sw in sws),
-        default=0.0)
+    metrics["switch_obstacle_clearance_min"] = min((sw.obstacle_clearance for sw in sws), default=float("inf"))
+    metrics["switch_penetration_max"] = max((sw.max_penetration for sw in sws), default=0.0)
     near = tool_obstacle_clearance(tool, motion.tool_pose, obstacles)
     metrics["tool_obstacle_clearance_min"] = near.distance
     metrics["joint_limit_violation_max"] = float(motion.joint_violation.max())
@@ -273,8 +270,8 @@ def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any
                            f"object {1e3 * off.max():.2f} mm off the planned path (from t = {motion.t[k]:.2f} s, "
                            f"{motion.phase[k]}; object planned at {np.round(motion.object_xy[k], 4).tolist()} m)")
     pushes = tuple(Segment("push", a, b, (f,), {"direction": d}) for f, a, b, d in motion.pushes)
-    switches = tuple(Segment("switch", a, b, (fa, fb), {"min_clearance": sw.min_clearance,
-                                                         "penetration": sw.info.get("object_penetration", 0.0)})
+    switches = tuple(Segment("switch", a, b, (fa, fb), {"min_clearance": float(sw.object_clearance),
+                                                         "penetration": float(sw.object_penetration)})
                      for fa, fb, a, b, sw in motion.switches)
     broken = hard_check_failures(metrics, task.oe.self_consistency_tol)
     status, reason = ("violated", "hard checks violated: " + "; ".join(broken)) if broken else ("solved", "")
