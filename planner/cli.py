@@ -42,23 +42,21 @@ def _spinner(text: str, quiet: bool = False) -> object:
 
 
 def _print_summary(summary: dict[str, object], title: str) -> None:
-    """A two-column rich table of a summary (lengths in m are printed in mm)."""
+    """A two-column rich table of a summary, each number with its unit from
+    :data:`tooltransfer.planner.metric_units.UNITS` (lengths in m are printed in mm)."""
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
+
+    from tooltransfer.planner.metric_units import shown
 
     table = Table(title=title, title_justify="left", show_header=False)
     table.add_column("key")
     table.add_column("value", justify="right")
     for k, v in summary.items():
-        lengths = ("_error", "_deviation", "clearance_min", "penetration_max", "reach_violation_max")
-        if isinstance(v, float) and k.endswith(lengths) and "tracking" not in k:
-            table.add_row(f"{k} \\[mm]", f"{1e3 * v:.4g}")
-        elif isinstance(v, float) and k in ("cone_violation_max", "joint_limit_violation_max", "tracking_error"):
-            table.add_row(f"{k} \\[rad]", f"{v:.4g}")
-        elif isinstance(v, float) and (k.endswith("_time") or k == "duration"):
-            table.add_row(f"{k} \\[s]", f"{v:.4g}")
-        elif isinstance(v, float):
-            table.add_row(k, f"{v:.4g}")
+        if isinstance(v, float):
+            label, text = shown(k, v)
+            table.add_row(escape(label), text)
         else:
             table.add_row(k, str(v))
     Console().print(table)
