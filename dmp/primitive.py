@@ -1,11 +1,23 @@
-"""The discrete Dynamic Movement Primitive (paper eqs. 1-5)."""
+"""The discrete Dynamic Movement Primitive (paper eqs. 1-5) and its skill file.
+
+A fitted DMP is saved as versioned JSON (:mod:`tooltransfer.versioned_json`), format ``tooltransfer.dmp/1``::
+
+    {"format": "tooltransfer.dmp/1",
+     "formulation": "<equations in words>",
+     "n_dims", "n_basis", "alpha_z", "beta_z", "gamma", "scaling", "ridge", "fit_method",
+     "tau" [s], "x0" [m], "g" [m], "centres", "widths", "weights" (N x n)}
+
+The other skill formats (``tooltransfer.oe/1``, ``tooltransfer.ss/1``) nest this dictionary
+(:meth:`DMP.to_dict`, :meth:`DMP.from_dict`).
+"""
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal, cast
+from pathlib import Path
+from typing import Any, Literal, cast
 
 import numpy as np
 import scipy.linalg
@@ -17,10 +29,21 @@ from tooltransfer.dmp.exact import RESPONSE_CACHE, SystemParams, free_response
 from tooltransfer.dmp.integrate import rk4_rollout
 from tooltransfer.dmp.scaling import SCALING_MODES, ScalingMode, scaling_matrix
 from tooltransfer.dmp.trajectory import Rollout
-from tooltransfer.errors import InputError
+from tooltransfer.errors import InputError, SkillFileError
 from tooltransfer.validation import check_array, check_positive, check_time
+from tooltransfer.versioned_json import check_format, format_tag, read_versioned, write_versioned
 
 FitMethod = Literal["forcing", "trajectory"]
+
+FORMAT = "tooltransfer.dmp"
+"""Name of the DMP skill format (its files carry ``"format": "tooltransfer.dmp/1"``)."""
+VERSION = 1
+"""Version of the DMP skill format this library writes and reads."""
+FORMULATION = (
+    "tau*dv/dt = alpha_z*(beta_z*(g - x) - v) + f(s); tau*dx/dt = v; tau*ds/dt = -gamma*s; "
+    "f(s) = M(x0, g) @ W.T @ psi(s); psi_i = phi_i*s/sum_j phi_j; phi_i = exp(-h_i*(s - c_i)^2)"
+)
+"""The equations a skill file's parameters belong to, in words (stored in the file for a reader)."""
 
 
 @dataclass(frozen=True)
@@ -284,15 +307,70 @@ class DMP:
         return w.reshape(self.n_basis, self.n_dims)
 
     # ------------------------------------------------------------------ files
-    def save(self, path: str) -> None:
-        """Save the skill as a versioned JSON file (see :mod:`tooltransfer.dmp.skill_file`)."""
-        from tooltransfer.dmp.skill_file import save_dmp
-
-        save_dmp(self, path)
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data description, format ``tooltransfer.dmp/1`` (JSON-serialisable; module docstring)."""
+        return {
+            "format": format_tag(FORMAT, VERSION),
+            "formulation": FORMULATION,
+            "n_dims": self.n_dims,
+            "n_basis": self.n_basis,
+            "alpha_z": self.alpha_z,
+            "beta_z": self.beta_z,
+            "gamma": self.gamma,
+            "scaling": self.scaling,
+            "ridge": self.ridge,
+            "fit_method": self.fit_method,
+            "tau": self.tau,
+            "x0": self.x0.tolist(),
+            "g": self.g.tolist(),
+            "centres": self.centres.tolist(),
+            "widths": self.widths.tolist(),
+            "weights": self.weights.tolist(),
+        }
 
     @classmethod
-    def load(cls, path: str) -> DMP:
-        """Load a skill saved by :meth:`save`; raises :class:`~tooltransfer.errors.SkillFileError`."""
-        from tooltransfer.dmp.skill_file import load_dmp
+    def from_dict(cls, data: Any, source: str = "<dict>") -> DMP:
+        """Rebuild a DMP from :meth:`to_dict` output; another format or version, a missing field or
+        damaged values raise :class:`~tooltransfer.errors.SkillFileError` naming ``source``."""
+        check_format(data, FORMAT, VERSION, source)
+        try:
+            d = cls(
+                n_dims=int(data["n_dims"]),
+                n_basis=int(data["n_basis"]),
+                alpha_z=float(data["alpha_z"]),
+                beta_z=float(data["beta_z"]),
+                gamma=float(data["gamma"]),
+                scaling=data["scaling"],
+                ridge=float(data["ridge"]),
+            )
+            w = np.asarray(data["weights"], dtype=np.float64)
+            if w.shape != (d.n_basis, d.n_dims) or not np.all(np.isfinite(w)):
+                raise SkillFileError(
+                    source, f"'weights' must be finite with shape ({d.n_basis}, {d.n_dims}), got {w.shape}"
+                )
+            for key in ("centres", "widths"):
+                stored = np.asarray(data[key], dtype=np.float64)
+                expect = d.centres if key == "centres" else d.widths
+                if stored.shape != expect.shape or not np.allclose(stored, expect, rtol=1e-12, atol=0):
+                    raise SkillFileError(source, f"'{key}' disagree with n_basis and gamma (corrupted file?)")
+            d.weights = w
+            d.tau = float(data["tau"])
+            d.x0 = np.asarray(data["x0"], dtype=np.float64).reshape(d.n_dims)
+            d.g = np.asarray(data["g"], dtype=np.float64).reshape(d.n_dims)
+            d.fit_method = data.get("fit_method")
+        except KeyError as exc:
+            raise SkillFileError(source, f"missing field {exc.args[0]!r}") from exc
+        except (TypeError, ValueError, InputError) as exc:
+            raise SkillFileError(source, f"invalid value: {exc}") from exc
+        return d
 
-        return load_dmp(path)
+    def save(self, path: str | Path) -> None:
+        """Save the skill as a versioned JSON file (:meth:`to_dict`), atomically
+        (:func:`tooltransfer.versioned_json.write_versioned`)."""
+        write_versioned(path, self.to_dict(), indent=1)
+
+    @classmethod
+    def load(cls, path: str | Path) -> DMP:
+        """Load a skill saved by :meth:`save`; a missing or damaged file or another format raises
+        :class:`~tooltransfer.errors.SkillFileError`."""
+        return cls.from_dict(read_versioned(path, FORMAT, VERSION), str(path))

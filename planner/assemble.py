@@ -20,37 +20,19 @@ Joints come from the vectorized inverse kinematics of the whole tool path (limit
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.errors import ToolTransferError
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
+from tooltransfer.planner.ss.result import SwitchPath
 from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration, stretch_factor
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pose import rotation
-
-
-@dataclass(frozen=True)
-class SwitchPath:
-    """A switch between two faces while the object stands still.
-
-    Attributes:
-        xy: tool centre point path (K, 2) [m] from the first face's contact pose to the second's.
-        status: ``"solved"`` or ``"infeasible"``; reason: why not.
-        min_clearance: least tool-object distance [m] over the middle of the switch (away from the contacts).
-        info: solver figures (time [s], iterations...).
-    """
-
-    xy: NDArray[np.float64]
-    status: str = "solved"
-    reason: str = ""
-    min_clearance: float = float("nan")
-    info: dict[str, float] = field(default_factory=dict)
-
 
 SwitchPlanner = Callable[[NDArray[np.float64], str, NDArray[np.float64], str, NDArray[np.float64]], SwitchPath]
 """``planner(object_xy (2,), face_a, pose_a (3,), face_b, pose_b (3,)) -> SwitchPath``."""
@@ -189,4 +171,4 @@ class SwitchFailed(ToolTransferError):
 
 def switch_clearances(motion: Motion) -> Sequence[float]:
     """Min clearance [m] of each switch, as its planner measured it."""
-    return [sw.min_clearance for *_, sw in motion.switches]
+    return [sw.object_clearance for *_, sw in motion.switches]

@@ -4,7 +4,7 @@ Exit codes: 0 done (solved), 1 infeasible, 2 bad input (a one-line message namin
 field, or the option and the path, never a traceback: ``-v`` adds it for a bug report), 130
 stopped by Ctrl-C (one line). Output paths are checked before any work (a folder where a file is
 expected, a missing folder, a place that cannot be written: exit 2 naming the option), and every
-file is written atomically (:mod:`tooltransfer.problems.atomic`). Every command has ``--help`` with an example.
+file is written atomically (:mod:`tooltransfer.atomic`). Every command has ``--help`` with an example.
 """
 
 from __future__ import annotations
@@ -18,7 +18,14 @@ from contextlib import contextmanager
 from pathlib import Path
 
 # nothing heavy is imported before main() runs: a Ctrl-C while numpy and the rest load is caught too
-EXIT_OK, EXIT_INFEASIBLE, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+from tooltransfer.planner.cli_common import (
+    EXIT_BAD_INPUT,
+    EXIT_INFEASIBLE,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    check_output,
+)
+
 #: The tools command's default figure (its folder is made when missing; an explicit path's must exist).
 DEFAULT_TOOLS_FIGURE = Path("out/tools.png")
 
@@ -35,23 +42,21 @@ def _spinner(text: str, quiet: bool = False) -> object:
 
 
 def _print_summary(summary: dict[str, object], title: str) -> None:
-    """A two-column rich table of a summary (lengths in m are printed in mm)."""
+    """A two-column rich table of a summary, each number with its unit from
+    :data:`tooltransfer.planner.metric_units.UNITS` (lengths in m are printed in mm)."""
     from rich.console import Console
+    from rich.markup import escape
     from rich.table import Table
+
+    from tooltransfer.planner.metric_units import shown
 
     table = Table(title=title, title_justify="left", show_header=False)
     table.add_column("key")
     table.add_column("value", justify="right")
     for k, v in summary.items():
-        lengths = ("_error", "_deviation", "clearance_min", "penetration_max", "reach_violation_max")
-        if isinstance(v, float) and k.endswith(lengths) and "tracking" not in k:
-            table.add_row(f"{k} \\[mm]", f"{1e3 * v:.4g}")
-        elif isinstance(v, float) and k in ("cone_violation_max", "joint_limit_violation_max", "tracking_error"):
-            table.add_row(f"{k} \\[rad]", f"{v:.4g}")
-        elif isinstance(v, float) and (k.endswith("_time") or k == "duration"):
-            table.add_row(f"{k} \\[s]", f"{v:.4g}")
-        elif isinstance(v, float):
-            table.add_row(k, f"{v:.4g}")
+        if isinstance(v, float):
+            label, text = shown(k, v)
+            table.add_row(escape(label), text)
         else:
             table.add_row(k, str(v))
     Console().print(table)
@@ -289,7 +294,7 @@ def _cmd_schema(args: argparse.Namespace) -> int:
 
     text = task_json_schema()
     if args.out:
-        from tooltransfer.problems.atomic import write_text
+        from tooltransfer.atomic import write_text
 
         write_text(args.out, text + "\n")
         print(f"wrote {args.out}")
@@ -311,8 +316,8 @@ def _cmd_tools(args: argparse.Namespace) -> int:
 def _written(path: Path) -> Iterator[Path]:
     """A temporary path beside ``path`` for a writer that takes a path (a figure): it replaces
     ``path`` once the writer is done, and is removed if the writer fails
-    (:func:`tooltransfer.problems.atomic.atomic_path`)."""
-    from tooltransfer.problems.atomic import atomic_path
+    (:func:`tooltransfer.atomic.atomic_path`)."""
+    from tooltransfer.atomic import atomic_path
 
     with atomic_path(path) as tmp:
         yield tmp
@@ -324,62 +329,6 @@ def file_stem(name: str, limit: int = 100) -> str:
     empty or starting with a dot."""
     stem = re.sub(r"[^A-Za-z0-9._-]+", "_", name)[:limit].lstrip(".") or "task"
     return stem
-
-
-def _nearest_existing(path: Path) -> Path:
-    p = path.absolute()
-    while not p.exists() and p != p.parent:
-        p = p.parent
-    return p
-
-
-def _writable(folder: Path) -> str:
-    """Why nothing can be created in ``folder`` ("" if something can): it is tried."""
-    probe = folder / f".tooltransfer-probe-{os.getpid()}"
-    try:
-        os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
-    except FileExistsError:
-        return ""
-    except OSError as exc:
-        return exc.strerror or str(exc)
-    try:
-        probe.unlink()
-    except OSError:
-        pass
-    return ""
-
-
-def check_output(option: str, path: Path, kind: str = "file", *, make_folders: bool = False) -> None:
-    """Check an output path before any work is done; raise :class:`~tooltransfer.errors.InputError` naming
-    ``option`` and ``path``. ``kind``: ``"file"`` (its folder must exist, unless ``make_folders``),
-    ``"folder"`` (made with its parents when missing)."""
-    from tooltransfer.errors import InputError
-
-    path = Path(path)
-    if len(os.fsencode(str(path))) > 4000 or any(len(os.fsencode(part)) > 255 for part in path.parts):
-        raise InputError(option, "a path whose names have at most 255 bytes", f"{str(path)[:100]}...")
-    if kind == "folder":
-        if path.exists() and not path.is_dir():
-            raise InputError(option, "a folder (to write into)", f"{path}, which is a file")
-        base = _nearest_existing(path)
-        if not base.is_dir():
-            raise InputError(option, "a folder that can be made", f"{path} ({base} is a file)")
-        why = _writable(base)
-        if why:
-            raise InputError(option, "a folder that can be written", f"{path} ({base}: {why})")
-        return
-    if path.is_dir():
-        raise InputError(option, "a file path, not a folder", str(path))
-    parent = path.parent
-    if not parent.exists():
-        if not make_folders:
-            raise InputError(option, "a file in an existing folder", f"{path} (there is no folder {parent})")
-        parent = _nearest_existing(parent)
-    if not parent.is_dir():
-        raise InputError(option, "a file in a folder", f"{path} ({parent} is not a folder)")
-    why = _writable(parent)
-    if why:
-        raise InputError(option, "a file in a place that can be written", f"{path} ({parent}: {why})")
 
 
 #: Output options by command: (argument name, option as shown, kind; see :func:`check_output`).

@@ -16,7 +16,7 @@ joints' names (the plan's ``joint_names``, or others for a robot's description):
   times rounded to the nanosecond).
 
 :func:`read_trajectory` reads any of them back (the round trip is exact but for those nanoseconds).
-Files are written atomically (:mod:`tooltransfer.problems.atomic`).
+Files are written atomically (:mod:`tooltransfer.atomic`).
 """
 
 from __future__ import annotations
@@ -116,7 +116,7 @@ def _csv_text(traj: Trajectory) -> str:
 def export_plan(plan: Plan, out: str | Path, fmt: str, joint_names: tuple[str, ...] | None = None) -> Path:
     """Write ``plan``'s joint trajectory to ``out`` in format ``fmt`` (:data:`FORMATS`) under
     ``joint_names`` (default: the plan's); returns the path."""
-    from tooltransfer.problems.atomic import atomic_path, write_text
+    from tooltransfer.atomic import atomic_path, write_text
 
     if fmt not in FORMATS:
         raise InputError("--format", f"one of {', '.join(FORMATS)}", fmt)
@@ -227,7 +227,7 @@ def run_export(args: Any) -> int:
     plan is infeasible (or violated, without ``--force``); errors raise (the command line's exit 2)."""
     import sys
 
-    from tooltransfer.planner.cli import EXIT_INFEASIBLE, EXIT_OK, check_output
+    from tooltransfer.planner.cli_common import EXIT_INFEASIBLE, EXIT_OK, check_output
     from tooltransfer.planner.plan import PlanFileError, read_plan
 
     names = check_joint_names(args.joint_names.split(",")) if args.joint_names is not None else None

@@ -17,16 +17,13 @@ import io
 from collections.abc import Callable
 from pathlib import Path
 
+from tooltransfer.atomic import write_text
 from tooltransfer.planner.plan import Plan
-from tooltransfer.problems import FINGER_DEMOS
-from tooltransfer.problems.atomic import write_text
+from tooltransfer.problems import FINGER_DEMOS, PAPER_PAIRS, PAPER_TRANSFER
 from tooltransfer.problems.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
-TRANSFER = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
 DATASET = FINGER_DEMOS
-
-PAIRS = (("mapping", "dmp"), ("mapping", "opt"), ("qp", "dmp"), ("qp", "opt"))
 
 #: Rows of the comparison table: metric key, label, unit, scale.
 ROWS = (
@@ -100,7 +97,7 @@ def render(renderable: object, width: int = 120) -> str:
 def compare(
     task_path: Path, out: Path, step: Callable[[str], None] = lambda _s: None
 ) -> tuple[object, dict[str, Plan]]:
-    """Solve ``task_path`` with every variant pair (:data:`PAIRS`); write the plans
+    """Solve ``task_path`` with every variant pair (:data:`tooltransfer.problems.PAPER_PAIRS`); write the plans
     (``plan_<task>_<oe>_<ss>.json``) and ``compare_<task>.png`` to ``out``; return the metrics table
     (rich) and the plans. ``step`` is called with a description before each solve (progress)."""
     from tooltransfer.planner.plots.execution import plot_plans
@@ -109,7 +106,7 @@ def compare(
     task = load_task(task_path)
     out.mkdir(parents=True, exist_ok=True)
     plans: dict[str, Plan] = {}
-    for oe, ss in PAIRS:
+    for oe, ss in PAPER_PAIRS:
         step(f"solve {task.name} with oe {oe}, ss {ss}")
         t = task.model_copy(update={"variants": task.variants.model_copy(update={"oe": oe, "ss": ss})})
         plans[f"{oe}/{ss}"] = plan = solve(t, task_path)
@@ -140,7 +137,7 @@ def run_paper(out: Path) -> str:
         skills_file = learn_skills(DATASET).save(out / "skills.json")
         skills = Skills.load(skills_file)
         report.append(f"skills learned from {DATASET.relative_to(ROOT)} -> {skills_file}")
-        table, plans = compare(TRANSFER, out, step)
+        table, plans = compare(PAPER_TRANSFER, out, step)
         report.append(render(table))
         main = plans["qp/opt"]
         executions = {}
@@ -165,7 +162,7 @@ def run_paper(out: Path) -> str:
         a, b = figures.fig8(DATASET, skills, out)
         report.append(f"wrote {a}\nwrote {b}")
         report.append(f"wrote {figures.fig9(DATASET, out / 'fig9_switching_skills.png')}")
-        report.append(f"wrote {figures.fig10(TRANSFER, out / 'fig10_condensed_paths.png')}")
+        report.append(f"wrote {figures.fig10(PAPER_TRANSFER, out / 'fig10_condensed_paths.png')}")
         report.append(f"wrote {figures.fig11(skills, out / 'fig11_generalized_switches.png')}")
         fig14_task = ROOT / "problems" / "paper" / "fig14_safety_margin.yaml"
         report.append(f"wrote {figures.fig14(fig14_task, out / 'fig14_safety_margin.png')}")

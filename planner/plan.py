@@ -153,8 +153,8 @@ class Plan:
 
     def write(self, path: str | Path) -> Path:
         """Write the plan as JSON, atomically (a temporary file beside it replaces it once complete:
-        :mod:`tooltransfer.problems.atomic`, so no half-written plan is ever left); returns the path."""
-        from tooltransfer.problems.atomic import write_text
+        :mod:`tooltransfer.atomic`, so no half-written plan is ever left); returns the path."""
+        from tooltransfer.atomic import write_text
 
         return write_text(path, json.dumps(self.to_dict(), indent=1))
 

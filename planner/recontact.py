@@ -18,7 +18,8 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.planner.assemble import SwitchPath, SwitchPlanner
+from tooltransfer.planner.assemble import SwitchPlanner
+from tooltransfer.planner.ss.result import SwitchPath
 from tooltransfer.planner.switches import densify
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, Obstacle
@@ -53,7 +54,7 @@ def recontact_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacl
             jp = joint_path(platform, dense)
             bad = np.flatnonzero(~np.isfinite(jp.heading) | (jp.violation > 0))
             if bad.size:
-                return SwitchPath(np.zeros((0, 2)), "infeasible", f"the re-contact of {face_a!r} leaves the Omni's "
+                return SwitchPath("recontact", "infeasible", f"the re-contact of {face_a!r} leaves the Omni's "
                                   f"reach at {np.round(dense[bad[0]], 4).tolist()} m")
             inner = slice(2, -2) if len(dense) > 5 else slice(0, 0)
             gap = swept_distance(tool, dense[inner], jp.heading[inner], puck)
@@ -62,11 +63,10 @@ def recontact_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacl
                 continue
             near = min((swept_distance(tool, dense, jp.heading, s) for s in shapes), default=np.inf)
             if near <= 0.0:
-                return SwitchPath(np.zeros((0, 2)), "infeasible", f"the re-contact of {face_a!r} at "
+                return SwitchPath("recontact", "infeasible", f"the re-contact of {face_a!r} at "
                                   f"{np.round(obj, 4).tolist()} m sweeps the tool into an obstacle")
-            return SwitchPath(corners, min_clearance=gap,
-                              info={"obstacle_clearance": float(near), "obstacle_penetration": 0.0,
-                                    "object_penetration": 0.0, "back_off": float(d)})
-        return SwitchPath(np.zeros((0, 2)), "infeasible", reason)
+            return SwitchPath("recontact", "solved", xy=corners, object_clearance=gap, obstacle_clearance=float(near),
+                              object_penetration=0.0, obstacle_penetration=0.0, info={"back_off": float(d)})
+        return SwitchPath("recontact", "infeasible", reason)
 
     return plan

@@ -19,25 +19,27 @@ one is given; a file without them (written before they existed) loads with ``mec
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from tooltransfer.dmp.skill_file import read_json
 from tooltransfer.errors import InputError, SkillFileError
 from tooltransfer.planner.oe.learn import OESkill
 from tooltransfer.planner.ss.learn import SwitchSkill
 from tooltransfer.problems.variants import MAPPING_K, VIRTUAL_MOTION
 from tooltransfer.tools.pushing.mechanics import PushMechanics
+from tooltransfer.versioned_json import check_format, format_tag, read_json, write_versioned
 
 if TYPE_CHECKING:
     from tooltransfer.tools.pushing.identify import Identification
 
-SKILLS_FORMAT = "tooltransfer.skills/1"
-MECHANICS_FORMAT = "tooltransfer.mechanics/1"
+SKILLS_NAME, SKILLS_VERSION = "tooltransfer.skills", 1
+"""Name and version of the skills file format (module docstring)."""
+SKILLS_FORMAT = format_tag(SKILLS_NAME, SKILLS_VERSION)
+MECHANICS_NAME, MECHANICS_VERSION = "tooltransfer.mechanics", 1
+MECHANICS_FORMAT = format_tag(MECHANICS_NAME, MECHANICS_VERSION)
 """Format of the cached identification of a dataset (in :func:`cache_dir`)."""
 SS_DEFAULT_CLEARANCE = 0.01
 """Offset [m] of the arch-shaped virtual object motion from the object's outline when learning."""
@@ -70,13 +72,11 @@ class Skills:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-data description, format ``tooltransfer.skills/1``."""
-        from tooltransfer.planner.ss.skill_file import switch_skill_to_dict
-
         if self.ss is None:
             raise InputError("skills.ss", "an SS skill to save (learn_skills(..., with_ss=True))", None)
         doc: dict[str, Any] = {"format": SKILLS_FORMAT, "dataset": self.dataset,
                                "dataset_sha256": self.dataset_sha256, "oe": self.oe.to_dict(),
-                               "ss": switch_skill_to_dict(self.ss)}
+                               "ss": self.ss.to_dict()}
         if self.mechanics is not None:
             doc["mechanics"] = self.mechanics.to_dict()
             if self.identification is not None:
@@ -84,23 +84,16 @@ class Skills:
         return doc
 
     def save(self, path: str | Path) -> Path:
-        """Write the skills file (JSON), atomically (a temporary file beside it replaces it once
-        complete: :mod:`tooltransfer.problems.atomic`); returns its path."""
-        from tooltransfer.problems.atomic import write_text
-
-        return write_text(path, json.dumps(self.to_dict()))
+        """Write the skills file (JSON; its parent folders are made), atomically (a temporary file
+        beside it replaces it once complete: :func:`tooltransfer.versioned_json.write_versioned`); returns its path."""
+        return write_versioned(path, self.to_dict(), mkdir=True)
 
     @classmethod
     def load(cls, path: str | Path) -> Skills:
         """Read a skills file; a missing or damaged file or another format raises
         :class:`~tooltransfer.errors.SkillFileError` naming the file."""
-        from tooltransfer.planner.ss.skill_file import switch_skill_from_dict
-
-        doc = read_json(path)
         src = str(path)
-        if not isinstance(doc, dict) or doc.get("format") != SKILLS_FORMAT:
-            got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
-            raise SkillFileError(src, f"expected format {SKILLS_FORMAT!r}, got {got!r}")
+        doc = check_format(read_json(path), SKILLS_NAME, SKILLS_VERSION, src)
         for key in ("oe", "ss", "dataset", "dataset_sha256"):
             if key not in doc:
                 raise SkillFileError(src, f"missing field {key!r}")
@@ -113,7 +106,7 @@ class Skills:
             ident = doc.get("identification")
             if ident is not None and not isinstance(ident, dict):
                 raise SkillFileError(src, f"identification: expected a mapping, got {type(ident).__name__}")
-        return cls(OESkill.from_dict(doc["oe"], f"{src}:oe"), switch_skill_from_dict(doc["ss"], f"{src}:ss"),
+        return cls(OESkill.from_dict(doc["oe"], f"{src}:oe"), SwitchSkill.from_dict(doc["ss"], f"{src}:ss"),
                    str(doc["dataset"]), str(doc["dataset_sha256"]), mechanics, ident)
 
 
@@ -200,19 +193,15 @@ def oe_skill_from_dataset(folder: Path, k: float) -> OESkill:
 
 def ss_skill_from_dataset(folder: Path, virtual: str = VIRTUAL_MOTION) -> SwitchSkill:
     """The SS skill of a dataset, cached by the dataset's content hash and the virtual motion."""
-    from tooltransfer.planner.ss import load_switch_skill, save_switch_skill
-
     folder = _check_dataset(folder)
-    return _cached(f"ss-{dataset_hash(folder)}-{virtual}.json", load_switch_skill, save_switch_skill,
+    return _cached(f"ss-{dataset_hash(folder)}-{virtual}.json", SwitchSkill.load, lambda s, p: s.save(p),
                    lambda: learn_ss_from_dataset(folder, virtual))
 
 
 def _load_identification(path: Path) -> Identification:
     from tooltransfer.tools.pushing.identify import Identification
 
-    doc = read_json(path)
-    if not isinstance(doc, dict) or doc.get("format") != MECHANICS_FORMAT:
-        raise SkillFileError(str(path), f"expected format {MECHANICS_FORMAT!r}")
+    doc = check_format(read_json(path), MECHANICS_NAME, MECHANICS_VERSION, str(path))
     try:
         return Identification.from_dict(doc.get("identification"), f"{path}:identification")
     except InputError as exc:
@@ -225,7 +214,7 @@ IDENTIFICATION_VERSION = 2
 
 
 def _save_identification(ident: Identification, path: Path) -> None:
-    path.write_text(json.dumps({"format": MECHANICS_FORMAT, "identification": ident.to_dict()}, allow_nan=False))
+    write_versioned(path, {"format": MECHANICS_FORMAT, "identification": ident.to_dict()}, allow_nan=False)
 
 
 def identification_from_dataset(folder: str | Path) -> Identification:

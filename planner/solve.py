@@ -29,6 +29,7 @@ import numpy as np
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.assemble import SwitchFailed, assemble
+from tooltransfer.planner.metric_units import UNITS
 from tooltransfer.planner.oe.generalize import generalize
 from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping
 from tooltransfer.planner.oe.qp_variant import QPOptions, condense_qp
@@ -237,15 +238,12 @@ def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any
                "mechanics_mu": scene.mechanics.mu, "mechanics_c": scene.mechanics.c}
     sws = [sw for fa, fb, *_, sw in motion.switches if fa != fb]
     recs = [sw for fa, fb, *_, sw in motion.switches if fa == fb]
-    metrics["switch_clearance_min"] = min((sw.min_clearance for sw in sws), default=float("inf"))
-    metrics["recontact_clearance_min"] = min((sw.min_clearance for sw in recs), default=float("inf"))
-    metrics["n_switch_fallbacks"] = float(sum(sw.info.get("fallback", 0.0) for *_, sw in motion.switches))
+    metrics["switch_clearance_min"] = min((sw.object_clearance for sw in sws), default=float("inf"))
+    metrics["recontact_clearance_min"] = min((sw.object_clearance for sw in recs), default=float("inf"))
+    metrics["n_switch_fallbacks"] = float(sum(sw.fallback for *_, sw in motion.switches))
     sws = [sw for *_, sw in motion.switches]
-    metrics["switch_obstacle_clearance_min"] = min(
-        (sw.info.get("obstacle_clearance", np.inf) for sw in sws), default=float("inf"))
-    metrics["switch_penetration_max"] = max(
-        (max(sw.info.get("object_penetration", 0.0), sw.info.get("obstacle_penetration", 0.0)) for sw in sws),
-        default=0.0)
+    metrics["switch_obstacle_clearance_min"] = min((sw.obstacle_clearance for sw in sws), default=float("inf"))
+    metrics["switch_penetration_max"] = max((sw.max_penetration for sw in sws), default=0.0)
     near = tool_obstacle_clearance(tool, motion.tool_pose, obstacles)
     metrics["tool_obstacle_clearance_min"] = near.distance
     metrics["joint_limit_violation_max"] = float(motion.joint_violation.max())
@@ -276,8 +274,8 @@ def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any
                            f"object {1e3 * off.max():.2f} mm off the planned path (from t = {motion.t[k]:.2f} s, "
                            f"{motion.phase[k]}; object planned at {np.round(motion.object_xy[k], 4).tolist()} m)")
     pushes = tuple(Segment("push", a, b, (f,), {"direction": d}) for f, a, b, d in motion.pushes)
-    switches = tuple(Segment("switch", a, b, (fa, fb), {"min_clearance": sw.min_clearance,
-                                                         "penetration": sw.info.get("object_penetration", 0.0)})
+    switches = tuple(Segment("switch", a, b, (fa, fb), {"min_clearance": float(sw.object_clearance),
+                                                         "penetration": float(sw.object_penetration)})
                      for fa, fb, a, b, sw in motion.switches)
     broken = hard_check_failures(metrics, task.oe.self_consistency_tol)
     status, reason = ("violated", "hard checks violated: " + "; ".join(broken)) if broken else ("solved", "")
@@ -286,20 +284,23 @@ def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any
                 metrics=metrics, **base)
 
 
-#: The hard checks of a whole plan (:func:`hard_check_failures`): family, metric, bound, sense (``"max"``:
-#: the metric may not exceed the bound; ``"min"``: it may not fall below it), unit. A plan that breaks one
-#: is ``violated`` (the paper's mapping variant guarantees none of them), still written and compared.
-HARD_CHECKS: tuple[tuple[str, str, float, str, str], ...] = (
-    ("cone", "cone_violation_max", 0.01, "max", "rad"),
-    ("friction cone", "friction_cone_margin_min", -1e-6, "min", "rad"),
-    ("contact edge", "contact_edge_margin_min", -1e-6, "min", "m"),
-    ("switch penetration", "switch_penetration_max", 1e-5, "max", "m"),
-    ("reach", "reach_violation_max", 1e-3, "max", "m"),
-    ("tool-obstacle clearance", "tool_obstacle_clearance_min", 0.0, "min", "m"),
-    ("switch-obstacle clearance", "switch_obstacle_clearance_min", 0.0, "min", "m"),
-    ("joint limits", "joint_limit_violation_max", 1e-9, "max", "rad"),
-    ("goal", "goal_error", 1e-4, "max", "m"),
+#: The hard checks of a whole plan (:func:`hard_check_failures`): family, metric, bound (in the metric's
+#: unit), sense (``"max"``: the metric may not exceed the bound; ``"min"``: it may not fall below it), unit
+#: (:data:`tooltransfer.planner.metric_units.UNITS`). A plan that breaks one is ``violated`` (the paper's
+#: mapping variant guarantees none of them), still written and compared.
+_HARD_BOUNDS: tuple[tuple[str, str, float, str], ...] = (
+    ("cone", "cone_violation_max", 0.01, "max"),
+    ("friction cone", "friction_cone_margin_min", -1e-6, "min"),
+    ("contact edge", "contact_edge_margin_min", -1e-6, "min"),
+    ("switch penetration", "switch_penetration_max", 1e-5, "max"),
+    ("reach", "reach_violation_max", 1e-3, "max"),
+    ("tool-obstacle clearance", "tool_obstacle_clearance_min", 0.0, "min"),
+    ("switch-obstacle clearance", "switch_obstacle_clearance_min", 0.0, "min"),
+    ("joint limits", "joint_limit_violation_max", 1e-9, "max"),
+    ("goal", "goal_error", 1e-4, "max"),
 )
+HARD_CHECKS: tuple[tuple[str, str, float, str, str], ...] = tuple(
+    (family, key, bound, sense, UNITS[key]) for family, key, bound, sense in _HARD_BOUNDS)
 
 
 def hard_check_failures(metrics: dict[str, float], self_consistency_tol: float = 1e-4) -> list[str]:
@@ -307,7 +308,8 @@ def hard_check_failures(metrics: dict[str, float], self_consistency_tol: float =
     ``safety_margin_used``, and ``self_consistency_max`` within ``self_consistency_tol``) that
     ``metrics`` break, each as ``"family (metric value > bound)"``; empty when every one holds. A
     missing or NaN metric (e.g. the friction-cone margin of a plan without pushes) is not checked."""
-    checks = [*HARD_CHECKS, ("self-consistency", "self_consistency_max", self_consistency_tol, "max", "m")]
+    checks = [*HARD_CHECKS,
+              ("self-consistency", "self_consistency_max", self_consistency_tol, "max", UNITS["self_consistency_max"])]
     margin = metrics.get("safety_margin_used")
     if margin is not None:
         checks.append(("safety margin", "obstacle_clearance_min", float(margin) - 1e-5, "min", "m"))

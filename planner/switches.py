@@ -10,23 +10,25 @@ object rests, by variant.
   (:func:`tooltransfer.planner.ss.optimize`), checked exactly with shapely; never returns a penetrating path.
 
 Each planner is ``planner(object_xy (2,), face_a, pose_a (3,), face_b, pose_b (3,)) -> SwitchPath``
-(:data:`tooltransfer.planner.assemble.SwitchPlanner`); ``min_clearance`` is the least tool-object distance [m]
-over the middle of the switch (away from the two contacts, where the tool must touch), and
-``info["object_penetration"]``, ``info["obstacle_penetration"]`` the largest penetration depths [m]
-over the whole switch, measured exactly on the swept outline.
+(:data:`tooltransfer.planner.assemble.SwitchPlanner`, :class:`tooltransfer.planner.ss.SwitchPath`);
+``object_clearance`` is the least tool-object distance [m] over the middle of the switch (away from the
+two contacts, where the tool must touch), ``obstacle_clearance`` the least tool-obstacle distance [m]
+(infinite without obstacles), and ``object_penetration``, ``obstacle_penetration`` the largest
+penetration depths [m] over the whole switch, measured exactly on the swept outline.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 import shapely
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.assemble import SwitchPath, SwitchPlanner
-from tooltransfer.planner.ss import OptOptions, SwitchSkill, SwitchTask, optimize, recombine
+from tooltransfer.planner.assemble import SwitchPlanner
+from tooltransfer.planner.ss import OptOptions, SwitchPath, SwitchSkill, SwitchTask, optimize, recombine
 from tooltransfer.planner.ss.arch_variant import NoArch, swept_clearance, switch_path
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, DiscObject
@@ -73,7 +75,7 @@ def arch_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: S
              pose_b: NDArray[np.float64]) -> SwitchPath:
         ends = joint_path(platform, np.vstack([pose_a[:2], pose_b[:2]]))
         if np.any(~np.isfinite(ends.heading) | (ends.violation > 0)):
-            return SwitchPath(np.zeros((0, 2)), "infeasible", f"a contact pose of the switch {face_a} -> {face_b} "
+            return SwitchPath("arch", "infeasible", f"a contact pose of the switch {face_a} -> {face_b} "
                               f"(object at {np.round(obj, 4).tolist()} m) is outside the Omni's reach")
         da = pose_a[2] + tool.face(face_a).push_angle
         db = pose_b[2] + tool.face(face_b).push_angle
@@ -81,17 +83,17 @@ def arch_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: S
             xy = switch_path(tool, platform, obj, pose_a, da, pose_b, db, clearance=clearance, obstacles=discs,
                              radius=radius)
         except NoArch as exc:
-            return SwitchPath(np.zeros((0, 2)), "infeasible", str(exc))
+            return SwitchPath("arch", "infeasible", str(exc))
         dense = densify(xy, 0.0005)
         reach = joint_path(platform, dense)
         bad = np.flatnonzero(~np.isfinite(reach.heading) | (reach.violation > 0))
         if bad.size:
-            return SwitchPath(np.zeros((0, 2)), "infeasible", f"the arch leaves the Omni's reach at "
+            return SwitchPath("arch", "infeasible", f"the arch leaves the Omni's reach at "
                               f"{np.round(dense[bad[0]], 4).tolist()} m (object at {np.round(obj, 4).tolist()} m)")
         near = min((swept_clearance(tool, platform, dense, o.centre, o.radius) for o in discs), default=np.inf)
-        return SwitchPath(xy, min_clearance=swept_clearance(tool, platform, dense[8:-8], obj, radius),
-                          info={"obstacle_clearance": float(near), "obstacle_penetration": 0.0,
-                                "object_penetration": 0.0})
+        return SwitchPath("arch", "solved", xy=xy,
+                          object_clearance=swept_clearance(tool, platform, dense[8:-8], obj, radius),
+                          obstacle_clearance=float(near), object_penetration=0.0, obstacle_penetration=0.0)
 
     return plan
 
@@ -109,29 +111,25 @@ def skill_planner(variant: str, skill: SwitchSkill, tool: Tool, platform: OmniPl
             task = SwitchTask(tool, face_a, face_b, np.asarray(obj, float), s_from=s_a, s_to=s_b,
                               obj=DiscObject(radius), obstacles=obs, platform=platform)
         except InputError as exc:  # e.g. a "switch" of one face to where it already touches
-            return SwitchPath(np.zeros((0, 2)), "infeasible", f"{variant} switch: {exc}")
+            return SwitchPath(variant, "infeasible", f"{variant} switch: {exc}")
         if variant == "dmp":
             res = recombine(skill, task)
         else:
             # the NLP needs a positive margin; 1 um stands for "touching allowed" (clearance 0)
             res = optimize(skill, task, OptOptions(n_knots=n_knots, margin=max(clearance, 1e-6)))
-        info = {"object_penetration": float(res.object_penetration),
-                "obstacle_penetration": float(res.obstacle_penetration),
-                "obstacle_clearance": float(res.obstacle_clearance) if obs else float("inf"),
-                "time": float(res.info.get("time", np.nan))}  # type: ignore[arg-type]
+        res = replace(res, obstacle_clearance=float(res.obstacle_clearance) if obs else float("inf"))
         if not res.ok:
-            return SwitchPath(np.zeros((0, 2)), "infeasible", f"{variant} switch: {res.reason}", info=info)
+            return replace(res, status="infeasible", reason=f"{variant} switch: {res.reason}")
         # the skill's path starts and ends at the exact contact poses the push plan uses
         gap = max(float(np.hypot(*(res.xy[0] - pose_a[:2]))), float(np.hypot(*(res.xy[-1] - pose_b[:2]))))
-        info["contact_gap"] = gap
-        return SwitchPath(res.xy, min_clearance=float(res.object_clearance), info=info)
+        return replace(res, info={**res.info, "contact_gap": gap})
 
     return plan
 
 
 def with_fallback(primary: SwitchPlanner, fallback: SwitchPlanner, name: str) -> SwitchPlanner:
-    """``primary``, and where it finds no path, ``fallback`` (the path's ``info["fallback"]`` is 1 and
-    ``info["primary_reason"]`` says why; the reason of a failure names both)."""
+    """``primary``, and where it finds no path, ``fallback`` (the path's ``fallback`` is True; the reason
+    of a failure names both)."""
 
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
              pose_b: NDArray[np.float64]) -> SwitchPath:
@@ -140,9 +138,7 @@ def with_fallback(primary: SwitchPlanner, fallback: SwitchPlanner, name: str) ->
             return first
         second = fallback(obj, face_a, pose_a, face_b, pose_b)
         if second.status == "solved":
-            return SwitchPath(second.xy, min_clearance=second.min_clearance,
-                              info={**second.info, "fallback": 1.0})
-        return SwitchPath(second.xy, "infeasible", f"{first.reason}; the {name} fallback: {second.reason}",
-                          info=first.info)
+            return replace(second, fallback=True)
+        return replace(first, status="infeasible", reason=f"{first.reason}; the {name} fallback: {second.reason}")
 
     return plan

@@ -35,8 +35,8 @@ import yaml
 from numpy.typing import NDArray
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator
 
+from tooltransfer.atomic import write_text
 from tooltransfer.errors import InputError
-from tooltransfer.problems.atomic import write_text
 from tooltransfer.tools.model import Tool
 
 FORMAT = "tooltransfer.dataset/1"

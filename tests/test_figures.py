@@ -55,8 +55,8 @@ def _labels(fig) -> list[str]:  # type: ignore[no-untyped-def]
 
 @pytest.fixture(scope="module")
 def plans() -> dict:
-    from tooltransfer.planner.paper_run import PAIRS
     from tooltransfer.planner.solve import solve
+    from tooltransfer.problems import PAPER_PAIRS as PAIRS
     from tooltransfer.problems.task import load_task
 
     task = load_task(TRANSFER)

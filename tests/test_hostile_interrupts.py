@@ -105,14 +105,14 @@ def test_ctrl_c_mid_solve_leaves_the_old_plan(tmp_path: Path, monkeypatch, capsy
 
 
 def test_ctrl_c_while_the_skills_file_is_written_leaves_the_old_one(tmp_path: Path, monkeypatch, capsys) -> None:
-    import tooltransfer.problems.atomic
+    import tooltransfer.atomic
 
     def stop(path: Path) -> None:
         raise KeyboardInterrupt
 
     out = tmp_path / "skills.json"
     out.write_text("old skills")
-    monkeypatch.setattr(tooltransfer.problems.atomic, "_fsync", stop)
+    monkeypatch.setattr(tooltransfer.atomic, "_fsync", stop)
     assert main(["learn", str(DATA), "-o", str(out)]) == 130
     assert capsys.readouterr().err.strip() == INTERRUPTED
     assert out.read_text() == "old skills" and sorted(p.name for p in tmp_path.iterdir()) == ["skills.json"]

@@ -19,8 +19,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from tooltransfer.atomic import atomic_path, write_bytes
 from tooltransfer.planner.cli import file_stem, main
-from tooltransfer.problems.atomic import atomic_path, write_bytes
 from tooltransfer.problems.task import TaskFileError, task_from_dict
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -185,12 +185,12 @@ def test_a_failing_writer_leaves_the_old_file_and_no_temporary(tmp_path: Path, f
 
 def _disk_full(monkeypatch: pytest.MonkeyPatch) -> None:
     """The next flush to disk fails as on a full disk (after the content went to the temporary file)."""
-    import tooltransfer.problems.atomic
+    import tooltransfer.atomic
 
     def full(path: Path) -> None:
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(tooltransfer.problems.atomic, "_fsync", full)
+    monkeypatch.setattr(tooltransfer.atomic, "_fsync", full)
 
 
 def test_plan_and_skills_files_are_never_half_written(tmp_path: Path, monkeypatch) -> None:
@@ -221,7 +221,6 @@ def test_dmp_skill_files_are_never_half_written(tmp_path: Path, monkeypatch) -> 
     import numpy as np
 
     from tooltransfer.dmp import DMP
-    from tooltransfer.dmp.skill_file import load_dmp, save_dmp
 
     t = np.linspace(0, 1, 50)
     d = DMP(n_dims=2, n_basis=10).fit(t, np.column_stack([t, t**2]))
@@ -234,11 +233,11 @@ def test_dmp_skill_files_are_never_half_written(tmp_path: Path, monkeypatch) -> 
     with monkeypatch.context() as m:
         m.setattr(os, "fsync", full)
         with pytest.raises(OSError):
-            save_dmp(d, target)
+            d.save(target)
     assert target.read_text() == "old"
     _no_temporaries(tmp_path)
-    save_dmp(d, target)
-    assert load_dmp(target).n_basis == 10
+    d.save(target)
+    assert DMP.load(target).n_basis == 10
 
 
 def test_a_full_disk_is_one_line_naming_the_file(tmp_path: Path, monkeypatch, capsys) -> None:

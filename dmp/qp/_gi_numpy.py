@@ -1,7 +1,7 @@
 """The entry points of ``_gi_core.c`` in NumPy: the fallback when the compiled core is absent
 (see :mod:`tooltransfer.dmp.qp.native`).
 
-The same Goldfarb-Idnani steps on the same state (:class:`tooltransfer.dmp.qp.native.GIWork`): the same
+The same Goldfarb-Idnani steps on the same state (:class:`tooltransfer.dmp.qp.gi_state.GIWork`): the same
 choice of row to add (the most violated, the first of equals), the same step lengths, ratio test
 and drop rule, the same tolerances and the same infeasibility proof (the rows with negative
 ``r`` and the row that can be neither reached nor made room for). Only the factorisation updates
@@ -25,7 +25,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 from scipy.linalg import blas
 
-from tooltransfer.dmp.qp.native import INFEASIBLE, MAX_ITER, NEED_ROWS, GIWork, PoolArrays
+from tooltransfer.dmp.qp.gi_state import INFEASIBLE, MAX_ITER, NEED_ROWS, GIWork, PoolArrays
 
 Vec = NDArray[np.float64]
 _EMPTY = np.zeros(0)

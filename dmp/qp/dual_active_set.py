@@ -31,7 +31,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.qp.native import INFEASIBLE, MAX_ITER, GIWork, core
+from tooltransfer.dmp.qp.gi_state import INFEASIBLE, MAX_ITER, GIWork
+from tooltransfer.dmp.qp.native import core
 from tooltransfer.errors import ToolTransferError
 
 RowSource = Callable[[NDArray[np.float64]], tuple[NDArray[np.float64], NDArray[np.float64]]]

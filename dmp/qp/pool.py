@@ -22,7 +22,8 @@ from numpy.typing import NDArray
 
 from tooltransfer.dmp.affine import AffineRollout
 from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
-from tooltransfer.dmp.qp.native import PoolArrays, core
+from tooltransfer.dmp.qp.gi_state import PoolArrays
+from tooltransfer.dmp.qp.native import core
 
 Ids = NDArray[np.intp]
 Cols = NDArray[np.intp] | slice

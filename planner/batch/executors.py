@@ -218,7 +218,7 @@ class Slots:
                 check_workers(self.client, self.flag, dataset)
             return
         if self.client is None:
-            from tooltransfer.problems.atomic import write_text
+            from tooltransfer.atomic import write_text
 
             if self._folder is None:
                 self._folder = tempfile.TemporaryDirectory(prefix="tooltransfer-skills-")

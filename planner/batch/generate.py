@@ -22,9 +22,9 @@ import numpy as np
 import shapely
 import yaml
 
+from tooltransfer.atomic import write_text
 from tooltransfer.errors import InputError
 from tooltransfer.planner.batch.spec import BatchSpec, Region, dataset_folder
-from tooltransfer.problems.atomic import write_text
 from tooltransfer.problems.task import SAFETY_MARGIN, ObjectSpec, schema_default, task_from_dict
 
 _TRIES = 2000

@@ -33,14 +33,12 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from tooltransfer.planner.batch.stats import wilson
-from tooltransfer.problems.atomic import write_bytes
+from tooltransfer.atomic import write_bytes
+from tooltransfer.planner.batch.stats import EXEC_TOLS, wilson
 
 CONE_TOL = 0.01
 REACH_TOL = 1e-3
 PENETRATION_TOL = 1e-6
-#: Executed success thresholds [m] (final object-to-target distance).
-EXEC_TOLS = (0.002, 0.005)
 
 
 def is_valid(r: dict[str, Any]) -> bool:

@@ -68,7 +68,7 @@ def install(skills: ShippedSkills, folder: str | Path) -> str:
     """Write the skills file into ``folder`` (atomically, unless a file of the same content is there)
     and register it in this process under the digest; returns its path. Each call is matched by one
     :func:`release`."""
-    from tooltransfer.problems.atomic import write_text
+    from tooltransfer.atomic import write_text
 
     path = Path(folder) / skills.file_name
     with _LOCK:

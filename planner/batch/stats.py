@@ -1,4 +1,4 @@
-"""Statistics of success rates shared by the batch report and its figures."""
+"""Statistics of success rates and the executed-success thresholds, shared by the batch report and its figures."""
 
 from __future__ import annotations
 
@@ -6,6 +6,8 @@ from scipy.stats import binomtest
 
 #: Confidence level of every interval in the batch report and figures.
 CONFIDENCE = 0.95
+#: Executed success thresholds [m] (final object-to-target distance).
+EXEC_TOLS = (0.002, 0.005)
 
 
 def wilson(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float]:

@@ -21,7 +21,6 @@ One DMP is then fitted on every recovered demonstration (one phase, eq. 4 over a
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,13 +30,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.dmp import DMP
-from tooltransfer.errors import InputError
+from tooltransfer.errors import InputError, SkillFileError
 from tooltransfer.planner.oe.mappings import angle_inverse, wrap_angle
 from tooltransfer.problems.task import MAPPING_K
 from tooltransfer.tools.model import Tool
 from tooltransfer.validation import check_array
+from tooltransfer.versioned_json import check_format, format_tag, read_json, write_versioned
 
-OE_FORMAT = "tooltransfer.oe/1"
+OE_NAME, OE_VERSION = "tooltransfer.oe", 1
+"""Name and version of the OE skill format."""
+OE_FORMAT = format_tag(OE_NAME, OE_VERSION)
 
 
 @dataclass(frozen=True)
@@ -192,10 +194,8 @@ class OESkill:
     def to_dict(self) -> dict[str, Any]:
         """Plain-data description, format ``tooltransfer.oe/1``: the DMP (``tooltransfer.dmp/1``),
         the recovery's ``k``, the demonstration tool and the recovered demonstrations."""
-        from tooltransfer.dmp.skill_file import dmp_to_dict
-
         return {
-            "format": OE_FORMAT, "k": self.k, "tool": self.tool, "dmp": dmp_to_dict(self.dmp),
+            "format": OE_FORMAT, "k": self.k, "tool": self.tool, "dmp": self.dmp.to_dict(),
             "recovered": [{"t": r.t.tolist(), "x": r.x.tolist(), "fixed": r.fixed.tolist(),
                            "starts": r.starts.tolist()} for r in self.recovered],
         }
@@ -204,34 +204,26 @@ class OESkill:
     def from_dict(cls, doc: Any, source: str = "<dict>") -> OESkill:
         """Rebuild a skill from :meth:`to_dict` output; another format or damaged data raises
         :class:`~tooltransfer.errors.SkillFileError`."""
-        from tooltransfer.dmp.skill_file import dmp_from_dict
-        from tooltransfer.errors import SkillFileError
-
-        if not isinstance(doc, dict) or doc.get("format") != OE_FORMAT:
-            got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
-            raise SkillFileError(source, f"expected format {OE_FORMAT!r}, got {got!r}")
+        check_format(doc, OE_NAME, OE_VERSION, source)
         try:
             rec = [Recovered(np.asarray(r["t"], float), np.asarray(r["x"], float), np.asarray(r["fixed"], float),
                              np.asarray(r["starts"], np.intp)) for r in doc["recovered"]]
             k = float(doc["k"])
             if not 0.0 < k < 1.0:
                 raise ValueError(f"k = {k} is not in (0, 1)")
-            return cls(dmp_from_dict(doc["dmp"], source), k, str(doc["tool"]), rec)
+            return cls(DMP.from_dict(doc["dmp"], source), k, str(doc["tool"]), rec)
         except (KeyError, TypeError, ValueError) as exc:
             raise SkillFileError(source, f"damaged OE skill ({exc})") from None
 
     def save(self, path: str | Path) -> Path:
-        """Write the skill as JSON (:meth:`to_dict`)."""
-        p = Path(path)
-        p.write_text(json.dumps(self.to_dict()))
-        return p
+        """Write the skill as JSON (:meth:`to_dict`), atomically
+        (:func:`tooltransfer.versioned_json.write_versioned`); returns its path."""
+        return write_versioned(path, self.to_dict())
 
     @classmethod
     def load(cls, path: str | Path) -> OESkill:
         """Read a skill written by :meth:`save`; another format or a damaged file raises
         :class:`~tooltransfer.errors.SkillFileError`."""
-        from tooltransfer.dmp.skill_file import read_json
-
         return cls.from_dict(read_json(path), str(path))
 
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from tooltransfer.planner.batch.stats import wilson
+from tooltransfer.planner.batch.stats import EXEC_TOLS, wilson
 from tooltransfer.planner.plots.save import save_figure
 
 
@@ -87,8 +87,6 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
 def plot_execution(by_var: dict[str, list[dict[str, Any]]], path: Path) -> Path:
     """Executed success per variant (shares of all tasks, 95% Wilson) and the final errors' CDFs."""
     import matplotlib.pyplot as plt
-
-    from tooltransfer.planner.batch.report import EXEC_TOLS
 
     bars = [("planned", None, None)] + [(f"{name} <= {1e3 * tol:g} mm", key, tol)
                                         for name, key in (("OL", "open_loop"), ("CL", "closed_loop"))

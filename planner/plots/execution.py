@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from tooltransfer.atomic import atomic_path
 from tooltransfer.planner.plan import Plan
 from tooltransfer.planner.plots.save import save_figure
-from tooltransfer.problems.atomic import atomic_path
 from tooltransfer.tools.sim.execution import Execution
 
 PHASE_COLOURS = {"approach": "0.6", "push": "tab:blue", "switch": "tab:orange", "retreat": "0.6"}

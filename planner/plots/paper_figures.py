@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from tooltransfer.atomic import atomic_path
 from tooltransfer.planner.plan import Plan
 from tooltransfer.planner.skills import Skills
-from tooltransfer.problems.atomic import atomic_path
 from tooltransfer.tools.sim.execution import Execution
 
 
@@ -176,19 +176,19 @@ def readme_figures(out: str | Path = "docs/images") -> tuple[Path, Path]:
     (``fig12_transfer_tool2.png``). Deterministic (the planner, the simulation and the closed loop's
     camera noise are); small palette PNGs. ``make figures`` writes them to ``docs/images``."""
     from tooltransfer.planner.closed_loop import execute_closed_loop
-    from tooltransfer.planner.paper_run import PAIRS, TRANSFER
     from tooltransfer.planner.plots.execution import plot_plan, plot_plans
     from tooltransfer.planner.simulate import simulate_plan
     from tooltransfer.planner.solve import solve
+    from tooltransfer.problems import PAPER_PAIRS, PAPER_TRANSFER
     from tooltransfer.problems.task import load_task
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    task = load_task(TRANSFER)
+    task = load_task(PAPER_TRANSFER)
     plans: dict[str, Plan] = {}
-    for oe, ss in PAIRS:
+    for oe, ss in PAPER_PAIRS:
         variant = task.model_copy(update={"variants": task.variants.model_copy(update={"oe": oe, "ss": ss})})
-        plans[f"{oe}/{ss}"] = solve(variant, TRANSFER)
+        plans[f"{oe}/{ss}"] = solve(variant, PAPER_TRANSFER)
     main = plans["qp/opt"]
     if main.status != "solved":
         raise RuntimeError(f"the transfer task's qp/opt plan is {main.status}: {main.reason}")

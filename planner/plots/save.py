@@ -1,4 +1,4 @@
-"""Writing a figure: make the folder, save atomically (never half a file, :mod:`tooltransfer.problems.atomic`),
+"""Writing a figure: make the folder, save atomically (never half a file, :mod:`tooltransfer.atomic`),
 close (no display is needed anywhere)."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from tooltransfer.problems.atomic import atomic_path
+from tooltransfer.atomic import atomic_path
 
 
 def save_figure(fig: Any, out: str | Path, dpi: int = 120) -> Path:

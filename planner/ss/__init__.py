@@ -17,7 +17,6 @@ from tooltransfer.planner.ss.dmp_variant import recombine
 from tooltransfer.planner.ss.learn import SwitchSkill, learn_switch_skill
 from tooltransfer.planner.ss.opt_variant import OptOptions, optimize
 from tooltransfer.planner.ss.result import SwitchPath
-from tooltransfer.planner.ss.skill_file import load_switch_skill, save_switch_skill
 from tooltransfer.planner.ss.task import SwitchTask
 from tooltransfer.planner.ss.virtual import virtual_motion
 
@@ -28,9 +27,7 @@ __all__ = [
     "SwitchSkill",
     "SwitchTask",
     "learn_switch_skill",
-    "load_switch_skill",
     "optimize",
     "recombine",
-    "save_switch_skill",
     "virtual_motion",
 ]

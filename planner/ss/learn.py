@@ -17,21 +17,44 @@ Steps:
 4. the pure tool skill from (18): ``f^t = k1^-1 (f - k2 f^o) = f - f^o``, i.e. ``W^t = W - W^o``.
    (Because the forcing targets and the ridge fit are linear in the path, this equals the DMP
    fitted on ``x - x^o + x_o`` directly; tests check it.)
+
+A :class:`SwitchSkill` is saved as versioned JSON (:mod:`tooltransfer.versioned_json`), format ``tooltransfer.ss/1``::
+
+    {"format": "tooltransfer.ss/1",
+     "formulation": "<eq. (10) and (18) in words>",
+     "virtual": "arch" | "line", "clearance" [m],
+     "tool_shift" [m] (2,), "object_shift" [m] (2,), "winding" [rad],
+     "tool", "faces" [from, to], "n_demos",
+     "dmp_x", "dmp_o", "dmp_t": each a ``tooltransfer.dmp/1`` dictionary (:meth:`tooltransfer.dmp.DMP.to_dict`)}
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.dmp.primitive import DMP
-from tooltransfer.errors import InputError
+from tooltransfer.errors import InputError, SkillFileError
 from tooltransfer.planner.ss.demonstrated import DemoSwitch
 from tooltransfer.planner.ss.virtual import VIRTUAL_KINDS, VirtualKind, virtual_motion
 from tooltransfer.tools.objects import Disc
+from tooltransfer.versioned_json import check_format, format_tag, read_versioned, write_versioned
+
+FORMAT = "tooltransfer.ss"
+"""Name of the SS skill format (its files carry ``"format": "tooltransfer.ss/1"``)."""
+VERSION = 1
+"""Version of the SS skill format this library writes and reads."""
+FORMULATION = (
+    "x - x_o = k1 (x^t - x_o) + k2 (x^o - x_o) (10), x = path of the first tool contact point, x_o = q_A; "
+    "shared phase, gains and tau: f = k1 f^t + k2 f^o (18); learned with k1 = k2 = I: f^t = f - f^o; "
+    "generalized with k1 = diag(new/demonstrated pure tool displacement), k2 = I (f^o fitted to the new x^o)"
+)
+"""The equations a skill file's DMPs belong to, in words (stored in the file for a reader)."""
 
 
 @dataclass
@@ -74,18 +97,65 @@ class SwitchSkill:
         return DMP(2, n_basis=d.n_basis, alpha_z=d.alpha_z, beta_z=d.beta_z, gamma=d.gamma, scaling=d.scaling,
                    ridge=d.ridge)
 
-    def save(self, path: str) -> None:
-        """Save as a versioned skills file (:mod:`tooltransfer.planner.ss.skill_file`)."""
-        from tooltransfer.planner.ss.skill_file import save_switch_skill
-
-        save_switch_skill(self, path)
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-data description, format ``tooltransfer.ss/1`` (JSON-serialisable; module docstring)."""
+        return {
+            "format": format_tag(FORMAT, VERSION),
+            "formulation": FORMULATION,
+            "virtual": self.virtual,
+            "clearance": self.clearance,
+            "tool_shift": self.tool_shift.tolist(),
+            "object_shift": self.object_shift.tolist(),
+            "winding": self.winding,
+            "tool": self.tool,
+            "faces": list(self.faces),
+            "n_demos": self.n_demos,
+            "dmp_x": self.dmp_x.to_dict(),
+            "dmp_o": self.dmp_o.to_dict(),
+            "dmp_t": self.dmp_t.to_dict(),
+        }
 
     @classmethod
-    def load(cls, path: str) -> SwitchSkill:
-        """Load a skill saved by :meth:`save`; raises :class:`~tooltransfer.errors.SkillFileError`."""
-        from tooltransfer.planner.ss.skill_file import load_switch_skill
+    def from_dict(cls, data: Any, source: str = "<dict>") -> SwitchSkill:
+        """Rebuild a skill from :meth:`to_dict` output; another format or version, a missing field or
+        damaged values raise :class:`~tooltransfer.errors.SkillFileError` naming ``source``."""
+        check_format(data, FORMAT, VERSION, source)
+        try:
+            virtual = data["virtual"]
+            if virtual not in VIRTUAL_KINDS:
+                raise SkillFileError(source, f"'virtual' must be one of {VIRTUAL_KINDS}, got {virtual!r}")
+            dmps = [DMP.from_dict(data[k], f"{source}:{k}") for k in ("dmp_x", "dmp_o", "dmp_t")]
+            shifts = [np.asarray(data[k], dtype=np.float64).reshape(2) for k in ("tool_shift", "object_shift")]
+            faces = tuple(str(f) for f in data["faces"])
+            if len(faces) != 2:
+                raise SkillFileError(source, "'faces' must name two faces")
+            skill = cls(
+                dmp_x=dmps[0], dmp_o=dmps[1], dmp_t=dmps[2], virtual=virtual, clearance=float(data["clearance"]),
+                tool_shift=shifts[0], object_shift=shifts[1], winding=float(data["winding"]), tool=str(data["tool"]),
+                faces=(faces[0], faces[1]), n_demos=int(data["n_demos"]),
+            )
+        except KeyError as exc:
+            raise SkillFileError(source, f"missing field {exc.args[0]!r}") from exc
+        except (TypeError, ValueError, InputError) as exc:
+            raise SkillFileError(source, f"invalid value: {exc}") from exc
+        d = skill.dmp_x
+        for other in (skill.dmp_o, skill.dmp_t):
+            if (other.n_basis, other.alpha_z, other.beta_z, other.gamma) != (d.n_basis, d.alpha_z, d.beta_z, d.gamma):
+                raise SkillFileError(source, "the three DMPs must share basis, gains and phase (eq. 18)")
+        if not all(np.all(np.isfinite(v)) for v in (skill.tool_shift, skill.object_shift)):
+            raise SkillFileError(source, "non-finite displacements")
+        return skill
 
-        return load_switch_skill(path)
+    def save(self, path: str | Path) -> None:
+        """Save as a versioned skills file (:meth:`to_dict`), atomically
+        (:func:`tooltransfer.versioned_json.write_versioned`)."""
+        write_versioned(path, self.to_dict(), indent=1)
+
+    @classmethod
+    def load(cls, path: str | Path) -> SwitchSkill:
+        """Load a skill saved by :meth:`save`; a missing or damaged file or another format raises
+        :class:`~tooltransfer.errors.SkillFileError`."""
+        return cls.from_dict(read_versioned(path, FORMAT, VERSION), str(path))
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,6 @@
-"""The result of planning a switch, in domain words."""
+"""The result of planning a switch, in domain words: the one type every switch and re-contact planner
+returns (the SS variants ``dmp`` and ``opt``, the geometric ``arch``, the re-contact move) and
+:func:`tooltransfer.planner.assemble.assemble` times."""
 
 from __future__ import annotations
 
@@ -18,17 +20,22 @@ class SwitchPath:
     """A switch path (or why there is none).
 
     Attributes:
-        variant: ``"dmp"`` (recombination, eq. 18) or ``"opt"`` (CasADi NLP).
+        variant: ``"dmp"`` (recombination, eq. 18), ``"opt"`` (CasADi NLP), ``"arch"`` (the geometric
+            reference) or ``"recontact"`` (the same face touching again elsewhere).
         status: ``"solved"``; ``"infeasible"`` (no such path: unreachable contact pose, a contact pose
             inside the object or an obstacle, or the NLP found no feasible point); ``"failed"`` (the
             solver or the exact check failed otherwise). ``reason`` says why when not solved.
         t: shape (K,), times from the start [s].
-        xy: shape (K, 2), tool centre points [m]; yaw: shape (K,), headings (the Omni's) [rad].
+        xy: shape (K, 2), tool centre points [m]; yaw: shape (K,), headings (the Omni's) [rad]. The
+            geometric planners (``arch``, ``recontact``) give only ``xy`` (``t`` and ``yaw`` empty): the
+            assembly times the path and the Omni imposes the heading.
         start, end: the contact poses (None when they could not be computed).
         object_penetration: largest penetration depth [m] of the swept tool into the object.
         object_clearance: smallest clearance [m] from the object away from the two contacts (over
             the middle of the path, where the full margin applies).
         obstacle_penetration, obstacle_clearance: the same against the obstacles (whole path).
+        fallback: True when a fallback planner found this path after the primary one found none
+            (:func:`tooltransfer.planner.switches.with_fallback`).
         info: numbers of the computation (k1, k2, end correction, solver status, iterations,
             refinements, knots, margin, timings [s]; for ``opt`` every solve in ``attempts`` with the
             start it used, and ``x_start`` (N, 2) [m], the start of the solve returned).
@@ -46,6 +53,7 @@ class SwitchPath:
     object_clearance: float = float("nan")
     obstacle_penetration: float = float("nan")
     obstacle_clearance: float = float("nan")
+    fallback: bool = False
     info: dict[str, object] = field(default_factory=dict)
 
     @property

@@ -1,0 +1,75 @@
+"""Versioned JSON files: one way for every skill format to write and read itself.
+
+A versioned document is a JSON object whose ``"format"`` field names its format and version,
+``"<name>/<version>"`` (``tooltransfer.dmp/1``, ``tooltransfer.ss/1``, ``tooltransfer.oe/1``,
+``tooltransfer.skills/1``, ``tooltransfer.mechanics/1``); the rest of the object belongs to the format.
+
+* :func:`write_versioned` writes one atomically (:mod:`tooltransfer.atomic`: a temporary file beside
+  the target, flushed to disk, replaces it in one step), so no half-written skill file is ever left;
+* :func:`read_json` parses a file, :func:`check_format` checks a document's format and version,
+  :func:`read_versioned` does both; a missing file, invalid JSON, another format or another version
+  raises :class:`~tooltransfer.errors.SkillFileError` naming the file (the field, for a document
+  nested in another).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from tooltransfer.atomic import write_text
+from tooltransfer.errors import SkillFileError
+
+
+def format_tag(name: str, version: int) -> str:
+    """The ``"format"`` value of format ``name`` at ``version``: ``"<name>/<version>"``."""
+    return f"{name}/{version}"
+
+
+def check_format(doc: Any, name: str, version: int, source: str = "<dict>") -> dict[str, Any]:
+    """``doc`` itself when it is a JSON object of format ``name`` at ``version``; otherwise raise
+    :class:`SkillFileError` naming ``source`` and the expected ``"<name>/<version>"``."""
+    tag = format_tag(name, version)
+    if not isinstance(doc, dict) or "format" not in doc:
+        got = "an object without a 'format' field" if isinstance(doc, dict) else f"a JSON {type(doc).__name__}"
+        raise SkillFileError(source, f"not a tooltransfer skill file: expected format {tag!r}, got {got}")
+    fmt = str(doc["format"])
+    got_name, _, got_version = fmt.partition("/")
+    if got_name != name:
+        raise SkillFileError(source, f"expected format {tag!r}, got {fmt!r}")
+    if got_version != str(version):
+        raise SkillFileError(
+            source, f"format version {got_version!r} of {name!r} is not supported (this library reads {tag!r})"
+        )
+    return doc
+
+
+def read_json(path: str | Path) -> Any:
+    """Parsed JSON of a file; a missing file or invalid JSON raises :class:`SkillFileError`."""
+    p = Path(path)
+    try:
+        return json.loads(p.read_text())
+    except FileNotFoundError as exc:
+        raise SkillFileError(str(p), "file not found") from exc
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise SkillFileError(str(p), f"not valid JSON ({exc})") from exc
+
+
+def read_versioned(path: str | Path, name: str, version: int) -> dict[str, Any]:
+    """The JSON object in ``path``, checked to be of format ``name`` at ``version`` (:func:`check_format`)."""
+    return check_format(read_json(path), name, version, str(path))
+
+
+def write_versioned(path: str | Path, doc: dict[str, Any], *, indent: int | None = None, allow_nan: bool = True,
+                    mkdir: bool = False) -> Path:
+    """Write the versioned document ``doc`` (it carries its ``"format"``) to ``path`` as JSON
+    (``indent`` as :func:`json.dumps`; ``allow_nan=False`` refuses NaN and infinities), atomically
+    (:func:`tooltransfer.atomic.write_text`; ``mkdir``: the parent folders are made first); returns the
+    path. An error while writing (a full disk) leaves ``path`` as it was and names it."""
+    if not isinstance(doc.get("format"), str) or "/" not in doc["format"]:
+        raise ValueError(f"a versioned document needs a 'format' field '<name>/<version>', got {doc.get('format')!r}")
+    return write_text(path, json.dumps(doc, indent=indent, allow_nan=allow_nan), mkdir=mkdir)
+
+
+__all__ = ["check_format", "format_tag", "read_json", "read_versioned", "write_versioned"]
