@@ -16,6 +16,7 @@ demo: $(PY)
 test: $(PY)
 	$(PY) -m pip install -q -e ".[test]"
 	$(PY) -m ruff check .
+	$(MAKE) --no-print-directory typecheck
 	$(PY) -m pytest
 
 # mypy on the DMP core and the public entry points ([tool.mypy] in pyproject.toml says why the link)
@@ -25,7 +26,7 @@ TYPED := -p tooltransfer.dmp -m tooltransfer -m tooltransfer.errors -m tooltrans
 	-m tooltransfer.planner.export
 typecheck: $(PY)
 	@mkdir -p build/mypy && ln -sfn "$(CURDIR)" build/mypy/tooltransfer
-	cd build/mypy && MYPYPATH=. ../../$(PY) -m mypy --config-file ../../pyproject.toml $(TYPED)
+	cd build/mypy && MYPYPATH=. $(abspath $(PY)) -m mypy --config-file "$(CURDIR)/pyproject.toml" $(TYPED)
 
 # The suite on the floors of pyproject.toml: uv's lowest-direct resolution (every direct dependency
 # at the lowest version its specifier admits, the others at their newest) in a separate venv,

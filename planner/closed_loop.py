@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,6 +45,9 @@ from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration
 from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.pose import rotation
+
+if TYPE_CHECKING:
+    from tooltransfer.tools.sim import SimConfig
 
 #: Tool moves shorter than this [m] between a chunk's end and the next chunk's start are skipped.
 SAME_POSE = 3e-4
@@ -436,7 +440,7 @@ class _Stop(ToolTransferError):
         super().__init__(reason)
 
 
-def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, config: object | None) -> object:
+def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, config: SimConfig | None) -> object:
     from tooltransfer.planner.execution import SimPlant
     from tooltransfer.planner.simulate import task_sim_config
     from tooltransfer.tools.sim import SimPlatform
@@ -575,7 +579,7 @@ def execute_closed_loop(
     plan: Plan, plant: object | None = None, *, tolerance: float = 0.001, chunk: float = 0.015,
     approach: float = 0.6, max_rounds: int = 4, max_chunks: int = 120, frames: int = 10,
     replan_threshold: float = 0.001, adapt: bool = True, camera_noise: float = 0.0015, seed: int = 0,
-    config: object | None = None,
+    config: SimConfig | None = None,
 ) -> ClosedLoopReport:
     """Execute a solved plan closed loop (module docstring).
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -278,7 +278,8 @@ def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any
                                                          "penetration": float(sw.object_penetration)})
                      for fa, fb, a, b, sw in motion.switches)
     broken = hard_check_failures(metrics, task.oe.self_consistency_tol)
-    status, reason = ("violated", "hard checks violated: " + "; ".join(broken)) if broken else ("solved", "")
+    status: Literal["solved", "violated"] = "violated" if broken else "solved"
+    reason = "hard checks violated: " + "; ".join(broken) if broken else ""
     return Plan(status=status, reason=reason, t=motion.t, object_xy=motion.object_xy, tool_pose=motion.tool_pose,
                 joints=motion.joints, phase=motion.phase, face=motion.face, pushes=pushes, switches=switches,
                 metrics=metrics, **base)

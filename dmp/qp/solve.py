@@ -308,7 +308,8 @@ def _rollout(problem: FitProblem, aff_d: AffineRollout, w: NDArray[np.float64], 
     v = aff_d.velocities(w)
     f = aff_d.psi @ wmat @ aff_d.M.T
     tau = float(problem.tau)  # type: ignore[arg-type]
-    acc = (dmp.alpha_z * (dmp.beta_z * (problem.g - x) - tau * v) + f) / tau**2
+    g = np.asarray(problem.g, dtype=np.float64)
+    acc = np.asarray((dmp.alpha_z * (dmp.beta_z * (g - x) - tau * v) + f) / tau**2, dtype=np.float64)
     return Rollout(aff_d.t, x, v, acc)
 
 
@@ -418,7 +419,7 @@ def solve_fit(
     rollout = _rollout(problem, aff_d, w, x_lin)  # x_lin: the positions of the final w
     violations = _dense_violations(problem, rollout)
     n_rows = exact.active.size if exact is not None else _n_grid_rows(problem, x_lin)
-    status = "solved" if max(violations.values(), default=0.0) <= tol else "inaccurate"
+    status: Literal["solved", "inaccurate"] = "solved" if max(violations.values(), default=0.0) <= tol else "inaccurate"
     return FitResult(
         status=status, solver=solver, strategy=strategy,
         weights=w.reshape(problem.dmp.n_basis, problem.dmp.n_dims), violations=violations,
