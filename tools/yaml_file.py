@@ -24,6 +24,8 @@ from typing import Any
 import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode
 
+from tooltransfer.errors import ToolTransferError
+
 #: Largest file read [bytes]: the project's YAML files are a few kB (a generated ``truth.yaml`` of 8
 #: demonstrations 10 kB); reading 1 MB of YAML takes about a second.
 MAX_BYTES = 2**20
@@ -51,7 +53,7 @@ def clip(value: object, limit: int = ECHO_CHARS) -> str:
     return f"{text[:limit]}... ({len(text)} characters)"
 
 
-class _RefusedYAML(yaml.YAMLError):
+class _RefusedYAML(yaml.YAMLError, ToolTransferError):
     """A document this reader refuses (depth, duplicate key, alias bomb), with the node's mark."""
 
     def __init__(self, problem: str, mark: yaml.Mark | None) -> None:
