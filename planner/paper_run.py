@@ -18,6 +18,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from tooltransfer.atomic import write_text
+from tooltransfer.planner.metric_units import display
 from tooltransfer.planner.plan import Plan
 from tooltransfer.problems import FINGER_DEMOS, PAPER_PAIRS, PAPER_TRANSFER
 from tooltransfer.problems.task import load_task
@@ -25,22 +26,30 @@ from tooltransfer.problems.task import load_task
 ROOT = Path(__file__).resolve().parents[1]
 DATASET = FINGER_DEMOS
 
-#: Rows of the comparison table: metric key, label, unit, scale.
+def _row(key: str, label: str, shown_as: str | None = None) -> tuple[str, str, str, float]:
+    """A row of :data:`ROWS`: metric ``key``, ``label``, and the unit and scale it is shown in
+    (:func:`tooltransfer.planner.metric_units.display`: lengths in mm; ``shown_as`` another unit)."""
+    unit, scale = display(key, shown_as)
+    return key, label, unit, scale
+
+
+#: Rows of the comparison table: metric key, label, unit, scale (from SI to the unit; units from
+#: :data:`tooltransfer.planner.metric_units.UNITS`, the stages' times in ms).
 ROWS = (
     ("status", "status", "", 1.0),
-    ("n_pushes", "pushes", "", 1.0),
-    ("goal_error", "goal error", "mm", 1e3),
-    ("cone_violation_max", "cone violation", "rad", 1.0),
-    ("reach_violation_max", "reach violation", "mm", 1e3),
-    ("obstacle_clearance_min", "object-obstacle clearance", "mm", 1e3),
-    ("tool_obstacle_clearance_min", "tool-obstacle clearance", "mm", 1e3),
-    ("deviation_mean", "mean deviation from skill", "mm", 1e3),
-    ("switch_clearance_min", "switch clearance (middle)", "mm", 1e3),
-    ("switch_penetration_max", "switch penetration", "mm", 1e3),
-    ("joint_limit_violation_max", "joint-limit violation", "rad", 1.0),
-    ("duration", "duration", "s", 1.0),
-    ("time_oe", "time: OE", "ms", 1e3),
-    ("time_switches_and_timing", "time: switches + timing", "ms", 1e3),
+    _row("n_pushes", "pushes"),
+    _row("goal_error", "goal error"),
+    _row("cone_violation_max", "cone violation"),
+    _row("reach_violation_max", "reach violation"),
+    _row("obstacle_clearance_min", "object-obstacle clearance"),
+    _row("tool_obstacle_clearance_min", "tool-obstacle clearance"),
+    _row("deviation_mean", "mean deviation from skill"),
+    _row("switch_clearance_min", "switch clearance (middle)"),
+    _row("switch_penetration_max", "switch penetration"),
+    _row("joint_limit_violation_max", "joint-limit violation"),
+    _row("duration", "duration"),
+    _row("time_oe", "time: OE", "ms"),
+    _row("time_switches_and_timing", "time: switches + timing", "ms"),
 )
 
 

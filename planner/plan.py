@@ -4,10 +4,13 @@ Everything a checker needs is inside, in SI units, so a plan can be verified wit
 the task as loaded, the platform (DH rows, base pose, table height, joint limits, a_t), the object,
 the tool (outline in the tool frame, faces with push direction and cone half-angle), obstacles,
 equal-length sample arrays (time, object centre, tool pose, joints, the joints' velocities and
-accelerations, phase, face), the joints' names, the pushes and switches, and metrics. Format
+accelerations, phase, face), the joints' names, the pushes and switches, and metrics with their
+units beside them (``metric_units``: metric name to ``"m"``, ``"rad"``, ``"s"`` or ``""`` for a count
+or a ratio, from :data:`tooltransfer.planner.metric_units.UNITS`; a QP family's ``violation_<family>``,
+in its rows' units, has none). Format
 ``tooltransfer.plan/1``; :func:`read_plan` refuses other versions and files that do not hold together
 (an unknown status, unequal sample arrays, values that are not finite numbers, unknown phases,
-non-increasing time), naming the file and the field.
+non-increasing time, a metric unit that is not the metric's), naming the file and the field.
 
 The joint velocities [rad/s] and accelerations [rad/s^2] are the derivatives of the joints on the
 plan's times, as the simulated execution tracks them (:func:`joint_rates`: ``numpy.gradient`` of the
@@ -15,7 +18,8 @@ joints over ``t``, then of the velocities; second-order central differences insi
 the ends); through the Omni's Jacobian they give the tool path's velocity to second order in the
 sample spacing. Plan files written before they were added (no ``joint_velocities``,
 ``joint_accelerations`` or ``joint_names``) are read with them derived so, and the names of the
-simulated Omni's joints (:data:`JOINT_NAMES`). A plan's status is
+simulated Omni's joints (:data:`JOINT_NAMES`); plan files without ``metric_units`` are read too (the
+units are those of :data:`~tooltransfer.planner.metric_units.UNITS` either way). A plan's status is
 ``solved``, ``infeasible`` (no whole plan: the reason says why) or ``violated`` (a whole plan that
 breaks a hard check, :func:`tooltransfer.planner.solve.hard_check_failures`: the reason names the families).
 """
@@ -31,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
+from tooltransfer.planner.metric_units import UNIT_NAMES, UNITS
 
 FORMAT = "tooltransfer.plan/1"
 PHASES = ("approach", "push", "switch", "retreat")
@@ -149,6 +154,7 @@ class Plan:
             "pushes": [seg(s) for s in self.pushes],
             "switches": [seg(s) for s in self.switches],
             "metrics": _clean(self.metrics),
+            "metric_units": metric_units(self.metrics),
         }
 
     def write(self, path: str | Path) -> Path:
@@ -157,6 +163,12 @@ class Plan:
         from tooltransfer.atomic import write_text
 
         return write_text(path, json.dumps(self.to_dict(), indent=1))
+
+
+def metric_units(metrics: dict[str, Any]) -> dict[str, str]:
+    """The units of the ``metrics`` listed in :data:`~tooltransfer.planner.metric_units.UNITS` (name to
+    ``"m"``, ``"rad"``, ``"s"`` or ``""``), in the metrics' order: the plan file's ``metric_units``."""
+    return {k: UNITS[k] for k in metrics if k in UNITS}
 
 
 def _clean(d: dict[str, Any]) -> dict[str, Any]:
@@ -270,7 +282,24 @@ def _parts(where: str, doc: dict[str, Any]) -> dict[str, Any]:
     if bad_metric:
         k = bad_metric[0]
         raise PlanFileError(where, f"metrics.{k}", "a number", _kind(parts["metrics"][k]))
+    if "metric_units" in doc:  # optional: plan files before it lack it
+        _check_metric_units(where, doc["metric_units"], parts["metrics"])
     return parts
+
+
+
+def _check_metric_units(where: str, units: object, metrics: dict[str, Any]) -> None:
+    """``metric_units`` checked: a mapping from names in ``metrics`` to a unit string, the one
+    :data:`~tooltransfer.planner.metric_units.UNITS` gives the name where it lists it."""
+    if not isinstance(units, dict):
+        raise PlanFileError(where, "metric_units", "a mapping of metric names to units", _kind(units))
+    for k, u in units.items():
+        if k not in metrics:
+            raise PlanFileError(where, f"metric_units.{k}", "the unit of a metric in metrics", _kind(u))
+        if not isinstance(u, str) or u not in UNIT_NAMES:
+            raise PlanFileError(where, f"metric_units.{k}", f"one of {', '.join(map(repr, UNIT_NAMES))}", _kind(u))
+        if k in UNITS and u != UNITS[k]:
+            raise PlanFileError(where, f"metric_units.{k}", f"{UNITS[k]!r} (the unit {k} is in)", _kind(u))
 
 
 def _sample_arrays(where: str, s: dict[str, Any]) -> tuple[NDArray[np.float64], dict[str, NDArray[np.float64]]]:

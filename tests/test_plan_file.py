@@ -44,3 +44,32 @@ def test_refuses_other_versions_and_inconsistent_files(tmp_path: Path, change, f
     with pytest.raises(PlanFileError) as err:
         read_plan(p)
     assert field in err.value.field
+
+
+def test_the_metrics_units_beside_them_and_plan_files_without_them(tmp_path: Path) -> None:
+    p = small_plan().write(tmp_path / "p.json")
+    doc = json.loads(p.read_text())
+    assert doc["metric_units"] == {"goal_error": "m", "switch_clearance_min": "m"}
+    del doc["metric_units"]  # a plan file written before metric_units
+    p.write_text(json.dumps(doc))
+    assert read_plan(p).metrics == read_plan(small_plan().write(tmp_path / "q.json")).metrics
+
+
+@pytest.mark.parametrize(
+    ("units", "field"),
+    [
+        (["m"], "metric_units"),
+        ({"goal_error": "mm"}, "metric_units.goal_error"),
+        ({"goal_error": 1}, "metric_units.goal_error"),
+        ({"goal_error": "rad"}, "metric_units.goal_error"),
+        ({"no_such_metric": "m"}, "metric_units.no_such_metric"),
+    ],
+)
+def test_refuses_metric_units_that_are_not_the_metrics(tmp_path: Path, units: object, field: str) -> None:
+    p = small_plan().write(tmp_path / "p.json")
+    doc = json.loads(p.read_text())
+    doc["metric_units"] = units
+    p.write_text(json.dumps(doc))
+    with pytest.raises(PlanFileError) as err:
+        read_plan(p)
+    assert err.value.field == f"{p}: {field}"

@@ -35,6 +35,7 @@ from rich.table import Table
 
 from tooltransfer.atomic import write_bytes
 from tooltransfer.planner.batch.stats import EXEC_TOLS, wilson
+from tooltransfer.planner.metric_units import display, label
 
 CONE_TOL = 0.01
 REACH_TOL = 1e-3
@@ -206,10 +207,10 @@ def top_reasons(rows: Sequence[dict[str, Any]], k: int = 3) -> list[dict[str, An
         if r["status"] != "solved":
             groups[(r["variant"], r["status"])][reason_class(r.get("reason") or "")] += 1
             continue
-        for key, label in (("open_loop", "open loop"), ("closed_loop", "closed loop")):
+        for key, loop in (("open_loop", "open loop"), ("closed_loop", "closed loop")):
             st = r.get(f"{key}_status")
             if st not in (None, "done", "reached"):
-                groups[(r["variant"], f"{label} {st}")][reason_class(r.get(f"{key}_reason") or "")] += 1
+                groups[(r["variant"], f"{loop} {st}")][reason_class(r.get(f"{key}_reason") or "")] += 1
     return [{"variant": v, "status": s, "count": n, "reason": text}
             for (v, s), cnt in sorted(groups.items()) for text, n in cnt.most_common(k)]
 
@@ -218,27 +219,38 @@ def _fmt(v: float, scale: float = 1.0, digits: int = 2) -> str:
     return "-" if v is None or not np.isfinite(v) else f"{v * scale:.{digits}f}"
 
 
+#: The violations table's columns: header, the :class:`GroupStats` field, the result column whose unit
+#: (:func:`tooltransfer.planner.metric_units.display`) the field is shown in, digits.
+VIOLATION_COLUMNS = (
+    ("cone", "cone_violation_max", "cone_violation_max", 3),
+    ("reach", "reach_violation_max", "reach_violation_max", 2),
+    ("penetr.", "penetration_max", "penetration_max", 2),
+    ("joints", "joint_limit_violation_max", "joint_limit_violation_max", 3),
+    ("clear. min", "obstacle_clearance_min", "obstacle_clearance_min", 2),
+    ("goal err", "goal_error_max", "goal_error", 2),
+)
+
+
 def print_report(stats: Sequence[GroupStats], reasons: Sequence[dict[str, Any]], console: Console) -> None:
     """The tables: outcomes and times, violations, executed success (when plans were executed), top
-    reasons."""
+    reasons. Units from :mod:`tooltransfer.planner.metric_units` (planning times in ms)."""
     t = Table(title="outcomes per tool and variant (success: solved; 95% Wilson interval)")
+    _, ms = display("time_total", "ms")
     for col in ("tool", "variant", "n", "solved", "rate [%]", "95% CI [%]", "valid", "violated", "infeas.", "error",
-                "timeout", "t50 [ms]", "t90 [ms]", "t99 [ms]"):
+                "timeout", *(label(p, "time_total", "ms") for p in ("t50", "t90", "t99"))):
         t.add_column(escape(col), justify="left" if col in ("tool", "variant") else "right")
     for s in stats:
         t.add_row(s.tool, s.variant, str(s.n), str(s.solved), _fmt(s.rate, 100, 1),
                   f"{_fmt(s.ci_low, 100, 1)}-{_fmt(s.ci_high, 100, 1)}", str(s.valid), str(s.violated),
-                  str(s.infeasible), str(s.error), str(s.timeout), _fmt(s.time_p50, 1e3, 0), _fmt(s.time_p90, 1e3, 0),
-                  _fmt(s.time_p99, 1e3, 0), end_section=s.tool == "all" and s is stats[-1])
+                  str(s.infeasible), str(s.error), str(s.timeout), _fmt(s.time_p50, ms, 0), _fmt(s.time_p90, ms, 0),
+                  _fmt(s.time_p99, ms, 0), end_section=s.tool == "all" and s is stats[-1])
     console.print(t)
     v = Table(title="solved plans: violation maxima, clearance")
-    for col in ("tool", "variant", "cone [rad]", "reach [mm]", "penetr. [mm]", "joints [rad]", "clear. min [mm]",
-                "goal err [mm]"):
+    for col in ("tool", "variant", *(label(head, column) for head, _, column, _ in VIOLATION_COLUMNS)):
         v.add_column(escape(col), justify="left" if col in ("tool", "variant") else "right")
     for s in stats:
-        v.add_row(s.tool, s.variant, _fmt(s.cone_violation_max, 1, 3), _fmt(s.reach_violation_max, 1e3),
-                  _fmt(s.penetration_max, 1e3), _fmt(s.joint_limit_violation_max, 1, 3),
-                  _fmt(s.obstacle_clearance_min, 1e3), _fmt(s.goal_error_max, 1e3))
+        v.add_row(s.tool, s.variant, *(_fmt(getattr(s, name), display(column)[1], digits)
+                                       for _, name, column, digits in VIOLATION_COLUMNS))
     console.print(v)
     if any(s.ol_n or s.cl_n for s in stats):
         print_execution(stats, console)
@@ -259,22 +271,33 @@ def _cell(s: GroupStats, which: str) -> str:
     return f"{k}: {_fmt(solved, 100, 0)} / {_fmt(every, 100, 0)}"
 
 
+def tolerance_text(tol: float) -> str:
+    """An executed-success tolerance ``tol`` [m] in the unit the final errors are shown in: ``"2 mm"``."""
+    u, f = display("open_loop_error")
+    return f"{tol * f:g} {u}"
+
+
 def print_execution(stats: Sequence[GroupStats], console: Console) -> None:
     """The executed-success table (module docstring)."""
+    tols = [tolerance_text(tol) for tol in EXEC_TOLS]
     e = Table(title="executed success on the simulated platform: open loop (OL) and closed loop (CL)",
-              caption="OL/CL <=2 mm (5 mm): the object ends within 2 mm (5 mm) of the target; cells: count: % of the "
-              "executed solved plans / % of all tasks; CI: Wilson, of all tasks; err: median final error; t: median "
-              "wall time of one execution")
-    for col in ("tool", "variant", "solved", "exec.", "OL <=2 mm", "OL <=5 mm", "CL <=2 mm", "CL <=5 mm",
-                "CL <=2 mm 95% CI [%]", "OL err [mm]", "CL err [mm]", "CL statuses", "CL replans (med)",
-                "t OL/CL [s]"):
+              caption=f"OL/CL <={tols[0]} ({tols[1]}): the object ends within {tols[0]} ({tols[1]}) of the target; "
+              "cells: count: % of the executed solved plans / % of all tasks; CI: Wilson, of all tasks; err: median "
+              "final error; t: median wall time of one execution")
+    _, m_ol = display("open_loop_error")
+    _, m_cl = display("closed_loop_error")
+    _, s_wall = display("open_loop_wall_time")
+    for col in ("tool", "variant", "solved", "exec.", *(f"{loop} <={tol}" for loop in ("OL", "CL") for tol in tols),
+                f"CL <={tols[0]} 95% CI [%]", label("OL err", "open_loop_error"), label("CL err", "closed_loop_error"),
+                "CL statuses", "CL replans (med)", label("t OL/CL", "open_loop_wall_time")):
         e.add_column(escape(col), justify="left" if col in ("tool", "variant", "CL statuses") else "right")
     for s in stats:
         e.add_row(s.tool, s.variant, str(s.solved), str(max(s.ol_n, s.cl_n)),
                   *(_cell(s, w) for w in ("ol_2mm", "ol_5mm", "cl_2mm", "cl_5mm")),
                   f"{_fmt(s.cl_2mm_all_ci_low, 100, 1)}-{_fmt(s.cl_2mm_all_ci_high, 100, 1)}" if s.cl_n else "-",
-                  _fmt(s.ol_error_median, 1e3), _fmt(s.cl_error_median, 1e3), s.cl_statuses or "-",
-                  _fmt(s.cl_replans_median, 1, 0), f"{_fmt(s.ol_wall_median, 1, 1)}/{_fmt(s.cl_wall_median, 1, 1)}")
+                  _fmt(s.ol_error_median, m_ol), _fmt(s.cl_error_median, m_cl), s.cl_statuses or "-",
+                  _fmt(s.cl_replans_median, 1, 0),
+                  f"{_fmt(s.ol_wall_median, s_wall, 1)}/{_fmt(s.cl_wall_median, s_wall, 1)}")
     console.print(e)
 
 

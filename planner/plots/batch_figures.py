@@ -2,7 +2,7 @@
 to the reach boundary) with 95% Wilson intervals, planning-time distributions per variant and, when
 plans were executed (``batch run --simulate``), executed success per variant (planned, open and
 closed loop within 2 and 5 mm, as shares of all tasks with Wilson intervals) beside the final-error
-distributions."""
+distributions. Axis units from :mod:`tooltransfer.planner.metric_units` (planning times in ms)."""
 
 from __future__ import annotations
 
@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 
 from tooltransfer.planner.batch.stats import EXEC_TOLS, wilson
+from tooltransfer.planner.metric_units import display
+from tooltransfer.planner.metric_units import label as unit_label
 from tooltransfer.planner.plots.save import save_figure
 
 
@@ -39,6 +41,7 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
     variants = sorted({r["variant"] for r in rows})
     by_var = {v: [r for r in rows if r["variant"] == v] for v in variants}
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    _, per_m = display("reach_margin")
     margins = np.array([r["reach_margin"] for r in rows if r.get("reach_margin") is not None], dtype=float)
     edges = np.unique(np.quantile(margins, np.linspace(0, 1, 6))) if margins.size else np.array([0.0, 1.0])
     for k, v in enumerate(variants):
@@ -52,12 +55,12 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
                 return int(np.clip(np.searchsorted(edges, r["reach_margin"], side="right") - 1, 0, edges.size - 2))
 
             xs, rate, lo, hi = _rates(sub, binned)
-            mid = 0.5 * (edges[:-1] + edges[1:])[xs] * 1e3
+            mid = 0.5 * (edges[:-1] + edges[1:])[xs] * per_m
             a2.errorbar(mid, rate, yerr=[lo, hi], marker="o", capsize=3, label=v)
     a1.set(xlabel="obstacles", ylabel="success rate (solved)", ylim=(-0.03, 1.03),
            title="success against obstacle count (95% Wilson)")
     a1.xaxis.get_major_locator().set_params(integer=True)
-    a2.set(xlabel="depth of start/target inside the reach, the smaller [mm] (quintiles)",
+    a2.set(xlabel=unit_label("depth of start/target inside the reach, the smaller", "reach_margin") + " (quintiles)",
            ylabel="success rate (solved)", ylim=(-0.03, 1.03), title="success against reach margin")
     for a in (a1, a2):
         a.grid(alpha=0.3)
@@ -65,18 +68,20 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
     written = [save_figure(fig, out / "success_vs_difficulty.png")]
 
     fig, ax = plt.subplots(figsize=(7, 4.2))
+    _, per_s = display("time_total", "ms")
     data, labels = [], []
     for v in variants:
         for status in ("solved", "violated", "infeasible"):
             t = [r["time_total"] for r in by_var[v] if r["status"] == status and r.get("time_total")]
             if t:
-                data.append(np.array(t) * 1e3)
+                data.append(np.array(t) * per_s)
                 labels.append(f"{v}\n{status} ({len(t)})")
     if data:
         ax.boxplot(data, whis=(1, 99), showfliers=True, flierprops={"markersize": 2})
         ax.set_xticks(range(1, len(labels) + 1), labels, fontsize=8)
         ax.set_yscale("log")
-    ax.set(ylabel="planning time [ms] (log)", title="planning time per variant (whiskers: 1st-99th percentile)")
+    ax.set(ylabel=unit_label("planning time", "time_total", "ms") + " (log)",
+           title="planning time per variant (whiskers: 1st-99th percentile)")
     ax.grid(alpha=0.3, axis="y")
     written.append(save_figure(fig, out / "time_distributions.png"))
     if any(r.get("open_loop_status") is not None or r.get("closed_loop_status") is not None for r in rows):
@@ -88,7 +93,8 @@ def plot_execution(by_var: dict[str, list[dict[str, Any]]], path: Path) -> Path:
     """Executed success per variant (shares of all tasks, 95% Wilson) and the final errors' CDFs."""
     import matplotlib.pyplot as plt
 
-    bars = [("planned", None, None)] + [(f"{name} <= {1e3 * tol:g} mm", key, tol)
+    u, per_m = display("open_loop_error")
+    bars = [("planned", None, None)] + [(f"{name} <= {per_m * tol:g} {u}", key, tol)
                                         for name, key in (("OL", "open_loop"), ("CL", "closed_loop"))
                                         for tol in EXEC_TOLS]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.4))
@@ -107,7 +113,7 @@ def plot_execution(by_var: dict[str, list[dict[str, Any]]], path: Path) -> Path:
             a1.bar(k + (j - (len(bars) - 1) / 2) * width, rate, width, yerr=[[rate - lo], [hi - rate]], capsize=2,
                    color=f"C{j}", label=label if k == 0 else None)
         for key, style in (("open_loop", "--"), ("closed_loop", "-")):
-            err = np.sort([r[f"{key}_error"] * 1e3 for r in rows if r.get(f"{key}_error") is not None])
+            err = np.sort([r[f"{key}_error"] * per_m for r in rows if r.get(f"{key}_error") is not None])
             if err.size:
                 a2.step(np.maximum(err, 1e-2), np.arange(1, err.size + 1) / err.size, where="post", ls=style,
                         color=f"C{k}", label=f"{v} {'OL' if key == 'open_loop' else 'CL'} ({err.size})")
@@ -115,10 +121,10 @@ def plot_execution(by_var: dict[str, list[dict[str, Any]]], path: Path) -> Path:
     a1.set(ylabel="share of all tasks", ylim=(0, 1.05), title="planned and executed success (95% Wilson)")
     a1.legend(fontsize=7)
     for tol in EXEC_TOLS:
-        a2.axvline(tol * 1e3, color="0.6", lw=0.8)
+        a2.axvline(tol * per_m, color="0.6", lw=0.8)
     a2.set_xscale("log")
-    a2.set(xlabel="final object-to-target error [mm] (log)", ylabel="share of executed plans",
-           ylim=(0, 1.02), title="final error, open loop (dashed) and closed loop")
+    a2.set(xlabel=unit_label("final object-to-target error", "open_loop_error") + " (log)",
+           ylabel="share of executed plans", ylim=(0, 1.02), title="final error, open loop (dashed) and closed loop")
     if a2.get_legend_handles_labels()[0]:
         a2.legend(fontsize=7)
     for a in (a1, a2):
