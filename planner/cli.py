@@ -16,6 +16,7 @@ import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 # nothing heavy is imported before main() runs: a Ctrl-C while numpy and the rest load is caught too
 from tooltransfer.planner.cli_common import (
@@ -439,15 +440,27 @@ def _add(sub: argparse._SubParsersAction, name: str, helptext: str, example: str
     return p
 
 
+class _Version(argparse.Action):
+    """``--version``: the distribution's version, looked up only when asked (importlib.metadata
+    costs every other command about 25 ms)."""
+
+    def __init__(self, option_strings: list[str], dest: str, **kwargs: Any) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: Any, **kwargs: Any) -> None:
+        import tooltransfer
+
+        print(f"tooltransfer {tooltransfer.__version__}")
+        parser.exit()
+
+
 def build_parser() -> argparse.ArgumentParser:
     from tooltransfer.problems.variants import MAPPING_K, VIRTUAL_MOTION, OEVariant, SSVariant, VirtualMotion, choices
 
     parser = argparse.ArgumentParser(
         prog="tooltransfer", description="DMP skill transfer for multi-tool pushing on a Phantom Omni."
     )
-    import tooltransfer
-
-    parser.add_argument("--version", action="version", version=f"tooltransfer {tooltransfer.__version__}")
+    parser.add_argument("--version", action=_Version, help="print the installed version and exit")
     sub = parser.add_subparsers(dest="command", required=True)
     p = _add(sub, "paper", "the paper's transfer scenario (the job of `make demo`): learn from the committed "
              "demonstrations, compare the variants on the transfer to tool 2, simulate the qp plan",
