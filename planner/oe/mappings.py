@@ -87,7 +87,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import lambertw
 
 from tooltransfer.errors import InputError
 from tooltransfer.validation import check_array
@@ -409,6 +408,8 @@ def outer_radius_inverse(
         rg = np.where(below, R, rg)
     e = rg - R  # exact for r_g <= 2R (Sterbenz)
     v = _ratio(kk, rg, R)
+    from scipy.special import lambertw  # imported here: scipy.special is slow to import, and only this needs it
+
     w = np.real(lambertw(-kk * np.exp(-v), 0))
     rp = np.maximum(rg + (R * w) / kk, 0.0)
     return np.where(e == 0.0, 0.0, _outer_newton(rp, e, R, kk))
