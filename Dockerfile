@@ -26,7 +26,7 @@ ENV PYTHONDONTWRITEBYTECODE=1 \
     TOOLTRANSFER_CACHE=/tmp/tooltransfer-cache
 COPY --from=build /wheels /wheels
 # bokeh: the scheduler's and the workers' dashboards (optional for the batch)
-RUN pip install --no-cache-dir /wheels/*.whl "bokeh>=3.1" \
+RUN pip install --no-cache-dir "$(ls /wheels/*.whl)[sim,dask]" "bokeh>=3.1" \
     && rm -rf /wheels \
     && python -c "import tooltransfer.planner.batch.execute, tooltransfer.planner.solve, tooltransfer.planner.closed_loop, tooltransfer.planner.simulate; \
 from tooltransfer.dmp.qp.native import compiled_path; assert compiled_path(), 'the compiled core was not built'"

@@ -10,7 +10,7 @@ $(PY):
 	$(PY) -m pip install -q --upgrade pip
 
 demo: $(PY)
-	$(PY) -m pip install -q -e .
+	$(PY) -m pip install -q -e ".[all]"
 	$(VENV)/bin/tooltransfer paper --out out
 
 test: $(PY)
@@ -43,14 +43,14 @@ test-lowest: $(PY)
 # API documentation and the design document (mkdocs + mkdocstrings), offline, warnings are errors;
 # `make test` builds it too (tests/test_docs.py). Open out/docs/index.html.
 docs: $(PY)
-	$(PY) -m pip install -q -e ".[docs]"
+	$(PY) -m pip install -q -e ".[all,docs]"
 	$(PY) -m mkdocs build --strict --site-dir out/docs
 
 # The README's two figures, committed in docs/images: the paper's transfer task solved with every
 # variant pair, and its qp/opt plan executed open and closed loop on the simulated Omni (Fig. 12).
 # Deterministic (the same bytes on the same versions of the dependencies); about 10 s.
 figures: $(PY)
-	$(PY) -m pip install -q -e .
+	$(PY) -m pip install -q -e ".[all]"
 	$(PY) -m tooltransfer.planner.plots.paper_figures docs/images
 
 bench: $(PY)
@@ -61,21 +61,21 @@ bench: $(PY)
 	$(PY) benchmarks/bench_solve.py
 
 bench-sim: $(PY)
-	$(PY) -m pip install -q -e .
+	$(PY) -m pip install -q -e ".[all]"
 	$(PY) benchmarks/bench_sim.py
 
 bench-ss: $(PY)
-	$(PY) -m pip install -q -e .
+	$(PY) -m pip install -q -e ".[all]"
 	$(PY) benchmarks/bench_ss.py
 
 # 1,000 generated tasks x 4 variants on 2 cores, process pool and Dask LocalCluster (several minutes)
 bench-batch: $(PY)
-	$(PY) -m pip install -q -e .
+	$(PY) -m pip install -q -e ".[all]"
 	$(PY) benchmarks/bench_batch.py
 
 # 60 generated tasks + 2 paper tasks planned and executed open and closed loop on 2 cores (about 25 s)
 bench-exec: $(PY)
-	$(PY) -m pip install -q -e .
+	$(PY) -m pip install -q -e ".[all]"
 	$(PY) benchmarks/bench_execution.py
 
 lint: $(PY)

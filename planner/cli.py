@@ -25,6 +25,7 @@ from tooltransfer.planner.cli_common import (
     EXIT_INTERRUPTED,
     EXIT_OK,
     check_output,
+    missing_extra,
 )
 
 #: The tools command's default figure (its folder is made when missing; an explicit path's must exist).
@@ -583,7 +584,7 @@ def main(argv: list[str] | None = None) -> int:
 
         if verbose:
             traceback.print_exc()
-        text = _message(exc) if isinstance(exc, ToolTransferError) else _unexpected(exc)
+        text = _message(exc) if isinstance(exc, ToolTransferError) else (missing_extra(exc) or _unexpected(exc))
         print(f"tooltransfer: error: {text}", file=sys.stderr)
         return EXIT_BAD_INPUT
     finally:

@@ -67,3 +67,19 @@ def check_output(option: str, path: Path, kind: str = "file", *, make_folders: b
     why = _writable(parent)
     if why:
         raise InputError(option, "a file in a place that can be written", f"{path} ({parent}: {why})")
+
+
+#: Optional dependencies by their import name -> the extra that installs them (``pyproject.toml``).
+EXTRAS = {"mujoco": "sim", "matplotlib": "plots", "PIL": "plots", "dask": "dask", "distributed": "dask"}
+
+
+def missing_extra(exc: BaseException) -> str | None:
+    """For an import of an optional dependency that failed, the one line that says what to install
+    (None for any other error): the core (planning, plans, export, learning) needs none of them."""
+    if not isinstance(exc, ModuleNotFoundError) or not exc.name:
+        return None
+    top = exc.name.split(".")[0]
+    extra = EXTRAS.get(top)
+    if extra is None:
+        return None
+    return f"this command needs {top}, which is optional: pip install 'tooltransfer[{extra}]' (or [all])"

@@ -18,8 +18,8 @@ from numpy.typing import NDArray
 from tooltransfer.errors import InputError
 from tooltransfer.planner.plan import Plan, PlanFileError, joint_rates
 from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
-from tooltransfer.tools.sim import Execution, SimPlatform
 from tooltransfer.tools.sim.config import SimConfig
+from tooltransfer.tools.sim.execution import Execution
 
 if TYPE_CHECKING:
     from tooltransfer.tools.model import Tool
@@ -61,6 +61,8 @@ def simulate_plan(plan: Plan, config: SimConfig | None = None) -> SimulationRepo
                          f"{plan.t.size} samples, {plan.t[-1] - plan.t[0]:.6g} s" if plan.t.size else "no samples")
     task = task_from_dict(plan.task, "plan.task")
     tool = task_tool(task)
+    from tooltransfer.tools.sim.platform import SimPlatform  # mujoco: the optional sim extra
+
     sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task), config or task_sim_config(task))
     start = time.perf_counter()
     sim.reset(np.array(task.start), q0=plan.joints[0])

@@ -16,22 +16,22 @@
 SI units and the world frame of docs/design.md section 2 throughout.
 """
 
-from tooltransfer.tools.sim.batch import Job, execute_many
-from tooltransfer.tools.sim.config import SimConfig
-from tooltransfer.tools.sim.execution import CONTACT_GAP, ContactEvent, Execution, Rates
-from tooltransfer.tools.sim.mjcf import build_mjcf
-from tooltransfer.tools.sim.model import SimModel
-from tooltransfer.tools.sim.platform import SimPlatform
+from importlib import import_module
+from typing import Any
 
-__all__ = [
-    "CONTACT_GAP",
-    "ContactEvent",
-    "Execution",
-    "Job",
-    "Rates",
-    "SimConfig",
-    "SimModel",
-    "SimPlatform",
-    "build_mjcf",
-    "execute_many",
-]
+#: Each public name and its submodule, imported on first use: ``config``, ``execution``, ``mjcf`` and
+#: ``reference`` need no mujoco (the optional ``sim`` extra), so checking or exporting a plan does not.
+_HOMES = {
+    "CONTACT_GAP": "execution", "ContactEvent": "execution", "Execution": "execution", "Rates": "execution",
+    "Job": "batch", "execute_many": "batch", "SimConfig": "config", "build_mjcf": "mjcf", "SimModel": "model",
+    "SimPlatform": "platform",
+}
+__all__ = sorted(_HOMES)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _HOMES:
+        value = getattr(import_module(f"tooltransfer.tools.sim.{_HOMES[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'tooltransfer.tools.sim' has no attribute {name!r}")
