@@ -46,6 +46,7 @@ from tooltransfer.errors import InputError
 from tooltransfer.planner.ss.bodies import UNIT, Body, all_bodies
 from tooltransfer.planner.ss.dmp_variant import measure, recombine
 from tooltransfer.planner.ss.initial import c_obstacle, round_paths
+from tooltransfer.planner.ss.interrupts import keep_interrupts
 from tooltransfer.planner.ss.learn import SwitchSkill
 from tooltransfer.planner.ss.nlp import MODELS, SEPARATORS, SOLVERS, SwitchNLP, get_nlp, initial_separators
 from tooltransfer.planner.ss.result import SwitchPath
@@ -315,7 +316,8 @@ def _solve(rnd: _Round, task: SwitchTask, ref: SwitchPath, opts: OptOptions, inf
         if opts.warm_duals and nlp.last_duals is not None:
             args["lam_x0"], args["lam_g0"] = nlp.last_duals
         t0 = time.perf_counter()
-        sol = nlp.solver(**args)
+        with keep_interrupts():  # CasADi turns a Ctrl-C into a failed solve
+            sol = nlp.solver(**args)
         t_solve = time.perf_counter() - t0
         st = nlp.solver.stats()
         z = np.asarray(sol["x"]).ravel()
