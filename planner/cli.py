@@ -561,6 +561,19 @@ def _handled_interrupt() -> None:
         pass
 
 
+def _interrupted(exc: BaseException) -> bool:
+    """A ``KeyboardInterrupt`` behind ``exc`` (a C extension such as CasADi's ``nlpsol`` hit by a Ctrl-C
+    returns ``SystemError: ... returned a result with an exception set``, the interrupt as its cause)."""
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return False
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit code."""
     import signal
@@ -581,6 +594,11 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INTERRUPTED
     except Exception as exc:  # one line, whatever went wrong (-v: the traceback too)
         from tooltransfer.errors import ToolTransferError
+
+        if _interrupted(exc):  # a Ctrl-C inside a C extension that came back as another error
+            print("tooltransfer: interrupted (Ctrl-C)", file=sys.stderr)
+            _handled_interrupt()
+            return EXIT_INTERRUPTED
 
         if verbose:
             traceback.print_exc()

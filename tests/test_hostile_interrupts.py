@@ -181,3 +181,19 @@ def test_an_interrupt_inside_an_extensions_own_evaluation_still_exits_130(tmp_pa
     res = subprocess.run([sys.executable, "-m", "interrupted_cli"], capture_output=True, text=True, cwd=tmp_path,
                          env=env, timeout=60)
     assert res.returncode == 130 and res.stderr.strip() == INTERRUPTED, (res.returncode, res.stderr)
+
+
+def test_a_ctrl_c_that_a_c_extension_turned_into_another_error_exits_130(monkeypatch, capsys) -> None:
+    """CasADi's ``nlpsol`` hit by a Ctrl-C while it builds returns ``SystemError: ... returned a result
+    with an exception set`` with the ``KeyboardInterrupt`` as its cause (seen with casadi 3.6.1)."""
+    import tooltransfer.planner.cli as cli
+
+    def hit(args):  # type: ignore[no-untyped-def]
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("<built-in function nlpsol> returned a result with an exception set") from exc
+
+    monkeypatch.setattr(cli, "_cmd_schema", hit)
+    assert cli.main(["schema"]) == 130
+    assert capsys.readouterr().err.strip() == INTERRUPTED

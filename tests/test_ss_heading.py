@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from tooltransfer.tools.omni.heading import centre_path, heading, point_path
@@ -13,6 +13,9 @@ PLATFORM = OmniPlatform()
 
 
 @settings(max_examples=50, deadline=None, derandomize=True)
+# found by hypothesis 6.100 (make test-lowest): a target near the base, where a full Newton step from
+# c = x - p jumped past the root and the undamped iteration returned a centre 74 mm off
+@example(r=0.11001586914062514, th=2.15625, px=0.0, py=0.05999779701232916)
 @given(
     r=st.floats(0.11, 0.22), th=st.floats(np.pi / 2 - 0.6, np.pi / 2 + 0.6),
     px=st.floats(-0.04, 0.04), py=st.floats(-0.06, 0.06),

@@ -68,22 +68,38 @@ def centre_path(
         px, py = pa[:, 0], pa[:, 1]
     bx, by = (float(v) for v in np.asarray(platform.base_xy, dtype=np.float64))
     c = x - pa if guess is None else np.array(guess, dtype=np.float64)
-    for _ in range(iters):
+
+    def residual(c: NDArray[np.float64]) -> tuple:
         dx, dy = c[:, 0] - bx, c[:, 1] - by
         r2 = dx * dx + dy * dy
         u = np.sqrt(np.maximum(r2 - D_TOOL**2, 1e-18))
         h = np.arctan2(dy, dx) - np.arctan2(D_TOOL, u) - np.pi / 2
         ch, sh = np.cos(h), np.sin(h)
         qx, qy = ch * px - sh * py, sh * px + ch * py  # R(h) p
-        fx, fy = c[:, 0] + qx - x[:, 0], c[:, 1] + qy - x[:, 1]
-        if np.max(np.abs(fx) + np.abs(fy)) < tol:
+        return c[:, 0] + qx - x[:, 0], c[:, 1] + qy - x[:, 1], dx, dy, r2, u, qx, qy
+
+    fx, fy, dx, dy, r2, u, qx, qy = residual(c)
+    for _ in range(iters):
+        size = np.abs(fx) + np.abs(fy)
+        if np.max(size) < tol:
             break
         gx = (-dy + D_TOOL * dx / u) / r2  # grad of the heading
         gy = (dx + D_TOOL * dy / u) / r2
         # J = I + (-qy, qx)^T (gx, gy)
         j11, j12, j21, j22 = 1.0 - qy * gx, -qy * gy, qx * gx, 1.0 + qx * gy
         det = j11 * j22 - j12 * j21
-        c = c - np.column_stack([(j22 * fx - j12 * fy) / det, (j11 * fy - j21 * fx) / det])
+        step = np.column_stack([(j22 * fx - j12 * fy) / det, (j11 * fy - j21 * fx) / det])
+        # damped: a point whose full step would not shrink its residual takes half steps (near the
+        # base, where the heading turns fast, a full step from c = x - p can jump past the root)
+        alpha = np.ones(len(c))
+        for _ in range(30):
+            trial = residual(c - alpha[:, None] * step)
+            worse = (np.abs(trial[0]) + np.abs(trial[1]) >= size) & (size >= tol)
+            if not worse.any():
+                break
+            alpha = np.where(worse, 0.5 * alpha, alpha)
+        c = c - alpha[:, None] * step
+        fx, fy, dx, dy, r2, u, qx, qy = residual(c)
     return c
 
 
