@@ -93,13 +93,13 @@ def centre_path(
         # base, where the heading turns fast, a full step from c = x - p can jump past the root)
         alpha = np.ones(len(c))
         for _ in range(30):
-            trial = residual(c - alpha[:, None] * step)
-            worse = (np.abs(trial[0]) + np.abs(trial[1]) >= size) & (size >= tol)
+            trial = c - alpha[:, None] * step
+            fx, fy, dx, dy, r2, u, qx, qy = residual(trial)  # the accepted trial's residual is the next one
+            worse = (np.abs(fx) + np.abs(fy) >= size) & (size >= tol)
             if not worse.any():
                 break
             alpha = np.where(worse, 0.5 * alpha, alpha)
-        c = c - alpha[:, None] * step
-        fx, fy, dx, dy, r2, u, qx, qy = residual(c)
+        c = trial
     return c
 
 
