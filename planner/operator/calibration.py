@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.operator.generate import JOINT_STEP, OBJECT_NOISE, RATES, record
+from tooltransfer.planner.operator.generate import JOINT_STEP, OBJECT_NOISE, RATES, platform_meta, record
 from tooltransfer.planner.operator.operator import (
     APPROACH,
     BACK_OFF,
@@ -44,7 +44,7 @@ from tooltransfer.planner.operator.operator import (
     _spans,
     _stroke,
 )
-from tooltransfer.problems.dataset import Demonstration, Meta, PlatformMeta, write_dataset
+from tooltransfer.problems.dataset import Demonstration, Meta, write_dataset
 from tooltransfer.tools.contact import contact_on_platform
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.model import Tool
@@ -240,11 +240,9 @@ def generate_calibration(out: str | Path, *, seed: int = 0, tool: str = "finger"
             raise InputError("seed", f"a seed for which the operator finishes trial {tr.name}", seed)
         demos.append(record(ex, tr.name, op.platform, noise))
         truth[tr.name] = tru
-    plat = op.platform
     meta = Meta(
         tool=tool, object_radius=OBJECT_RADIUS, rates=RATES,
-        platform=PlatformMeta(a_t=plat.a_t, base_xy=tuple(plat.base_xy), base_yaw=plat.base_yaw,
-                              table_height=plat.table_height),
+        platform=platform_meta(op.platform),
         demonstrations=[f"{d.name}.csv" for d in demos],
         scene={"kind": "calibration", "travel": float(travel),
                "trials": [{"name": t.name, "face": t.face, "angle_deg": round(float(np.degrees(t.angle)), 6)}

@@ -39,6 +39,12 @@ JOINT_STEP = 2e-4
 RATES = Rates(object_hz=30.0, tool_hz=100.0)
 
 
+def platform_meta(platform: OmniPlatform) -> PlatformMeta:
+    """The Omni's placement as a dataset's ``meta.yaml`` records it."""
+    return PlatformMeta(a_t=platform.a_t, base_xy=tuple(platform.base_xy), base_yaw=platform.base_yaw,
+                        table_height=platform.table_height)
+
+
 def record(ex: Execution, name: str, platform: OmniPlatform, rng: np.random.Generator) -> Demonstration:
     """What the sensors give of one execution recorded at every 1 ms physics step: the camera's
     samples on its own 30 Hz clock with noise, the encoders' on their 100 Hz clock quantized, and
@@ -92,11 +98,9 @@ def generate_demonstrations(out: str | Path, *, n: int = 8, seed: int = 0, tool:
         }
     if len(demos) < n:
         raise InputError("seed", "a seed for which the operator finishes enough demonstrations", seed)
-    plat = op.platform
     meta = Meta(
         tool=tool, object_radius=OBJECT_RADIUS, rates=RATES,
-        platform=PlatformMeta(a_t=plat.a_t, base_xy=tuple(plat.base_xy), base_yaw=plat.base_yaw,
-                              table_height=plat.table_height),
+        platform=platform_meta(op.platform),
         demonstrations=[f"{d.name}.csv" for d in demos],
         scene=DEMO_SCENE.to_dict(),
         generator={"program": "tooltransfer demos", "seed": seed, "skipped_operator_seeds": skipped,
