@@ -248,23 +248,11 @@ def _cmd_solve(args: argparse.Namespace) -> int:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import json
 
-    from tooltransfer.planner.plan import PlanFileError, read_plan
-    from tooltransfer.planner.simulate import PlanLimitError, check_plan
+    from tooltransfer.planner.simulate import plan_to_use
 
-    plan = read_plan(args.plan)
-    if plan.status != "solved" and not (args.force and plan.status == "violated"):
-        more = " (--force runs it anyway)" if plan.status == "violated" else ""
-        print(f"plan {args.plan} is {plan.status}: {plan.reason}{more}")
+    plan = plan_to_use(args.plan, args.force, "runs", "running")
+    if plan is None:
         return EXIT_INFEASIBLE
-    if plan.status == "violated":
-        print(f"tooltransfer: warning: plan {args.plan} is violated ({plan.reason}); running it anyway (--force)",
-              file=sys.stderr)
-    try:  # the plan against itself and its task (a hand-edited plan may lie)
-        check_plan(plan, str(args.plan))
-    except PlanFileError as exc:
-        if not args.force or isinstance(exc, PlanLimitError):
-            raise
-        print(f"tooltransfer: warning: {exc}; running it anyway (--force)", file=sys.stderr)
     summary, executions = _execute(plan, closed_loop=args.closed_loop, quiet=args.json)
     if args.figure:
         from tooltransfer.planner.plots.paper_figures import fig12

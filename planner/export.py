@@ -225,32 +225,20 @@ def run_export(args: Any) -> int:
     and checked against itself and its task (:func:`tooltransfer.planner.simulate.check_plan`, as ``simulate``
     does: ``--force`` exports one that fails, with a warning), then written. Exit 0 written, 1 the
     plan is infeasible (or violated, without ``--force``); errors raise (the command line's exit 2)."""
-    import sys
 
     from tooltransfer.planner.cli_common import EXIT_INFEASIBLE, EXIT_OK, check_output
-    from tooltransfer.planner.plan import PlanFileError, read_plan
 
     names = check_joint_names(args.joint_names.split(",")) if args.joint_names is not None else None
     out = Path(args.out) if args.out is not None else default_output(args.plan, args.format)
     check_output("-o/--out", out)  # before any work (an explicit -o is checked by the command line already)
     if out.exists() and Path(args.plan).exists() and out.samefile(args.plan):
         raise InputError("-o/--out", "a file other than the plan", str(out))
-    plan = read_plan(args.plan)
-    if plan.status == "infeasible" or (plan.status == "violated" and not args.force):
-        more = " (--force exports it anyway)" if plan.status == "violated" else ""
-        print(f"plan {args.plan} is {plan.status}: {plan.reason}{more}; nothing exported")
-        return EXIT_INFEASIBLE
-    if plan.status == "violated":
-        print(f"tooltransfer: warning: plan {args.plan} is violated ({plan.reason}); exporting it anyway (--force)",
-              file=sys.stderr)
-    from tooltransfer.planner.simulate import PlanLimitError, check_plan
+    from tooltransfer.planner.simulate import plan_to_use
 
-    try:  # the plan against itself and its task before an arm runs it (a hand-edited plan may lie)
-        check_plan(plan, str(args.plan))
-    except PlanFileError as exc:
-        if not args.force or isinstance(exc, PlanLimitError):
-            raise
-        print(f"tooltransfer: warning: {exc}; exporting it anyway (--force)", file=sys.stderr)
+    # checked against itself and its task before an arm runs it (a hand-edited plan may lie)
+    plan = plan_to_use(args.plan, args.force, "exports", "exporting", "; nothing exported")
+    if plan is None:
+        return EXIT_INFEASIBLE
     path = export_plan(plan, out, args.format, names)
     shown = ", ".join(names or plan.joint_names)
     print(f"wrote {path} ({args.format}: {plan.t.size} points over {plan.t[-1] - plan.t[0]:.2f} s, joints {shown})")

@@ -10,6 +10,7 @@ tool's limits or whose joints do not give its tool poses is refused naming the f
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
@@ -248,3 +249,32 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
     _check_tool_rates(plan, source, task)
     _check_replay(plan, source, task, tool, start)
     _check_joint_rates(plan, source)
+
+
+def plan_to_use(path: str | Path, force: bool, verb: str, doing: str, refused: str = "") -> Plan | None:
+    """The plan file at ``path`` read and checked before a command uses it (``simulate`` runs it,
+    ``export`` exports it): None, after one line saying why, for a plan that is not solved (a
+    ``violated`` one goes on with ``force``); the checks of :func:`check_plan` refuse it, unless
+    ``force``, with a warning (never past the simulation's own bounds, :class:`PlanLimitError`).
+    ``verb`` and ``doing`` name the use ("runs", "running"; "exports", "exporting"); ``refused`` ends
+    the line of a refusal."""
+    import sys
+
+    from tooltransfer.planner.plan import read_plan
+
+    plan = read_plan(path)
+    if plan.status != "solved" and not (force and plan.status == "violated"):
+        more = f" (--force {verb} it anyway)" if plan.status == "violated" else ""
+        print(f"plan {path} is {plan.status}: {plan.reason}{more}{refused}")
+        return None
+    if plan.status == "violated":
+        print(f"tooltransfer: warning: plan {path} is violated ({plan.reason}); {doing} it anyway (--force)",
+              file=sys.stderr)
+    try:  # the plan against itself and its task (a hand-edited plan may lie)
+        check_plan(plan, str(path))
+    except PlanFileError as exc:
+        if not force or isinstance(exc, PlanLimitError):
+            raise
+        print(f"tooltransfer: warning: {exc}; {doing} it anyway (--force)", file=sys.stderr)
+    return plan
+
