@@ -20,6 +20,7 @@ from typing import Any
 
 from tooltransfer.atomic import write_text
 from tooltransfer.errors import SkillFileError
+from tooltransfer.readable_json import dumps
 
 
 def format_tag(name: str, version: int) -> str:
@@ -64,12 +65,15 @@ def read_versioned(path: str | Path, name: str, version: int) -> dict[str, Any]:
 def write_versioned(path: str | Path, doc: dict[str, Any], *, indent: int | None = None, allow_nan: bool = True,
                     mkdir: bool = False) -> Path:
     """Write the versioned document ``doc`` (it carries its ``"format"``) to ``path`` as JSON
-    (``indent`` as :func:`json.dumps`; ``allow_nan=False`` refuses NaN and infinities), atomically
+    (``indent``: objects indented by that many spaces per level and arrays of numbers on one line,
+    :func:`tooltransfer.readable_json.dumps`; None: one line; ``allow_nan=False`` refuses NaN and
+    infinities), atomically
     (:func:`tooltransfer.atomic.write_text`; ``mkdir``: the parent folders are made first); returns the
     path. An error while writing (a full disk) leaves ``path`` as it was and names it."""
     if not isinstance(doc.get("format"), str) or "/" not in doc["format"]:
         raise ValueError(f"a versioned document needs a 'format' field '<name>/<version>', got {doc.get('format')!r}")
-    return write_text(path, json.dumps(doc, indent=indent, allow_nan=allow_nan), mkdir=mkdir)
+    text = json.dumps(doc, allow_nan=allow_nan) if indent is None else dumps(doc, indent=indent, allow_nan=allow_nan)
+    return write_text(path, text, mkdir=mkdir)
 
 
 __all__ = ["check_format", "format_tag", "read_json", "read_versioned", "write_versioned"]

@@ -158,11 +158,13 @@ class Plan:
         }
 
     def write(self, path: str | Path) -> Path:
-        """Write the plan as JSON, atomically (a temporary file beside it replaces it once complete:
+        """Write the plan as JSON (objects indented, sampled arrays one per line:
+        :mod:`tooltransfer.readable_json`), atomically (a temporary file beside it replaces it once complete:
         :mod:`tooltransfer.atomic`, so no half-written plan is ever left); returns the path."""
         from tooltransfer.atomic import write_text
+        from tooltransfer.readable_json import dumps
 
-        return write_text(path, json.dumps(self.to_dict(), indent=1))
+        return write_text(path, dumps(self.to_dict()))
 
 
 def metric_units(metrics: dict[str, Any]) -> dict[str, str]:
