@@ -45,6 +45,7 @@ SS_DEFAULT_CLEARANCE = 0.01
 """Offset [m] of the arch-shaped virtual object motion from the object's outline when learning."""
 
 _MEMORY: dict[str, Any] = {}
+_HASHES: dict[tuple[Any, ...], str] = {}
 
 
 @dataclass(frozen=True)
@@ -111,13 +112,19 @@ class Skills:
 
 
 def dataset_hash(folder: Path) -> str:
-    """Content hash (SHA-256 hex) of a dataset folder: every file's name and bytes."""
-    h = hashlib.sha256()
-    for p in sorted(folder.iterdir()):
-        if p.is_file():
+    """Content hash (SHA-256 hex) of a dataset folder: every file's name and bytes. Kept in memory for
+    the process while no file's name, size, modification time or inode changes (one planning run asks
+    for it once per skill it reads)."""
+    files = sorted(p for p in Path(folder).iterdir() if p.is_file())
+    signature = tuple((p.name, (st := p.stat()).st_size, st.st_mtime_ns, st.st_ino) for p in files)
+    key = (str(Path(folder).resolve()), signature)
+    if key not in _HASHES:
+        h = hashlib.sha256()
+        for p in files:
             h.update(p.name.encode())
             h.update(p.read_bytes())
-    return h.hexdigest()
+        _HASHES[key] = h.hexdigest()
+    return _HASHES[key]
 
 
 def cache_dir() -> Path:
@@ -220,11 +227,15 @@ def _save_identification(ident: Identification, path: Path) -> None:
 def identification_from_dataset(folder: str | Path) -> Identification:
     """The push mechanics identified from every push of a dataset (demonstrations or a calibration
     recording), cached by the dataset's content hash (:func:`tooltransfer.planner.identify.identify_dataset`)."""
-    from tooltransfer.planner.identify import identify_dataset
-
     folder = _check_dataset(Path(folder))
     return _cached(f"mech{IDENTIFICATION_VERSION}-{dataset_hash(folder)}.json", _load_identification,
-                   _save_identification, lambda: identify_dataset(folder))
+                   _save_identification, lambda: _identify(folder))
+
+
+def _identify(folder: Path) -> Identification:
+    from tooltransfer.planner.identify import identify_dataset  # the dataset reader: only when not cached
+
+    return identify_dataset(folder)
 
 
 def learn_skills(folder: str | Path, k: float = MAPPING_K, virtual: str = VIRTUAL_MOTION, *, with_ss: bool = True,
