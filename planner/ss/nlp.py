@@ -64,6 +64,7 @@ would need a C compiler at run time. The build and solve times are in ``benchmar
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -342,6 +343,23 @@ def build_nlp(
     """Build the NLP (module docstring) for ``tool`` at ``n_knots`` knots against bodies of the kinds
     of ``bodies`` (their values are parameters of each solve). ``reach``: which reach row families
     (:func:`reach_families`) the interior knots get."""
+    wait_for_prefetch()
+    return _build(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth,
+                  reach_margin=reach_margin, max_iter=max_iter, reach=reach, separators=separators)
+
+
+def _build(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], **kw: Any) -> SwitchNLP:
+    return _formulate(tool, n_knots, platform, bodies, **kw)()
+
+
+def _formulate(
+    tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
+    solver: str = "ipopt", smooth: float = 10.0, reach_margin: float = 1e-4, max_iter: int = 150,
+    reach: bool | tuple[bool, bool, bool] = True, separators: str = "distance",
+) -> Callable[[], SwitchNLP]:
+    """The NLP's expressions (built here: CasADi calls from Python, holding the GIL) and the step
+    that derives the solver from them (``nlpsol``, in C++ with the GIL released), which
+    :func:`prefetch_nlp` runs in a background thread; :func:`build_nlp` runs both at once."""
     import casadi as ca
 
     t0 = time.perf_counter()
@@ -387,15 +405,24 @@ def build_nlp(
     z = ca.vertcat(ca.vec(X), ca.vec(S)) if S is not None else ca.vec(X)
     pv = ca.vertcat(ca.vec(Xd), m_obj, m_obs, *bpar, s_max)
     nlp = {"x": z, "p": pv, "f": track + smooth * acc, "g": ca.vertcat(*blocks)}
-    fn = SOLVERS[solver](nlp, max_iter)
-    g_fn = ca.Function("ss_rows", [z, pv], [nlp["g"]])
-    lbg = np.zeros(count)
-    ubg = np.full(count, np.inf)
-    return SwitchNLP(
-        key=(), solver=fn, n_knots=N, model=model, solver_name=solver, n_sep=tr.n_sep, sep_layout=tr.sep_layout,
-        families=families, lbg=lbg, ubg=ubg, pieces=tr.pieces, capsule=tr.capsule,
-        build_time=time.perf_counter() - t0, n_params=int(pv.numel()), rows=g_fn, angle=tr.angle,
-    )
+    spent = time.perf_counter() - t0
+    n_params = int(pv.numel())
+    held = [nlp]  # the expressions: released by the thread that derives the solver from them
+
+    def derive() -> SwitchNLP:
+        t1 = time.perf_counter()
+        expr = held.pop()
+        fn = SOLVERS[solver](expr, max_iter)
+        g_fn = ca.Function("ss_rows", [expr["x"], expr["p"]], [expr["g"]])
+        expr.clear()
+        return SwitchNLP(
+            key=(), solver=fn, n_knots=N, model=model, solver_name=solver, n_sep=tr.n_sep, sep_layout=tr.sep_layout,
+            families=families, lbg=np.zeros(count), ubg=np.full(count, np.inf), pieces=tr.pieces,
+            capsule=tr.capsule, build_time=spent + time.perf_counter() - t1, n_params=n_params, rows=g_fn,
+            angle=tr.angle,
+        )
+
+    return derive
 
 
 def _signed_distance(verts: NDArray[np.float64], lx: Any, ly: Any) -> Any:
@@ -436,17 +463,28 @@ def _area2(v: NDArray[np.float64]) -> float:
 
 
 _CACHE: dict[tuple, SwitchNLP] = {}
+_PREFETCH: list[threading.Thread] = []
+_PREFETCHED: set[tuple] = set()  # built by a prefetch, not used yet: the first get_nlp reports it built
+
+
+def _key(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], model: str, solver: str,
+         smooth: float, reach: bool | tuple[bool, bool, bool], separators: str) -> tuple:
+    return (_tool_key(tool), model, n_knots, platform, tuple(b.signature for b in bodies),
+            tuple(b.family == "object" for b in bodies), solver, smooth, reach_families(reach), separators)
 
 
 def get_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
             solver: str = "ipopt", smooth: float = 10.0, reach: bool | tuple[bool, bool, bool] = True,
             separators: str = "distance") -> tuple[SwitchNLP, bool]:
-    """The cached NLP for this structure (built on first use); returns ``(nlp, built_now)``."""
-    key = (_tool_key(tool), model, n_knots, platform, tuple(b.signature for b in bodies),
-           tuple(b.family == "object" for b in bodies), solver, smooth, reach_families(reach), separators)
+    """The cached NLP for this structure (built on first use); returns ``(nlp, built_now)``. A build
+    :func:`prefetch_nlp` started is waited for first (and counts as built now, by this call)."""
+    key = _key(tool, n_knots, platform, bodies, model, solver, smooth, reach, separators)
+    wait_for_prefetch()
     hit = _CACHE.get(key)
     if hit is not None:
-        return hit, False
+        prefetched = key in _PREFETCHED
+        _PREFETCHED.discard(key)
+        return hit, prefetched
     nlp = build_nlp(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth, reach=reach,
                     separators=separators)
     nlp.key = key
@@ -454,9 +492,53 @@ def get_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[B
     return nlp, True
 
 
+def prefetch_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *,
+                 model: str = "pieces", solver: str = "ipopt", smooth: float = 10.0,
+                 reach: bool | tuple[bool, bool, bool] = True, separators: str = "distance") -> bool:
+    """Build the NLP of this structure (arguments as :func:`get_nlp`), its solver in a background
+    thread, unless it is cached or a prefetch is running; returns whether one started.
+
+    The expressions are built here (Python calling CasADi: in a thread they would wait for the GIL
+    behind the caller's work). Most of a build is then ``nlpsol`` deriving the problem (the
+    Lagrangian's Hessian, the sparsity) in C++ with the GIL released: that runs in the thread, so the
+    caller's NumPy work (the push plan the switches follow) goes on meanwhile on another core and the
+    first switch finds its NLP built. CasADi is not thread-safe: the caller makes no other CasADi call
+    until the thread ends (every use of it in this module, :func:`get_nlp` and :func:`build_nlp`, first
+    waits for it: :func:`wait_for_prefetch`; no other module calls CasADi). A build that fails in the
+    thread is forgotten: :func:`get_nlp` builds it again and raises there; invalid arguments raise here."""
+    key = _key(tool, n_knots, platform, bodies, model, solver, smooth, reach, separators)
+    if key in _CACHE or _PREFETCH:
+        return False
+    derive = _formulate(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth, reach=reach,
+                        separators=separators)
+
+    def build() -> None:
+        try:
+            nlp = derive()
+        except Exception:  # get_nlp builds it again and raises in the caller's thread
+            return
+        nlp.key = key
+        _CACHE[key] = nlp
+        _PREFETCHED.add(key)
+
+    thread = threading.Thread(target=build, name="tooltransfer-nlp-prefetch", daemon=True)
+    _PREFETCH.append(thread)
+    thread.start()
+    return True
+
+
+def wait_for_prefetch() -> None:
+    """Wait until no prefetch (:func:`prefetch_nlp`) runs."""
+    while _PREFETCH:
+        _PREFETCH[0].join()
+        _PREFETCH.pop(0)
+
+
 def clear_cache() -> None:
-    """Forget every built NLP."""
+    """Forget every built NLP (after any prefetch has finished)."""
+    wait_for_prefetch()
     _CACHE.clear()
+    _PREFETCHED.clear()
 
 
 def initial_separators(nlp: SwitchNLP, xy_mm: NDArray[np.float64], yaw: NDArray[np.float64],
