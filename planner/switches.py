@@ -135,12 +135,15 @@ def prefetch_opt_nlp(tool: Tool, platform: OmniPlatform, radius: float, obstacle
     first ``opt`` switch of a plan most often needs: ``tool`` at ``n_knots`` knots against the object
     (a disc of ``radius`` [m]) and every obstacle, without reach rows (the first refinement level of a
     switch near all the obstacles and away from the reach boundary). A switch that needs another
-    structure builds its own as before; the plan is the same either way. Returns whether a build
-    started."""
-    opts = OptOptions(n_knots=n_knots)
-    bodies = all_bodies(Disc(np.zeros(2), radius), tuple(obstacles))
-    return prefetch_nlp(tool, n_knots, platform, bodies, model=opts.model, solver=opts.solver, smooth=opts.smooth,
-                        reach=False, separators=opts.separators)
+    structure builds its own as before; the plan is the same either way, and a structure that cannot
+    be built is left to the switch that needs it (to raise there). Returns whether a build started."""
+    try:
+        opts = OptOptions(n_knots=n_knots)
+        bodies = all_bodies(Disc(np.zeros(2), radius), tuple(obstacles))
+        return prefetch_nlp(tool, n_knots, platform, bodies, model=opts.model, solver=opts.solver,
+                            smooth=opts.smooth, reach=False, separators=opts.separators)
+    except Exception:  # a guess never changes the outcome: the switch that needs it builds it and raises there
+        return False
 
 
 def with_fallback(primary: SwitchPlanner, fallback: SwitchPlanner, name: str) -> SwitchPlanner:

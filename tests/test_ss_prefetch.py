@@ -54,3 +54,11 @@ def test_solve_plans_the_same_with_and_without_prefetch() -> None:
     assert with_prefetch.status == without.status == "solved"
     np.testing.assert_array_equal(with_prefetch.tool_pose, without.tool_pose)
     np.testing.assert_array_equal(with_prefetch.object_xy, without.object_xy)
+
+
+def test_a_guess_that_cannot_be_built_is_left_to_the_switch() -> None:
+    from tooltransfer.planner.switches import prefetch_opt_nlp
+
+    task = fig11_task("fig11b")
+    assert not prefetch_opt_nlp(task.tool, task.omni, 0.0175, (), n_knots=3)  # too few knots: no prefetch, no raise
+    assert not nlp_module._PREFETCH
