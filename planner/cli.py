@@ -2,9 +2,10 @@
 
 Exit codes: 0 done (solved), 1 infeasible, 2 bad input (a one-line message naming the file and the
 field, or the option and the path, never a traceback: ``-v`` adds it for a bug report), 130
-stopped by Ctrl-C (one line). Output paths are checked before any work (a folder where a file is
-expected, a missing folder, a place that cannot be written: exit 2 naming the option), and every
-file is written atomically (:mod:`tooltransfer.atomic`). Every command has ``--help`` with an example.
+stopped by Ctrl-C (one line), 141 when the output's reader has gone (``| head``: silently). Output
+paths are checked before any work (a folder where a file is expected, a missing folder, a place
+that cannot be written: exit 2 naming the option), and every file is written atomically
+(:mod:`tooltransfer.atomic`). Every command has ``--help`` with an example.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from typing import Any
 # nothing heavy is imported before main() runs: a Ctrl-C while numpy and the rest load is caught too
 from tooltransfer.planner.cli_common import (
     EXIT_BAD_INPUT,
+    EXIT_BROKEN_PIPE,
     EXIT_INFEASIBLE,
     EXIT_INTERRUPTED,
     EXIT_OK,
@@ -573,32 +575,69 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(words)
         verbose = bool(getattr(args, "verbose", False))
         _check_outputs(args)
-        return int(args.func(args))
+        code = int(args.func(args))
+        sys.stdout.flush()  # here, where a reader that has gone (BrokenPipeError) is handled
+        return code
     except KeyboardInterrupt:
         if verbose:
             traceback.print_exc()
         print("tooltransfer: interrupted (Ctrl-C)", file=sys.stderr)
         _handled_interrupt()
         return EXIT_INTERRUPTED
+    except BrokenPipeError as exc:
+        if _stdout_gone():
+            return EXIT_BROKEN_PIPE
+        return _report(exc, verbose)
     except Exception as exc:  # one line, whatever went wrong (-v: the traceback too)
-        from tooltransfer.errors import ToolTransferError
-
-        if _interrupted(exc):  # a Ctrl-C inside a C extension that came back as another error
-            print("tooltransfer: interrupted (Ctrl-C)", file=sys.stderr)
-            _handled_interrupt()
-            return EXIT_INTERRUPTED
-
-        if verbose:
-            traceback.print_exc()
-        text = _message(exc) if isinstance(exc, ToolTransferError) else (missing_extra(exc) or _unexpected(exc))
-        print(f"tooltransfer: error: {text}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _report(exc, verbose)
     finally:
         if argv is None:  # the console command: a Ctrl-C while the interpreter exits ends it at once, silently
             try:
                 signal.signal(signal.SIGINT, signal.SIG_DFL)
             except ValueError:  # not the main thread
                 pass
+
+
+def _stdout_gone() -> bool:
+    """Whether standard output is a pipe (or socket) whose reader has closed it: a write to it fails
+    with EPIPE (POLLERR on its end); if so it is pointed at the null device, so that the interpreter's
+    last flush at exit does not complain."""
+    import os
+    import select
+    import stat
+
+    try:
+        fd = sys.stdout.fileno()
+        if not (stat.S_ISFIFO(os.fstat(fd).st_mode) or stat.S_ISSOCK(os.fstat(fd).st_mode)):
+            return False
+        poller = select.poll()
+        poller.register(fd, select.POLLOUT)
+        if not any(ev & select.POLLERR for _, ev in poller.poll(0)):
+            return False
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, fd)
+        os.close(null)
+        return True
+    except (OSError, ValueError, AttributeError):  # no usable stdout at all (or no poll on this platform)
+        return False
+
+
+def _report(exc: Exception, verbose: bool) -> int:
+    """The one-line message of an exception main() caught (-v: the traceback too); the exit code."""
+    import traceback
+
+    from tooltransfer.errors import ToolTransferError
+
+    if _interrupted(exc):  # a Ctrl-C inside a C extension that came back as another error
+        print("tooltransfer: interrupted (Ctrl-C)", file=sys.stderr)
+        _handled_interrupt()
+        return EXIT_INTERRUPTED
+
+    if verbose:
+        traceback.print_exc()
+    text = _message(exc) if isinstance(exc, ToolTransferError) else (missing_extra(exc) or _unexpected(exc))
+    print(f"tooltransfer: error: {text}", file=sys.stderr)
+    return EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

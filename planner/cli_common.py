@@ -11,6 +11,9 @@ import os
 from pathlib import Path
 
 EXIT_OK, EXIT_INFEASIBLE, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_BROKEN_PIPE = 141
+"""The reader of the output went away (``tooltransfer tasks | head``): 128 + SIGPIPE, as a shell reports a
+command the signal ended; nothing is printed."""
 
 
 def _nearest_existing(path: Path) -> Path:

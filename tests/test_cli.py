@@ -74,3 +74,20 @@ def test_version_is_the_distributions(capsys) -> None:
         main(["--version"])
     assert exc.value.code == 0
     assert capsys.readouterr().out.strip() == f"tooltransfer {version}"
+
+
+def test_a_reader_that_has_gone_ends_the_command_silently_with_141() -> None:
+    """``tooltransfer tasks | head -1``: the pipe's reader closes it; no message, exit 128 + SIGPIPE."""
+    import os
+    import subprocess
+    import sys
+
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader is gone before the first line is written
+    try:
+        done = subprocess.run([sys.executable, "-m", "tooltransfer.planner.cli", "tasks"], stdout=write_end,
+                              stderr=subprocess.PIPE, text=True, timeout=120)
+    finally:
+        os.close(write_end)
+    assert done.returncode == 141
+    assert done.stderr == ""
