@@ -502,10 +502,11 @@ def prefetch_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Seque
     behind the caller's work). Most of a build is then ``nlpsol`` deriving the problem (the
     Lagrangian's Hessian, the sparsity) in C++ with the GIL released: that runs in the thread, so the
     caller's NumPy work (the push plan the switches follow) goes on meanwhile on another core and the
-    first switch finds its NLP built. CasADi is not thread-safe: the caller makes no other CasADi call
-    until the thread ends (every use of it in this module, :func:`get_nlp` and :func:`build_nlp`, first
-    waits for it: :func:`wait_for_prefetch`; no other module calls CasADi). A build that fails in the
-    thread is forgotten: :func:`get_nlp` builds it again and raises there; invalid arguments raise here."""
+    first switch finds its NLP built. CasADi is not thread-safe, so no other CasADi call may run until
+    the thread ends: :func:`get_nlp` and :func:`build_nlp` first wait for it
+    (:func:`wait_for_prefetch`), and the package calls CasADi only through them and the functions they
+    return. A build that fails in the thread is forgotten: :func:`get_nlp` builds it again and raises
+    there; invalid arguments raise here."""
     key = _key(tool, n_knots, platform, bodies, model, solver, smooth, reach, separators)
     if key in _CACHE or _PREFETCH:
         return False
