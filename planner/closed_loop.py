@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 from tooltransfer.errors import InputError, ToolTransferError
 from tooltransfer.planner.oe.contacts import MIN_PIECE
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
+from tooltransfer.planner.oe.qp_variant import QPOptions
 from tooltransfer.planner.plan import Plan
 from tooltransfer.planner.scene import Scene
 from tooltransfer.planner.ss.arch_variant import swept_clearance
@@ -63,6 +64,8 @@ REPLAN_CONE_WIDENING = 1.5
 #: Once the model has mispredicted two chunks, the last this many metres are pushed along the faces'
 #: normals (:meth:`_Loop.correction`).
 STAGE = 0.025
+#: The most contacts (re-contacts + 1) one push of a re-plan may use (:meth:`_Loop.replan_options`).
+MAX_REPLAN_CONTACTS = 30
 
 
 @dataclass(frozen=True)
@@ -192,6 +195,7 @@ class _Loop:
         self.tool = task_tool(task)
         self.platform = task_platform(task, self.tool)
         obstacles = task_obstacles(task)
+        self.obstacles = obstacles
         self.skills = task_skills(task, need_ss=plan.variant.get("ss") in ("dmp", "opt"))
         self.scene = task_scene(task, obstacles, effective_margin(task, obstacles), self.skills)
         r, clear = task.object.radius, task.ss.clearance
@@ -206,6 +210,7 @@ class _Loop:
         self.options = qp_options(task).model_copy(update={"n_samples": 40, "screen_samples": 30, "n_basis": 15,
                                                             "candidates": 2, "alternatives": 0})
         self.mapping = mapping_options(task)
+        self.c_plan = self.scene.mechanics.c
         self.v, self.a = task.timing.max_tool_speed, task.timing.max_tool_accel
         self.face: str | None = None
         self.adapt = adapt
@@ -277,6 +282,21 @@ class _Loop:
         pose = self.plant.tool_pose()  # type: ignore[attr-defined]
         return contact_fraction(self.tool, self.face, o, pose, self.scene.radius) * self.tool.face(self.face).length
 
+    def replan_options(self) -> QPOptions:
+        """The re-plans' options: the plan's contact budget carried over to the push model in force.
+
+        A sticking contact rolls ``1/c^2`` [m] along the face per metre of the object's sideways
+        travel (:class:`tooltransfer.planner.oe.constraints.ContactOnFace`), so the sideways travel the
+        task's ``max_contacts`` contacts per push carry at the plan's ``c`` needs ``(c_plan / c)^2``
+        times as many contacts once the adaptation finds a smaller ``c``: the re-plans may use that
+        many (never fewer than the task's, at most :data:`MAX_REPLAN_CONTACTS`). Re-contacts are short
+        moves of the same face; refusing them would leave the object on the drift the smaller ``c``
+        causes, toward the face's normal."""
+        ratio = (self.c_plan / self.scene.mechanics.c) ** 2
+        n = int(np.clip(np.ceil(self.options.max_contacts * ratio - 1e-9), self.options.max_contacts,
+                        max(self.options.max_contacts, MAX_REPLAN_CONTACTS)))
+        return self.options if n == self.options.max_contacts else self.options.model_copy(update={"max_contacts": n})
+
     def replan(self, t: NDArray[np.float64], ref: NDArray[np.float64], faces: tuple[str, ...],
                switches: tuple[float, ...], o: NDArray[np.float64]) -> PushPlan:
         """The rest of the task from the observed object ``o``: the sequence, else a new search."""
@@ -291,18 +311,38 @@ class _Loop:
                                   self.mapping)
         elif faces:
             pp = condense_sequence(t, ref, self.tool, self.platform, scene, self.target, faces, switches,
-                                   self.options, s_first=s_first, free_start=True)
+                                   self.replan_options(), s_first=s_first, free_start=True)
             if pp.status != "solved":
                 self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
                                 "new search")
-                pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options,
+                pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.replan_options(),
                                  free_start=True)
         else:
-            pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options, free_start=True)
+            pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.replan_options(),
+                             free_start=True)
+        if pp.status == "solved" and pp.pushes:
+            pp = self.clear_of_obstacles(pp)
         self.replan_times.append(time.perf_counter() - start)
         if pp.status == "solved" and not pp.pushes:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")
         return pp
+
+    def clear_of_obstacles(self, pp: PushPlan) -> PushPlan:
+        """``pp``, or ``pp`` refused when the tool outline at one of its pushes' poses overlaps an
+        obstacle: the fit keeps the object clear of them, not the tool, and the nominal plan is
+        refused for the same overlap (:func:`tooltransfer.planner.solve.solve`); a refused re-plan
+        lets the caller try another (a correction's next leg)."""
+        from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
+
+        if not self.obstacles:
+            return pp
+        poses = np.vstack([p.tool_pose for p in pp.pushes])
+        near = tool_obstacle_clearance(self.tool, poses, self.obstacles)
+        if near.distance > 0.0:
+            return pp
+        where = np.round(poses[near.sample, :2], 4).tolist()
+        return replace(pp, status="infeasible",
+                       reason=f"the tool outline overlaps obstacles[{near.obstacle}] with the tool at {where} m")
 
     def correction(self, o: NDArray[np.float64]) -> PushPlan:
         """A correction from ``o`` once the plan's path is used up: along the faces' normals (where
@@ -530,7 +570,14 @@ def _next_chunk(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> bool:
         return True
     expected = f.plan.object_xy[p.samples[f.k]]
     tau = f.base + float(f.plan.t[p.samples[f.k]] - f.plan.t[0])
-    if np.hypot(*(o - expected)) > pace.threshold and tau < ref.end - 0.05:
+    off = np.hypot(*(o - expected)) > pace.threshold
+    if off and f.base >= ref.end:  # a correction in force, and the object strays from it: correct from here
+        pp = loop.correction(o)
+        if pp.status == "solved":
+            f.switch_to(pp, ref.end)
+            p = f.plan.pushes[0]
+            loop.log.append(f"corrected again from {np.round(o, 4).tolist()} m: {' -> '.join(pp.faces)}")
+    elif off and tau < ref.end - 0.05:
         t, r, faces, switches = ref.rest(tau, o, loop.target)
         pp = loop.replan(t, r, faces, switches, o)
         if pp.status == "solved":
