@@ -58,6 +58,9 @@ BACK_OFF = 0.002
 ADAPT_ERROR = 0.001
 #: The adaptation identifies the model from at most this many of the last push chunks.
 ADAPT_CHUNKS = 6
+#: Standard deviation of the adaptation's prior on ``log mu`` and ``log c`` (centred on the model in
+#: force) for chunks the model in force fits within the camera's noise (:meth:`_Loop.learn`).
+ADAPT_PRIOR_SD = 0.5
 #: A re-plan may use this many times the share of the friction cone the nominal plan uses (the task's
 #: ``oe.friction_cone_fraction``), up to the whole cone (:meth:`_Loop.scene_at`).
 REPLAN_CONE_WIDENING = 1.5
@@ -186,12 +189,13 @@ class _Loop:
     """One closed-loop run (see :func:`execute_closed_loop`)."""
 
     def __init__(self, plan: Plan, task: Task, plant: object, frames: int, tolerance: float,
-                 adapt: bool = True) -> None:
+                 adapt: bool = True, camera_noise: float = 0.0015) -> None:
         from tooltransfer.planner.recontact import recontact_planner
         from tooltransfer.planner.solve import effective_margin, mapping_options, qp_options, task_scene, task_skills
         from tooltransfer.planner.switches import arch_planner, skill_planner, with_fallback
 
         self.plan, self.task, self.plant, self.frames, self.tolerance = plan, task, plant, frames, tolerance
+        self.noise = camera_noise / np.sqrt(frames)
         self.tool = task_tool(task)
         self.platform = task_platform(task, self.tool)
         obstacles = task_obstacles(task)
@@ -439,7 +443,12 @@ class _Loop:
         """The last push chunk observed at its end ``o``: keep it, and when the model predicted it more
         than ``ADAPT_ERROR`` off, identify ``mu`` and ``c`` again from the last chunks
         (:func:`tooltransfer.tools.pushing.identify.identify_mechanics`, started from and pulled towards the
-        mechanics in force), so the re-plans use the plant's own."""
+        mechanics in force), so the re-plans use the plant's own. The identification weighs its prior
+        in units of the chunks' misfit at the model in force; the prior's standard deviation is
+        :data:`ADAPT_PRIOR_SD` times that misfit over the camera's averaged noise (at least 1), so the
+        pull towards the model in force stays that of a fit within the noise and does not grow
+        with how far the model mispredicts (a strong pull would keep ``c`` near the model the chunks
+        refute, and the re-plans on the drift that model causes)."""
         from tooltransfer.tools.pushing.forward import simulate
         from tooltransfer.tools.pushing.identify import RecordedPush, identify_mechanics
 
@@ -456,9 +465,13 @@ class _Loop:
         if len(self.chunks) < 2 or self.mispredicted % 2:
             return  # every second misprediction: the identification takes a few tenths of a second
         start = time.perf_counter()
+        recent = self.chunks[-ADAPT_CHUNKS:]
+        miss = [simulate(self.tool, c.tool_pose, c.object_start, self.scene.radius, self.scene.mechanics).final
+                - c.object_xy[-1] for c in recent]
+        misfit = float(np.sqrt(np.mean(np.square(miss))))
         try:
-            ident = identify_mechanics(self.tool, self.scene.radius, self.chunks[-ADAPT_CHUNKS:],
-                                       initial=self.scene.mechanics, prior_sd=0.5, max_step=5e-4)
+            ident = identify_mechanics(self.tool, self.scene.radius, recent, initial=self.scene.mechanics,
+                                       prior_sd=ADAPT_PRIOR_SD * max(1.0, misfit / self.noise), max_step=5e-4)
         except Exception as exc:  # an identification that cannot run leaves the model as it is
             self.log.append(f"no adaptation ({type(exc).__name__}: {exc})")
             return
@@ -657,7 +670,7 @@ def execute_closed_loop(
     loop: _Loop | None = None
     try:
         plant = plant if plant is not None else _default_plant(plan, task, camera_noise, seed, config)
-        loop = _Loop(plan, task, plant, frames, tolerance, adapt)
+        loop = _Loop(plan, task, plant, frames, tolerance, adapt, camera_noise)
         approach_m = np.asarray(plan.phase) == "approach"
         loop.move(plan.tool_pose[approach_m, :2])
         loop.face = plan.pushes[0].faces[0]
