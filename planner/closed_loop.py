@@ -9,7 +9,10 @@ re-solves the rest of the task from there with the same condensing as the plan:
    the target (a reference from here), with the rest of the plan's face sequence and switch times:
    one fit of that sequence (:func:`tooltransfer.planner.oe.qp_variant.condense_sequence`, the contact starting
    where the face already touches the object), and when it fails a new sequence search
-   (:func:`tooltransfer.planner.oe.qp_variant.condense_qp`) from here; ``mapping`` plans re-plan with the mapping;
+   (:func:`tooltransfer.planner.oe.qp_variant.condense_qp`) from here; ``mapping`` plans re-plan with the mapping.
+   Re-plans use the push model in force (identified again on line when it mispredicts), with the
+   task's contact budget carried over to that model's ``c`` (:meth:`_Loop.replan_options`), and a
+   re-plan whose tool outline overlaps an obstacle is refused as the nominal plan is;
 2. the next chunk: the first push of that re-plan, at most ``chunk`` of object travel (and at most
    ``approach`` of what is left once the target is near, so the object comes at it from short of it:
    faces cannot pull back), its tool path from the push model (the re-plan's tool poses); a change of
@@ -18,7 +21,8 @@ re-solves the rest of the task from there with the same condensing as the plan:
 3. when the plan's path is used up and the object is not within ``tolerance``: correction rounds
    from the observed object to the target along the faces' normals (one face, or the corner of two
    faces' normals that splits the way: pushes along a normal go where they are aimed whatever the
-   limit surface is), a new search when none fits, at most ``max_rounds``.
+   limit surface is), a new search when none fits, at most ``max_rounds``; a correction the object
+   strays from by more than the re-plan threshold is made again from where the object is.
 
 It ends ``"reached"`` (the measured object within ``tolerance``; the true error may differ by the
 camera's noise), ``"closest"`` (no push sequence brings it closer from where it is), ``"rounds"``
