@@ -227,6 +227,7 @@ class _Loop:
         self.chunks: list = []
         self.adapt_times: list[float] = []
         self.mispredicted = 0
+        self.adapted = False
         self.staged = False
         self.n_pushes = self.n_switches = self.n_recontacts = 0
         self.replan_times: list[float] = []
@@ -320,6 +321,8 @@ class _Loop:
         elif faces:
             pp = condense_sequence(t, ref, self.tool, self.platform, scene, self.target, faces, switches,
                                    self.replan_options(), s_first=s_first, free_start=True)
+            if pp.status == "solved" and pp.pushes:
+                pp = self.clear_of_obstacles(pp)
             if pp.status != "solved":
                 self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
                                 "new search")
@@ -336,15 +339,18 @@ class _Loop:
         return pp
 
     def clear_of_obstacles(self, pp: PushPlan) -> PushPlan:
-        """``pp``, or ``pp`` refused when the tool outline at one of its pushes' poses overlaps an
-        obstacle: the fit keeps the object clear of them, not the tool, and the nominal plan is
-        refused for the same overlap (:func:`tooltransfer.planner.solve.solve`); a refused re-plan
-        lets the caller try another (a correction's next leg)."""
+        """``pp``, or ``pp`` refused when the tool outline overlaps an obstacle at a pose of its first
+        push (the one the loop executes next) or at the second push's contact pose (where the switch
+        or re-contact after it must end, a pose the switch planner refuses): the fit keeps the
+        object clear of the obstacles, not the tool, and the nominal plan is refused for the same
+        overlap (:func:`tooltransfer.planner.solve.solve`). The later poses are left to the re-plans
+        made from the observed object before they run. A refused re-plan lets the caller try
+        another (a new search, a correction's next leg)."""
         from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
 
         if not self.obstacles:
             return pp
-        poses = np.vstack([p.tool_pose for p in pp.pushes])
+        poses = np.vstack([pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
         near = tool_obstacle_clearance(self.tool, poses, self.obstacles)
         if near.distance > 0.0:
             return pp
@@ -466,8 +472,11 @@ class _Loop:
         if np.hypot(*(predicted - o)) <= ADAPT_ERROR:
             return
         self.mispredicted += 1
-        if len(self.chunks) < 2 or self.mispredicted % 2:
-            return  # every second misprediction: the identification takes a few tenths of a second
+        if len(self.chunks) < 2 or (self.adapted and self.mispredicted % 2):
+            # every misprediction until an adaptation took (the plan's model is refuted, and every
+            # chunk pushed on it adds to the drift), then every second one: the identification takes
+            # a few tenths of a second
+            return
         start = time.perf_counter()
         recent = self.chunks[-ADAPT_CHUNKS:]
         miss = [simulate(self.tool, c.tool_pose, c.object_start, self.scene.radius, self.scene.mechanics).final
@@ -483,6 +492,7 @@ class _Loop:
             self.adapt_times.append(time.perf_counter() - start)
         m = ident.mechanics
         if ident.c_excited or ident.mu_excited:
+            self.adapted = True
             self.scene = replace(self.scene, mechanics=m)
             self.log.append(f"adapted the push model to mu {m.mu:.3f}, c {m.c:.3f} from {len(ident.names)} chunks")
 

@@ -176,21 +176,30 @@ def test_replans_carry_the_contact_budget_over_to_the_adapted_c(plan_file: Path)
 
 def test_a_replan_whose_tool_overlaps_an_obstacle_is_refused(plan_file: Path) -> None:
     """The fit keeps the object clear of the obstacles, not the tool: a re-plan whose tool outline
-    at a push pose overlaps one is refused with the obstacle and the pose, as the nominal plan is."""
+    overlaps one along the push executed next, or at the contact pose the switch after it ends in,
+    is refused with the obstacle and the pose, as the nominal plan is; later poses are re-planned
+    before they run."""
     from tooltransfer.planner.closed_loop import _Reference
     from tooltransfer.tools.objects import Disc
 
     plan, loop = _loop_on(plan_file)
     pp = _Reference.of(plan).plan
+    assert len(pp.pushes) >= 3
     loop.obstacles = []
     assert loop.clear_of_obstacles(pp) is pp
-    pose = pp.pushes[-1].tool_pose[-1]
-    loop.obstacles = [Disc(np.array([50.0, 50.0]), 0.005)]  # far away: the plan stands
+    far = Disc(np.array([50.0, 50.0]), 0.005)
+    loop.obstacles = [far]
     assert loop.clear_of_obstacles(pp).status == "solved"
-    loop.obstacles = [Disc(np.array([50.0, 50.0]), 0.005), Disc(pose[:2].copy(), 0.002)]
-    refused = loop.clear_of_obstacles(pp)
-    assert refused.status == "infeasible"
-    assert "obstacles[1]" in refused.reason and "overlaps" in refused.reason
+    first = pp.pushes[0].tool_pose
+    for pose in (first[len(first) // 2], pp.pushes[1].tool_pose[0]):
+        loop.obstacles = [far, Disc(pose[:2].copy(), 0.002)]
+        refused = loop.clear_of_obstacles(pp)
+        assert refused.status == "infeasible"
+        assert "obstacles[1]" in refused.reason and "overlaps" in refused.reason
+    later = pp.pushes[-1].tool_pose[-1]
+    assert min(np.hypot(*(p.tool_pose[:, :2] - later[:2]).T).min() for p in pp.pushes[:2]) > 0.05
+    loop.obstacles = [far, Disc(later[:2].copy(), 0.002)]
+    assert loop.clear_of_obstacles(pp).status == "solved"
 
 
 def test_a_straying_correction_is_corrected_from_the_observed_object(plan_file: Path) -> None:
@@ -244,3 +253,51 @@ def test_the_adaptations_prior_is_weighed_in_units_of_the_camera_noise(plan_file
     assert min(seen) >= ADAPT_PRIOR_SD
     assert seen[0] > 2.0 * ADAPT_PRIOR_SD  # the plan's c mispredicts the first chunks far beyond the noise
     assert abs(rep.mechanics.c - 0.6 * c_plan) < 0.25 * abs(c_plan - 0.6 * c_plan)
+
+
+def test_the_model_is_identified_at_every_misprediction_until_an_adaptation_takes(plan_file: Path,
+                                                                                  monkeypatch) -> None:
+    """Until an identification changes the model, every mispredicted chunk (from the second one
+    kept) identifies it again; afterwards every second one does."""
+    from types import SimpleNamespace
+
+    import tooltransfer.tools.pushing.identify as identify
+
+    plan, loop = _loop_on(plan_file, c_factor=0.6)
+    takes = {"now": False}
+    calls: list[int] = []
+
+    def fake(tool, radius, pushes, *, initial, **kwargs):
+        calls.append(len(loop.chunks))
+        return SimpleNamespace(mechanics=initial.with_values(initial.mu, 0.9 * initial.c), c_excited=takes["now"],
+                               mu_excited=False, names=[p.name for p in pushes])
+
+    monkeypatch.setattr(identify, "identify_mechanics", fake)
+    push = _reference_push(plan)
+    t, poses, before = push
+    def chunk() -> None:
+        loop.pending, loop.before = (t, poses), before
+        loop.learn(before + np.array([0.0, 0.02]))  # far from where any model puts it: mispredicted
+
+    chunk()
+    assert calls == []  # one chunk kept: nothing to identify from yet
+    chunk()
+    chunk()
+    assert calls == [2, 3] and not loop.adapted  # each misprediction, none took
+    takes["now"] = True
+    chunk()
+    assert calls == [2, 3, 4] and loop.adapted
+    chunk()
+    chunk()
+    assert calls == [2, 3, 4, 6]  # every second one once the model has been adapted
+
+
+def _reference_push(plan):
+    """A push of the plan as a chunk: times from 0 [s], tool poses (K, 3), the object before it [m]."""
+    from tooltransfer.planner.closed_loop import _Reference
+
+    ref = _Reference.of(plan)
+    p = ref.plan.pushes[0]
+    k = min(20, len(p.samples))
+    t = np.linspace(0.0, 1.0, k)
+    return t, p.tool_pose[:k], ref.plan.object_xy[p.samples[0]].copy()
