@@ -227,7 +227,6 @@ class _Loop:
         self.chunks: list = []
         self.adapt_times: list[float] = []
         self.mispredicted = 0
-        self.adapted = False
         self.staged = False
         self.n_pushes = self.n_switches = self.n_recontacts = 0
         self.replan_times: list[float] = []
@@ -472,11 +471,8 @@ class _Loop:
         if np.hypot(*(predicted - o)) <= ADAPT_ERROR:
             return
         self.mispredicted += 1
-        if len(self.chunks) < 2 or (self.adapted and self.mispredicted % 2):
-            # every misprediction until an adaptation took (the plan's model is refuted, and every
-            # chunk pushed on it adds to the drift), then every second one: the identification takes
-            # a few tenths of a second
-            return
+        if len(self.chunks) < 2 or self.mispredicted % 2:
+            return  # every second misprediction: the identification takes a few tenths of a second
         start = time.perf_counter()
         recent = self.chunks[-ADAPT_CHUNKS:]
         miss = [simulate(self.tool, c.tool_pose, c.object_start, self.scene.radius, self.scene.mechanics).final
@@ -492,7 +488,6 @@ class _Loop:
             self.adapt_times.append(time.perf_counter() - start)
         m = ident.mechanics
         if ident.c_excited or ident.mu_excited:
-            self.adapted = True
             self.scene = replace(self.scene, mechanics=m)
             self.log.append(f"adapted the push model to mu {m.mu:.3f}, c {m.c:.3f} from {len(ident.names)} chunks")
 
