@@ -297,9 +297,10 @@ class _Loop:
         travel (:class:`tooltransfer.planner.oe.constraints.ContactOnFace`), so the sideways travel the
         task's ``max_contacts`` contacts per push carry at the plan's ``c`` needs ``(c_plan / c)^2``
         times as many contacts once the adaptation finds a smaller ``c``: the re-plans may use that
-        many (never fewer than the task's, at most :data:`MAX_REPLAN_CONTACTS`). Re-contacts are short
-        moves of the same face; refusing them would leave the object on the drift the smaller ``c``
-        causes, toward the face's normal."""
+        many (never fewer than the task's, at most :data:`MAX_REPLAN_CONTACTS`, which may exceed the
+        task file's bound on ``oe.max_contacts``: that bounds what the nominal plan is asked for, this
+        follows from it). Re-contacts are short moves of the same face; refusing them would leave the
+        object on the drift the smaller ``c`` causes, toward the face's normal."""
         ratio = (self.c_plan / self.scene.mechanics.c) ** 2
         n = int(np.clip(np.ceil(self.options.max_contacts * ratio - 1e-9), self.options.max_contacts,
                         max(self.options.max_contacts, MAX_REPLAN_CONTACTS)))
@@ -453,11 +454,12 @@ class _Loop:
         than ``ADAPT_ERROR`` off, identify ``mu`` and ``c`` again from the last chunks
         (:func:`tooltransfer.tools.pushing.identify.identify_mechanics`, started from and pulled towards the
         mechanics in force), so the re-plans use the plant's own. The identification weighs its prior
-        in units of the chunks' misfit at the model in force; the prior's standard deviation is
-        :data:`ADAPT_PRIOR_SD` times that misfit over the camera's averaged noise (at least 1), so the
-        pull towards the model in force stays that of a fit within the noise and does not grow
-        with how far the model mispredicts (a strong pull would keep ``c`` near the model the chunks
-        refute, and the re-plans on the drift that model causes)."""
+        in units of the chunks' misfit at the model in force, so its standard deviation here is
+        :data:`ADAPT_PRIOR_SD` times the ratio of that misfit [m] to the camera's averaged noise
+        (``camera_noise / sqrt(frames)`` [m]; the ratio at least 1): the pull towards the model in
+        force stays that of a fit within the noise and does not grow with how far the model
+        mispredicts (a strong pull would keep ``c`` near the model the chunks refute, and the re-plans
+        on the drift that model causes)."""
         from tooltransfer.tools.pushing.forward import simulate
         from tooltransfer.tools.pushing.identify import RecordedPush, identify_mechanics
 
@@ -670,6 +672,8 @@ def execute_closed_loop(
         adapt: identify ``mu`` and ``c`` again from the executed chunks when the model mispredicts one
             by more than ``ADAPT_ERROR``, so the re-plans use the plant's mechanics (the report's
             ``mechanics``; the identification's times are ``adapt_times``).
+        camera_noise: the camera's noise per frame [m]: the default plant's, and the noise the re-plan
+            threshold and the adaptation's prior (:meth:`_Loop.learn`) assume for any plant.
     """
     if not isinstance(plan, Plan) or plan.status != "solved":
         raise InputError("plan", "a solved plan", getattr(plan, "status", type(plan).__name__))
