@@ -9,7 +9,10 @@ re-solves the rest of the task from there with the same condensing as the plan:
    the target (a reference from here), with the rest of the plan's face sequence and switch times:
    one fit of that sequence (:func:`tooltransfer.planner.oe.qp_variant.condense_sequence`, the contact starting
    where the face already touches the object), and when it fails a new sequence search
-   (:func:`tooltransfer.planner.oe.qp_variant.condense_qp`) from here; ``mapping`` plans re-plan with the mapping;
+   (:func:`tooltransfer.planner.oe.qp_variant.condense_qp`) from here; ``mapping`` plans re-plan with the mapping.
+   Re-plans use the push model in force (identified again on line when it mispredicts), with the
+   task's contact budget carried over to that model's ``c`` (:meth:`_Loop.replan_options`), and a
+   re-plan whose tool outline overlaps an obstacle is refused as the nominal plan is;
 2. the next chunk: the first push of that re-plan, at most ``chunk`` of object travel (and at most
    ``approach`` of what is left once the target is near, so the object comes at it from short of it:
    faces cannot pull back), its tool path from the push model (the re-plan's tool poses); a change of
@@ -18,7 +21,8 @@ re-solves the rest of the task from there with the same condensing as the plan:
 3. when the plan's path is used up and the object is not within ``tolerance``: correction rounds
    from the observed object to the target along the faces' normals (one face, or the corner of two
    faces' normals that splits the way: pushes along a normal go where they are aimed whatever the
-   limit surface is), a new search when none fits, at most ``max_rounds``.
+   limit surface is), a new search when none fits, at most ``max_rounds``; a correction the object
+   strays from by more than the re-plan threshold is made again from where the object is.
 
 It ends ``"reached"`` (the measured object within ``tolerance``; the true error may differ by the
 camera's noise), ``"closest"`` (no push sequence brings it closer from where it is), ``"rounds"``
@@ -38,6 +42,7 @@ from numpy.typing import NDArray
 from tooltransfer.errors import InputError, ToolTransferError
 from tooltransfer.planner.oe.contacts import MIN_PIECE
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
+from tooltransfer.planner.oe.qp_variant import QPOptions
 from tooltransfer.planner.plan import Plan
 from tooltransfer.planner.scene import Scene
 from tooltransfer.planner.ss.arch_variant import swept_clearance
@@ -57,12 +62,17 @@ BACK_OFF = 0.002
 ADAPT_ERROR = 0.001
 #: The adaptation identifies the model from at most this many of the last push chunks.
 ADAPT_CHUNKS = 6
+#: Standard deviation of the adaptation's prior on ``log mu`` and ``log c`` (centred on the model in
+#: force) for chunks the model in force fits within the camera's noise (:meth:`_Loop.learn`).
+ADAPT_PRIOR_SD = 0.5
 #: A re-plan may use this many times the share of the friction cone the nominal plan uses (the task's
 #: ``oe.friction_cone_fraction``), up to the whole cone (:meth:`_Loop.scene_at`).
 REPLAN_CONE_WIDENING = 1.5
 #: Once the model has mispredicted two chunks, the last this many metres are pushed along the faces'
 #: normals (:meth:`_Loop.correction`).
 STAGE = 0.025
+#: The most contacts (re-contacts + 1) one push of a re-plan may use (:meth:`_Loop.replan_options`).
+MAX_REPLAN_CONTACTS = 30
 
 
 @dataclass(frozen=True)
@@ -183,15 +193,17 @@ class _Loop:
     """One closed-loop run (see :func:`execute_closed_loop`)."""
 
     def __init__(self, plan: Plan, task: Task, plant: object, frames: int, tolerance: float,
-                 adapt: bool = True) -> None:
+                 adapt: bool = True, camera_noise: float = 0.0015) -> None:
         from tooltransfer.planner.recontact import recontact_planner
         from tooltransfer.planner.solve import effective_margin, mapping_options, qp_options, task_scene, task_skills
         from tooltransfer.planner.switches import arch_planner, skill_planner, with_fallback
 
         self.plan, self.task, self.plant, self.frames, self.tolerance = plan, task, plant, frames, tolerance
+        self.noise = camera_noise / np.sqrt(frames)
         self.tool = task_tool(task)
         self.platform = task_platform(task, self.tool)
         obstacles = task_obstacles(task)
+        self.obstacles = obstacles
         self.skills = task_skills(task, need_ss=plan.variant.get("ss") in ("dmp", "opt"))
         self.scene = task_scene(task, obstacles, effective_margin(task, obstacles), self.skills)
         r, clear = task.object.radius, task.ss.clearance
@@ -206,6 +218,7 @@ class _Loop:
         self.options = qp_options(task).model_copy(update={"n_samples": 40, "screen_samples": 30, "n_basis": 15,
                                                             "candidates": 2, "alternatives": 0})
         self.mapping = mapping_options(task)
+        self.c_plan = self.scene.mechanics.c
         self.v, self.a = task.timing.max_tool_speed, task.timing.max_tool_accel
         self.face: str | None = None
         self.adapt = adapt
@@ -277,6 +290,22 @@ class _Loop:
         pose = self.plant.tool_pose()  # type: ignore[attr-defined]
         return contact_fraction(self.tool, self.face, o, pose, self.scene.radius) * self.tool.face(self.face).length
 
+    def replan_options(self) -> QPOptions:
+        """The re-plans' options: the plan's contact budget carried over to the push model in force.
+
+        A sticking contact rolls ``1/c^2`` [m] along the face per metre of the object's sideways
+        travel (:class:`tooltransfer.planner.oe.constraints.ContactOnFace`), so the sideways travel the
+        task's ``max_contacts`` contacts per push carry at the plan's ``c`` needs ``(c_plan / c)^2``
+        times as many contacts once the adaptation finds a smaller ``c``: the re-plans may use that
+        many (never fewer than the task's, at most :data:`MAX_REPLAN_CONTACTS`, which may exceed the
+        task file's bound on ``oe.max_contacts``: that bounds what the nominal plan is asked for, this
+        follows from it). Re-contacts are short moves of the same face; refusing them would leave the
+        object on the drift the smaller ``c`` causes, toward the face's normal."""
+        ratio = (self.c_plan / self.scene.mechanics.c) ** 2
+        n = int(np.clip(np.ceil(self.options.max_contacts * ratio - 1e-9), self.options.max_contacts,
+                        max(self.options.max_contacts, MAX_REPLAN_CONTACTS)))
+        return self.options if n == self.options.max_contacts else self.options.model_copy(update={"max_contacts": n})
+
     def replan(self, t: NDArray[np.float64], ref: NDArray[np.float64], faces: tuple[str, ...],
                switches: tuple[float, ...], o: NDArray[np.float64]) -> PushPlan:
         """The rest of the task from the observed object ``o``: the sequence, else a new search."""
@@ -291,18 +320,43 @@ class _Loop:
                                   self.mapping)
         elif faces:
             pp = condense_sequence(t, ref, self.tool, self.platform, scene, self.target, faces, switches,
-                                   self.options, s_first=s_first, free_start=True)
+                                   self.replan_options(), s_first=s_first, free_start=True)
+            if pp.status == "solved" and pp.pushes:
+                pp = self.clear_of_obstacles(pp)
             if pp.status != "solved":
                 self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
                                 "new search")
-                pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options,
+                pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.replan_options(),
                                  free_start=True)
         else:
-            pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.options, free_start=True)
+            pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.replan_options(),
+                             free_start=True)
+        if pp.status == "solved" and pp.pushes:
+            pp = self.clear_of_obstacles(pp)
         self.replan_times.append(time.perf_counter() - start)
         if pp.status == "solved" and not pp.pushes:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")
         return pp
+
+    def clear_of_obstacles(self, pp: PushPlan) -> PushPlan:
+        """``pp``, or ``pp`` refused when the tool outline overlaps an obstacle at a pose of its first
+        push (the one the loop executes next) or at the second push's contact pose (where the switch
+        or re-contact after it must end, a pose the switch planner refuses): the fit keeps the
+        object clear of the obstacles, not the tool, and the nominal plan is refused for the same
+        overlap (:func:`tooltransfer.planner.solve.solve`). The later poses are left to the re-plans
+        made from the observed object before they run. A refused re-plan lets the caller try
+        another (a new search, a correction's next leg)."""
+        from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
+
+        if not self.obstacles:
+            return pp
+        poses = np.vstack([pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
+        near = tool_obstacle_clearance(self.tool, poses, self.obstacles)
+        if near.distance > 0.0:
+            return pp
+        where = np.round(poses[near.sample, :2], 4).tolist()
+        return replace(pp, status="infeasible",
+                       reason=f"the tool outline overlaps obstacles[{near.obstacle}] with the tool at {where} m")
 
     def correction(self, o: NDArray[np.float64]) -> PushPlan:
         """A correction from ``o`` once the plan's path is used up: along the faces' normals (where
@@ -399,7 +453,13 @@ class _Loop:
         """The last push chunk observed at its end ``o``: keep it, and when the model predicted it more
         than ``ADAPT_ERROR`` off, identify ``mu`` and ``c`` again from the last chunks
         (:func:`tooltransfer.tools.pushing.identify.identify_mechanics`, started from and pulled towards the
-        mechanics in force), so the re-plans use the plant's own."""
+        mechanics in force), so the re-plans use the plant's own. The identification weighs its prior
+        in units of the chunks' misfit at the model in force, so its standard deviation here is
+        :data:`ADAPT_PRIOR_SD` times the ratio of that misfit [m] to the camera's averaged noise
+        (``camera_noise / sqrt(frames)`` [m]; the ratio at least 1): the pull towards the model in
+        force stays that of a fit within the noise and does not grow with how far the model
+        mispredicts (a strong pull would keep ``c`` near the model the chunks refute, and the re-plans
+        on the drift that model causes)."""
         from tooltransfer.tools.pushing.forward import simulate
         from tooltransfer.tools.pushing.identify import RecordedPush, identify_mechanics
 
@@ -416,9 +476,13 @@ class _Loop:
         if len(self.chunks) < 2 or self.mispredicted % 2:
             return  # every second misprediction: the identification takes a few tenths of a second
         start = time.perf_counter()
+        recent = self.chunks[-ADAPT_CHUNKS:]
+        miss = [simulate(self.tool, c.tool_pose, c.object_start, self.scene.radius, self.scene.mechanics).final
+                - c.object_xy[-1] for c in recent]
+        misfit = float(np.sqrt(np.mean(np.square(miss))))
         try:
-            ident = identify_mechanics(self.tool, self.scene.radius, self.chunks[-ADAPT_CHUNKS:],
-                                       initial=self.scene.mechanics, prior_sd=0.5, max_step=5e-4)
+            ident = identify_mechanics(self.tool, self.scene.radius, recent, initial=self.scene.mechanics,
+                                       prior_sd=ADAPT_PRIOR_SD * max(1.0, misfit / self.noise), max_step=5e-4)
         except Exception as exc:  # an identification that cannot run leaves the model as it is
             self.log.append(f"no adaptation ({type(exc).__name__}: {exc})")
             return
@@ -530,7 +594,14 @@ def _next_chunk(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> bool:
         return True
     expected = f.plan.object_xy[p.samples[f.k]]
     tau = f.base + float(f.plan.t[p.samples[f.k]] - f.plan.t[0])
-    if np.hypot(*(o - expected)) > pace.threshold and tau < ref.end - 0.05:
+    off = np.hypot(*(o - expected)) > pace.threshold
+    if off and f.base >= ref.end:  # a correction in force, and the object strays from it: correct from here
+        pp = loop.correction(o)
+        if pp.status == "solved":
+            f.switch_to(pp, ref.end)
+            p = f.plan.pushes[0]
+            loop.log.append(f"corrected again from {np.round(o, 4).tolist()} m: {' -> '.join(pp.faces)}")
+    elif off and tau < ref.end - 0.05:
         t, r, faces, switches = ref.rest(tau, o, loop.target)
         pp = loop.replan(t, r, faces, switches, o)
         if pp.status == "solved":
@@ -601,6 +672,8 @@ def execute_closed_loop(
         adapt: identify ``mu`` and ``c`` again from the executed chunks when the model mispredicts one
             by more than ``ADAPT_ERROR``, so the re-plans use the plant's mechanics (the report's
             ``mechanics``; the identification's times are ``adapt_times``).
+        camera_noise: the camera's noise per frame [m]: the default plant's, and the noise the re-plan
+            threshold and the adaptation's prior (:meth:`_Loop.learn`) assume for any plant.
     """
     if not isinstance(plan, Plan) or plan.status != "solved":
         raise InputError("plan", "a solved plan", getattr(plan, "status", type(plan).__name__))
@@ -610,7 +683,7 @@ def execute_closed_loop(
     loop: _Loop | None = None
     try:
         plant = plant if plant is not None else _default_plant(plan, task, camera_noise, seed, config)
-        loop = _Loop(plan, task, plant, frames, tolerance, adapt)
+        loop = _Loop(plan, task, plant, frames, tolerance, adapt, camera_noise)
         approach_m = np.asarray(plan.phase) == "approach"
         loop.move(plan.tool_pose[approach_m, :2])
         loop.face = plan.pushes[0].faces[0]

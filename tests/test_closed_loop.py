@@ -134,3 +134,122 @@ def test_the_loop_adapts_the_push_model_to_a_mismatched_plant(plan_file: Path) -
                                                 plan.tool_pose[0], platform=task_platform(task, tool),
                                                 camera_noise=0.0015, seed=1), adapt=False)
     assert off.mechanics.c == m.c and not off.adapt_times
+
+
+def _loop_on(plan_file: Path, c_factor: float = 1.0, seed: int = 1):
+    """A closed-loop run's state on the transfer plan, with a quasi-static plant whose c is
+    ``c_factor`` times the plan's (the tool at its first pose, nothing executed)."""
+    from tooltransfer.planner.closed_loop import _Loop
+    from tooltransfer.planner.execution import ModelPlant
+    from tooltransfer.planner.solve import task_mechanics, task_skills
+    from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
+    from tooltransfer.tools.pushing.mechanics import PushMechanics
+
+    plan = read_plan(plan_file)
+    task = task_from_dict(plan.task)
+    tool = task_tool(task)
+    m = task_mechanics(task, task_skills(task))
+    plant = ModelPlant(tool, task.object.radius, PushMechanics(m.mu, c_factor * m.c), task.start, plan.tool_pose[0],
+                       platform=task_platform(task, tool), camera_noise=0.0015, seed=seed)
+    return plan, _Loop(plan, task, plant, 10, 0.001)
+
+
+def test_replans_carry_the_contact_budget_over_to_the_adapted_c(plan_file: Path) -> None:
+    """The contact rolls 1/c^2 per sideways travel: at 0.6 x the plan's c the re-plans may use
+    1/0.36 times the task's contacts per push, never fewer than the task's, at most the cap."""
+    from dataclasses import replace
+
+    from tooltransfer.planner.closed_loop import MAX_REPLAN_CONTACTS
+
+    _, loop = _loop_on(plan_file)
+    task_contacts = loop.options.max_contacts
+    assert loop.replan_options().max_contacts == task_contacts
+    m = loop.scene.mechanics
+    loop.scene = replace(loop.scene, mechanics=m.with_values(m.mu, 0.6 * m.c))
+    assert loop.replan_options().max_contacts == int(np.ceil(task_contacts / 0.36 - 1e-9))
+    assert loop.replan_options().n_samples == loop.options.n_samples  # nothing else changes
+    loop.scene = replace(loop.scene, mechanics=m.with_values(m.mu, min(2.0, 1.4 * m.c)))
+    assert loop.replan_options().max_contacts == task_contacts
+    loop.scene = replace(loop.scene, mechanics=m.with_values(m.mu, 0.05 * m.c))
+    assert loop.replan_options().max_contacts == MAX_REPLAN_CONTACTS
+
+
+def test_a_replan_whose_tool_overlaps_an_obstacle_is_refused(plan_file: Path) -> None:
+    """The fit keeps the object clear of the obstacles, not the tool: a re-plan whose tool outline
+    overlaps one along the push executed next, or at the contact pose the switch after it ends in,
+    is refused with the obstacle and the pose, as the nominal plan is; later poses are re-planned
+    before they run."""
+    from tooltransfer.planner.closed_loop import _Reference
+    from tooltransfer.tools.objects import Disc
+
+    plan, loop = _loop_on(plan_file)
+    pp = _Reference.of(plan).plan
+    assert len(pp.pushes) >= 3
+    loop.obstacles = []
+    assert loop.clear_of_obstacles(pp) is pp
+    far = Disc(np.array([50.0, 50.0]), 0.005)
+    loop.obstacles = [far]
+    assert loop.clear_of_obstacles(pp).status == "solved"
+    first = pp.pushes[0].tool_pose
+    for pose in (first[len(first) // 2], pp.pushes[1].tool_pose[0]):
+        loop.obstacles = [far, Disc(pose[:2].copy(), 0.002)]
+        refused = loop.clear_of_obstacles(pp)
+        assert refused.status == "infeasible"
+        assert "obstacles[1]" in refused.reason and "overlaps" in refused.reason
+    later = pp.pushes[-1].tool_pose[-1]
+    assert min(np.hypot(*(p.tool_pose[:, :2] - later[:2]).T).min() for p in pp.pushes[:2]) > 0.05
+    loop.obstacles = [far, Disc(later[:2].copy(), 0.002)]
+    assert loop.clear_of_obstacles(pp).status == "solved"
+
+
+def test_a_straying_correction_is_corrected_from_the_observed_object(plan_file: Path) -> None:
+    """With a correction in force (past the plan's path), an object observed off it by more than
+    the re-plan threshold gets a new correction from where it is; on it, the correction goes on."""
+    from tooltransfer.planner.closed_loop import _InForce, _next_chunk, _Pace, _Reference
+
+    plan, loop = _loop_on(plan_file)
+    ref = _Reference.of(plan)
+    pace = _Pace(0.001, 0.001, 0.015, 0.6, 4)
+    calls: list[np.ndarray] = []
+
+    def correction(o: np.ndarray, target: np.ndarray | None = None):
+        calls.append(o)
+        return ref.plan  # a solved push plan, put in force from the plan's end
+
+    loop.correction = correction
+    loop.push = lambda p, pp, o, k0, length, lead_in=None: k0 + 1  # nothing moves
+    here = np.asarray(plan.object["start"], dtype=float)
+    loop.observe = lambda: here.copy()
+    f = _InForce(ref.plan, base=ref.end)  # a correction in force whose first sample is the start: on it
+    assert not _next_chunk(loop, ref, f, pace)
+    assert not calls
+    here = here + np.array([0.004, 0.0])  # 4 mm off the correction in force
+    f = _InForce(ref.plan, base=ref.end)
+    assert not _next_chunk(loop, ref, f, pace)
+    assert len(calls) == 1 and np.allclose(calls[0], here)
+    assert f.base == ref.end and f.plan is ref.plan
+    assert any("corrected again" in line for line in loop.log)
+
+
+def test_the_adaptations_prior_is_weighed_in_units_of_the_camera_noise(plan_file: Path, monkeypatch) -> None:
+    """Chunks the model in force mispredicts far beyond the camera's noise loosen the pull towards
+    it (the prior's standard deviation grows with the misfit over the noise, never below
+    ADAPT_PRIOR_SD), and the model in force ends near the plant's c."""
+    import tooltransfer.tools.pushing.identify as identify
+    from tooltransfer.planner.closed_loop import ADAPT_PRIOR_SD, execute_closed_loop
+
+    seen: list[float] = []
+    real = identify.identify_mechanics
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs["prior_sd"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(identify, "identify_mechanics", spy)
+    plan, loop = _loop_on(plan_file, c_factor=0.6)
+    c_plan = loop.scene.mechanics.c
+    rep = execute_closed_loop(plan, loop.plant)
+    assert seen, rep.log
+    assert min(seen) >= ADAPT_PRIOR_SD
+    assert seen[0] > 2.0 * ADAPT_PRIOR_SD  # the plan's c mispredicts the first chunks far beyond the noise
+    assert abs(rep.mechanics.c - 0.6 * c_plan) < 0.25 * abs(c_plan - 0.6 * c_plan)
