@@ -577,6 +577,8 @@ def main(argv: list[str] | None = None) -> int:
         _check_outputs(args)
         code = int(args.func(args))
         sys.stdout.flush()  # here, where a reader that has gone (BrokenPipeError) is handled
+        if argv is None and args.command in QUICK_EXIT:
+            _quick_exit(code)
         return code
     except KeyboardInterrupt:
         if verbose:
@@ -596,6 +598,31 @@ def main(argv: list[str] | None = None) -> int:
                 signal.signal(signal.SIGINT, signal.SIG_DFL)
             except ValueError:  # not the main thread
                 pass
+
+
+#: Commands that end the process as soon as their work is done (:func:`_quick_exit`): they start no
+#: process or thread that outlives them and write their files atomically before returning.
+QUICK_EXIT = frozenset({"solve", "export", "schema", "tasks"})
+
+
+def _quick_exit(code: int) -> None:
+    """End the console command now with ``code``: the exit handlers run (``atexit``: logging's
+    flush, a coverage tool's report), the streams are flushed, and the interpreter's teardown of
+    every module's objects is skipped (about 0.15 s after ``solve``, an eighth of the command).
+    Returns (and the interpreter ends as usual) when a profiler or a debugger is attached, another
+    non-daemon thread still runs, or this Python has no ``atexit._run_exitfuncs``."""
+    import atexit
+    import os
+    import threading
+
+    run_exit_handlers = getattr(atexit, "_run_exitfuncs", None)
+    others = [t for t in threading.enumerate() if t is not threading.main_thread() and not t.daemon]
+    if run_exit_handlers is None or others or sys.getprofile() is not None or sys.gettrace() is not None:
+        return
+    run_exit_handlers()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
 
 
 def _stdout_gone() -> bool:

@@ -91,3 +91,28 @@ def test_a_reader_that_has_gone_ends_the_command_silently_with_141() -> None:
         os.close(write_end)
     assert done.returncode == 141
     assert done.stderr == ""
+
+
+def test_a_quick_exit_still_runs_the_exit_handlers_and_flushes(tmp_path) -> None:
+    """``tasks`` ends without the interpreter's teardown (an object only the teardown frees is never
+    freed): its output is whole, its exit code kept, and an ``atexit`` handler (logging's, a coverage
+    tool's) still runs."""
+    import subprocess
+    import sys
+
+    mark, torn = tmp_path / "handler-ran", tmp_path / "torn-down"
+    code = ("import atexit, pathlib, sys\n"
+            f"atexit.register(pathlib.Path({str(mark)!r}).write_text, 'ran')\n"
+            "class Kept:\n"
+            f"    def __del__(self, p=pathlib.Path({str(torn)!r})): p.write_text('teardown')\n"
+            "kept = Kept()  # freed only by the interpreter's teardown\n"
+            "from tooltransfer.planner.cli import main\n"
+            "sys.argv = ['tooltransfer', 'tasks']\n"
+            "sys.exit(main())\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert mark.read_text() == "ran"
+    assert not torn.exists()  # the teardown was skipped
+    from tooltransfer.problems.named import bundled_tasks
+
+    assert [line.split()[0] for line in done.stdout.splitlines()] == list(bundled_tasks())
