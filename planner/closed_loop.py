@@ -316,39 +316,37 @@ class _Loop:
         s_first = self.contact_s(o) if faces and faces[0] == self.face else None
         scene = self.scene_at(o)
         if self.variant == "mapping":
-            pp = condense_mapping(t, ref, self.tool, self.platform, scene, self.target,
-                                  self.mapping)
-        elif faces:
-            pp = condense_sequence(t, ref, self.tool, self.platform, scene, self.target, faces, switches,
-                                   self.replan_options(), s_first=s_first, free_start=True)
-            if pp.status == "solved" and pp.pushes:
-                pp = self.clear_of_obstacles(pp)
-            if pp.status != "solved":
-                self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
-                                "new search")
-                pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.replan_options(),
-                                 free_start=True)
+            pp = self.clear_of_obstacles(condense_mapping(t, ref, self.tool, self.platform, scene, self.target,
+                                                          self.mapping))
         else:
-            pp = condense_qp(t, ref, self.tool, self.platform, scene, self.target, self.replan_options(),
-                             free_start=True)
-        if pp.status == "solved" and pp.pushes:
-            pp = self.clear_of_obstacles(pp)
+            opts = self.replan_options()
+            pp = None
+            if faces:
+                pp = self.clear_of_obstacles(condense_sequence(t, ref, self.tool, self.platform, scene, self.target,
+                                                               faces, switches, opts, s_first=s_first,
+                                                               free_start=True))
+                if pp.status != "solved":
+                    self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
+                                    "new search")
+            if pp is None or pp.status != "solved":
+                pp = self.clear_of_obstacles(condense_qp(t, ref, self.tool, self.platform, scene, self.target, opts,
+                                                         free_start=True))
         self.replan_times.append(time.perf_counter() - start)
         if pp.status == "solved" and not pp.pushes:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")
         return pp
 
     def clear_of_obstacles(self, pp: PushPlan) -> PushPlan:
-        """``pp``, or ``pp`` refused when the tool outline overlaps an obstacle at a pose of its first
-        push (the one the loop executes next) or at the second push's contact pose (where the switch
-        or re-contact after it must end, a pose the switch planner refuses): the fit keeps the
-        object clear of the obstacles, not the tool, and the nominal plan is refused for the same
-        overlap (:func:`tooltransfer.planner.solve.solve`). The later poses are left to the re-plans
-        made from the observed object before they run. A refused re-plan lets the caller try
-        another (a new search, a correction's next leg)."""
+        """``pp`` (as it is when not solved or without a push), or ``pp`` refused when the tool
+        outline overlaps an obstacle at a pose of its first push (the one the loop executes next) or
+        at the second push's contact pose (where the switch or re-contact after it must end, a pose
+        the switch planner refuses): the fit keeps the object clear of the obstacles, not the tool,
+        and the nominal plan is refused for the same overlap (:func:`tooltransfer.planner.solve.solve`).
+        The later poses are left to the re-plans made from the observed object before they run. A
+        refused re-plan lets the caller try another (a new search, a correction's next leg)."""
         from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
 
-        if not self.obstacles:
+        if not self.obstacles or pp.status != "solved" or not pp.pushes:
             return pp
         poses = np.vstack([pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
         near = tool_obstacle_clearance(self.tool, poses, self.obstacles)
