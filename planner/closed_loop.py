@@ -320,7 +320,6 @@ class _Loop:
                                                           self.mapping))
         else:
             opts = self.replan_options()
-            pp = None
             if faces:
                 pp = self.clear_of_obstacles(condense_sequence(t, ref, self.tool, self.platform, scene, self.target,
                                                                faces, switches, opts, s_first=s_first,
@@ -328,7 +327,7 @@ class _Loop:
                 if pp.status != "solved":
                     self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
                                     "new search")
-            if pp is None or pp.status != "solved":
+            if not faces or pp.status != "solved":
                 pp = self.clear_of_obstacles(condense_qp(t, ref, self.tool, self.platform, scene, self.target, opts,
                                                          free_start=True))
         self.replan_times.append(time.perf_counter() - start)
