@@ -161,20 +161,16 @@ def solve(task: Task, task_path: str | Path | None = None, *, prefetch: bool = T
     often needs in a background thread while the push plan is solved
     (:func:`~tooltransfer.planner.switches.prefetch_opt_nlp`; the plan is the same either way, it only
     comes sooner on a machine with a core to spare)."""
-    start = time.perf_counter()
-    if prefetch and task.variants.ss == "opt":
-        tool = task_tool(task)
-        prefetch_opt_nlp(tool, task_platform(task, tool), task.object.radius, task_obstacles(task), task.ss.n_knots)
     try:
-        return _solve(task, task_path, start)
+        return _solve(task, task_path, prefetch)
     finally:
         wait_for_prefetch()  # no CasADi build left running behind the caller
 
 
-def _solve(task: Task, task_path: str | Path | None, start: float) -> Plan:
+def _solve(task: Task, task_path: str | Path | None, prefetch: bool) -> Plan:
     task_path = task_origin(task, task_path)
     stages: dict[str, float] = {}
-    clock = start
+    start = clock = time.perf_counter()
 
     def lap(name: str) -> None:
         nonlocal clock
@@ -185,6 +181,8 @@ def _solve(task: Task, task_path: str | Path | None, start: float) -> Plan:
     tool = task_tool(task)
     platform = task_platform(task, tool)
     obstacles = task_obstacles(task)
+    if prefetch and task.variants.ss == "opt":
+        prefetch_opt_nlp(tool, platform, task.object.radius, obstacles, task.ss.n_knots)
     desc = _describe(task, tool, platform, obstacles)
     base = {"variant": {"oe": task.variants.oe, "ss": task.variants.ss}, "task": _as_loaded(task, task_path),
             **desc}

@@ -344,12 +344,8 @@ def build_nlp(
     of ``bodies`` (their values are parameters of each solve). ``reach``: which reach row families
     (:func:`reach_families`) the interior knots get."""
     wait_for_prefetch()
-    return _build(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth,
-                  reach_margin=reach_margin, max_iter=max_iter, reach=reach, separators=separators)
-
-
-def _build(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], **kw: Any) -> SwitchNLP:
-    return _formulate(tool, n_knots, platform, bodies, **kw)()
+    return _formulate(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth,
+                      reach_margin=reach_margin, max_iter=max_iter, reach=reach, separators=separators)()
 
 
 def _formulate(
@@ -485,11 +481,14 @@ def get_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[B
         prefetched = key in _PREFETCHED
         _PREFETCHED.discard(key)
         return hit, prefetched
-    nlp = build_nlp(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth, reach=reach,
-                    separators=separators)
+    return _store(key, build_nlp(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth,
+                                 reach=reach, separators=separators)), True
+
+
+def _store(key: tuple, nlp: SwitchNLP) -> SwitchNLP:
     nlp.key = key
     _CACHE[key] = nlp
-    return nlp, True
+    return nlp
 
 
 def prefetch_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *,
@@ -518,8 +517,7 @@ def prefetch_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Seque
             nlp = derive()
         except Exception:  # get_nlp builds it again and raises in the caller's thread
             return
-        nlp.key = key
-        _CACHE[key] = nlp
+        _store(key, nlp)
         _PREFETCHED.add(key)
 
     thread = threading.Thread(target=build, name="tooltransfer-nlp-prefetch", daemon=True)
