@@ -635,7 +635,8 @@ def _stdout_gone() -> bool:
 
     try:
         fd = sys.stdout.fileno()
-        if not (stat.S_ISFIFO(os.fstat(fd).st_mode) or stat.S_ISSOCK(os.fstat(fd).st_mode)):
+        mode = os.fstat(fd).st_mode
+        if not (stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)):
             return False
         poller = select.poll()
         poller.register(fd, select.POLLOUT)

@@ -115,9 +115,10 @@ def dataset_hash(folder: Path) -> str:
     """Content hash (SHA-256 hex) of a dataset folder: every file's name and bytes. Kept in memory for
     the process while no file's name, size, modification time or inode changes (one planning run asks
     for it once per skill it reads)."""
-    files = sorted(p for p in Path(folder).iterdir() if p.is_file())
+    folder = Path(folder)
+    files = sorted(p for p in folder.iterdir() if p.is_file())
     signature = tuple((p.name, (st := p.stat()).st_size, st.st_mtime_ns, st.st_ino) for p in files)
-    key = (str(Path(folder).resolve()), signature)
+    key = (str(folder.resolve()), signature)
     if key not in _HASHES:
         h = hashlib.sha256()
         for p in files:
