@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.plan import JOINT_NAMES, Plan
+from tooltransfer.readable_json import dumps
 
 FORMATS = ("csv", "npz", "joint-trajectory")
 #: The file name ending of each format (the default output is the plan's name with it).
@@ -124,7 +125,7 @@ def export_plan(plan: Plan, out: str | Path, fmt: str, joint_names: tuple[str, .
     if fmt == "csv":
         return write_text(out, _csv_text(traj))
     if fmt == "joint-trajectory":
-        return write_text(out, json.dumps(joint_trajectory_message(traj), indent=1) + "\n")
+        return write_text(out, dumps(joint_trajectory_message(traj)) + "\n")
     with atomic_path(out) as tmp, open(tmp, "wb") as f:  # a file object: numpy adds no ".npz" to the name
         np.savez(f, t=traj.t, positions=traj.positions, velocities=traj.velocities,
                  accelerations=traj.accelerations, joint_names=np.array(traj.joint_names),
