@@ -304,7 +304,7 @@ def run_task(job: Job) -> Row:
     wall, cpu = time.perf_counter(), time.process_time()
     try:
         with _deadline(job.timeout, "planning"):
-            plan = solve(_task(job), job.source, prefetch=False)  # as the batch workers: every core is busy
+            plan = solve(_task(job), job.source)
     except Exception as exc:
         now = time.perf_counter()
         row.update(status=_exception(exc), plan_wall=now - wall, task_wall=now - started)

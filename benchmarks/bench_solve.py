@@ -4,8 +4,8 @@ A new process each time, the skills cached on disk after the first run, the pack
 compiled first (as ``pip install`` leaves it: a checkout whose ``.pyc`` files are stale, e.g. under
 ``PYTHONDONTWRITEBYTECODE=1``, would compile its sources on every start). Prints the medians of
 several runs of the whole process (wall time and CPU time, user + system of the child), of
-``tooltransfer --help`` (wall), and of planning alone in-process with and without the switch-NLP
-prefetch (:func:`tooltransfer.planner.solve.solve`). Targets (issue 18): whole-process solve at
+``tooltransfer --help`` (wall), and of planning alone in-process (:func:`tooltransfer.planner.solve.solve`,
+its switch NLPs built each run, as in a new process). Targets (issue 18): whole-process solve at
 most 0.8 s, ``--help`` at most 0.25 s.
 
 ``--peer COMMAND...``: another build's solve command (e.g. an older checkout's ``tooltransfer solve
@@ -80,15 +80,13 @@ def main() -> None:
 
     task = load_task(TASK)
     solve(task, TASK)
-    plans: dict[bool, list[float]] = {True: [], False: []}
+    plans: list[float] = []
     for _ in range(args.reps):
-        for prefetch in (True, False):
-            clear_cache()  # every run builds its switch NLPs, as a new process does
-            t0 = time.perf_counter()
-            solve(task, TASK, prefetch=prefetch)
-            plans[prefetch].append(time.perf_counter() - t0)
-    print(f"planning alone (NLPs built each run): median {np.median(plans[True]):.3f} s with the prefetch, "
-          f"{np.median(plans[False]):.3f} s without")
+        clear_cache()  # every run builds its switch NLPs, as a new process does
+        t0 = time.perf_counter()
+        solve(task, TASK)
+        plans.append(time.perf_counter() - t0)
+    print(f"planning alone (NLPs built each run): median {np.median(plans):.3f} s")
 
 
 if __name__ == "__main__":

@@ -37,8 +37,7 @@ from tooltransfer.planner.plan import Plan, Segment
 from tooltransfer.planner.recontact import recontact_planner
 from tooltransfer.planner.scene import Scene
 from tooltransfer.planner.skills import Skills, learn_skills, load_skills_file
-from tooltransfer.planner.ss.nlp import wait_for_prefetch
-from tooltransfer.planner.switches import arch_planner, prefetch_opt_nlp, skill_planner, with_fallback
+from tooltransfer.planner.switches import arch_planner, skill_planner, with_fallback
 from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
 from tooltransfer.problems.task import Task, resolve, task_obstacles, task_origin, task_platform, task_tool
 from tooltransfer.tools.objects import Disc
@@ -152,22 +151,12 @@ def effective_margin(task: Task, obstacles: list) -> float:
     return margin
 
 
-def solve(task: Task, task_path: str | Path | None = None, *, prefetch: bool = True) -> Plan:
+def solve(task: Task, task_path: str | Path | None = None) -> Plan:
     """Plan ``task``: the plan's status is ``"solved"`` only when every hard check holds.
 
     Relative paths in the task are relative to ``task_path``'s folder, by default the folder of the file
     the task was loaded from (:func:`~tooltransfer.problems.task.load_task`; the working folder for a task
-    built in code). ``prefetch``: with the ``opt`` switches, build the switch NLP the first switch most
-    often needs in a background thread while the push plan is solved
-    (:func:`~tooltransfer.planner.switches.prefetch_opt_nlp`; the plan is the same either way, it only
-    comes sooner on a machine with a core to spare)."""
-    try:
-        return _solve(task, task_path, prefetch)
-    finally:
-        wait_for_prefetch()  # no CasADi build left running behind the caller
-
-
-def _solve(task: Task, task_path: str | Path | None, prefetch: bool) -> Plan:
+    built in code)."""
     task_path = task_origin(task, task_path)
     stages: dict[str, float] = {}
     start = clock = time.perf_counter()
@@ -181,8 +170,6 @@ def _solve(task: Task, task_path: str | Path | None, prefetch: bool) -> Plan:
     tool = task_tool(task)
     platform = task_platform(task, tool)
     obstacles = task_obstacles(task)
-    if prefetch and task.variants.ss == "opt":
-        prefetch_opt_nlp(tool, platform, task.object.radius, obstacles, task.ss.n_knots)
     desc = _describe(task, tool, platform, obstacles)
     base = {"variant": {"oe": task.variants.oe, "ss": task.variants.ss}, "task": _as_loaded(task, task_path),
             **desc}

@@ -30,8 +30,6 @@ from tooltransfer.errors import InputError
 from tooltransfer.planner.assemble import SwitchPlanner
 from tooltransfer.planner.ss import OptOptions, SwitchPath, SwitchSkill, SwitchTask, optimize, recombine
 from tooltransfer.planner.ss.arch_variant import NoArch, swept_clearance, switch_path
-from tooltransfer.planner.ss.bodies import all_bodies
-from tooltransfer.planner.ss.nlp import prefetch_nlp
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, DiscObject
 from tooltransfer.tools.omni.ik import joint_path
@@ -127,23 +125,6 @@ def skill_planner(variant: str, skill: SwitchSkill, tool: Tool, platform: OmniPl
         return replace(res, info={**res.info, "contact_gap": gap})
 
     return plan
-
-
-def prefetch_opt_nlp(tool: Tool, platform: OmniPlatform, radius: float, obstacles: Sequence[Obstacle],
-                     n_knots: int) -> bool:
-    """Start building, in the background (:func:`tooltransfer.planner.ss.nlp.prefetch_nlp`), the NLP the
-    first ``opt`` switch of a plan most often needs: ``tool`` at ``n_knots`` knots against the object
-    (a disc of ``radius`` [m]) and every obstacle, without reach rows (the first refinement level of a
-    switch near all the obstacles and away from the reach boundary). A switch that needs another
-    structure builds its own as before; the plan is the same either way, and a structure that cannot
-    be built is left to the switch that needs it (to raise there). Returns whether a build started."""
-    try:
-        opts = OptOptions(n_knots=n_knots)
-        bodies = all_bodies(Disc(np.zeros(2), radius), tuple(obstacles))
-        return prefetch_nlp(tool, n_knots, platform, bodies, model=opts.model, solver=opts.solver,
-                            smooth=opts.smooth, reach=False, separators=opts.separators)
-    except Exception:  # a guess never changes the outcome: the switch that needs it builds it and raises there
-        return False
 
 
 def with_fallback(primary: SwitchPlanner, fallback: SwitchPlanner, name: str) -> SwitchPlanner:

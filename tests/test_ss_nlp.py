@@ -1,12 +1,20 @@
-"""The switch NLP's rows (built vectorized over the knots) against a knot-by-knot numpy evaluation."""
+"""The switch NLP: its rows (mapped over the knots) against a knot-by-knot numpy evaluation, and the
+derivatives it hands IPOPT against CasADi's own, in value and in the solves they give."""
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
+import pytest
+import shapely
 
+from tooltransfer.planner.ss import OptOptions, SwitchTask, learn_switch_skill, optimize
+from tooltransfer.planner.ss import nlp as nlp_module
 from tooltransfer.planner.ss.bodies import UNIT, all_bodies
 from tooltransfer.planner.ss.cases import fig11_task
-from tooltransfer.planner.ss.nlp import build_nlp
+from tooltransfer.planner.ss.nlp import build_nlp, clear_cache
+from tooltransfer.planner.ss.synthetic import synthetic_switches
+from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.heading import heading
 from tooltransfer.tools.omni.reach import reach_sector, wedge_rows
@@ -90,3 +98,92 @@ def test_distance_rows_are_shapely_signed_distances() -> None:
     n_body = len(expected)
     np.testing.assert_allclose(g[:n_body], expected, atol=1e-6)
     assert inside > 0  # the inside branch was exercised
+
+
+def _casadis_own(nlp: nlp_module.SwitchNLP) -> tuple[ca.Function, ca.Function, ca.Function]:
+    """CasADi's automatic gradient, Jacobian and Lagrangian Hessian (upper triangle) of the NLP's
+    objective and rows, as functions of (z, p) and (z, p, lam_f, lam_g)."""
+    z, p = ca.MX.sym("z", nlp.n_vars), ca.MX.sym("p", nlp.n_params)
+    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", nlp.lbg.size)
+    f = nlp.solver.get_function("nlp_f")(z, p)
+    g = nlp.rows(z, p)
+    hess = ca.triu(ca.hessian(lam_f * f + ca.dot(lam_g, g), z)[0])
+    return (ca.Function("own_grad", [z, p], [ca.gradient(f, z)]), ca.Function("own_jac", [z, p], [ca.jacobian(g, z)]),
+            ca.Function("own_hess", [z, p, lam_f, lam_g], [hess]))
+
+
+_POLYGON = shapely.box(0.03, 0.15, 0.045, 0.17)
+
+
+@pytest.mark.parametrize(("model", "separators", "obstacles", "reach"), [
+    ("pieces", "distance", (Disc(np.array([0.05, 0.17]), 0.01),), True),
+    ("pieces", "distance", (_POLYGON,), (False, True, False)),
+    ("pieces", "vector", (Disc(np.array([0.05, 0.17]), 0.01), _POLYGON), True),
+    ("pieces", "angle", (Disc(np.array([0.05, 0.17]), 0.01),), False),
+    ("capsule", "distance", (Disc(np.array([0.05, 0.17]), 0.01),), True),
+])
+def test_derivatives_equal_casadis_own(model: str, separators: str, obstacles: tuple, reach: object) -> None:
+    """The gradient, Jacobian and Lagrangian Hessian IPOPT gets (derived for one knot and mapped)
+    equal CasADi's automatic derivatives of the whole problem at random points, with the same
+    sparsity; the gradient is stored dense (IPOPT reads it as a dense vector: a sparse one left the
+    separators' entries unset and sent IPOPT astray)."""
+    rng = np.random.default_rng(7)
+    task = fig11_task("fig11b")
+    bodies = all_bodies(task.shape, obstacles)
+    N = 9
+    nlp = build_nlp(task.tool, N, task.omni, bodies, model=model, separators=separators, reach=reach)
+    grad, jac, hess = (nlp.solver.get_function(n) for n in ("nlp_grad_f", "nlp_jac_g", "nlp_hess_l"))
+    assert grad.sparsity_out(1).is_dense()
+    own_grad, own_jac, own_hess = _casadis_own(nlp)
+    assert jac.sparsity_out(1).nnz() == own_jac.sparsity_out(0).nnz()
+    assert hess.sparsity_out(0).nnz() == own_hess.sparsity_out(0).nnz()
+    for _ in range(4):
+        X = (np.array([0.0, 0.16]) + rng.uniform(-0.03, 0.03, (N, 2))) / UNIT
+        z = np.concatenate([X.ravel(), rng.normal(size=nlp.n_vars - X.size)])
+        p = np.concatenate([X.ravel() + 1.0, rng.uniform(0, 2, 2 * N), *[b.data for b in bodies], [25.0]])
+        lam = rng.normal(size=nlp.lbg.size)
+        np.testing.assert_allclose(grad(z, p)[1].full(), own_grad(z, p).full(), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(jac(z, p)[1].full(), own_jac(z, p).full(), rtol=1e-12, atol=1e-12)
+        got, want = hess(z, p, 0.7, lam).full(), own_hess(z, p, 0.7, lam).full()
+        np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-10 * np.abs(want).max())
+
+
+def test_ipopt_solves_as_with_casadis_own_derivatives(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every solve of a switch past a disc and a polygon obstacle (separating variables) takes the
+    same IPOPT iterations to the same path as IPOPT given CasADi's own derivatives of the problem."""
+    compared: list[int] = []
+    separated: list[bool] = []
+
+    class Twin:
+        """The NLP's solver, and beside it IPOPT with CasADi's derivatives of the same f and g."""
+
+        def __init__(self, problem: dict, derivatives: dict, max_iter: int) -> None:
+            self.ours = ipopt(problem, derivatives, max_iter)
+            self.own = ipopt(problem, {}, max_iter)
+            # separating variables: more variables than the 2 N knot coordinates (p holds 4 N + bodies + 1)
+            separated.append(problem["x"].numel() > 2 * (problem["p"].numel() // 4))
+
+        def __call__(self, **args: object) -> dict:
+            got, want = self.ours(**args), self.own(**args)
+            mine, theirs = self.ours.stats(), self.own.stats()
+            assert (mine["return_status"], mine["iter_count"]) == (theirs["return_status"], theirs["iter_count"])
+            np.testing.assert_allclose(got["x"].full(), want["x"].full(), rtol=1e-9, atol=1e-9)
+            compared.append(mine["iter_count"])
+            return got
+
+        def stats(self) -> dict:
+            return self.ours.stats()
+
+    ipopt = nlp_module.SOLVERS["ipopt"]
+    monkeypatch.setitem(nlp_module.SOLVERS, "ipopt", Twin)
+    clear_cache()
+    skill = learn_switch_skill(synthetic_switches(5, seed=1), virtual="arch", tool="finger")
+    c = np.array([0.0, 0.16])
+    task = SwitchTask(load_tool("finger"), "upper", "left", c,
+                      obstacles=(Disc(c + np.array([0.055, 0.02]), 0.01), shapely.box(-0.075, 0.17, -0.06, 0.185)))
+    try:
+        path = optimize(skill, task, OptOptions(body_band=None))  # every obstacle in the NLP
+    finally:
+        clear_cache()
+    assert path.ok, path.reason
+    assert compared and sum(compared) > 5 and any(separated)

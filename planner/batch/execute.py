@@ -45,7 +45,7 @@ def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: 
     t = task_from_dict(task, source)
     t = t.model_copy(update={"variants": Variants(oe=oe, ss=ss)})
     wall, cpu = time.perf_counter(), time.process_time()
-    plan = solve(t, source, prefetch=False)  # the workers fill every core: a guessed NLP not needed would take one
+    plan = solve(t, source)
     row: dict[str, Any] = {"status": plan.status, "reason": plan.reason,
                            "time_total": time.perf_counter() - wall, "cpu_time": time.process_time() - cpu}
     m = plan.metrics

@@ -53,18 +53,17 @@ the ``dmp`` path (a parameter).
 Solvers (:data:`SOLVERS`): ``"ipopt"`` (interior point; warm start with primal and dual values and
 ``warm_start_init_point``) and ``"sqp"`` (CasADi's ``sqpmethod`` with the ``qrqp`` active-set QP,
 fast on the small capsule model; ``qpOASES`` is not used: it keeps state between calls).
-Building an NLP (the rows, vectorized over the knots, then ``nlpsol``: derivatives and sparsity,
-mostly the Lagrangian's Hessian) costs tens of milliseconds, far more than a solve, so
-:func:`get_nlp` caches one per structure (tool, model, N, platform, body kinds, solver) and solves
-change only parameters, bounds and the initial guess. It is not cached on disk: deserializing a
-built solver (``Function.serialize``) is no faster than building it, and a generated, compiled NLP
-would need a C compiler at run time. The build and solve times are in ``benchmarks/README.md``
+Building an NLP: the rows of one interior knot are SX expressions, derived once and mapped over the
+knots (:mod:`tooltransfer.planner.ss.knot_rows`), and IPOPT gets these derivatives instead of ones
+CasADi would derive from the whole problem (an SX Hessian of some 60,000 operations, 80-130 ms to
+build). A build takes about 20 ms, mostly Python making the expressions; :func:`get_nlp` caches one
+per structure (tool, model, N, platform, body kinds, solver), and solves change only parameters,
+bounds and the initial guess. The build and solve times are in ``benchmarks/README.md``
 (``benchmarks/bench_ss.py``).
 """
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -75,6 +74,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.ss.bodies import UNIT, Body
+from tooltransfer.planner.ss.knot_rows import KnotRows, placed
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.omni.heading import heading_casadi
 from tooltransfer.tools.omni.platform import OmniPlatform
@@ -112,16 +112,17 @@ class Capsule:
         return best
 
 
-def _ipopt(nlp: dict[str, Any], max_iter: int) -> Any:
+def _ipopt(nlp: dict[str, Any], derivatives: dict[str, Any], max_iter: int) -> Any:
     import casadi as ca
 
     # tol 1e-4 on the (mm, mm^2) scaled NLP error; the constraint violation keeps IPOPT's default
     # constr_viol_tol (1e-4 mm), and the exact shapely check decides penetration anyway. The
     # adaptive barrier update takes fewer iterations than the monotone one (the other IPOPT settings
     # tried are listed in benchmarks/README.md). calc_lam_p off: the parameters' multipliers are not
-    # used (one evaluation less per solve).
+    # used (one evaluation less per solve). The derivatives are the NLP's own, mapped knot by knot
+    # (build_nlp), not CasADi's of the whole MX graph.
     return ca.nlpsol("ss_ipopt", "ipopt", nlp, {
-        "print_time": False, "error_on_fail": False, "calc_lam_p": False,
+        **derivatives, "print_time": False, "error_on_fail": False, "calc_lam_p": False,
         "ipopt": {"print_level": 0, "sb": "yes", "max_iter": max_iter, "tol": 1e-4, "acceptable_tol": 1e-3,
                   "mu_strategy": "adaptive", "warm_start_init_point": "yes", "warm_start_bound_push": 1e-3,
                   "warm_start_mult_bound_push": 1e-3, "warm_start_slack_bound_push": 1e-3, "mu_init": 1e-2,
@@ -129,18 +130,21 @@ def _ipopt(nlp: dict[str, Any], max_iter: int) -> Any:
     })
 
 
-def _sqp(nlp: dict[str, Any], max_iter: int) -> Any:
+def _sqp(nlp: dict[str, Any], derivatives: dict[str, Any], max_iter: int) -> Any:
     import casadi as ca
 
+    # sqpmethod asks for other derivative functions (the whole Hessian, the Jacobian of f and g at
+    # once): the MX problem is expanded to SX and CasADi derives it (slower to build, as fast to solve)
     return ca.nlpsol("ss_sqp", "sqpmethod", nlp, {
-        "print_time": False, "print_header": False, "print_iteration": False, "print_status": False,
+        "expand": True, "print_time": False, "print_header": False, "print_iteration": False, "print_status": False,
         "error_on_fail": False, "max_iter": max_iter, "qpsol": "qrqp",
         "qpsol_options": {"print_iter": False, "print_header": False, "print_info": False, "error_on_fail": False},
     })
 
 
-#: Registered NLP backends: name -> builder(nlp dict, max_iter) -> casadi Function.
-SOLVERS: dict[str, Callable[[dict[str, Any], int], Any]] = {"ipopt": _ipopt, "sqp": _sqp}
+#: Registered NLP backends: name -> builder(nlp dict, derivative functions by nlpsol option, max_iter)
+#: -> casadi Function.
+SOLVERS: dict[str, Callable[[dict[str, Any], dict[str, Any], int], Any]] = {"ipopt": _ipopt, "sqp": _sqp}
 MODELS: tuple[str, ...] = ("pieces", "capsule")
 #: Non-penetration rows for disc bodies: the exact signed distance (no variables; the default), or
 #: separating directions as a vector ``n`` with ``|n|^2 <= 1`` (two variables and a row) or as an angle
@@ -252,30 +256,29 @@ class _ToolRows:
 
 
 class _Interior:
-    """The tool at the interior knots, as (1, N - 2) CasADi rows: its centre ``Xi, Yi`` [mm] and the
-    heading's cosine and sine (the heading a function of position through the Omni's waist)."""
+    """The tool at one interior knot (SX): its centre ``Xi, Yi`` [mm] and the heading's cosine and
+    sine (the heading a function of position through the Omni's waist)."""
 
-    def __init__(self, X: Any, platform: OmniPlatform) -> None:
+    def __init__(self, centre: Any, platform: OmniPlatform) -> None:
         import casadi as ca
 
-        n = X.shape[1]
-        self.Xi, self.Yi = X[0, 1:n - 1], X[1, 1:n - 1]
+        self.Xi, self.Yi = centre[0], centre[1]
         yaw = heading_casadi(platform, self.Xi * UNIT, self.Yi * UNIT)
         self.cos_k, self.sin_k = ca.cos(yaw), ca.sin(yaw)
 
     def world(self, v: NDArray[np.float64]) -> tuple[Any, Any]:
-        """The tool-frame point ``v`` (2,) [mm] in the world at each interior knot."""
+        """The tool-frame point ``v`` (2,) [mm] in the world at the knot."""
         return self.Xi + self.cos_k * v[0] - self.sin_k * v[1], self.Yi + self.sin_k * v[0] + self.cos_k * v[1]
 
     def tool_frame(self, cx: Any, cy: Any) -> tuple[Any, Any]:
-        """The world point ``(cx, cy)`` in the tool frame at each interior knot (there the tool's
-        outline is constant, so distance expressions and their Hessians stay small)."""
+        """The world point ``(cx, cy)`` in the tool frame at the knot (there the tool's outline is
+        constant, so distance expressions and their Hessians stay small)."""
         rx, ry = cx - self.Xi, cy - self.Yi
         return self.cos_k * rx + self.sin_k * ry, self.cos_k * ry - self.sin_k * rx
 
 
 def _body_rows(knots: _Interior, tr: _ToolRows, b: Body, bi: int, p: Any, m: Any, S: Any) -> list[Any]:
-    """Non-penetration rows (each (1, N - 2), >= 0) of body ``b`` (number ``bi``, parameters ``p``,
+    """Non-penetration rows (SX scalars of one knot, each >= 0) of body ``b`` (number ``bi``, parameters ``p``,
     margin row ``m`` [mm]) against the tool: the capsule's distance, the signed distance of each
     piece to a disc, or the separating-line rows of each piece (separating variables ``S``)."""
     import casadi as ca
@@ -315,7 +318,7 @@ def _body_rows(knots: _Interior, tr: _ToolRows, b: Body, bi: int, p: Any, m: Any
 
 def _reach_rows(knots: _Interior, platform: OmniPlatform, reach: bool | tuple[bool, bool, bool],
                 reach_margin: float) -> list[Any]:
-    """Reach rows (each (1, N - 2), >= 0, scaled to millimetres) of the interior knots: inside the
+    """Reach rows (SX scalars of one knot, each >= 0, scaled to millimetres): inside the
     outer radius, outside the inner one and inside the wedge's two half-planes, each
     ``reach_margin`` [m] inside, as far as :func:`reach_families` keeps them."""
     sec = reach_sector(platform)
@@ -342,83 +345,90 @@ def build_nlp(
 ) -> SwitchNLP:
     """Build the NLP (module docstring) for ``tool`` at ``n_knots`` knots against bodies of the kinds
     of ``bodies`` (their values are parameters of each solve). ``reach``: which reach row families
-    (:func:`reach_families`) the interior knots get."""
-    wait_for_prefetch()
-    return _formulate(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth,
-                      reach_margin=reach_margin, max_iter=max_iter, reach=reach, separators=separators)()
+    (:func:`reach_families`) the interior knots get.
 
-
-def _formulate(
-    tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
-    solver: str = "ipopt", smooth: float = 10.0, reach_margin: float = 1e-4, max_iter: int = 150,
-    reach: bool | tuple[bool, bool, bool] = True, separators: str = "distance",
-) -> Callable[[], SwitchNLP]:
-    """The NLP's expressions (built here: CasADi calls from Python, holding the GIL) and the step
-    that derives the solver from them (``nlpsol``, in C++ with the GIL released), which
-    :func:`prefetch_nlp` runs in a background thread; :func:`build_nlp` runs both at once."""
+    Variables ``z = [vec(X) (2 N), vec(S) (n_sep, N - 2)]``; parameters
+    ``p = [vec(Xd) (2 N), m_obj (N), m_obs (N), each body's data, s_max]``. The rows of each body and
+    the reach rows read one interior knot each: they are derived for one knot and mapped
+    (:class:`tooltransfer.planner.ss.knot_rows.KnotRows`); the objective and the step rows, which
+    couple neighbouring knots and are quadratic, are one SX function of the knots."""
     import casadi as ca
 
     t0 = time.perf_counter()
     _check_build(n_knots, bodies, model, solver, separators)
-    N = n_knots
+    N, K = n_knots, n_knots - 2
     tr = _ToolRows.of(tool, bodies, model, separators)
-    X = ca.SX.sym("X", 2, N)
-    S = ca.SX.sym("S", tr.n_sep, N - 2) if tr.n_sep else None
-    Xd = ca.SX.sym("Xd", 2, N)
-    m_obj = ca.SX.sym("m_obj", N)
-    m_obs = ca.SX.sym("m_obs", N)
-    bpar = [ca.SX.sym(f"body{i}", b.data.size) for i, b in enumerate(bodies)]
-    s_max = ca.SX.sym("s_max")
-    # Rows are built vectorized over the interior knots (each expression a (1, N - 2) row: a few
-    # hundred CasADi operations instead of one per knot: much faster to build), then stacked knot by knot
-    # (``ca.vec`` of the (rows per knot, N - 2) matrix), the same order as one knot at a time.
-    K = N - 2
-    knots = _Interior(X, platform)
-    blocks: list[Any] = []
+    n_vars = 2 * N + K * tr.n_sep
+    sizes = [int(b.data.size) for b in bodies]
+    n_params = 4 * N + sum(sizes) + 1
+    z, p = ca.MX.sym("z", n_vars), ca.MX.sym("p", n_params)
+    # one knot's variables: its centre, then its separators (z's order: knot k is column k + 1 of X)
+    var_index = np.column_stack([2 * np.arange(1, N - 1), 2 * np.arange(1, N - 1) + 1,
+                                 2 * N + tr.n_sep * np.arange(K)[:, None] + np.arange(tr.n_sep)]).astype(np.intp)
+    v = ca.SX.sym("v", 2 + tr.n_sep)
+    m = ca.SX.sym("m")
+    knot = _Interior(v[:2], platform)
+    S = v[2:] if tr.n_sep else None
+    interior = KnotRows(var_index, n_vars)
     families: list[tuple[str, int, int]] = []
-    count = 0
-    for bi, b in enumerate(bodies):
-        start = count
-        m = (m_obj if b.family == "object" else m_obs)[1:N - 1].T
-        per_knot = _body_rows(knots, tr, b, bi, bpar[bi], m, S)
-        blocks.append(ca.vec(ca.vertcat(*per_knot)))
-        count += len(per_knot) * K
-        families.append((b.family, start, count))
+    count, off = 0, 4 * N
+    for bi, (b, size) in enumerate(zip(bodies, sizes, strict=True)):
+        q = ca.SX.sym(f"body{bi}", size)
+        base = 2 * N if b.family == "object" else 3 * N  # m_obj or m_obs, at the interior knots
+        margins = p[base + 1:base + N - 1].T
+        n = interior.add(f"body{bi}", v, q, m, _body_rows(knot, tr, b, bi, q, m, S), p[off:off + size], margins)
+        families.append((b.family, count, count + n))
+        count, off = count + n, off + size
     start = count
-    per_knot = _reach_rows(knots, platform, reach, reach_margin)
+    per_knot = _reach_rows(knot, platform, reach, reach_margin)
     if per_knot:
-        blocks.append(ca.vec(ca.vertcat(*per_knot)))
-        count += len(per_knot) * K
+        count += interior.add("reach", v, ca.SX(0, 1), m, per_knot, ca.MX(0, 1), ca.MX(1, K))
     families.append(("reach", start, count))
-    # step length between consecutive knots at most s_max (no tunnelling through a body between knots)
-    start = count
+    whole, whole_hess = _objective_and_steps(N, smooth)
+    families.append(("step", count, count + N - 1))
+    n_rows = count + N - 1
+    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", n_rows)
+    fo, st, grad, jac_s = whole(z[:2 * N], p[:2 * N], p[-1])
+    g = ca.vertcat(*interior.rows(z), st)
+    r, c = (np.asarray(a, dtype=np.intp) for a in whole.sparsity_out(3).get_triplet())
+    jac = sum(interior.jacobian(z, n_rows), placed(jac_s, count + r, c, (n_rows, n_vars)))
+    r, c = (np.asarray(a, dtype=np.intp) for a in whole_hess.sparsity_out(0).get_triplet())
+    hess = sum(interior.hessian(z, lam_g),
+               placed(whole_hess(z[:2 * N], p[:2 * N], p[-1], lam_f, lam_g[count:]), r, c, (n_vars, n_vars)))
+    derivatives = {
+        # IPOPT reads the gradient as a dense vector: the separators' zeros must be stored ones
+        "grad_f": ca.Function("nlp_grad_f", [z, p], [fo, ca.densify(ca.vertcat(grad, ca.MX(n_vars - 2 * N, 1)))],
+                              ["x", "p"], ["f", "grad_f_x"]),
+        "jac_g": ca.Function("nlp_jac_g", [z, p], [g, jac], ["x", "p"], ["g", "jac_g_x"]),
+        "hess_lag": ca.Function("nlp_hess_l", [z, p, lam_f, lam_g], [hess],
+                                ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
+    }
+    fn = SOLVERS[solver]({"x": z, "p": p, "f": fo, "g": g}, derivatives, max_iter)
+    return SwitchNLP(
+        key=(), solver=fn, n_knots=N, model=model, solver_name=solver, n_sep=tr.n_sep, sep_layout=tr.sep_layout,
+        families=families, lbg=np.zeros(n_rows), ubg=np.full(n_rows, np.inf), pieces=tr.pieces,
+        capsule=tr.capsule, build_time=time.perf_counter() - t0, n_params=n_params,
+        rows=ca.Function("ss_rows", [z, p], [g]), angle=tr.angle,
+    )
+
+
+def _objective_and_steps(N: int, smooth: float) -> tuple[Any, Any]:
+    """The objective and the step rows ``|X_{k+1} - X_k| <= s_max`` (no tunnelling through a body
+    between knots) as SX functions of the knots ``x = vec(X)`` (2 N,) [mm], the reference
+    ``xd`` (2 N,) [mm] and ``s_max`` [mm]: ``(f, steps, grad f, jac steps)`` and, apart (an MX call
+    depends on all its inputs, and these take no multipliers), the upper triangle of the Hessian of
+    ``lam_f f + lam_s . steps``."""
+    import casadi as ca
+
+    x, xd, s_max = ca.SX.sym("x", 2 * N), ca.SX.sym("xd", 2 * N), ca.SX.sym("s_max")
+    X = ca.reshape(x, 2, N)
     dX = X[:, 1:] - X[:, :-1]
-    blocks.append(((s_max * s_max - (dX[0, :] ** 2 + dX[1, :] ** 2)) / s_max).T)
-    count += N - 1
-    families.append(("step", start, count))
-    track = ca.sumsqr(X - Xd) / N
-    acc = ca.sumsqr(X[:, 2:] - 2 * X[:, 1:-1] + X[:, :-2])
-    z = ca.vertcat(ca.vec(X), ca.vec(S)) if S is not None else ca.vec(X)
-    pv = ca.vertcat(ca.vec(Xd), m_obj, m_obs, *bpar, s_max)
-    nlp = {"x": z, "p": pv, "f": track + smooth * acc, "g": ca.vertcat(*blocks)}
-    spent = time.perf_counter() - t0
-    n_params = int(pv.numel())
-    held = [nlp]  # the expressions: released by the thread that derives the solver from them
-
-    def derive() -> SwitchNLP:
-        t1 = time.perf_counter()
-        expr = held.pop()
-        fn = SOLVERS[solver](expr, max_iter)
-        g_fn = ca.Function("ss_rows", [expr["x"], expr["p"]], [expr["g"]])
-        expr.clear()
-        return SwitchNLP(
-            key=(), solver=fn, n_knots=N, model=model, solver_name=solver, n_sep=tr.n_sep, sep_layout=tr.sep_layout,
-            families=families, lbg=np.zeros(count), ubg=np.full(count, np.inf), pieces=tr.pieces,
-            capsule=tr.capsule, build_time=spent + time.perf_counter() - t1, n_params=n_params, rows=g_fn,
-            angle=tr.angle,
-        )
-
-    return derive
+    step = ((s_max * s_max - (dX[0, :] ** 2 + dX[1, :] ** 2)) / s_max).T
+    f = ca.sumsqr(x - xd) / N + smooth * ca.sumsqr(X[:, 2:] - 2 * X[:, 1:-1] + X[:, :-2])
+    lam_f, lam_s = ca.SX.sym("lam_f"), ca.SX.sym("lam_s", N - 1)
+    return (ca.Function("ss_whole", [x, xd, s_max], [f, step, ca.gradient(f, x), ca.jacobian(step, x)]),
+            ca.Function("ss_whole_hess", [x, xd, s_max, lam_f, lam_s],
+                        [ca.triu(ca.hessian(lam_f * f + ca.dot(lam_s, step), x)[0])]))
 
 
 def _signed_distance(verts: NDArray[np.float64], lx: Any, ly: Any) -> Any:
@@ -426,7 +436,7 @@ def _signed_distance(verts: NDArray[np.float64], lx: Any, ly: Any) -> Any:
     with vertices ``verts`` (V, 2) [mm]: outside, the least clamped point-to-edge distance (exact,
     continuously differentiable); inside, the largest signed distance to the edges' lines
     (negative). In the tool frame the edges are constants, so the expression (and its Hessian) stays
-    small; vectorised over the knots like the other rows."""
+    small."""
     import casadi as ca
 
     v = np.asarray(verts, dtype=np.float64)
@@ -459,8 +469,6 @@ def _area2(v: NDArray[np.float64]) -> float:
 
 
 _CACHE: dict[tuple, SwitchNLP] = {}
-_PREFETCH: list[threading.Thread] = []
-_PREFETCHED: set[tuple] = set()  # built by a prefetch, not used yet: the first get_nlp reports it built
 
 
 def _key(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], model: str, solver: str,
@@ -472,72 +480,21 @@ def _key(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body
 def get_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *, model: str = "pieces",
             solver: str = "ipopt", smooth: float = 10.0, reach: bool | tuple[bool, bool, bool] = True,
             separators: str = "distance") -> tuple[SwitchNLP, bool]:
-    """The cached NLP for this structure (built on first use); returns ``(nlp, built_now)``. A build
-    :func:`prefetch_nlp` started is waited for first (and counts as built now, by this call)."""
+    """The cached NLP for this structure (built on first use); returns ``(nlp, built_now)``."""
     key = _key(tool, n_knots, platform, bodies, model, solver, smooth, reach, separators)
-    wait_for_prefetch()
     hit = _CACHE.get(key)
     if hit is not None:
-        prefetched = key in _PREFETCHED
-        _PREFETCHED.discard(key)
-        return hit, prefetched
-    return _store(key, build_nlp(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth,
-                                 reach=reach, separators=separators)), True
-
-
-def _store(key: tuple, nlp: SwitchNLP) -> SwitchNLP:
+        return hit, False
+    nlp = build_nlp(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth, reach=reach,
+                    separators=separators)
     nlp.key = key
     _CACHE[key] = nlp
-    return nlp
-
-
-def prefetch_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[Body], *,
-                 model: str = "pieces", solver: str = "ipopt", smooth: float = 10.0,
-                 reach: bool | tuple[bool, bool, bool] = True, separators: str = "distance") -> bool:
-    """Build the NLP of this structure (arguments as :func:`get_nlp`), its solver in a background
-    thread, unless it is cached or a prefetch is running; returns whether one started.
-
-    The expressions are built here (Python calling CasADi: in a thread they would wait for the GIL
-    behind the caller's work). Most of a build is then ``nlpsol`` deriving the problem (the
-    Lagrangian's Hessian, the sparsity) in C++ with the GIL released: that runs in the thread, so the
-    caller's NumPy work (the push plan the switches follow) goes on meanwhile on another core and the
-    first switch finds its NLP built. CasADi is not thread-safe, so no other CasADi call may run until
-    the thread ends: :func:`get_nlp` and :func:`build_nlp` first wait for it
-    (:func:`wait_for_prefetch`), and the package calls CasADi only through them and the functions they
-    return. A build that fails in the thread is forgotten: :func:`get_nlp` builds it again and raises
-    there; invalid arguments raise here."""
-    key = _key(tool, n_knots, platform, bodies, model, solver, smooth, reach, separators)
-    if key in _CACHE or _PREFETCH:
-        return False
-    derive = _formulate(tool, n_knots, platform, bodies, model=model, solver=solver, smooth=smooth, reach=reach,
-                        separators=separators)
-
-    def build() -> None:
-        try:
-            nlp = derive()
-        except Exception:  # get_nlp builds it again and raises in the caller's thread
-            return
-        _store(key, nlp)
-        _PREFETCHED.add(key)
-
-    thread = threading.Thread(target=build, name="tooltransfer-nlp-prefetch", daemon=True)
-    _PREFETCH.append(thread)
-    thread.start()
-    return True
-
-
-def wait_for_prefetch() -> None:
-    """Wait until no prefetch (:func:`prefetch_nlp`) runs."""
-    while _PREFETCH:
-        _PREFETCH[0].join()
-        _PREFETCH.pop(0)
+    return nlp, True
 
 
 def clear_cache() -> None:
-    """Forget every built NLP (after any prefetch has finished)."""
-    wait_for_prefetch()
+    """Forget every built NLP."""
     _CACHE.clear()
-    _PREFETCHED.clear()
 
 
 def initial_separators(nlp: SwitchNLP, xy_mm: NDArray[np.float64], yaw: NDArray[np.float64],
