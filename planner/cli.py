@@ -229,7 +229,7 @@ def _cmd_solve(args: argparse.Namespace) -> int:
                **{k: m[k] for k in ("goal_error", "cone_violation_max", "reach_violation_max", "obstacle_clearance_min",
                                     "tool_obstacle_clearance_min", "switch_clearance_min", "switch_penetration_max",
                                     "joint_limit_violation_max", "duration") if k in m},
-               # the whole solve; a plan that stopped early has only the stages it ran (time_total sums them)
+               # the solve's wall time; a plan that stopped early has no time_total: the stages it ran
                "planning_time": m.get("time_total", sum(v for k, v in m.items() if k.startswith("time_")))}
     executions: dict = {}
     if args.simulate and plan.status == "solved":

@@ -3,6 +3,8 @@ derivatives it hands IPOPT against CasADi's own, in value and in the solves they
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -113,30 +115,35 @@ def _casadis_own(nlp: nlp_module.SwitchNLP) -> tuple[ca.Function, ca.Function, c
 
 
 _POLYGON = shapely.box(0.03, 0.15, 0.045, 0.17)
+_DISC = Disc(np.array([0.05, 0.17]), 0.01)
+_SQUARE_OBJECT = shapely.box(-0.015, 0.145, 0.015, 0.175)
 
 
-@pytest.mark.parametrize(("model", "separators", "obstacles", "reach"), [
-    ("pieces", "distance", (Disc(np.array([0.05, 0.17]), 0.01),), True),
-    ("pieces", "distance", (_POLYGON,), (False, True, False)),
-    ("pieces", "vector", (Disc(np.array([0.05, 0.17]), 0.01), _POLYGON), True),
-    ("pieces", "angle", (Disc(np.array([0.05, 0.17]), 0.01),), False),
-    ("capsule", "distance", (Disc(np.array([0.05, 0.17]), 0.01),), True),
+@pytest.mark.parametrize(("tool", "model", "separators", "obj", "obstacles", "reach", "n_knots"), [
+    ("trapezoid", "pieces", "distance", None, (_DISC,), True, 9),
+    ("trapezoid", "pieces", "distance", None, (_POLYGON,), (False, True, False), 9),
+    ("trapezoid", "pieces", "vector", None, (_DISC, _POLYGON), True, 9),
+    ("trapezoid", "pieces", "angle", None, (_DISC,), False, 9),
+    ("trapezoid", "capsule", "distance", None, (_DISC,), True, 9),
+    ("l_shape", "pieces", "distance", None, (_DISC,), (False, False, True), 5),  # two pieces; wedge rows only
+    ("l_shape", "pieces", "distance", _SQUARE_OBJECT, (_DISC, _POLYGON), (True, False, False), 6),
 ])
-def test_derivatives_equal_casadis_own(model: str, separators: str, obstacles: tuple, reach: object) -> None:
+def test_derivatives_equal_casadis_own(tool: str, model: str, separators: str, obj: object, obstacles: tuple,
+                                       reach: object, n_knots: int) -> None:
     """The gradient, Jacobian and Lagrangian Hessian IPOPT gets (derived for one knot and mapped)
     equal CasADi's automatic derivatives of the whole problem at random points, with the same
-    sparsity; the gradient is stored dense (IPOPT reads it as a dense vector: a sparse one left the
-    separators' entries unset and sent IPOPT astray)."""
+    sparsity patterns (the Hessian's upper triangle); the gradient is stored dense (IPOPT reads it as
+    a dense vector: a sparse one left the separators' entries unset and sent IPOPT astray)."""
     rng = np.random.default_rng(7)
     task = fig11_task("fig11b")
-    bodies = all_bodies(task.shape, obstacles)
-    N = 9
-    nlp = build_nlp(task.tool, N, task.omni, bodies, model=model, separators=separators, reach=reach)
+    bodies = all_bodies(task.shape if obj is None else obj, obstacles)
+    N = n_knots
+    nlp = build_nlp(load_tool(tool), N, task.omni, bodies, model=model, separators=separators, reach=reach)
     grad, jac, hess = (nlp.solver.get_function(n) for n in ("nlp_grad_f", "nlp_jac_g", "nlp_hess_l"))
     assert grad.sparsity_out(1).is_dense()
     own_grad, own_jac, own_hess = _casadis_own(nlp)
-    assert jac.sparsity_out(1).nnz() == own_jac.sparsity_out(0).nnz()
-    assert hess.sparsity_out(0).nnz() == own_hess.sparsity_out(0).nnz()
+    assert jac.sparsity_out(1) == own_jac.sparsity_out(0)
+    assert hess.sparsity_out(0) == own_hess.sparsity_out(0) and hess.sparsity_out(0).is_triu()
     for _ in range(4):
         X = (np.array([0.0, 0.16]) + rng.uniform(-0.03, 0.03, (N, 2))) / UNIT
         z = np.concatenate([X.ravel(), rng.normal(size=nlp.n_vars - X.size)])
@@ -149,25 +156,24 @@ def test_derivatives_equal_casadis_own(model: str, separators: str, obstacles: t
 
 
 def test_ipopt_solves_as_with_casadis_own_derivatives(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Every solve of a switch past a disc and a polygon obstacle (separating variables) takes the
-    same IPOPT iterations to the same path as IPOPT given CasADi's own derivatives of the problem."""
+    """Every solve of a switch past a disc and a polygon obstacle (separating variables) ends as IPOPT
+    given CasADi's own derivatives of the problem does: the same status and path, and the iteration
+    counts within rounding's reach (equal here; rounding can change the count of a long solve)."""
     compared: list[int] = []
-    separated: list[bool] = []
 
     class Twin:
         """The NLP's solver, and beside it IPOPT with CasADi's derivatives of the same f and g."""
 
-        def __init__(self, problem: dict, derivatives: dict, max_iter: int) -> None:
+        def __init__(self, problem: dict, derivatives: Callable[[], dict], max_iter: int) -> None:
             self.ours = ipopt(problem, derivatives, max_iter)
-            self.own = ipopt(problem, {}, max_iter)
-            # separating variables: more variables than the 2 N knot coordinates (p holds 4 N + bodies + 1)
-            separated.append(problem["x"].numel() > 2 * (problem["p"].numel() // 4))
+            self.own = ipopt(problem, dict, max_iter)  # no derivatives given: CasADi derives the MX graph
 
         def __call__(self, **args: object) -> dict:
             got, want = self.ours(**args), self.own(**args)
             mine, theirs = self.ours.stats(), self.own.stats()
-            assert (mine["return_status"], mine["iter_count"]) == (theirs["return_status"], theirs["iter_count"])
-            np.testing.assert_allclose(got["x"].full(), want["x"].full(), rtol=1e-9, atol=1e-9)
+            assert mine["return_status"] == theirs["return_status"]
+            assert abs(mine["iter_count"] - theirs["iter_count"]) <= max(1, theirs["iter_count"] // 10)
+            np.testing.assert_allclose(got["x"].full(), want["x"].full(), rtol=1e-6, atol=1e-6)  # [mm]
             compared.append(mine["iter_count"])
             return got
 
@@ -183,6 +189,7 @@ def test_ipopt_solves_as_with_casadis_own_derivatives(monkeypatch: pytest.Monkey
                       obstacles=(Disc(c + np.array([0.055, 0.02]), 0.01), shapely.box(-0.075, 0.17, -0.06, 0.185)))
     try:
         path = optimize(skill, task, OptOptions(body_band=None))  # every obstacle in the NLP
+        separated = [nlp.n_sep > 0 for nlp in nlp_module._CACHE.values()]  # the polygon's separating variables
     finally:
         clear_cache()
     assert path.ok, path.reason

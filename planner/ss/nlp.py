@@ -67,14 +67,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.ss.bodies import UNIT, Body
-from tooltransfer.planner.ss.knot_rows import KnotRows, placed
+from tooltransfer.planner.ss.knot_rows import KnotRows, placed, triplet
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.omni.heading import heading_casadi
 from tooltransfer.tools.omni.platform import OmniPlatform
@@ -112,7 +112,7 @@ class Capsule:
         return best
 
 
-def _ipopt(nlp: dict[str, Any], derivatives: dict[str, Any], max_iter: int) -> Any:
+def _ipopt(nlp: dict[str, Any], derivatives: Callable[[], dict[str, Any]], max_iter: int) -> Any:
     import casadi as ca
 
     # tol 1e-4 on the (mm, mm^2) scaled NLP error; the constraint violation keeps IPOPT's default
@@ -122,7 +122,7 @@ def _ipopt(nlp: dict[str, Any], derivatives: dict[str, Any], max_iter: int) -> A
     # used (one evaluation less per solve). The derivatives are the NLP's own, mapped knot by knot
     # (build_nlp), not CasADi's of the whole MX graph.
     return ca.nlpsol("ss_ipopt", "ipopt", nlp, {
-        **derivatives, "print_time": False, "error_on_fail": False, "calc_lam_p": False,
+        **derivatives(), "print_time": False, "error_on_fail": False, "calc_lam_p": False,
         "ipopt": {"print_level": 0, "sb": "yes", "max_iter": max_iter, "tol": 1e-4, "acceptable_tol": 1e-3,
                   "mu_strategy": "adaptive", "warm_start_init_point": "yes", "warm_start_bound_push": 1e-3,
                   "warm_start_mult_bound_push": 1e-3, "warm_start_slack_bound_push": 1e-3, "mu_init": 1e-2,
@@ -130,11 +130,12 @@ def _ipopt(nlp: dict[str, Any], derivatives: dict[str, Any], max_iter: int) -> A
     })
 
 
-def _sqp(nlp: dict[str, Any], derivatives: dict[str, Any], max_iter: int) -> Any:
+def _sqp(nlp: dict[str, Any], derivatives: Callable[[], dict[str, Any]], max_iter: int) -> Any:
     import casadi as ca
 
     # sqpmethod asks for other derivative functions (the whole Hessian, the Jacobian of f and g at
-    # once): the MX problem is expanded to SX and CasADi derives it (slower to build, as fast to solve)
+    # once), so ``derivatives`` is not called: the MX problem is expanded to SX and CasADi derives it
+    # (slower to build, as fast to solve)
     return ca.nlpsol("ss_sqp", "sqpmethod", nlp, {
         "expand": True, "print_time": False, "print_header": False, "print_iteration": False, "print_status": False,
         "error_on_fail": False, "max_iter": max_iter, "qpsol": "qrqp",
@@ -142,9 +143,10 @@ def _sqp(nlp: dict[str, Any], derivatives: dict[str, Any], max_iter: int) -> Any
     })
 
 
-#: Registered NLP backends: name -> builder(nlp dict, derivative functions by nlpsol option, max_iter)
-#: -> casadi Function.
-SOLVERS: dict[str, Callable[[dict[str, Any], dict[str, Any], int], Any]] = {"ipopt": _ipopt, "sqp": _sqp}
+#: Registered NLP backends: name -> builder(nlp dict, a function giving the NLP's derivative functions
+#: by nlpsol option (called only by a backend that uses them), max_iter) -> casadi Function.
+SOLVERS: dict[str, Callable[[dict[str, Any], Callable[[], dict[str, Any]], int], Any]] = {"ipopt": _ipopt,
+                                                                                          "sqp": _sqp}
 MODELS: tuple[str, ...] = ("pieces", "capsule")
 #: Non-penetration rows for disc bodies: the exact signed distance (no variables; the default), or
 #: separating directions as a vector ``n`` with ``|n|^2 <= 1`` (two variables and a row) or as an angle
@@ -384,26 +386,34 @@ def build_nlp(
     if per_knot:
         count += interior.add("reach", v, ca.SX(0, 1), m, per_knot, ca.MX(0, 1), ca.MX(1, K))
     families.append(("reach", start, count))
-    whole, whole_hess = _objective_and_steps(N, smooth)
     families.append(("step", count, count + N - 1))
     n_rows = count + N - 1
-    lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", n_rows)
-    fo, st, grad, jac_s = whole(z[:2 * N], p[:2 * N], p[-1])
-    g = ca.vertcat(*interior.rows(z), st)
-    r, c = (np.asarray(a, dtype=np.intp) for a in whole.sparsity_out(3).get_triplet())
-    jac = sum(interior.jacobian(z, n_rows), placed(jac_s, count + r, c, (n_rows, n_vars)))
-    r, c = (np.asarray(a, dtype=np.intp) for a in whole_hess.sparsity_out(0).get_triplet())
-    hess = sum(interior.hessian(z, lam_g),
-               placed(whole_hess(z[:2 * N], p[:2 * N], p[-1], lam_f, lam_g[count:]), r, c, (n_vars, n_vars)))
-    derivatives = {
-        # IPOPT reads the gradient as a dense vector: the separators' zeros must be stored ones
-        "grad_f": ca.Function("nlp_grad_f", [z, p], [fo, ca.densify(ca.vertcat(grad, ca.MX(n_vars - 2 * N, 1)))],
-                              ["x", "p"], ["f", "grad_f_x"]),
-        "jac_g": ca.Function("nlp_jac_g", [z, p], [g, jac], ["x", "p"], ["g", "jac_g_x"]),
-        "hess_lag": ca.Function("nlp_hess_l", [z, p, lam_f, lam_g], [hess],
-                                ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"]),
-    }
-    fn = SOLVERS[solver]({"x": z, "p": p, "f": fo, "g": g}, derivatives, max_iter)
+    whole = _objective_and_steps(N, smooth)
+    xs, xd, s_max = z[:2 * N], p[:2 * N], p[-1]
+    g = ca.vertcat(*interior.rows(z), whole.steps(xs, s_max))
+
+    def derivatives() -> dict[str, Any]:
+        """IPOPT's derivative functions: the gradient (stored dense: IPOPT reads it as a dense vector,
+        so the separators' zeros must be stored ones), the Jacobian and the Lagrangian's Hessian."""
+        lam_f, lam_g = ca.MX.sym("lam_f"), ca.MX.sym("lam_g", n_rows)
+        f, grad = whole.with_grad(xs, xd)
+        values, jacobians = interior.rows_and_jacobian(z, n_rows)
+        steps, jac_steps = whole.steps_with_jac(xs, s_max)
+        r, c = triplet(whole.steps_with_jac.sparsity_out(1))
+        jac = sum(jacobians, placed(jac_steps, count + r, c, (n_rows, n_vars)))
+        r, c = triplet(whole.hess.sparsity_out(0))
+        hess = sum(interior.hessian(z, lam_g), placed(whole.hess(xs, s_max, lam_f, lam_g[count:]), r, c,
+                                                      (n_vars, n_vars)))
+        return {
+            "grad_f": ca.Function("nlp_grad_f", [z, p], [f, ca.densify(ca.vertcat(grad, ca.MX(n_vars - 2 * N, 1)))],
+                                  ["x", "p"], ["f", "grad_f_x"]),
+            "jac_g": ca.Function("nlp_jac_g", [z, p], [ca.vertcat(*values, steps), jac], ["x", "p"],
+                                 ["g", "jac_g_x"]),
+            "hess_lag": ca.Function("nlp_hess_l", [z, p, lam_f, lam_g], [hess], ["x", "p", "lam_f", "lam_g"],
+                                    ["triu_hess_gamma_x_x"]),
+        }
+
+    fn = SOLVERS[solver]({"x": z, "p": p, "f": whole.f(xs, xd), "g": g}, derivatives, max_iter)
     return SwitchNLP(
         key=(), solver=fn, n_knots=N, model=model, solver_name=solver, n_sep=tr.n_sep, sep_layout=tr.sep_layout,
         families=families, lbg=np.zeros(n_rows), ubg=np.full(n_rows, np.inf), pieces=tr.pieces,
@@ -412,12 +422,25 @@ def build_nlp(
     )
 
 
-def _objective_and_steps(N: int, smooth: float) -> tuple[Any, Any]:
-    """The objective and the step rows ``|X_{k+1} - X_k| <= s_max`` (no tunnelling through a body
-    between knots) as SX functions of the knots ``x = vec(X)`` (2 N,) [mm], the reference
-    ``xd`` (2 N,) [mm] and ``s_max`` [mm]: ``(f, steps, grad f, jac steps)`` and, apart (an MX call
-    depends on all its inputs, and these take no multipliers), the upper triangle of the Hessian of
-    ``lam_f f + lam_s . steps``."""
+class _Whole(NamedTuple):
+    """The objective and the step rows as SX functions of the knots ``x = vec(X)`` (2 N,) [mm], the
+    reference ``xd`` (2 N,) [mm] and ``s_max`` [mm], one function per combination the NLP's callbacks
+    need (an SX function computes all its outputs whenever it is called): ``f(x, xd)``,
+    ``with_grad(x, xd) -> (f, grad f)``, ``steps(x, s_max)``, ``steps_with_jac(x, s_max) -> (steps,
+    their Jacobian)`` and ``hess(x, s_max, lam_f, lam_s)``, the upper triangle of the Hessian of
+    ``lam_f f + lam_s . steps`` (constant in ``x`` for f, whose Hessian does not depend on ``xd``)."""
+
+    f: Any
+    with_grad: Any
+    steps: Any
+    steps_with_jac: Any
+    hess: Any
+
+
+def _objective_and_steps(N: int, smooth: float) -> _Whole:
+    """:class:`_Whole` for ``N`` knots: the objective ``|X - Xd|^2 / N + smooth * sum |X_{k+1} - 2 X_k +
+    X_{k-1}|^2`` and the step rows ``(s_max^2 - |X_{k+1} - X_k|^2) / s_max >= 0`` (no tunnelling
+    through a body between knots)."""
     import casadi as ca
 
     x, xd, s_max = ca.SX.sym("x", 2 * N), ca.SX.sym("xd", 2 * N), ca.SX.sym("s_max")
@@ -426,9 +449,13 @@ def _objective_and_steps(N: int, smooth: float) -> tuple[Any, Any]:
     step = ((s_max * s_max - (dX[0, :] ** 2 + dX[1, :] ** 2)) / s_max).T
     f = ca.sumsqr(x - xd) / N + smooth * ca.sumsqr(X[:, 2:] - 2 * X[:, 1:-1] + X[:, :-2])
     lam_f, lam_s = ca.SX.sym("lam_f"), ca.SX.sym("lam_s", N - 1)
-    return (ca.Function("ss_whole", [x, xd, s_max], [f, step, ca.gradient(f, x), ca.jacobian(step, x)]),
-            ca.Function("ss_whole_hess", [x, xd, s_max, lam_f, lam_s],
-                        [ca.triu(ca.hessian(lam_f * f + ca.dot(lam_s, step), x)[0])]))
+    return _Whole(
+        f=ca.Function("ss_objective", [x, xd], [f]),
+        with_grad=ca.Function("ss_objective_grad", [x, xd], [f, ca.gradient(f, x)]),
+        steps=ca.Function("ss_steps", [x, s_max], [step]),
+        steps_with_jac=ca.Function("ss_steps_jac", [x, s_max], [step, ca.jacobian(step, x)]),
+        hess=ca.Function("ss_whole_hess", [x, s_max, lam_f, lam_s],
+                         [ca.triu(ca.hessian(lam_f * f + ca.dot(lam_s, step), x)[0])]))
 
 
 def _signed_distance(verts: NDArray[np.float64], lx: Any, ly: Any) -> Any:
@@ -442,7 +469,8 @@ def _signed_distance(verts: NDArray[np.float64], lx: Any, ly: Any) -> Any:
     v = np.asarray(verts, dtype=np.float64)
     if _area2(v) < 0:
         v = v[::-1]
-    d2, line = None, None
+    d2: Any = None  # the least squared distance to an edge so far (CasADi expression)
+    line: Any = None  # the largest signed distance to an edge's line so far
     for i in range(len(v)):
         a, e = v[i], v[(i + 1) % len(v)] - v[i]
         di = _clamped_d2(lx, ly, a, e)
