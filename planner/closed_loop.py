@@ -203,7 +203,6 @@ class _Loop:
         self.tool = task_tool(task)
         self.platform = task_platform(task, self.tool)
         obstacles = task_obstacles(task)
-        self.obstacles = obstacles
         self.skills = task_skills(task, need_ss=plan.variant.get("ss") in ("dmp", "opt"))
         self.scene = task_scene(task, obstacles, effective_margin(task, obstacles), self.skills)
         r, clear = task.object.radius, task.ss.clearance
@@ -345,10 +344,10 @@ class _Loop:
         refused re-plan lets the caller try another (a new search, a correction's next leg)."""
         from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
 
-        if not self.obstacles or pp.status != "solved" or not pp.pushes:
+        if not self.scene.obstacles or pp.status != "solved" or not pp.pushes:
             return pp
         poses = np.vstack([pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
-        near = tool_obstacle_clearance(self.tool, poses, self.obstacles)
+        near = tool_obstacle_clearance(self.tool, poses, self.scene.obstacles)
         if near.distance > 0.0:
             return pp
         where = np.round(poses[near.sample, :2], 4).tolist()

@@ -6,6 +6,7 @@ CLI, with the figure and the GIF."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -157,7 +158,6 @@ def _loop_on(plan_file: Path, c_factor: float = 1.0, seed: int = 1):
 def test_replans_carry_the_contact_budget_over_to_the_adapted_c(plan_file: Path) -> None:
     """The contact rolls 1/c^2 per sideways travel: at 0.6 x the plan's c the re-plans may use
     1/0.36 times the task's contacts per push, never fewer than the task's, at most the cap."""
-    from dataclasses import replace
 
     from tooltransfer.planner.closed_loop import MAX_REPLAN_CONTACTS
 
@@ -185,20 +185,20 @@ def test_a_replan_whose_tool_overlaps_an_obstacle_is_refused(plan_file: Path) ->
     plan, loop = _loop_on(plan_file)
     pp = _Reference.of(plan).plan
     assert len(pp.pushes) >= 3
-    loop.obstacles = []
+    loop.scene = replace(loop.scene, obstacles=())
     assert loop.clear_of_obstacles(pp) is pp
     far = Disc(np.array([50.0, 50.0]), 0.005)
-    loop.obstacles = [far]
+    loop.scene = replace(loop.scene, obstacles=(far,))
     assert loop.clear_of_obstacles(pp).status == "solved"
     first = pp.pushes[0].tool_pose
     for pose in (first[len(first) // 2], pp.pushes[1].tool_pose[0]):
-        loop.obstacles = [far, Disc(pose[:2].copy(), 0.002)]
+        loop.scene = replace(loop.scene, obstacles=(far, Disc(pose[:2].copy(), 0.002)))
         refused = loop.clear_of_obstacles(pp)
         assert refused.status == "infeasible"
         assert "obstacles[1]" in refused.reason and "overlaps" in refused.reason
     later = pp.pushes[-1].tool_pose[-1]
     assert min(np.hypot(*(p.tool_pose[:, :2] - later[:2]).T).min() for p in pp.pushes[:2]) > 0.05
-    loop.obstacles = [far, Disc(later[:2].copy(), 0.002)]
+    loop.scene = replace(loop.scene, obstacles=(far, Disc(later[:2].copy(), 0.002)))
     assert loop.clear_of_obstacles(pp).status == "solved"
 
 
