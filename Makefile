@@ -59,6 +59,13 @@ figures: $(PY)
 	$(PY) -m pip install -q -e ".[all]"
 	$(PY) -m tooltransfer.planner.plots.paper_figures docs/images
 
+# The Dockerfile built without a Docker engine, then a batch on its workers (docs/cluster.md; root,
+# network and debootstrap; tests/image/dockerfile_without_engine.py)
+.PHONY: image-check
+image-check: $(PY)
+	$(PY) -m pip install -q -e ".[all]"
+	$(PY) tests/image/dockerfile_without_engine.py
+
 bench: $(PY)
 	$(PY) -m pip install -q -e ".[bench]"
 	$(PY) benchmarks/bench_dmp.py
