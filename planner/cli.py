@@ -576,6 +576,8 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(words)
         verbose = bool(getattr(args, "verbose", False))
         _check_outputs(args)
+        if argv is None and args.command in QUICK_EXIT:
+            _fewer_collections()
         code = int(args.func(args))
         sys.stdout.flush()  # here, where a reader that has gone (BrokenPipeError) is handled
         if argv is None and args.command in QUICK_EXIT:
@@ -604,6 +606,16 @@ def main(argv: list[str] | None = None) -> int:
 #: Commands that end the process as soon as their work is done (:func:`_quick_exit`): they start no
 #: process or thread that outlives them and write their files atomically before returning.
 QUICK_EXIT = frozenset({"solve", "export", "schema", "tasks"})
+
+
+def _fewer_collections() -> None:
+    """Run the cyclic garbage collector less often in a quick command: its imports and its planning
+    allocate some 10^5 short-lived containers, which at the default threshold (700) cost ~170
+    collections, about 5 % of ``solve``. Every 10,000 allocations keeps what the collector may hold
+    back to a few MB, and the process ends with the command."""
+    import gc
+
+    gc.set_threshold(10_000, 10, 10)
 
 
 def _quick_exit(code: int) -> None:
