@@ -576,11 +576,12 @@ def main(argv: list[str] | None = None) -> int:
         args = build_parser().parse_args(words)
         verbose = bool(getattr(args, "verbose", False))
         _check_outputs(args)
-        if argv is None and args.command in QUICK_EXIT:
+        quick = argv is None and args.command in QUICK_EXIT
+        if quick:
             _fewer_collections()
         code = int(args.func(args))
         sys.stdout.flush()  # here, where a reader that has gone (BrokenPipeError) is handled
-        if argv is None and args.command in QUICK_EXIT:
+        if quick:
             _quick_exit(code)
         return code
     except KeyboardInterrupt:

@@ -57,7 +57,6 @@ class Stage:
     workdir: str = "/"
     user: str = "root"
     cmd: list[str] = field(default_factory=list)
-    expose: list[str] = field(default_factory=list)
 
 
 def instructions(dockerfile: Path) -> list[tuple[int, str, str]]:
@@ -128,11 +127,6 @@ def make_base(work: Path, mirror: str, ca_bundle: Path | None) -> Path:
     ``ca_bundle``: certificate authorities pip is to trust (a network behind an intercepting proxy,
     as a Docker engine there would need them too), written to the root's ``/etc/pip.conf``."""
     base = work / "base"
-    if ca_bundle is not None and base.exists():
-        shutil.copy2(ca_bundle, base / "etc" / "ssl" / "certs" / "site-ca.crt")
-        (base / "etc" / "pip.conf").write_text("[global]\ncert = /etc/ssl/certs/site-ca.crt\n")
-    if (base / PY_ENV.lstrip("/") / "bin" / "pip").exists():
-        return base
     if not (base / "usr" / "include" / "python3.11" / "Python.h").exists():  # not yet, or interrupted
         shutil.rmtree(base, ignore_errors=True)
         subprocess.run(["debootstrap", "--variant=minbase", f"--include={BASE_PACKAGES}", "bookworm", str(base),
@@ -141,6 +135,8 @@ def make_base(work: Path, mirror: str, ca_bundle: Path | None) -> Path:
     if ca_bundle is not None:
         shutil.copy2(ca_bundle, base / "etc" / "ssl" / "certs" / "site-ca.crt")
         (base / "etc" / "pip.conf").write_text("[global]\ncert = /etc/ssl/certs/site-ca.crt\n")
+    if (base / PY_ENV.lstrip("/") / "bin" / "pip").exists():
+        return base
     with mounted(base):
         chroot(base, ["/bin/sh", "-c", f"python3 -m venv {PY_ENV} && {PY_ENV}/bin/pip install -q --upgrade pip"],
                {"PATH": BASE_PATH})
@@ -237,7 +233,7 @@ def build(dockerfile: Path, context: Path, work: Path, mirror: str, ca_bundle: P
         elif word == "USER":
             stage.user = args
         elif word == "EXPOSE":
-            stage.expose += args.split()
+            pass  # documentation for the engine: the stand-in shares the machine's network
         elif word == "CMD":
             stage.cmd = json.loads(args)
         else:
@@ -266,14 +262,13 @@ def wait_for(port: int, seconds: float) -> None:
 def run_batch(image: Stage, work: Path) -> None:
     """The Dockerfile header's recipe on one machine: scheduler and worker in the image, the batch here."""
     print("[run] pip show tooltransfer", flush=True)
-    with mounted(image.root):
-        chroot(image.root, ["pip", "show", "tooltransfer"], image.env, user=image.user, cwd=image.workdir)
     batch_run = [str(Path(sys.executable).with_name("tooltransfer")), "batch", "run",
                  str(ROOT / "problems" / "batch" / "small.yaml")]
     port = free_port()
     addr = f"tcp://127.0.0.1:{port}"
     procs: list[subprocess.Popen[bytes]] = []
     with mounted(image.root):
+        chroot(image.root, ["pip", "show", "tooltransfer"], image.env, user=image.user, cwd=image.workdir)
         try:
             # the scheduler and a second worker through the image's wrappers (dask's Kubernetes operator
             # starts its pods with those names)
