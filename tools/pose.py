@@ -1,8 +1,10 @@
-"""Planar rigid poses of a tool on the table: ``(x, y, yaw)`` [m, m, rad] in the world frame."""
+"""Planar rigid poses of a tool on the table: ``(x, y, yaw)`` [m, m, rad] in the world frame, and the
+package's one angle wrapping (:func:`wrap_angle`)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 import shapely
@@ -10,6 +12,26 @@ import shapely.affinity
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.errors import InputError
+
+
+@overload
+def wrap_angle(angle: float) -> float: ...
+
+
+@overload
+def wrap_angle(angle: NDArray[np.float64]) -> NDArray[np.float64]: ...
+
+
+def wrap_angle(angle: float | NDArray[np.float64]) -> float | NDArray[np.float64]:
+    """Angles [rad] wrapped into ``[-pi, pi)``: ``(angle + pi) mod 2 pi - pi``, elementwise.
+
+    A float (also a NumPy scalar) gives a float, an array an array of the same shape. Every wrap in
+    the package goes through this expression, so the same angle wraps to the same bits everywhere
+    (``arctan2(sin a, cos a)`` differs from it in the last bits and gives ``+pi`` at ``pi``). Not
+    validated: a NaN or infinite angle gives NaN.
+    """
+    wrapped = (angle + np.pi) % (2.0 * np.pi) - np.pi
+    return wrapped if isinstance(wrapped, np.ndarray) else float(wrapped)
 
 
 def rotation(yaw: float) -> NDArray[np.float64]:
