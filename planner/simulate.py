@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from tooltransfer.errors import InputError
 from tooltransfer.planner.plan import Plan, PlanFileError, joint_rates
 from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
+from tooltransfer.tools.pose import wrap_angle
 from tooltransfer.tools.sim.config import SimConfig
 from tooltransfer.tools.sim.execution import Execution
 
@@ -118,7 +119,7 @@ def _check_joints(plan: Plan, source: str, platform: OmniPlatform) -> None:
               f"{plan.joints[k, j]:.6g} rad at t = {t[k]:.3f} s")
     fk = table_poses(plan.joints, platform.a_t, platform.base_xy, platform.base_yaw, platform.table_height)
     pos = np.hypot(*(fk[:, :2] - plan.tool_pose[:, :2]).T)
-    yaw = np.abs((fk[:, 2] - plan.tool_pose[:, 2] + np.pi) % (2 * np.pi) - np.pi)
+    yaw = np.abs(wrap_angle(fk[:, 2] - plan.tool_pose[:, 2]))
     if pos.max() > FK_TOL or yaw.max() > YAW_TOL:
         k = int(np.argmax((pos > FK_TOL) | (yaw > YAW_TOL)))
         _fail(source, f"samples.tool_pose[{k}]", "the tool pose the joints give (forward kinematics of "

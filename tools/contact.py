@@ -20,11 +20,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.errors import InputError
-from tooltransfer.tools.model import Tool, wrap_angle
+from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import DiscObject, ObjectModel
 from tooltransfer.tools.omni.ik import IKResult, inverse_kinematics
 from tooltransfer.tools.omni.platform import OmniPlatform
-from tooltransfer.tools.pose import Pose2D
+from tooltransfer.tools.pose import Pose2D, wrap_angle
 from tooltransfer.validation import check_array
 
 

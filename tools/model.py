@@ -26,14 +26,10 @@ from numpy.typing import NDArray
 from tooltransfer.errors import InputError
 from tooltransfer.tools.decompose import convex_decomposition
 from tooltransfer.tools.errors import ToolSpecError, UnknownFaceError
+from tooltransfer.tools.pose import wrap_angle
 
 #: Distance [m] within which a face must lie on the outline.
 ON_OUTLINE_TOL = 1e-9
-
-
-def wrap_angle(a: float) -> float:
-    """Angle wrapped to [-pi, pi) [rad]."""
-    return float((a + np.pi) % (2.0 * np.pi) - np.pi)
 
 
 @dataclass(frozen=True, eq=False)

@@ -22,6 +22,7 @@ from tooltransfer.dmp.qp.constraints import OutsideDisc, PositionPolygon
 from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
 from tooltransfer.errors import InputError
 from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.tools.pose import wrap_angle
 from tooltransfer.tools.pushing.inverse import FaceGeometry
 from tooltransfer.tools.pushing.mechanics import PushMechanics
 
@@ -59,7 +60,7 @@ class HeadingCone(Constraint):
         if not np.any(moving):
             return 0.0
         ang = np.arctan2(v[moving, 1], v[moving, 0]) - self.frame.push_direction(x[moving])
-        off = np.abs((ang + np.pi) % (2 * np.pi) - np.pi)
+        off = np.abs(wrap_angle(ang))
         return float(max(0.0, (off - self.frame.theta_b).max()))
 
 

@@ -34,6 +34,7 @@ from tooltransfer.tools.model import Tool
 from tooltransfer.tools.omni.dh import D_TOOL
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.omni.reach import reach_sector
+from tooltransfer.tools.pose import wrap_angle
 from tooltransfer.validation import check_array
 
 
@@ -145,7 +146,7 @@ def admissible_cone(
     """The tool-frame directions ``[lo, hi]`` [rad] a face may push in: its friction cone
     ``normal_angle +- friction_half`` intersected with the operator's ``push_angle +- theta_b``
     (``hi <= lo`` when they do not overlap)."""
-    off = float((push_angle - normal_angle + np.pi) % (2 * np.pi) - np.pi)
+    off = wrap_angle(push_angle - normal_angle)
     lo = max(-friction_half, off - theta_b)
     hi = min(friction_half, off + theta_b)
     return normal_angle + lo, normal_angle + hi

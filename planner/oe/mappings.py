@@ -89,6 +89,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.errors import InputError
+from tooltransfer.tools.pose import wrap_angle as _wrap_unchecked
 from tooltransfer.validation import check_array
 
 __all__ = [
@@ -218,9 +219,13 @@ def _clip_open_upper(y: NDArray[np.float64], b: float, field: str, clip: bool) -
 
 
 def wrap_angle(angle: ArrayLike) -> NDArray[np.float64]:
-    """Wrap angles [rad] of any shape into ``[-pi, pi)``, e.g. a direction relative to a push direction."""
-    a = check_array(angle, "angle")
-    return np.remainder(a + np.pi, 2.0 * np.pi) - np.pi
+    """Wrap finite angles [rad] of any shape into ``[-pi, pi)``, e.g. a direction relative to a push
+    direction: :func:`tooltransfer.tools.pose.wrap_angle` behind the check of the input.
+
+    Raises:
+        InputError: ``angle`` not an array of finite reals.
+    """
+    return _wrap_unchecked(check_array(angle, "angle"))
 
 
 def angle_map(theta_g: ArrayLike, theta_b: float, k: float) -> NDArray[np.float64]:

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.planner.oe.constraints import reach_constraints
 from tooltransfer.planner.oe.face_frame import FaceFrame
+from tooltransfer.tools.pose import wrap_angle
 
 Sequence_ = tuple[tuple[str, ...], tuple[int, ...], float]
 """(faces, switch segment boundaries (P-1,), proxy cost)."""
@@ -26,7 +27,7 @@ def cone_distance(v: NDArray[np.float64], phi: NDArray[np.float64], theta_b: flo
     """Distance [m/s] (K,) from velocities ``v`` (K, 2) to the cones of half-angle ``theta_b`` about
     directions ``phi`` (K,) [rad]."""
     speed = np.linalg.norm(v, axis=1)
-    ang = np.abs((np.arctan2(v[:, 1], v[:, 0]) - phi + np.pi) % (2 * np.pi) - np.pi)
+    ang = np.abs(wrap_angle(np.arctan2(v[:, 1], v[:, 0]) - phi))
     excess = np.maximum(ang - theta_b, 0.0)
     return np.where(excess >= np.pi / 2, speed, speed * np.sin(np.minimum(excess, np.pi / 2)))
 

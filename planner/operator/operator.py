@@ -37,7 +37,7 @@ from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.omni.platform import OmniPlatform
-from tooltransfer.tools.pose import Pose2D
+from tooltransfer.tools.pose import Pose2D, wrap_angle
 from tooltransfer.tools.sim import ContactEvent, Execution, Rates, SimPlatform
 
 BACK_OFF = 0.012
@@ -176,7 +176,7 @@ class ScriptedOperator:
         the puck can still sweep the body over an obstacle)."""
         da, db = a_back - obj, b_back - obj
         ta, tb = np.arctan2(da[1], da[0]), np.arctan2(db[1], db[0])
-        dth = (tb - ta + np.pi) % (2 * np.pi) - np.pi
+        dth = wrap_angle(tb - ta)
         s = np.linspace(0.0, 1.0, 60)
         ends = (np.linspace(here, a_back, 12), np.linspace(b_back, b, 12))
         for bulge in np.arange(0.0, 0.06 + 1e-12, 0.004):

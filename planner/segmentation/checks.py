@@ -29,6 +29,7 @@ from tooltransfer.planner.segmentation.geometry import ToolGeometry, table_poses
 from tooltransfer.planner.segmentation.rest import camera_noise
 from tooltransfer.problems.dataset import DatasetError, Demonstration
 from tooltransfer.tools.model import Tool
+from tooltransfer.tools.pose import wrap_angle
 
 FK_TOL, YAW_TOL = 0.002, 0.02
 """Tool pose against the joints' forward kinematics [m, rad]."""
@@ -58,7 +59,7 @@ def check_recording(demo: Demonstration, tool: Tool) -> None:
     p = o.platform
     fk = table_poses(demo.joints, p.a_t, p.base_xy, p.base_yaw, p.table_height)
     pos = np.hypot(*(fk[:, :2] - demo.tool_pose[:, :2]).T)
-    yaw = np.abs((fk[:, 2] - demo.tool_pose[:, 2] + np.pi) % (2 * np.pi) - np.pi)
+    yaw = np.abs(wrap_angle(fk[:, 2] - demo.tool_pose[:, 2]))
     bad = (pos > FK_TOL) | (yaw > YAW_TOL)
     if bad.any():
         k = int(np.argmax(bad))

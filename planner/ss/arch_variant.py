@@ -19,7 +19,7 @@ from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import OBJECT_RADIUS, Disc
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.omni.platform import OmniPlatform
-from tooltransfer.tools.pose import rotation
+from tooltransfer.tools.pose import rotation, wrap_angle
 
 
 class NoArch(ToolTransferError):
@@ -52,7 +52,7 @@ def arch_path(
     clearance = min(clearance, 0.9 * ends)  # an end closer than that cannot be left or reached otherwise
     da, db = a - obj, b - obj
     ta, tb = np.arctan2(da[1], da[0]), np.arctan2(db[1], db[0])
-    dth = (tb - ta + np.pi) % (2 * np.pi) - np.pi
+    dth = wrap_angle(tb - ta)
     s = np.linspace(0.0, 1.0, n)
     out = np.arange(0.004, max_bulge + 1e-12, 0.004)
     # hugging the object first (an obstacle is usually farther out), then bulging out

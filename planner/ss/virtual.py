@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.errors import InputError
 from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.pose import wrap_angle
 from tooltransfer.validation import check_array
 
 VirtualKind = Literal["arch", "line"]
@@ -67,7 +68,7 @@ def sweep_angle(q_a: NDArray[np.float64], q_b: NDArray[np.float64], centre: NDAr
     clockwise (``"ccw"``, > 0), clockwise (``"cw"``, < 0), or the way of the sign of a number."""
     da, db = q_a - centre, q_b - centre
     d = float(np.arctan2(db[1], db[0]) - np.arctan2(da[1], da[0]))
-    short = (d + np.pi) % (2 * np.pi) - np.pi
+    short = wrap_angle(d)
     if isinstance(way, str):
         if way == "short":
             return short

@@ -24,17 +24,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL, forward_kinematics
 from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.tools.pose import wrap_angle
 from tooltransfer.validation import check_array
 
 Reason = Literal["radius", "angle", "joint limit"]
 
 #: Tolerance [rad] on joint limits, so points on the boundary of the reachable polygon count.
 LIMIT_ATOL = 1e-9
-
-
-def _wrap(a: float) -> float:
-    """Angle wrapped to [-pi, pi) [rad]."""
-    return float((a + np.pi) % (2.0 * np.pi) - np.pi)
 
 
 def effective_link(a_t: float) -> tuple[float, float]:
@@ -94,7 +90,7 @@ def planar_2r(u: float, v: float, a_t: float) -> list[tuple[float, float]]:
     for sign in (1.0, -1.0):
         q3p = sign * float(np.arccos(c))
         q2 = np.arctan2(v, u) - np.arctan2(le * np.sin(q3p), L1 + le * np.cos(q3p))
-        out.append((_wrap(q2), _wrap(q3p - delta)))
+        out.append((wrap_angle(q2), wrap_angle(q3p - delta)))
     return out
 
 
@@ -126,7 +122,7 @@ def inverse_kinematics(
     u_abs = float(np.sqrt(max(rho * rho - D_TOOL * D_TOOL, 0.0)))
     branches: list[IKBranch] = []
     for u in (u_abs, -u_abs):
-        q1 = _wrap(np.arctan2(by, bx) - np.arctan2(D_TOOL, u))
+        q1 = wrap_angle(np.arctan2(by, bx) - np.arctan2(D_TOOL, u))
         for q2, q3 in planar_2r(u, v, platform.a_t):
             q = np.array([q1, q2, q3])
             branches.append(IKBranch(q, platform.limits.violated(q, LIMIT_ATOL)))
@@ -214,7 +210,7 @@ def joint_path(platform: OmniPlatform, points: ArrayLike) -> JointPath:
     v = D1 - platform.table_height
     u = np.sqrt(np.maximum(rho**2 - D_TOOL**2, 0.0))
     q1 = np.arctan2(b[:, 1], b[:, 0]) - np.arctan2(D_TOOL, u)
-    q1 = (q1 + np.pi) % (2 * np.pi) - np.pi
+    q1 = wrap_angle(q1)
     le, delta = effective_link(platform.a_t)
     c = (u * u + v * v - L1 * L1 - le * le) / (2.0 * L1 * le)
     ok = (np.abs(c) <= 1.0 + 1e-12) & (rho >= D_TOOL)
@@ -224,7 +220,7 @@ def joint_path(platform: OmniPlatform, points: ArrayLike) -> JointPath:
     for sign in (1.0, -1.0):
         q3p = sign * np.arccos(c)
         q2 = np.arctan2(v, u) - np.arctan2(le * np.sin(q3p), L1 + le * np.cos(q3p))
-        q = np.column_stack([q1, (q2 + np.pi) % (2 * np.pi) - np.pi, (q3p - delta + np.pi) % (2 * np.pi) - np.pi])
+        q = np.column_stack([q1, wrap_angle(q2), wrap_angle(q3p - delta)])
         excess = np.maximum(np.maximum(lo - q, q - hi), 0.0).max(axis=1)
         excess[excess <= LIMIT_ATOL] = 0.0
         score = int(np.sum(ok & (excess == 0.0)))
