@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.dmp.qp.constraints import OutsideDisc, PositionPolygon
+from tooltransfer.dmp.qp.constraints import OutsideDisc, PositionPolygon, cone_rows
 from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
 from tooltransfer.errors import InputError
 from tooltransfer.planner.oe.face_frame import FaceFrame
@@ -45,11 +45,7 @@ class HeadingCone(Constraint):
     def _coefficients(self, k: NDArray[np.intp], t: NDArray[np.float64], x_lin: NDArray[np.float64]) -> Coefficients:
         if x_lin.shape[1] != 2:
             raise InputError("HeadingCone", "a planar (2-D) motion", f"{x_lin.shape[1]}-D")
-        phi = self.frame.push_direction(x_lin[k])
-        hi, lo = phi + self.frame.theta_b, phi - self.frame.theta_b
-        n1 = np.stack([np.sin(hi), -np.cos(hi)], axis=1)  # inward normals of the two edges
-        n2 = np.stack([-np.sin(lo), np.cos(lo)], axis=1)
-        a_vel = -np.stack([n1, n2], axis=1)  # (K, 2, 2): -n . v <= 0
+        a_vel = cone_rows(self.frame.push_direction(x_lin[k]), self.frame.theta_b)  # (K, 2, 2)
         return Coefficients(k, None, a_vel, np.zeros((k.size, 2)))
 
     def angle_violation(self, x: NDArray[np.float64], v: NDArray[np.float64], speed_tol: float = 1e-6) -> float:

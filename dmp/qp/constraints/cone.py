@@ -9,6 +9,18 @@ from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
 from tooltransfer.errors import InputError
 
 
+def cone_rows(direction: float | NDArray[np.float64], theta_b: float) -> NDArray[np.float64]:
+    """Rows ``A`` of ``A v <= 0`` keeping a planar velocity in the cone of half-angle ``theta_b`` [rad]
+    about ``direction`` [rad]: the negated inward unit normals of the edges at ``direction +- theta_b``.
+
+    Shape (2, 2) for one direction, (K, 2, 2) for directions of shape (K,) (one cone per sample).
+    """
+    hi, lo = direction + theta_b, direction - theta_b
+    n1 = np.stack([np.sin(hi), -np.cos(hi)], axis=-1)  # inward normals of the two edges
+    n2 = np.stack([-np.sin(lo), np.cos(lo)], axis=-1)
+    return -np.stack([n1, n2], axis=-2)  # -n . v <= 0
+
+
 class VelocityCone(Constraint):
     """Planar velocity in the cone of half-angle ``theta_b`` around the push direction ``phi``.
 
@@ -30,10 +42,7 @@ class VelocityCone(Constraint):
         if not (0.0 < theta_b < np.pi / 2):
             raise InputError("theta_b", "a half-angle in (0, pi/2) rad", repr(theta_b))
         self.direction, self.theta_b = float(direction), float(theta_b)
-        hi, lo = direction + theta_b, direction - theta_b
-        n1 = np.array([np.sin(hi), -np.cos(hi)])
-        n2 = np.array([-np.sin(lo), np.cos(lo)])
-        self.rows_vel = -np.stack([n1, n2])  # -n . v <= 0
+        self.rows_vel = cone_rows(direction, theta_b)
 
     def _coefficients(self, k: NDArray[np.intp], t: NDArray[np.float64], x_lin: NDArray[np.float64]) -> Coefficients:
         if x_lin.shape[1] != 2:
