@@ -25,7 +25,9 @@ METRIC_COLUMNS = (
 )
 
 
-def _finite(v: Any) -> float | None:
+def finite_or_none(v: Any) -> float | None:
+    """``v`` as a float if it is a finite number, else None (a NULL column: NaN, infinities, text,
+    None and objects that are no number)."""
     try:
         f = float(v)
     except (TypeError, ValueError):
@@ -50,16 +52,16 @@ def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: 
                            "time_total": time.perf_counter() - wall, "cpu_time": time.process_time() - cpu}
     m = plan.metrics
     for k in METRIC_COLUMNS:
-        row[k] = _finite(m.get(k))
+        row[k] = finite_or_none(m.get(k))
     row["n_switches"] = len(plan.switches) if plan.status in ("solved", "violated") else None
     # penetration [m]: the switches' own report (the dmp switch variant may penetrate), or how far a
     # clearance goes below zero
     depth = [-float(v) for v in (m.get("switch_clearance_min"), m.get("switch_obstacle_clearance_min"),
-                                 m.get("obstacle_clearance_min")) if _finite(v) is not None]
-    if _finite(m.get("switch_penetration_max")) is not None:
+                                 m.get("obstacle_clearance_min")) if finite_or_none(v) is not None]
+    if finite_or_none(m.get("switch_penetration_max")) is not None:
         depth.append(float(m["switch_penetration_max"]))
     row["penetration_max"] = max(0.0, *depth) if depth else None
-    row["metrics_json"] = json.dumps({k: (v if _finite(v) is not None else str(v)) for k, v in m.items()})
+    row["metrics_json"] = json.dumps({k: (v if finite_or_none(v) is not None else str(v)) for k, v in m.items()})
     if keep_plan and plan.status == "solved":
         row["plan"] = pickle.dumps(plan, protocol=pickle.HIGHEST_PROTOCOL)
     return row
@@ -73,9 +75,9 @@ def open_loop(plan: bytes, tolerance: float = 0.01) -> dict[str, Any]:
     from tooltransfer.planner.simulate import simulate_plan
 
     rep = simulate_plan(pickle.loads(plan))
-    err = _finite(rep.final_error)
+    err = finite_or_none(rep.final_error)
     return {"open_loop_status": "done", "open_loop_error": err, "sim_final_error": err,
-            "sim_tool_deviation": _finite(rep.tool_deviation), "sim_wall_time": rep.wall_time,
+            "sim_tool_deviation": finite_or_none(rep.tool_deviation), "sim_wall_time": rep.wall_time,
             "sim_success": None if err is None else int(err <= tolerance)}
 
 
@@ -89,7 +91,7 @@ def closed_loop(plan: bytes, seed: int, tolerance: float = 0.001, camera_noise: 
     rep = execute_closed_loop(pickle.loads(plan), tolerance=tolerance, camera_noise=camera_noise, seed=seed)
     times = [float(x) for x in rep.replan_times]
     return {"closed_loop_status": rep.status, "closed_loop_reason": rep.reason, "closed_loop_seed": seed,
-            "closed_loop_error": _finite(rep.final_error), "closed_loop_pushes": rep.n_pushes,
+            "closed_loop_error": finite_or_none(rep.final_error), "closed_loop_pushes": rep.n_pushes,
             "closed_loop_switches": rep.n_switches, "closed_loop_recontacts": rep.n_recontacts,
             "closed_loop_replans": rep.n_replans,
             "closed_loop_replan_time_median": statistics.median(times) if times else None,
