@@ -2,7 +2,7 @@
 
 ``json.dumps(doc, indent=1)`` puts every number of a plan's sampled arrays on a line of its own (tens of
 thousands of lines), and any ``indent`` makes :mod:`json` fall back from its C encoder to the pure-Python
-one, about three times slower on a plan. :func:`dumps` indents the objects and the arrays that hold objects,
+one, several times slower on a plan. :func:`dumps` indents the objects and the arrays that hold objects,
 so the structure reads at a glance, and writes every other array (numbers, strings, arrays of arrays of
 numbers) in one call of the C encoder on one line. The text parses to the same value as
 ``json.dumps(doc)``.

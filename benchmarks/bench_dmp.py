@@ -115,7 +115,7 @@ def bench_constrained(reps: int) -> None:
     """Median CPU time (``time.process_time`` around the whole ``solve_fit`` call, so the final
     dense-grid check is included for every formulation) over ``reps`` interleaved runs: each
     repetition runs every formulation once, so a change of machine load hits all of them alike.
-    The ratio to quadprog (exact on its own rows, the issue's reference peer) is taken per size."""
+    The ratio to quadprog (exact on its own rows, the reference peer) is taken per size."""
     print(f"\n== constrained fit (cone + hexagon + disc), CPU-time medians of {reps} interleaved runs ==")
     print(
         f"{'size':<14}{'formulation':<42}{'CPU ms':>8}{'wall ms':>9}{'max viol':>10}{'status':>12}"

@@ -1,8 +1,8 @@
 """OE condensing benchmark on the paper's transfer case (tool 1's demos -> tool 2), one command:
 `python benchmarks/bench_oe.py`. Medians of several runs of the whole OE step (the ``qp`` variant
 including its push-sequence search; the ``mapping`` variant), the number of QPs (sequential-convex
-solves) and the time per QP, in CPU time (the machine is shared). Targets: qp <= 300 ms (issue 5,
-kept by issue 14 with the push mechanics), each QP <= 20 ms, mapping <= 50 ms. The scene: the
+solves) and the time per QP, in CPU time (the machine is shared). Targets: qp <= 300 ms (with the
+push mechanics), each QP <= 20 ms, mapping <= 50 ms. The scene: the
 paper's puck with the platform's nominal mechanics (mu 0.8, c 0.59)."""
 
 from __future__ import annotations

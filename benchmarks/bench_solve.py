@@ -5,7 +5,7 @@ compiled first (as ``pip install`` leaves it: a checkout whose ``.pyc`` files ar
 ``PYTHONDONTWRITEBYTECODE=1``, would compile its sources on every start). Prints the medians of
 several runs of the whole process (wall time and CPU time, user + system of the child), of
 ``tooltransfer --help`` (wall), and of planning alone in-process (:func:`tooltransfer.planner.solve.solve`,
-its switch NLPs built each run, as in a new process). Targets (issue 18): whole-process solve at
+its switch NLPs built each run, as in a new process). Targets: whole-process solve at
 most 0.8 s, ``--help`` at most 0.25 s.
 
 ``--peer COMMAND...``: another build's solve command (e.g. an older checkout's ``tooltransfer solve

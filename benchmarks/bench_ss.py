@@ -1,5 +1,5 @@
 """SS switching benchmark, one command: `python benchmarks/bench_ss.py`. Medians (the machine is shared
-and timings are noisy). Targets (issue 6): ``opt`` switch with a reused solver at N = 40 for the
+and timings are noisy). Targets: ``opt`` switch with a reused solver at N = 40 for the
 library's tools (convex pieces), shapely verification included, <= 15 ms; a capsule tool <= 3 ms;
 ``dmp`` switch <= 2 ms; IPOPT iteration counts and the failure rate over >= 200 random switches.
 Wall and CPU (``time.process_time``) medians; a peer configuration is measured in the same run."""

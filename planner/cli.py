@@ -433,8 +433,8 @@ def _add(sub: argparse._SubParsersAction, name: str, helptext: str, example: str
 
 
 class _Version(argparse.Action):
-    """``--version``: the distribution's version, looked up only when asked (importlib.metadata
-    costs every other command about 25 ms)."""
+    """``--version``: the distribution's version, looked up only when asked (importing
+    importlib.metadata would slow every other command down; ``benchmarks/README.md``)."""
 
     def __init__(self, option_strings: list[str], dest: str, **kwargs: Any) -> None:
         super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
@@ -611,9 +611,9 @@ QUICK_EXIT = frozenset({"solve", "export", "schema", "tasks"})
 
 def _fewer_collections() -> None:
     """Run the cyclic garbage collector less often in a quick command: its imports and its planning
-    allocate some 10^5 short-lived containers, which at the default threshold (700) cost ~170
-    collections, about 5 % of ``solve``. Every 10,000 allocations keeps what the collector may hold
-    back to a few MB, and the process ends with the command."""
+    allocate some 10^5 short-lived containers, which the default threshold (700) collects over and
+    over (figures in ``benchmarks/README.md``). Every 10,000 allocations keeps what the collector may
+    hold back to a few MB, and the process ends with the command."""
     import gc
 
     gc.set_threshold(10_000, 10, 10)
@@ -622,7 +622,7 @@ def _fewer_collections() -> None:
 def _quick_exit(code: int) -> None:
     """End the console command now with ``code``: the exit handlers run (``atexit``: logging's
     flush, a coverage tool's report), the streams are flushed, and the interpreter's teardown of
-    every module's objects is skipped (about 0.15 s after ``solve``, an eighth of the command).
+    every module's objects is skipped (a sizeable share of a quick command, ``benchmarks/README.md``).
     Returns (and the interpreter ends as usual) when a profiler or a debugger is attached, another
     non-daemon thread still runs, or this Python has no ``atexit._run_exitfuncs``."""
     import atexit

@@ -79,7 +79,7 @@ def simulate_plan(plan: Plan, config: SimConfig | None = None) -> SimulationRepo
 
 
 #: Longest plan :func:`check_plan` lets run [s] (the planner's plans last tens of seconds; the
-#: simulation runs about 10-20 times faster than real time).
+#: simulation runs faster than real time, ``benchmarks/bench_sim.py``).
 MAX_PLAN_DURATION = 1800.0
 #: Tolerances of :func:`check_plan`: the joints' forward kinematics against the tool poses [m, rad],
 #: joint limits [rad], tool-object overlap [m], the start and the end of the object path [m], the

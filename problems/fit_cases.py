@@ -1,6 +1,6 @@
 """Named constrained-fit problems shared by the tests, the benchmark and the demo.
 
-``l_push_case`` is the problem class the DMP-core issue measures: an L-shaped pushing path (a
+``l_push_case`` is the problem class ``benchmarks/bench_dmp.py`` measures: an L-shaped pushing path (a
 forward push, a corner, a leftward push) fitted with 2 x N weights, under a velocity cone around
 the mean push direction, a 6-sided workspace polygon that clips the corner, and a disc obstacle on the
 first leg, passed on the left, linearised: 9 rows per sample, every family active.

@@ -52,7 +52,7 @@ Length = Annotated[float, Field(ge=0.0, le=0.2, allow_inf_nan=False, strict=True
 MAX_PLAN_DURATION = 900.0
 #: Sample rate of a plan's approach, switches and retreat [Hz] (:func:`tooltransfer.planner.assemble.assemble`).
 PLAN_RATE = 100.0
-#: Largest push-sequence search of the ``qp`` variant (:func:`push_search_steps`; about 1.5 s).
+#: Largest push-sequence search of the ``qp`` variant (:func:`push_search_steps`; a few seconds at most).
 MAX_SEARCH_STEPS = 200_000
 #: Longest task name [characters] (it names output files: ``plan_<name>.png``).
 MAX_NAME = 100
@@ -195,9 +195,9 @@ class OEOptions(_Model):
     # the one source of these defaults, bounds and descriptions: QPOptions and MappingOptions reuse
     # the fields, Scene its cone fraction and contact defaults (tests/test_options_once.py)
 
-    # the bounds keep one solve within seconds and well under 1 GB: n_samples 2000 takes about 2 s and
-    # 300 MB; n_basis 800 takes 9 s (100,000 asked for 1.2 TiB); n_knots 320 takes 9 s; the push-sequence
-    # search grows as faces^max_pushes x segments (:data:`MAX_SEARCH_STEPS`); each candidate is a QP
+    # the bounds keep one solve within seconds and well under 1 GB (figures at the bounds in
+    # benchmarks/README.md); the push-sequence search grows as faces^max_pushes x segments
+    # (:data:`MAX_SEARCH_STEPS`); each candidate is a QP
     n_samples: int = Field(120, ge=10, le=2000, strict=True,
                            description="constraint-grid samples of the final fit (violations are measured 10x denser)")
     n_basis: int = Field(25, ge=1, le=100, strict=True,
@@ -310,10 +310,10 @@ def min_jerk_time(length: float, v_max: float, a_max: float) -> float:
 
 def push_search_steps(n_faces: int, max_pushes: int, segments: int) -> int:
     """Work of the ``qp`` variant's push-sequence search
-    (:func:`tooltransfer.planner.oe.sequence_proxy.ranked_sequences`)
-    in steps of about 8 us: every face order of at most ``max_pushes`` pushes is enumerated (about
-    1/6 step each) and the ones without a face twice in a row split ``segments`` phases by dynamic
-    programming (``pushes x segments`` steps each)."""
+    (:func:`tooltransfer.planner.oe.sequence_proxy.ranked_sequences`) in steps of equal cost (their
+    time in ``benchmarks/README.md``): every face order of at most ``max_pushes`` pushes is enumerated
+    (about 1/6 step each) and the ones without a face twice in a row split ``segments`` phases by
+    dynamic programming (``pushes x segments`` steps each)."""
     f = n_faces
     enumerated = sum(f**p for p in range(1, max_pushes + 1))
     split = sum(f * (f - 1) ** (p - 1) * p * segments for p in range(1, min(max_pushes, segments) + 1))

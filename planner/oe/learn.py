@@ -101,7 +101,7 @@ def _smooth(t: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[np.float6
 
 def _similarity(path: NDArray[np.float64], end: NDArray[np.float64]) -> NDArray[np.float64]:
     """Pin ``path`` (K, 2) to end at ``end`` (2,): the mismatch is spread along the path in proportion
-    to arc length (a turn-and-scale about the start was tried first and blew short stretches up)."""
+    to arc length (a turn-and-scale about the start would blow short stretches up)."""
     seg = np.linalg.norm(np.diff(path, axis=0), axis=1)
     total = float(seg.sum())
     frac = np.concatenate([[0.0], np.cumsum(seg)]) / total if total > 0 else np.linspace(0.0, 1.0, len(path))

@@ -6,13 +6,12 @@ of the puck at (40, 160) mm and sweeps 80 mm to the left. Panels:
 
 (a) top view: the tool's outline and the puck every 0.5 s (light to dark), the commanded tool path
     (dashed), the puck's track, and where an ideal push straight to the left would take it;
-(b) the tool's heading against its x: measured in MuJoCo and predicted by q1 (the IK), a turn of
-    about 28 degrees over the sweep;
+(b) the tool's heading against its x: measured in MuJoCo and predicted by q1 (the IK);
 (c) the puck's sideways drift (y) over time, with the tool-puck contact shaded: the face's normal
     leans forward, the round puck is pushed along it, rolls up the face and round the head, and
     is left behind.
 
-Prints the measured figures. Runs in about a second.
+Prints the measured figures (the heading's turn over the sweep, the puck's drift).
 """
 
 from __future__ import annotations

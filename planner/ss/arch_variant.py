@@ -2,8 +2,9 @@
 that bulges out until the swept tool keeps a clearance from it (checked with shapely on the tool
 outline at the heading the Omni imposes), and approaches the other face's contact.
 
-It needs no learned skill: the scripted operator uses it, and the planner uses it as the reference
-switch until the SS skill (DMP recombination, CasADi paths) replaces it.
+It needs no learned skill: the scripted operator uses it, and the planner offers it as the ``arch``
+switch variant, the geometric reference of the skill-based ones (DMP recombination, CasADi paths),
+and as the fallback of a variant whose local solve finds no path (:mod:`tooltransfer.planner.switches`).
 """
 
 from __future__ import annotations

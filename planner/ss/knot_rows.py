@@ -9,9 +9,9 @@ placed into the NLP's sparse Jacobian and upper-triangular Lagrangian Hessian
 (:func:`placed`).
 
 Why: written out knot by knot in SX, the Lagrangian's Hessian is some 60,000 SX operations, most of
-them from the clamped-distance rows' min/max branches. Deriving and storing that expression took
-80-130 ms per NLP. Derived for one knot, it is under 1,000 operations, and the whole NLP builds in
-about 20 ms. IPOPT's callbacks run each family's SX function once per knot in CasADi's virtual
+them from the clamped-distance rows' min/max branches, slow to derive and store for every NLP.
+Derived for one knot, it is under 1,000 operations, and the whole NLP builds several times faster.
+IPOPT's callbacks run each family's SX function once per knot in CasADi's virtual
 machine; the MX graph around them holds a few dozen nodes. The rows are the same functions as
 written knot by knot, and their derivatives equal CasADi's own to rounding: the solves reach the
 same outcomes and paths, in the same iterations where a solve is well conditioned (rounding can

@@ -55,8 +55,8 @@ Solvers (:data:`SOLVERS`): ``"ipopt"`` (interior point; warm start with primal a
 fast on the small capsule model; ``qpOASES`` is not used: it keeps state between calls).
 Building an NLP: the rows of one interior knot are SX expressions, derived once and mapped over the
 knots (:mod:`tooltransfer.planner.ss.knot_rows`), and IPOPT gets these derivatives instead of ones
-CasADi would derive from the whole problem (an SX Hessian of some 60,000 operations, 80-130 ms to
-build). A build takes about 20 ms, mostly Python making the expressions; :func:`get_nlp` caches one
+CasADi would derive from the whole problem (an SX Hessian of some 60,000 operations, slow to
+build). A build's time is mostly Python making the expressions; :func:`get_nlp` caches one
 per structure (tool, model, N, platform, body kinds, solver), and solves change only parameters,
 bounds and the initial guess. The build and solve times are in ``benchmarks/README.md``
 (``benchmarks/bench_ss.py``).

@@ -5,10 +5,10 @@ and checked exactly with shapely (docs/design.md section 6; the NLP in :mod:`too
    The primal initial guess (separating directions from its geometry) is the ``dmp`` path when it
    keeps out of the C-obstacle (``init="auto"``), else a path round the C-obstacle
    (:mod:`tooltransfer.planner.ss.initial`; the ``dmp`` path of a new tool often goes right through the object,
-   and IPOPT started there used to run out of iterations); when the NLP ends without a solution the
+   a start from which IPOPT can run out of iterations); when the NLP ends without a solution the
    next start is tried (the other way round; ``max_starts``), each try an attempt in ``info``.
    Optionally the dual values of the cached solver's last successful solve (``warm_duals``, off by
-   default: measured slower), with IPOPT's ``warm_start_init_point``.
+   default: slower, see ``OptOptions``), with IPOPT's ``warm_start_init_point``.
 2. Contact poses that already overlap the object (another part of the tool than the face) or an
    obstacle make the switch infeasible before any solve, as do unreachable ones.
 3. The margin to the object is ``margin`` over the middle of the path, ramped linearly to 0 at the

@@ -67,8 +67,8 @@ class SweepCheck:
 
 def point_hulls(pts: NDArray[np.float64]) -> NDArray:
     """Convex hulls of point sets ``pts`` (..., P, 2) [m], one per leading index. Built from line
-    strings through the points (GEOS hulls the coordinates whatever the geometry): about 3 times
-    faster than from multipoints, which shapely creates point by point."""
+    strings through the points (GEOS hulls the coordinates whatever the geometry): faster than
+    from multipoints, which shapely creates point by point."""
     return shapely.convex_hull(shapely.linestrings(pts))
 
 

@@ -58,8 +58,8 @@ def centre_path(
     """Inverse of :func:`point_path`: tool centre points (K, 2) [m] whose tool-frame point ``p`` (2,)
     (or one point per sample, (K, 2)) is at ``x`` (K, 2): Newton's method on
     ``c + R(heading(c)) p - x = 0`` per point (the 2 x 2 Jacobian ``I + R'(h) p grad(h)^T`` in closed
-    form), from ``c = x - p``; 3-4 steps where the fixed-point iteration on the heading took 15-20 (it
-    contracts by about ``|p| / |x - b|``), or from ``guess`` (K, 2) when given."""
+    form), from ``c = x - p``, or from ``guess`` (K, 2) when given. Newton's method rather than the
+    fixed-point iteration on the heading, which contracts only by about ``|p| / |x - b|`` per step."""
     x = np.atleast_2d(np.asarray(x, dtype=np.float64))
     pa = np.asarray(p, dtype=np.float64)
     if pa.ndim == 1:

@@ -15,7 +15,7 @@ class SimConfig:
     Physics (see :mod:`tooltransfer.tools.sim.mjcf` for why each numerical setting has its value):
 
     Attributes:
-        timestep: physics step [s]; 1-2 ms were measured to give the same push.
+        timestep: physics step [s]; 1-2 ms give the same push.
         puck_mass: mass of the puck [kg].
         puck_radius: radius of the puck [m] (Table II: 17.5 mm).
         puck_height: height of the puck [m].

@@ -20,24 +20,22 @@ Collisions. Only tool-puck, puck-table and puck-obstacle contacts exist (contype
 bits): the links are visual only, and the tool passes through obstacles (the planner keeps it
 clear of them geometrically). Non-convex obstacle polygons are split into convex pieces.
 
-Contact settings measured to matter with MuJoCo 4.0 on exactly this push (a forward push of the
-puck with tool 1's upper face) in the issue's prototype:
+Contact settings that matter with MuJoCo 4.0 on a forward push of the puck with tool 1's upper face
+(figures in ``benchmarks/README.md``):
 
-* ``<flag multiccd="disable"/>``: with it on, contacts on the prism's edges got a wrong normal
+* ``<flag multiccd="disable"/>``: with it on, contacts on the prism's edges get a wrong normal
   (a large final error and penetration).
 * ``cone="elliptic"``: pyramidal cones let the puck slide off the tool.
-* contact ``solref="0.005 1"``: damping ratio 1 (lower ratios gave large errors) with a 5 ms time
+* contact ``solref="0.005 1"``: damping ratio 1 (lower ratios give large errors) with a 5 ms time
   constant.
 * ``timestep`` 1 ms (1-2 ms give the same push), ``integrator="implicitfast"`` (stable with the
   velocity actuators' damping), ``solver="Newton"``.
 * ``priority`` on the table, obstacle and tool geoms, so their friction is the one used against
   the puck (not the larger of the two geoms').
 
-On the current model the pyramidal cones still matter most (the puck slides on the face); the
-other settings move the final puck by fractions of a millimetre to a few millimetres (the
-sideways sweep's end is sensitive, see tests/test_sim_push.py), and priority changes nothing
-while the puck's own friction equals the table's. The settings are kept as the prototype found
-them; the figures are in ``benchmarks/README.md``.
+The pyramidal cones matter most (the puck slides on the face); the other settings move the final
+puck by up to a few millimetres (the sideways sweep's end is sensitive, see tests/test_sim_push.py),
+and priority changes nothing while the puck's own friction equals the table's.
 
 The arm: gravity compensation on every moving body (``gravcomp="1"``), and a position plus a
 velocity actuator per joint: ``tau = kp (q_ref - q) + kv (qd_ref - qd)``, PD tracking of a joint

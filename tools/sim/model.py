@@ -35,7 +35,8 @@ from tooltransfer.tools.sim.mjcf import (
 #: State components a simulation is saved and restored with (time, qpos, qvel, activations...).
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 #: Oldest MuJoCo with what the model needs (contact sensors; the solver's warm start saved by
-#: ``mj_step``, so rollouts chain); the contact settings were measured with MuJoCo 4.0.0.
+#: ``mj_step``, so rollouts chain); the contact settings (:mod:`tooltransfer.tools.sim.mjcf`) are
+#: chosen for MuJoCo 4.0.
 MIN_MUJOCO = (3, 3, 6)
 if tuple(int(p) for p in re.findall(r"\d+", mujoco.__version__)[:3]) < MIN_MUJOCO:  # pragma: no cover
     raise ImportError(f"tooltransfer.tools.sim needs mujoco >= {'.'.join(map(str, MIN_MUJOCO))}, "

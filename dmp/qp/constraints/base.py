@@ -37,7 +37,7 @@ class Rows(NamedTuple):
 
 def _apply(a: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[np.float64]:
     """``a[k] @ x[k]`` for each k: (K, m, n), (K, n) -> (K, m); one matrix product when ``a`` repeats
-    one (m, n) block (a broadcast: einsum on those is 5-10x slower)."""
+    one (m, n) block (a broadcast, on which einsum is several times slower)."""
     if a.shape[0] > 1 and a.strides[0] == 0:
         return x @ a[0].T
     return np.einsum("kmd,kd->km", a, x)
