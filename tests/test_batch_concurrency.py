@@ -181,7 +181,7 @@ def test_a_dask_worker_without_the_package_is_refused_before_the_first_job(tmp_p
 def test_dask_workers_that_cannot_read_the_dataset_are_refused() -> None:
     from distributed import Client, LocalCluster
 
-    from tooltransfer.planner.batch.executors import check_workers
+    from tooltransfer.planner.batch.dask_plugin import check_workers
 
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
             Client(cluster) as client:

@@ -105,10 +105,10 @@ def test_workers_in_another_folder_without_the_dataset_run_the_batch(tmp_path, m
 def test_workers_that_join_later_get_the_skills_and_jobs_and_the_run_removes_them(tmp_path, monkeypatch) -> None:
     from distributed import Client, LocalCluster
 
-    from tooltransfer.planner.batch import executors
+    from tooltransfer.planner.batch import dask_plugin
 
     skills = _skills(tmp_path)
-    monkeypatch.setattr(executors, "RECOUNT", 0.0)
+    monkeypatch.setattr(dask_plugin, "RECOUNT", 0.0)
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         with open_executor(scheduler=cluster.scheduler_address) as slots:
             slots.ship(skills)

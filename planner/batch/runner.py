@@ -420,7 +420,7 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
     Before the first job: the batch's dataset is loaded and checked (a corrupt one is refused here,
     not turned into a row per job), the store is locked (:func:`tooltransfer.planner.batch.store.lock_store`: a
     second ``batch run`` on it is refused), Dask workers are probed
-    (:func:`tooltransfer.planner.batch.executors.check_workers`), and the skills are learned and shipped to the
+    (:func:`tooltransfer.planner.batch.dask_plugin.check_workers`), and the skills are learned and shipped to the
     executor (:mod:`tooltransfer.planner.batch.shipping`; a dataset they cannot be learned from is refused before
     the store is made).
 
