@@ -39,8 +39,9 @@ def test_solve_and_the_figures_plan_for_the_task_setting() -> None:
 
     task = load_task(PAPER_TRANSFER)
     setting = setting_from_task(task, task_skills(task))
-    assert _world(setting_from_task(task)) == _world(setting)  # the mechanics without the SS skill: the same
+    assert setting_from_task(task) == setting  # the mechanics without the SS skill: the same
     _, _, figures = figure_setting(PAPER_TRANSFER)
+    assert figures == setting
     assert _world(figures) == _world(setting)
     plan = solve(task)
     described = setting.describe()
@@ -63,6 +64,8 @@ def test_the_radius_is_validated_once_by_the_object() -> None:
     with pytest.raises(InputError, match=r"setting\.margin"):
         Setting(tool, plat, DiscObject(0.0175), margin=-1e-3)
     assert Setting(tool, plat, DiscObject(0.024)).radius == 0.024
+    assert Setting(tool, plat, DiscObject(0.024)) == Setting(tool, OmniPlatform(a_t=tool.a_t), DiscObject(0.024))
+    assert Setting(tool, plat, DiscObject(0.024)) != Setting(tool, plat, DiscObject(0.024), margin=0.001)
 
 
 def _calls(path: Path) -> set[str]:
