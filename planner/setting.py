@@ -47,7 +47,7 @@ class Setting:
     Attributes:
         tool: the tool the Omni carries.
         platform: the Omni carrying ``tool`` (its ``a_t``, base, joint limits).
-        obj: the pushed object, a disc; its radius is validated here, once (:class:`DiscObject`).
+        obj: the pushed object, a disc (:class:`DiscObject`, which validates its radius: the one place).
         mechanics: the push model's parameters (tool-object friction ``mu``, limit-surface ``c``).
         obstacles: discs and convex shapely polygons in the world [m].
         margin: safety margin [m] kept from the obstacles beyond the object's radius (the one the
