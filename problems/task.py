@@ -193,7 +193,7 @@ class OEOptions(_Model):
     """Options of OE condensing (:class:`tooltransfer.planner.oe.QPOptions` takes its fields from here)."""
 
     # the one source of these defaults, bounds and descriptions: QPOptions and MappingOptions reuse
-    # the fields, Scene its cone fraction and contact defaults (tests/test_options_once.py)
+    # the fields, FaceFrame its cone fraction (tests/test_options_once.py)
 
     # the bounds keep one solve within seconds and well under 1 GB (figures at the bounds in
     # benchmarks/README.md); the push-sequence search grows as faces^max_pushes x segments
