@@ -141,7 +141,7 @@ class ModelPlant:
     def move_tool(self, t: NDArray[np.float64], tool_pose: NDArray[np.float64]) -> None:
         _, pose = _check_path(t, tool_pose)
         if self.platform is not None:
-            bad = np.flatnonzero(joint_path(self.platform, pose[:, :2]).violation > 0)
+            bad = np.flatnonzero(joint_path(self.platform, pose[:, :2]).refused)
             if bad.size:
                 raise InputError("tool_pose", "a path the Omni reaches within its joint limits",
                                  f"sample {int(bad[0])} at {np.round(pose[bad[0], :2], 4).tolist()} m")
