@@ -40,9 +40,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError, ToolTransferError
-from tooltransfer.planner.oe.contacts import MIN_PIECE
+from tooltransfer.planner.execution import Plant
+from tooltransfer.planner.oe.correction import correction_references
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.oe.qp_variant import QPOptions
+from tooltransfer.planner.oe.replan import PlanReference, contact_budget, refuse_tool_overlap, replan_scene
 from tooltransfer.planner.plan import Plan
 from tooltransfer.planner.scene import Scene
 from tooltransfer.planner.ss.arch_variant import swept_clearance
@@ -50,6 +52,7 @@ from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration
 from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.pose import rotation
+from tooltransfer.tools.pushing.adaptation import Adaptation
 
 if TYPE_CHECKING:
     from tooltransfer.tools.sim import SimConfig
@@ -58,21 +61,9 @@ if TYPE_CHECKING:
 SAME_POSE = 3e-4
 #: How far [m] the tool first backs off along the contact's normal before a switch or a re-contact.
 BACK_OFF = 0.002
-#: A push chunk the model predicted farther off than this [m] triggers the model's adaptation.
-ADAPT_ERROR = 0.001
-#: The adaptation identifies the model from at most this many of the last push chunks.
-ADAPT_CHUNKS = 6
-#: Standard deviation of the adaptation's prior on ``log mu`` and ``log c`` (centred on the model in
-#: force) for chunks the model in force fits within the camera's noise (:meth:`_Loop.learn`).
-ADAPT_PRIOR_SD = 0.5
-#: A re-plan may use this many times the share of the friction cone the nominal plan uses (the task's
-#: ``oe.friction_cone_fraction``), up to the whole cone (:meth:`_Loop.scene_at`).
-REPLAN_CONE_WIDENING = 1.5
 #: Once the model has mispredicted two chunks, the last this many metres are pushed along the faces'
 #: normals (:meth:`_Loop.correction`).
 STAGE = 0.025
-#: The most contacts (re-contacts + 1) one push of a re-plan may use (:meth:`_Loop.replan_options`).
-MAX_REPLAN_CONTACTS = 30
 
 
 @dataclass(frozen=True)
@@ -108,91 +99,10 @@ class ClosedLoopReport:
     adapt_times: list[float] = field(default_factory=list)
 
 
-@dataclass(frozen=True)
-class _Reference:
-    """The plan's pushes on their own time axis (``tau`` [s], switches and approach taken out), as a
-    push plan whose pushes carry the plan's tool poses."""
-
-    plan: PushPlan
-    spans: tuple[tuple[str, float, float], ...]
-    lead_ins: tuple[NDArray[np.float64] | None, ...]
-    """per push, the plan's own tool path (K, 2) [m] from the previous push's end (its switch or
-    re-contact), None for the first."""
-
-    @classmethod
-    def of(cls, plan: Plan) -> _Reference:
-        taus: list[NDArray[np.float64]] = []
-        xys: list[NDArray[np.float64]] = []
-        poses: list[NDArray[np.float64]] = []
-        spans: list[tuple[str, float, float]] = []
-        pushes: list[Push] = []
-        leads: list[NDArray[np.float64] | None] = []
-        now, n = 0.0, 0
-        phase = np.asarray(plan.phase)
-        prev_end: float | None = None
-        for seg in plan.pushes:
-            if prev_end is None:
-                leads.append(None)
-            else:
-                between = (plan.t >= prev_end - 1e-9) & (plan.t <= seg.t_start + 1e-9)
-                leads.append(plan.tool_pose[between, :2].copy())
-            prev_end = seg.t_end
-            m = np.flatnonzero((plan.t >= seg.t_start - 1e-9) & (plan.t <= seg.t_end + 1e-9) & (phase == "push"))
-            tt = plan.t[m] - seg.t_start + now
-            first = 1 if taus else 0  # consecutive pushes share the object's position at the switch
-            idx = np.arange(n - first, n - first + m.size)
-            taus.append(tt[first:])
-            xys.append(plan.object_xy[m][first:])
-            poses.append(plan.tool_pose[m])
-            face = seg.faces[0]
-            end = now + seg.t_end - seg.t_start
-            pushes.append(Push(face, now, end, 0.0, idx, plan.tool_pose[m],
-                               recontact=bool(pushes) and pushes[-1].face == face))
-            if spans and spans[-1][0] == face:  # a re-contact: a re-plan places its own contacts
-                spans[-1] = (face, spans[-1][1], end)
-            else:
-                spans.append((face, now, end))
-            now, n = end, n + m.size - first
-        tau, xy = np.concatenate(taus), np.vstack(xys)
-        v = np.gradient(xy, tau, axis=0) if tau.size > 2 else np.zeros_like(xy)
-        return cls(PushPlan(plan.variant.get("oe", "qp"), "solved", tau, xy, v, xy, pushes=tuple(pushes)),
-                   tuple(spans), tuple(leads))
-
-    @property
-    def tau(self) -> NDArray[np.float64]:
-        return self.plan.t
-
-    @property
-    def xy(self) -> NDArray[np.float64]:
-        return self.plan.object_xy
-
-    def rest(self, tau0: float, start: NDArray[np.float64], target: NDArray[np.float64]) -> tuple:
-        """Times (K,) from 0, the reference (K, 2) from ``start`` blended back to the plan by the end
-        (and exactly to ``target``), and the faces with their switch times after ``tau0``."""
-        keep = self.tau > tau0 + 1e-9
-        tt = np.concatenate([[tau0], self.tau[keep]])
-        here = [np.interp(tau0, self.tau, self.xy[:, j]) for j in range(2)]
-        xy = np.vstack([here, self.xy[keep]])
-        u = (tt - tt[0]) / max(tt[-1] - tt[0], 1e-9)
-        ref = xy + (1.0 - u)[:, None] * (start - xy[0]) + u[:, None] * (target - xy[-1])
-        spans = [(f, max(a, tau0) - tau0, b - tau0) for f, a, b in self.spans if b > tau0 + 1e-9]
-        if len(spans) > 1:  # a face with less than MIN_PIECE of the plan left: the next face from here
-            ahead = (tt <= tau0 + spans[0][2] + 1e-9)
-            if np.sum(np.linalg.norm(np.diff(ref[ahead], axis=0), axis=1)) < MIN_PIECE:
-                spans = [(spans[1][0], 0.0, spans[1][2]), *spans[2:]]
-        faces = tuple(f for f, _, _ in spans)
-        switches = tuple(b for _, _, b in spans[:-1])
-        return tt - tau0, ref, faces, switches
-
-    @property
-    def end(self) -> float:
-        return float(self.tau[-1])
-
-
 class _Loop:
     """One closed-loop run (see :func:`execute_closed_loop`)."""
 
-    def __init__(self, plan: Plan, task: Task, plant: object, frames: int, tolerance: float,
+    def __init__(self, plan: Plan, task: Task, plant: Plant, frames: int, tolerance: float,
                  adapt: bool = True, camera_noise: float = 0.0015) -> None:
         from tooltransfer.planner.recontact import recontact_planner
         from tooltransfer.planner.solve import effective_margin, mapping_options, qp_options, task_scene, task_skills
@@ -223,9 +133,7 @@ class _Loop:
         self.adapt = adapt
         self.pending: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self.before: NDArray[np.float64] | None = None
-        self.chunks: list = []
-        self.adapt_times: list[float] = []
-        self.mispredicted = 0
+        self.adaptation = Adaptation(self.tool, self.scene.radius, self.noise)
         self.staged = False
         self.n_pushes = self.n_switches = self.n_recontacts = 0
         self.replan_times: list[float] = []
@@ -235,7 +143,7 @@ class _Loop:
     # ---------------------------------------------------------------- sensing and moving
     def observe(self) -> NDArray[np.float64]:
         """The resting object as the camera measures it: the mean of ``frames`` frames."""
-        return np.mean([self.plant.observe_object() for _ in range(self.frames)], axis=0)  # type: ignore[attr-defined]
+        return np.mean([self.plant.observe_object() for _ in range(self.frames)], axis=0)
 
     def true_error(self) -> float:
         here = getattr(self.plant, "true_object", None)
@@ -252,33 +160,19 @@ class _Loop:
         n = max(3, int(np.ceil(dur / 0.01)) + 1)
         t, path = min_jerk_along(xy, dur, n)
         jp = joint_path(self.platform, path)
-        if np.any(~np.isfinite(jp.heading)) or np.any(jp.violation > 0):
-            k = int(np.argmax(~np.isfinite(jp.heading) | (jp.violation > 0)))
+        bad = np.flatnonzero(jp.refused)
+        if bad.size:
             raise InputError("tool path", "a move within the Omni's reach and joint limits",
-                             f"{np.round(path[k], 4).tolist()} m")
+                             f"{np.round(path[bad[0]], 4).tolist()} m")
         poses = np.column_stack([path, jp.heading])
-        self.plant.move_tool(t, poses)  # type: ignore[attr-defined]
+        self.plant.move_tool(t, poses)
         if record:
             self.pending = (t, poses)
 
     # ---------------------------------------------------------------- planning
     def scene_at(self, o: NDArray[np.float64]) -> Scene:
-        """The scene for a re-plan from ``o``: the safety margin at most the object's clearance there
-        (an object pushed closer to an obstacle than the margin keeps that clearance, as a start
-        touching one does: :func:`tooltransfer.planner.solve.effective_margin`), and the friction cone's
-        share widened by :data:`REPLAN_CONE_WIDENING`: the nominal plan keeps part of the cone in
-        reserve so that it survives an error in the mechanics, and a re-plan, made from where the
-        object was seen, spends that reserve on the correction (a plant whose object drifts toward the
-        face's normal needs directions beyond the nominal share to come back)."""
-        import shapely
-
-        from tooltransfer.tools.objects import Disc
-
-        disc = shapely.Point(o).buffer(self.scene.radius, quad_segs=64)
-        gap = min((float(shapely.distance(disc, ob.polygon() if isinstance(ob, Disc) else ob))
-                   for ob in self.scene.obstacles), default=np.inf)
-        scene = self.scene if gap >= self.scene.margin else replace(self.scene, margin=max(0.0, gap - 1e-4))
-        return replace(scene, cone_fraction=min(1.0, REPLAN_CONE_WIDENING * scene.cone_fraction))
+        """The scene for a re-plan from ``o`` (:func:`tooltransfer.planner.oe.replan.replan_scene`)."""
+        return replan_scene(self.scene, o)
 
     def contact_s(self, o: NDArray[np.float64]) -> float | None:
         """Where the face in contact touches the object at ``o`` [m along the face], if it does."""
@@ -286,24 +180,13 @@ class _Loop:
             return None
         from tooltransfer.planner.switches import contact_fraction
 
-        pose = self.plant.tool_pose()  # type: ignore[attr-defined]
+        pose = self.plant.tool_pose()
         return contact_fraction(self.tool, self.face, o, pose, self.scene.radius) * self.tool.face(self.face).length
 
     def replan_options(self) -> QPOptions:
-        """The re-plans' options: the plan's contact budget carried over to the push model in force.
-
-        A sticking contact rolls ``1/c^2`` [m] along the face per metre of the object's sideways
-        travel (:class:`tooltransfer.planner.oe.constraints.ContactOnFace`), so the sideways travel the
-        task's ``max_contacts`` contacts per push carry at the plan's ``c`` needs ``(c_plan / c)^2``
-        times as many contacts once the adaptation finds a smaller ``c``: the re-plans may use that
-        many (never fewer than the task's, at most :data:`MAX_REPLAN_CONTACTS`, which may exceed the
-        task file's bound on ``oe.max_contacts``: that bounds what the nominal plan is asked for, this
-        follows from it). Re-contacts are short moves of the same face; refusing them would leave the
-        object on the drift the smaller ``c`` causes, toward the face's normal."""
-        ratio = (self.c_plan / self.scene.mechanics.c) ** 2
-        n = int(np.clip(np.ceil(self.options.max_contacts * ratio - 1e-9), self.options.max_contacts,
-                        max(self.options.max_contacts, MAX_REPLAN_CONTACTS)))
-        return self.options if n == self.options.max_contacts else self.options.model_copy(update={"max_contacts": n})
+        """The re-plans' options: the plan's contact budget carried over to the push model in force
+        (:func:`tooltransfer.planner.oe.replan.contact_budget`)."""
+        return contact_budget(self.options, self.c_plan, self.scene.mechanics.c)
 
     def replan(self, t: NDArray[np.float64], ref: NDArray[np.float64], faces: tuple[str, ...],
                switches: tuple[float, ...], o: NDArray[np.float64]) -> PushPlan:
@@ -335,62 +218,21 @@ class _Loop:
         return pp
 
     def clear_of_obstacles(self, pp: PushPlan) -> PushPlan:
-        """``pp`` (as it is when not solved or without a push), or ``pp`` refused when the tool
-        outline overlaps an obstacle at a pose of its first push (the one the loop executes next) or
-        at the second push's contact pose (where the switch or re-contact after it must end, a pose
-        the switch planner refuses): the fit keeps the object clear of the obstacles, not the tool,
-        and the nominal plan is refused for the same overlap (:func:`tooltransfer.planner.solve.solve`).
-        The later poses are left to the re-plans made from the observed object before they run. A
-        refused re-plan lets the caller try another (a new search, a correction's next leg)."""
-        from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
-
-        if not self.scene.obstacles or pp.status != "solved" or not pp.pushes:
-            return pp
-        poses = np.vstack([pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
-        near = tool_obstacle_clearance(self.tool, poses, self.scene.obstacles)
-        if near.distance > 0.0:
-            return pp
-        where = np.round(poses[near.sample, :2], 4).tolist()
-        return replace(pp, status="infeasible",
-                       reason=f"the tool outline overlaps obstacles[{near.obstacle}] with the tool at {where} m")
+        """``pp``, or refused when the tool outline overlaps an obstacle along what the loop executes
+        next (:func:`tooltransfer.planner.oe.replan.refuse_tool_overlap`)."""
+        return refuse_tool_overlap(self.tool, self.scene.obstacles, pp)
 
     def correction(self, o: NDArray[np.float64]) -> PushPlan:
-        """A correction from ``o`` once the plan's path is used up: along the faces' normals (where
-        the object goes whatever ``c`` is): one face whose admissible cone holds the way to the
-        target, else the shortest corner of two faces' normals that splits it (``r = a u1 + b u2``,
-        ``a, b > 0``), each fitted as that sequence; a new search along the straight way when none
-        of them works."""
-        from tooltransfer.planner.oe.face_frame import FaceFrame
-
-        r = self.target - o
-        d = float(np.hypot(*r))
-        frames = {f: FaceFrame.build(self.tool, f, self.platform, self.scene) for f in self.tool.face_names}
-        normal = {f: _unit(float(fr.normal_direction(o[None])[0])) for f, fr in frames.items()}
-        legs: list[tuple[float, tuple[str, ...], NDArray[np.float64]]] = []
-        for f, fr in frames.items():
-            off = float((np.arctan2(r[1], r[0]) - fr.push_direction(o[None])[0] + np.pi) % (2 * np.pi) - np.pi)
-            if abs(off) <= fr.theta_b:
-                legs.append((d, (f,), np.vstack([o, self.target])))
-        for f1 in frames:
-            for f2 in frames:
-                m = np.column_stack([normal[f1], normal[f2]])
-                if f1 == f2 or abs(np.linalg.det(m)) < 1e-3:
-                    continue
-                a, b = np.linalg.solve(m, r)
-                if a > 1e-4 and b > 1e-4:
-                    legs.append((float(a + b), (f1, f2), np.vstack([o, o + a * normal[f1], self.target])))
-        for length, faces, corners in sorted(legs, key=lambda leg: leg[0])[:3]:
-            seg = np.linalg.norm(np.diff(corners, axis=0), axis=1)
-            s = np.concatenate([[0.0], np.cumsum(seg)])
-            t = np.linspace(0.0, max(1.0, length / 0.01), 40)
-            u = np.linspace(0.0, s[-1], t.size)
-            ref = np.column_stack([np.interp(u, s, corners[:, j]) for j in range(2)])
-            switches = (float(t[-1] * s[1] / s[-1]),) if len(faces) == 2 else ()
-            pp = self.replan(t, ref, faces, switches, o)
+        """A correction from ``o`` once the plan's path is used up: each way of
+        :func:`tooltransfer.planner.oe.correction.correction_references` in turn, fitted as its
+        sequence, until one is solved (the last, a new search along the straight way)."""
+        pp: PushPlan | None = None
+        for way in correction_references(self.tool, self.platform, self.scene, o, self.target):
+            pp = self.replan(way.t, way.ref, way.faces, way.switches, o)
             if pp.status == "solved":
                 return pp
-        t = np.linspace(0.0, max(1.0, d / 0.01), 30)
-        return self.replan(t, o + np.linspace(0.0, 1.0, t.size)[:, None] * r, (), (), o)
+        assert pp is not None  # the straight way is always among the references
+        return pp
 
     # ---------------------------------------------------------------- executing
     def leave(self, o: NDArray[np.float64], pose: NDArray[np.float64], face: str, start: NDArray[np.float64],
@@ -427,18 +269,17 @@ class _Loop:
         """Bring ``p``'s face to its contact pose at sample ``k0`` of the push (switch, re-contact or
         none; along ``lead_in`` (K, 2) [m], the plan's own path, when given), then push along ``p``
         for at most ``length`` [m] of object travel; returns the push sample reached."""
-        pose = self.plant.tool_pose()  # type: ignore[attr-defined]
+        pose = self.plant.tool_pose()
         start = p.tool_pose[k0]
         change = self.face is not None and self.face != p.face
         if change or np.hypot(*(pose[:2] - start[:2])) > SAME_POSE:
             self.leave(o, pose, p.face, start, change, lead_in)
         self.face = p.face
-        self.face = p.face
         xy = pp.object_xy[p.samples[k0:]]
         travel = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
         k = int(np.searchsorted(travel, length, side="right")) - 1
         k = k0 + max(1, min(k, len(xy) - 1))
-        here = self.plant.tool_pose()  # type: ignore[attr-defined]
+        here = self.plant.tool_pose()
         self.before = self.observe() if self.adapt else o
         self.move(np.vstack([here[:2], p.tool_pose[k0: k + 1, :2]]), record=self.adapt)
         self.n_pushes += 1
@@ -446,52 +287,18 @@ class _Loop:
 
     # ---------------------------------------------------------------- adapting the model
     def learn(self, o: NDArray[np.float64]) -> None:
-        """The last push chunk observed at its end ``o``: keep it, and when the model predicted it more
-        than ``ADAPT_ERROR`` off, identify ``mu`` and ``c`` again from the last chunks
-        (:func:`tooltransfer.tools.pushing.identify.identify_mechanics`, started from and pulled towards the
-        mechanics in force), so the re-plans use the plant's own. The identification weighs its prior
-        in units of the chunks' misfit at the model in force, so its standard deviation here is
-        :data:`ADAPT_PRIOR_SD` times the ratio of that misfit [m] to the camera's averaged noise
-        (``camera_noise / sqrt(frames)`` [m]; the ratio at least 1): the pull towards the model in
-        force stays that of a fit within the noise and does not grow with how far the model
-        mispredicts (a strong pull would keep ``c`` near the model the chunks refute, and the re-plans
-        on the drift that model causes)."""
-        from tooltransfer.tools.pushing.forward import simulate
-        from tooltransfer.tools.pushing.identify import RecordedPush, identify_mechanics
-
+        """The last push chunk observed at its end ``o``: hand it to the model's adaptation
+        (:class:`tooltransfer.tools.pushing.adaptation.Adaptation`), whose model, when it adapts one,
+        the re-plans use from here."""
         if self.pending is None or self.before is None:
             return
         t, poses = self.pending
         self.pending = None
-        self.chunks.append(RecordedPush(t, poses, np.array([t[-1]]), o[None], self.before, o,
-                                        f"chunk {len(self.chunks)}"))
-        predicted = simulate(self.tool, poses, self.before, self.scene.radius, self.scene.mechanics).final
-        if np.hypot(*(predicted - o)) <= ADAPT_ERROR:
-            return
-        self.mispredicted += 1
-        if len(self.chunks) < 2 or self.mispredicted % 2:
-            return  # every second misprediction: the identification takes a few tenths of a second
-        start = time.perf_counter()
-        recent = self.chunks[-ADAPT_CHUNKS:]
-        miss = [simulate(self.tool, c.tool_pose, c.object_start, self.scene.radius, self.scene.mechanics).final
-                - c.object_xy[-1] for c in recent]
-        misfit = float(np.sqrt(np.mean(np.square(miss))))
-        try:
-            ident = identify_mechanics(self.tool, self.scene.radius, recent, initial=self.scene.mechanics,
-                                       prior_sd=ADAPT_PRIOR_SD * max(1.0, misfit / self.noise), max_step=5e-4)
-        except Exception as exc:  # an identification that cannot run leaves the model as it is
-            self.log.append(f"no adaptation ({type(exc).__name__}: {exc})")
-            return
-        finally:
-            self.adapt_times.append(time.perf_counter() - start)
-        m = ident.mechanics
-        if ident.c_excited or ident.mu_excited:
-            self.scene = replace(self.scene, mechanics=m)
-            self.log.append(f"adapted the push model to mu {m.mu:.3f}, c {m.c:.3f} from {len(ident.names)} chunks")
-
-
-def _unit(angle: float) -> NDArray[np.float64]:
-    return np.array([np.cos(angle), np.sin(angle)])
+        mechanics, note = self.adaptation.learn(t, poses, self.before, o, self.scene.mechanics)
+        if note:
+            self.log.append(note)
+        if mechanics is not None:
+            self.scene = replace(self.scene, mechanics=mechanics)
 
 
 class _Stop(ToolTransferError):
@@ -500,7 +307,7 @@ class _Stop(ToolTransferError):
         super().__init__(reason)
 
 
-def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, config: SimConfig | None) -> object:
+def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, config: SimConfig | None) -> Plant:
     from tooltransfer.planner.execution import SimPlant
     from tooltransfer.planner.simulate import task_sim_config
     from tooltransfer.tools.sim import SimPlatform
@@ -540,7 +347,7 @@ class _InForce:
         self.plan, self.base, self.i, self.k = plan, base, 0, 0
 
 
-def _plan_the_rest(loop: _Loop, ref: _Reference, f: _InForce) -> bool:
+def _plan_the_rest(loop: _Loop, ref: PlanReference, f: _InForce) -> bool:
     """A re-plan realised its first face only and the plan in force is used up short of its end:
     plan the rest from the observed object. Whether a plan was put in force."""
     current = f.plan
@@ -559,7 +366,7 @@ def _plan_the_rest(loop: _Loop, ref: _Reference, f: _InForce) -> bool:
     return False
 
 
-def _plan_done(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> tuple[str, str] | None:
+def _plan_done(loop: _Loop, ref: PlanReference, f: _InForce, pace: _Pace) -> tuple[str, str] | None:
     """The plan in force is done: is the object there (three observations averaged)? If not, a
     correction round. Returns the run's ``(status, reason)`` when it ends here, None when a
     correction is in force."""
@@ -578,7 +385,7 @@ def _plan_done(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> tuple[
     return None
 
 
-def _next_chunk(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> bool:
+def _next_chunk(loop: _Loop, ref: PlanReference, f: _InForce, pace: _Pace) -> bool:
     """Observe, re-plan if the object strays more than the threshold from where the plan in force
     puts it, stage the last stretch for a mispredicting plant, then push one chunk. Whether the
     object was observed at the target (the run ends)."""
@@ -606,7 +413,7 @@ def _next_chunk(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> bool:
         else:  # nothing better from here: the plan in force goes on
             loop.log.append(f"no re-plan from {np.round(o, 4).tolist()} m ({pp.reason}); the plan goes on")
     left = float(np.sum(np.linalg.norm(np.diff(f.plan.object_xy[p.samples[f.k]:], axis=0), axis=1)))
-    if loop.mispredicted >= 2 and not loop.staged and left < STAGE:
+    if loop.adaptation.mispredicted >= 2 and not loop.staged and left < STAGE:
         # a plant the model mispredicts: the last stretch along the faces' normals, where the
         # object goes where it is aimed whatever its limit surface (an object pushed past the
         # target by a sideways push that fell short cannot be pushed back)
@@ -626,7 +433,7 @@ def _next_chunk(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> bool:
     return False
 
 
-def _report(status: str, reason: str, loop: _Loop | None, plant: object | None, tolerance: float,
+def _report(status: str, reason: str, loop: _Loop | None, plant: Plant | None, tolerance: float,
             start: float) -> ClosedLoopReport:
     """The run's report; a run that ended otherwise but sees the object within ``tolerance`` [m]
     (one more observation) counts as reached. ``start``: the run's ``perf_counter`` start [s]."""
@@ -639,11 +446,11 @@ def _report(status: str, reason: str, loop: _Loop | None, plant: object | None, 
         loop.n_recontacts if loop else 0, len(loop.replan_times) if loop else 0,
         loop.replan_times if loop else [], loop.errors if loop else [], time.perf_counter() - start,
         execution, loop.log if loop else [], loop.scene.mechanics if loop else None,
-        loop.adapt_times if loop else [])
+        loop.adaptation.times if loop else [])
 
 
 def execute_closed_loop(
-    plan: Plan, plant: object | None = None, *, tolerance: float = 0.001, chunk: float = 0.015,
+    plan: Plan, plant: Plant | None = None, *, tolerance: float = 0.001, chunk: float = 0.015,
     approach: float = 0.6, max_rounds: int = 4, max_chunks: int = 120, frames: int = 10,
     replan_threshold: float = 0.001, adapt: bool = True, camera_noise: float = 0.0015, seed: int = 0,
     config: SimConfig | None = None,
@@ -669,7 +476,8 @@ def execute_closed_loop(
             by more than ``ADAPT_ERROR``, so the re-plans use the plant's mechanics (the report's
             ``mechanics``; the identification's times are ``adapt_times``).
         camera_noise: the camera's noise per frame [m]: the default plant's, and the noise the re-plan
-            threshold and the adaptation's prior (:meth:`_Loop.learn`) assume for any plant.
+            threshold and the adaptation's prior (:mod:`tooltransfer.tools.pushing.adaptation`) assume
+            for any plant.
     """
     if not isinstance(plan, Plan) or plan.status != "solved":
         raise InputError("plan", "a solved plan", getattr(plan, "status", type(plan).__name__))
@@ -683,7 +491,7 @@ def execute_closed_loop(
         approach_m = np.asarray(plan.phase) == "approach"
         loop.move(plan.tool_pose[approach_m, :2])
         loop.face = plan.pushes[0].faces[0]
-        ref = _Reference.of(plan)
+        ref = PlanReference.of(plan)
         f = _InForce(ref.plan)
         pace = _Pace(tolerance, max(replan_threshold, 3.0 * camera_noise / np.sqrt(frames)), chunk, approach,
                      max_rounds)

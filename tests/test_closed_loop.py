@@ -159,7 +159,7 @@ def test_replans_carry_the_contact_budget_over_to_the_adapted_c(plan_file: Path)
     """The contact rolls 1/c^2 per sideways travel: at 0.6 x the plan's c the re-plans may use
     1/0.36 times the task's contacts per push, never fewer than the task's, at most the cap."""
 
-    from tooltransfer.planner.closed_loop import MAX_REPLAN_CONTACTS
+    from tooltransfer.planner.oe.replan import MAX_REPLAN_CONTACTS
 
     _, loop = _loop_on(plan_file)
     task_contacts = loop.options.max_contacts
@@ -179,11 +179,11 @@ def test_a_replan_whose_tool_overlaps_an_obstacle_is_refused(plan_file: Path) ->
     overlaps one along the push executed next, or at the contact pose the switch after it ends in,
     is refused with the obstacle and the pose, as the nominal plan is; later poses are re-planned
     before they run."""
-    from tooltransfer.planner.closed_loop import _Reference
+    from tooltransfer.planner.oe.replan import PlanReference
     from tooltransfer.tools.objects import Disc
 
     plan, loop = _loop_on(plan_file)
-    pp = _Reference.of(plan).plan
+    pp = PlanReference.of(plan).plan
     assert len(pp.pushes) >= 3
     loop.scene = replace(loop.scene, obstacles=())
     assert loop.clear_of_obstacles(pp) is pp
@@ -205,10 +205,11 @@ def test_a_replan_whose_tool_overlaps_an_obstacle_is_refused(plan_file: Path) ->
 def test_a_straying_correction_is_corrected_from_the_observed_object(plan_file: Path) -> None:
     """With a correction in force (past the plan's path), an object observed off it by more than
     the re-plan threshold gets a new correction from where it is; on it, the correction goes on."""
-    from tooltransfer.planner.closed_loop import _InForce, _next_chunk, _Pace, _Reference
+    from tooltransfer.planner.closed_loop import _InForce, _next_chunk, _Pace
+    from tooltransfer.planner.oe.replan import PlanReference
 
     plan, loop = _loop_on(plan_file)
-    ref = _Reference.of(plan)
+    ref = PlanReference.of(plan)
     pace = _Pace(0.001, 0.001, 0.015, 0.6, 4)
     calls: list[np.ndarray] = []
 
@@ -236,7 +237,8 @@ def test_the_adaptations_prior_is_weighed_in_units_of_the_camera_noise(plan_file
     it (the prior's standard deviation grows with the misfit over the noise, never below
     ADAPT_PRIOR_SD), and the model in force ends near the plant's c."""
     import tooltransfer.tools.pushing.identify as identify
-    from tooltransfer.planner.closed_loop import ADAPT_PRIOR_SD, execute_closed_loop
+    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.tools.pushing.adaptation import ADAPT_PRIOR_SD
 
     seen: list[float] = []
     real = identify.identify_mechanics
