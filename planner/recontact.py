@@ -12,19 +12,17 @@ imposes). The back-off doubles, up to ``4 * back_off``, until the shift clears t
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 import shapely
 from numpy.typing import NDArray
 
 from tooltransfer.planner.assemble import SwitchPlanner
+from tooltransfer.planner.setting import Setting
 from tooltransfer.planner.ss.result import SwitchPath
 from tooltransfer.planner.switches import densify
 from tooltransfer.tools.model import Tool
-from tooltransfer.tools.objects import Disc, Obstacle
+from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.ik import joint_path
-from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pose import rotation
 
 
@@ -37,10 +35,11 @@ def swept_distance(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64]
     return float(shapely.distance(shapely.GeometryCollection(polys), shape))
 
 
-def recontact_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: Sequence[Obstacle],
-                      back_off: float = 0.002) -> SwitchPlanner:
-    """The re-contact move as a :data:`tooltransfer.planner.assemble.SwitchPlanner` (``face_a == face_b``)."""
-    shapes = [o.polygon() if isinstance(o, Disc) else o for o in obstacles]
+def recontact_planner(setting: Setting, back_off: float = 0.002) -> SwitchPlanner:
+    """The re-contact move in ``setting`` as a :data:`tooltransfer.planner.assemble.SwitchPlanner`
+    (``face_a == face_b``; ``back_off`` [m]: the first distance backed off along the face's normal)."""
+    tool, platform, radius = setting.tool, setting.platform, setting.radius
+    shapes = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
 
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
              pose_b: NDArray[np.float64]) -> SwitchPath:

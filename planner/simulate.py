@@ -18,12 +18,13 @@ from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.plan import Plan, PlanFileError, joint_rates
-from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
+from tooltransfer.planner.setting import Setting, setting_from_task, task_mechanics
+from tooltransfer.problems.task import Task, task_from_dict
+from tooltransfer.tools.pushing.mechanics import PushMechanics
 from tooltransfer.tools.sim.config import SimConfig
 from tooltransfer.tools.sim.execution import Execution
 
 if TYPE_CHECKING:
-    from tooltransfer.tools.model import Tool
     from tooltransfer.tools.omni.platform import OmniPlatform
 
 
@@ -61,10 +62,10 @@ def simulate_plan(plan: Plan, config: SimConfig | None = None) -> SimulationRepo
                          "simulation's bound, --force or not)",
                          f"{plan.t.size} samples, {plan.t[-1] - plan.t[0]:.6g} s" if plan.t.size else "no samples")
     task = task_from_dict(plan.task, "plan.task")
-    tool = task_tool(task)
+    setting = setting_from_task(task, mechanics=task_mechanics(task))  # MuJoCo has its own contact model
     from tooltransfer.tools.sim.platform import SimPlatform  # mujoco: the optional sim extra
 
-    sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task), config or task_sim_config(task))
+    sim = SimPlatform(setting.tool, setting.platform, list(setting.obstacles), config or task_sim_config(task))
     start = time.perf_counter()
     sim.reset(np.array(task.start), q0=plan.joints[0])
     ex = sim.execute(plan.t, plan.joints, plan.joint_velocities)  # the plan's velocities fed forward
@@ -126,14 +127,14 @@ def _check_joints(plan: Plan, source: str, platform: OmniPlatform) -> None:
               f"{1e3 * pos[k]:.4g} mm and {yaw[k]:.3g} rad off at t = {t[k]:.3f} s")
 
 
-def _check_clear(plan: Plan, source: str, task: Task, tool: Tool, start: NDArray[np.float64]) -> None:
+def _check_clear(plan: Plan, source: str, setting: Setting, start: NDArray[np.float64]) -> None:
     """The tool clear of the object at the task's ``start`` [m], of the planned object path and of
     every obstacle (overlaps beyond ``OVERLAP_TOL`` [m] fail)."""
     from tooltransfer.planner.segmentation.geometry import ToolGeometry, to_tool_frame
     from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
 
-    t = plan.t
-    geo = ToolGeometry(tool, task.object.radius)
+    t, tool = plan.t, setting.tool
+    geo = ToolGeometry(tool, setting.radius)
     gap0 = float(geo.outline_gap(to_tool_frame(start, plan.tool_pose[:1]))[0][0])
     if gap0 < -OVERLAP_TOL:
         _fail(source, "samples.tool_pose[0]", "a start pose of the tool clear of the object at the task's start",
@@ -144,7 +145,7 @@ def _check_clear(plan: Plan, source: str, task: Task, tool: Tool, start: NDArray
         _fail(source, f"samples.tool_pose[{k}]",
               "a tool path that never overlaps the planned object (samples.object_xy)",
               f"the tool outline {1e3 * -gap[k]:.3g} mm into the object at t = {t[k]:.3f} s ({plan.phase[k]})")
-    near = tool_obstacle_clearance(tool, plan.tool_pose, task_obstacles(task))
+    near = tool_obstacle_clearance(tool, plan.tool_pose, list(setting.obstacles))
     if near.distance <= 0.0:
         k = near.sample
         _fail(source, f"samples.tool_pose[{k}]", f"a tool path clear of obstacles[{near.obstacle}]",
@@ -171,24 +172,25 @@ def _check_tool_rates(plan: Plan, source: str, task: Task) -> None:
                   f"{acc[k]:.4g} m/s^2 ({acc[k] / a_max:.3g} times the limit) at t = {t[k]:.3f} s")
 
 
-def _check_replay(plan: Plan, source: str, task: Task, tool: Tool, start: NDArray[np.float64]) -> None:
-    """The planned tool path, replayed through the push model from ``start`` [m] with the plan's
-    mechanics (its metrics, else the task's), moves the object along the planned path."""
+def _plan_mechanics(plan: Plan, source: str, task: Task) -> PushMechanics:
+    """The push model's parameters the plan records in its metrics, else the task's
+    (:func:`tooltransfer.planner.setting.task_mechanics`, without skills)."""
+    mu, c = plan.metrics.get("mechanics_mu"), plan.metrics.get("mechanics_c")
+    if mu is None or c is None:
+        return task_mechanics(task)
+    try:
+        return PushMechanics(float(mu), float(c), "given")
+    except InputError as exc:
+        _fail(source, f"metrics.{exc.field.replace('mechanics.', 'mechanics_')}", exc.expected, exc.got)
+
+
+def _check_replay(plan: Plan, source: str, task: Task, setting: Setting, start: NDArray[np.float64]) -> None:
+    """The planned tool path, replayed through the push model from ``start`` [m] with the setting's
+    mechanics (the plan's, :func:`_plan_mechanics`), moves the object along the planned path."""
     from tooltransfer.tools.pushing.forward import simulate
-    from tooltransfer.tools.pushing.mechanics import PushMechanics
 
     t = plan.t
-    mu, c = plan.metrics.get("mechanics_mu"), plan.metrics.get("mechanics_c")
-    if mu is not None and c is not None:
-        try:
-            mech = PushMechanics(float(mu), float(c), "given")
-        except InputError as exc:
-            _fail(source, f"metrics.{exc.field.replace('mechanics.', 'mechanics_')}", exc.expected, exc.got)
-    else:
-        from tooltransfer.planner.solve import task_mechanics
-
-        mech = task_mechanics(task)
-    replay = simulate(tool, plan.tool_pose, start, task.object.radius, mech)
+    replay = simulate(setting.tool, plan.tool_pose, start, setting.radius, setting.mechanics)
     off = np.hypot(*(replay.object_xy - plan.object_xy).T)
     tol = max(REPLAY_TOL, 10 * task.oe.self_consistency_tol)
     if off.max() > tol:
@@ -236,18 +238,20 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
     if not 0.0 <= t[0] <= 1.0:
         _fail(source, "samples.t[0]", "a plan starting at 0 s", f"{t[0]:.6g} s")
     task = task_from_dict(plan.task, f"{source}: task")
-    tool = task_tool(task)
-    platform = task_platform(task, tool)
+    try:
+        setting = setting_from_task(task, mechanics=_plan_mechanics(plan, source, task))
+    except InputError as exc:  # e.g. the task's object overlapping an obstacle at its start
+        _fail(source, f"task.{exc.field}", exc.expected, exc.got)
     start, target = np.array(task.start), np.array(task.target)
     for k, point, name in ((0, start, "start"), (t.size - 1, target, "target")):
         off = float(np.hypot(*(plan.object_xy[k] - point)))
         if off > END_TOL:
             _fail(source, f"samples.object_xy[{k}]", f"the task's {name} {point.round(6).tolist()} m (within "
                   f"{1e3 * END_TOL:g} mm)", f"{plan.object_xy[k].round(6).tolist()} m, {1e3 * off:.3g} mm off")
-    _check_joints(plan, source, platform)
-    _check_clear(plan, source, task, tool, start)
+    _check_joints(plan, source, setting.platform)
+    _check_clear(plan, source, setting, start)
     _check_tool_rates(plan, source, task)
-    _check_replay(plan, source, task, tool, start)
+    _check_replay(plan, source, task, setting, start)
     _check_joint_rates(plan, source)
 
 

@@ -1,8 +1,9 @@
 """The planner end to end: a task in, a plan out (``tooltransfer.planner.solve``).
 
 Stages (each timed in the plan's metrics): skills (the universal OE skill learned from the task's
-dataset, cached in memory by the dataset's content hash), the scene (object radius, push mechanics,
-obstacles, margin: :mod:`tooltransfer.planner.scene`), OE condensing with the chosen variant (pushes realised
+dataset, cached in memory by the dataset's content hash), the setting (tool, platform, object, push
+mechanics, obstacles, margin: :mod:`tooltransfer.planner.setting`), OE condensing with the chosen variant
+(:mod:`tooltransfer.planner.variant_registry`; pushes realised
 by the inverse push model, :mod:`tooltransfer.planner.oe.contacts`), a switch between consecutive pushes of
 different faces and a re-contact between pieces of one face, approach and retreat, timing under the
 tool's speed and acceleration limits, inverse kinematics of the whole tool path (joint limits
@@ -27,49 +28,19 @@ from typing import Any, Literal
 
 import numpy as np
 
-from tooltransfer.errors import InputError
 from tooltransfer.planner.assemble import SwitchFailed, assemble
 from tooltransfer.planner.metric_units import UNITS
 from tooltransfer.planner.oe.generalize import generalize
-from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping
-from tooltransfer.planner.oe.qp_variant import QPOptions, condense_qp
+from tooltransfer.planner.oe.mapping_variant import MappingOptions
+from tooltransfer.planner.oe.qp_variant import QPOptions
 from tooltransfer.planner.plan import Plan, Segment
 from tooltransfer.planner.recontact import recontact_planner
-from tooltransfer.planner.scene import Scene
-from tooltransfer.planner.skills import Skills, learn_skills, load_skills_file
-from tooltransfer.planner.switches import arch_planner, skill_planner, with_fallback
+from tooltransfer.planner.setting import Setting, setting_from_task, task_skills
+from tooltransfer.planner.switches import with_fallback
 from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
-from tooltransfer.problems.task import Task, resolve, task_obstacles, task_origin, task_platform, task_tool
-from tooltransfer.tools.objects import Disc
-from tooltransfer.tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
+from tooltransfer.planner.variant_registry import needs_ss_skill, oe_variant, switch_planner
+from tooltransfer.problems.task import Task, resolve, task_origin
 from tooltransfer.tools.pushing.forward import simulate
-from tooltransfer.tools.pushing.mechanics import PLATFORM_MECHANICS, PushMechanics
-
-
-def _describe(task: Task, tool: Any, platform: Any, obstacles: list) -> dict[str, Any]:
-    return {
-        "platform": {
-            "dh": [
-                {"joint": 1, "alpha": -np.pi / 2, "a": 0.0, "d": D1, "theta": "q1"},
-                {"joint": 2, "alpha": 0.0, "a": L1, "d": 0.0, "theta": "q2"},
-                {"joint": 3, "alpha": 0.0, "a": L2, "d": 0.0, "theta": "q3"},
-                {"joint": "tool", "alpha": 0.0, "a": platform.a_t, "d": D_TOOL, "theta": THETA_TOOL},
-            ],
-            "base_xy": list(platform.base_xy), "base_yaw": platform.base_yaw,
-            "table_height": platform.table_height, "a_t": platform.a_t,
-            "joint_limits": {"lower": list(platform.limits.lower), "upper": list(platform.limits.upper)},
-        },
-        "object": {"radius": task.object.radius, "start": list(task.start), "goal": list(task.target)},
-        "tool": {
-            "name": tool.name, "outline": np.asarray(tool.outline.exterior.coords)[:-1].tolist(),
-            "faces": [{"name": f.name, "segment": [f.start.tolist(), f.end.tolist()], "push_angle": f.push_angle,
-                       "theta_b": f.theta_b} for f in tool.faces],
-        },
-        "obstacles": [
-            {"kind": "disc", "centre": o.centre.tolist(), "radius": o.radius} if isinstance(o, Disc)
-            else {"kind": "polygon", "vertices": np.asarray(o.exterior.coords)[:-1].tolist()} for o in obstacles
-        ],
-    }
 
 
 def _as_loaded(task: Task, task_path: str | Path) -> dict[str, Any]:
@@ -81,25 +52,6 @@ def _as_loaded(task: Task, task_path: str | Path) -> dict[str, Any]:
     return data
 
 
-def task_skills(task: Task, task_path: str | Path | None = None, *, need_ss: bool = True) -> Skills:
-    """The skills ``task`` names: learned from its dataset (cached; the SS skill only if ``need_ss``)
-    or read from its skills file (relative to ``task_path``, by default the task's file:
-    :func:`~tooltransfer.problems.task.task_origin`).
-
-    Raises:
-        InputError: a missing dataset or skills file, or a skills file learned with another ``k``
-            than the task's ``oe.k``.
-    """
-    task_path = task_origin(task, task_path)
-    if task.skills.file is not None:
-        skills = load_skills_file(resolve(task_path, task.skills.file))
-        if "k" in task.oe.model_fields_set and task.oe.k != skills.oe.k:
-            raise InputError("oe.k", f"the skills file's k = {skills.oe.k} (or learn the skills again)", task.oe.k)
-        return skills
-    folder = resolve(task_path, task.skills.dataset or "")
-    return learn_skills(folder, task.oe.k, task.ss.virtual_motion, with_ss=need_ss)
-
-
 def qp_options(task: Task) -> QPOptions:
     """The ``qp`` variant's options from the task's ``oe`` section (:meth:`QPOptions.from_task`)."""
     return QPOptions.from_task(task.oe)
@@ -108,47 +60,6 @@ def qp_options(task: Task) -> QPOptions:
 def mapping_options(task: Task) -> MappingOptions:
     """The ``mapping`` variant's options from the task's ``oe`` section (:meth:`MappingOptions.from_task`)."""
     return MappingOptions.from_task(task.oe)
-
-
-def task_mechanics(task: Task, skills: Skills | None = None) -> PushMechanics:
-    """The push model's parameters: the task's ``object.mechanics`` override, else those identified
-    with the skills, else the platform's nominal values (:data:`PLATFORM_MECHANICS`)."""
-    spec = task.object.mechanics
-    if spec is not None:
-        return PushMechanics(spec.mu, spec.c, "task")
-    identified = getattr(skills, "mechanics", None)
-    return identified if isinstance(identified, PushMechanics) else PLATFORM_MECHANICS
-
-
-def task_scene(task: Task, obstacles: list, margin: float, skills: Skills | None = None) -> Scene:
-    """The :class:`Scene` of ``task``: its object, mechanics, obstacles and the ``margin`` [m] used."""
-    return Scene(task.object.radius, task_mechanics(task, skills), tuple(obstacles), margin,
-                 task.oe.friction_cone_fraction, task.oe.contact_margin, task.oe.contact_span)
-
-
-def effective_margin(task: Task, obstacles: list) -> float:
-    """The safety margin [m] the plan can keep: the task's ``safety_margin``, reduced to the object's
-    clearance from the nearest obstacle at the start or the target when that is smaller (an object
-    that starts touching an obstacle keeps at least its starting clearance; the plan's metrics
-    report the margin used).
-
-    Raises:
-        InputError: the object overlaps an obstacle at the start or the target.
-    """
-    import shapely
-
-    r = task.object.radius
-    margin = task.safety_margin
-    for field, point in (("start", task.start), ("target", task.target)):
-        disc = shapely.Point(point).buffer(r, quad_segs=64)
-        for i, o in enumerate(obstacles):
-            shape = o.polygon() if isinstance(o, Disc) else o
-            gap = float(shapely.distance(disc, shape))
-            if gap == 0.0 and shapely.intersection(disc, shape).area > 1e-10:
-                raise InputError(field, f"an object position clear of obstacles[{i}] (the object of radius "
-                                 f"{r} m overlaps it)", list(point))
-            margin = min(margin, gap)
-    return margin
 
 
 def solve(task: Task, task_path: str | Path | None = None) -> Plan:
@@ -167,42 +78,26 @@ def solve(task: Task, task_path: str | Path | None = None) -> Plan:
         stages[f"time_{name}"] = now - clock
         clock = now
 
-    tool = task_tool(task)
-    platform = task_platform(task, tool)
-    obstacles = task_obstacles(task)
-    desc = _describe(task, tool, platform, obstacles)
+    skills = task_skills(task, task_path, need_ss=needs_ss_skill(task.variants.ss))
+    lap("skills")
+    setting = setting_from_task(task, skills, task_path)
+    desc = setting.describe()
+    desc["object"].update(start=list(task.start), goal=list(task.target))
     base = {"variant": {"oe": task.variants.oe, "ss": task.variants.ss}, "task": _as_loaded(task, task_path),
             **desc}
-    margin = effective_margin(task, obstacles)
-    skills = task_skills(task, task_path, need_ss=task.variants.ss != "arch")
-    lap("skills")
-    scene = task_scene(task, obstacles, margin, skills)
     t, x, _ = generalize(skills.oe.dmp, np.array(task.start), np.array(task.target))
     target = np.array(task.target)
-    if task.variants.oe == "qp":
-        push_plan = condense_qp(t, x, tool, platform, scene, target, qp_options(task))
-    else:
-        push_plan = condense_mapping(t, x, tool, platform, scene, target,
-                                     mapping_options(task))
+    oe = oe_variant(task.variants.oe)
+    push_plan = oe.condense(t, x, setting, target, oe.options_from_task(task.oe))
     lap("oe")
     if push_plan.status != "solved":
         return Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base)
-    radius = task.object.radius
-    if task.variants.ss == "arch":
-        switch = arch_planner(tool, platform, radius, obstacles, task.ss.clearance)
-    else:
-        if skills.ss is None:
-            raise InputError("skills", "an SS skill for the switch variant " + repr(task.variants.ss), "none")
-        switch = skill_planner(task.variants.ss, skills.ss, tool, platform, radius, obstacles, task.ss.clearance,
-                               task.ss.n_knots)
-        if task.variants.ss == "opt":  # the NLP is local: where it finds no path, the geometric arch
-            switch = with_fallback(switch, arch_planner(tool, platform, radius, obstacles, task.ss.clearance),
-                                   "arch")
-    recontact = with_fallback(recontact_planner(tool, platform, radius, obstacles), switch, "switch")
+    switch = switch_planner(task.variants.ss, setting, skills.ss, task.ss)
+    recontact = with_fallback(recontact_planner(setting), switch, "switch")
     reasons: list[str] = []
     violated: Plan | None = None  # the first whole plan that breaks a hard check (kept if nothing solves)
     while True:  # the push plan, then the next candidates it hands out while a later stage fails
-        plan = _complete(task, tool, platform, scene, push_plan, switch, recontact, stages, base)
+        plan = _complete(task, setting, push_plan, switch, recontact, stages, base)
         if plan.status == "violated" and violated is None:
             violated = plan
         if plan.status == "solved" or push_plan.next_best is None:
@@ -222,20 +117,20 @@ def solve(task: Task, task_path: str | Path | None = None) -> Plan:
     return plan
 
 
-def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any, switch: Any, recontact: Any,
+def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, recontact: Any,
               stages: dict[str, float], base: dict[str, Any]) -> Plan:
     """A solved push plan made a whole plan (switches, timing, joints) and checked (module docstring)."""
     clock = time.perf_counter()
-    radius = scene.radius
-    obstacles = list(scene.obstacles)
+    tool, platform, radius = setting.tool, setting.platform, setting.radius
+    obstacles = list(setting.obstacles)
     try:
         motion = assemble(push_plan, tool, platform, switch, recontact, v_max=task.timing.max_tool_speed,
                           a_max=task.timing.max_tool_accel, approach_distance=task.timing.approach_distance)
     except SwitchFailed as exc:
         return Plan(status="infeasible", reason=str(exc), metrics={**push_plan.metrics, **stages}, **base)
     stages = {**stages, "time_switches_and_timing": time.perf_counter() - clock}
-    metrics = {**push_plan.metrics, **stages, "safety_margin_used": scene.margin,
-               "mechanics_mu": scene.mechanics.mu, "mechanics_c": scene.mechanics.c}
+    metrics = {**push_plan.metrics, **stages, "safety_margin_used": setting.margin,
+               "mechanics_mu": setting.mechanics.mu, "mechanics_c": setting.mechanics.c}
     sws = [sw for fa, fb, *_, sw in motion.switches if fa != fb]
     recs = [sw for fa, fb, *_, sw in motion.switches if fa == fb]
     metrics["switch_clearance_min"] = min((sw.object_clearance for sw in sws), default=float("inf"))
@@ -263,7 +158,7 @@ def _complete(task: Task, tool: Any, platform: Any, scene: Scene, push_plan: Any
                            f"t = {motion.t[k]:.2f} s ({motion.phase[k]}; tool at "
                            f"{np.round(motion.tool_pose[k, :2], 4).tolist()} m)")
     t_replay = time.perf_counter()
-    replay = simulate(tool, motion.tool_pose, np.array(task.start), radius, scene.mechanics)
+    replay = simulate(tool, motion.tool_pose, np.array(task.start), radius, setting.mechanics)
     off = np.linalg.norm(replay.object_xy - motion.object_xy, axis=1)
     metrics["self_consistency_max"] = float(off.max())
     metrics["time_replay"] = time.perf_counter() - t_replay

@@ -19,7 +19,7 @@ penetration depths [m] over the whole switch, measured exactly on the swept outl
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -28,15 +28,16 @@ from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.assemble import SwitchPlanner
+from tooltransfer.planner.setting import Setting
 from tooltransfer.planner.ss import OptOptions, SwitchPath, SwitchSkill, SwitchTask, optimize, recombine
 from tooltransfer.planner.ss.arch_variant import NoArch, swept_clearance, switch_path
 from tooltransfer.tools.model import Tool
-from tooltransfer.tools.objects import Disc, DiscObject
+from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.ik import joint_path
-from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pose import rotation
 
-Obstacle = Disc | shapely.Polygon
+#: How a skill variant solves one switch: ``solve(skill, task) -> SwitchPath``.
+SkillSolver = Callable[[SwitchSkill, SwitchTask], SwitchPath]
 
 
 def enclosing_disc(poly: shapely.Polygon) -> Disc:
@@ -66,10 +67,10 @@ def contact_fraction(tool: Tool, face: str, obj: NDArray[np.float64], pose: NDAr
     return float(np.clip(s, *f.contact_range))
 
 
-def arch_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: Sequence[Obstacle],
-                 clearance: float) -> SwitchPlanner:
-    """The ``arch`` switch planner (``clearance`` [m] from the object and the obstacles)."""
-    discs = [o if isinstance(o, Disc) else enclosing_disc(o) for o in obstacles]
+def arch_planner(setting: Setting, clearance: float) -> SwitchPlanner:
+    """The ``arch`` switch planner in ``setting`` (``clearance`` [m] from the object and the obstacles)."""
+    tool, platform, radius = setting.tool, setting.platform, setting.radius
+    discs = [o if isinstance(o, Disc) else enclosing_disc(o) for o in setting.obstacles]
 
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
              pose_b: NDArray[np.float64]) -> SwitchPath:
@@ -98,25 +99,21 @@ def arch_planner(tool: Tool, platform: OmniPlatform, radius: float, obstacles: S
     return plan
 
 
-def skill_planner(variant: str, skill: SwitchSkill, tool: Tool, platform: OmniPlatform, radius: float,
-                  obstacles: Sequence[Obstacle], clearance: float, n_knots: int) -> SwitchPlanner:
-    """The ``dmp`` or ``opt`` switch planner of the SS skill (``clearance`` [m]: the NLP's margin
-    over the middle of the switch; ``n_knots``: its knots)."""
-    obs = tuple(obstacles)
+def skill_planner(variant: str, solve: SkillSolver, skill: SwitchSkill, setting: Setting) -> SwitchPlanner:
+    """The switch planner of an SS skill variant named ``variant``: each switch posed as a
+    :class:`SwitchTask` in ``setting`` (the contact fractions where the two poses touch the object)
+    and solved by ``solve(skill, task)``; the path's ends are the exact contact poses."""
+    tool, platform, radius, obs = setting.tool, setting.platform, setting.radius, setting.obstacles
 
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
              pose_b: NDArray[np.float64]) -> SwitchPath:
         s_a, s_b = (contact_fraction(tool, f, obj, p, radius) for f, p in ((face_a, pose_a), (face_b, pose_b)))
         try:
             task = SwitchTask(tool, face_a, face_b, np.asarray(obj, float), s_from=s_a, s_to=s_b,
-                              obj=DiscObject(radius), obstacles=obs, platform=platform)
+                              obj=setting.obj, obstacles=obs, platform=platform)
         except InputError as exc:  # e.g. a "switch" of one face to where it already touches
             return SwitchPath(variant, "infeasible", f"{variant} switch: {exc}")
-        if variant == "dmp":
-            res = recombine(skill, task)
-        else:
-            # the NLP needs a positive margin; 1 um stands for "touching allowed" (clearance 0)
-            res = optimize(skill, task, OptOptions(n_knots=n_knots, margin=max(clearance, 1e-6)))
+        res = solve(skill, task)
         res = replace(res, obstacle_clearance=float(res.obstacle_clearance) if obs else float("inf"))
         if not res.ok:
             return replace(res, status="infeasible", reason=f"{variant} switch: {res.reason}")
@@ -125,6 +122,19 @@ def skill_planner(variant: str, skill: SwitchSkill, tool: Tool, platform: OmniPl
         return replace(res, info={**res.info, "contact_gap": gap})
 
     return plan
+
+
+def dmp_planner(skill: SwitchSkill, setting: Setting) -> SwitchPlanner:
+    """The ``dmp`` switch planner: the SS skill recombined (eq. 18); penetration measured, not avoided."""
+    return skill_planner("dmp", recombine, skill, setting)
+
+
+def opt_planner(skill: SwitchSkill, setting: Setting, clearance: float, n_knots: int) -> SwitchPlanner:
+    """The ``opt`` switch planner: the CasADi NLP near the ``dmp`` path with ``n_knots`` knots, keeping
+    ``clearance`` [m] over the middle of the switch (1 um stands for "touching allowed": the NLP needs
+    a positive margin)."""
+    options = OptOptions(n_knots=n_knots, margin=max(clearance, 1e-6))
+    return skill_planner("opt", lambda sk, task: optimize(sk, task, options), skill, setting)
 
 
 def with_fallback(primary: SwitchPlanner, fallback: SwitchPlanner, name: str) -> SwitchPlanner:

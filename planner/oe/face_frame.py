@@ -15,8 +15,8 @@ direction in the world: :class:`FaceFrame`.
 
 The directions a face may push the object in are those of its friction cone about the face's
 outward normal (docs/design.md section 10: a round object under a flat face moves inside
-``|phi_c| <= atan(mu)`` about the normal, whatever the tool does), narrowed to the scene's
-``cone_fraction`` of it and intersected with the tool file's ``push_angle +- theta_b`` (the
+``|phi_c| <= atan(mu)`` about the normal, whatever the tool does), narrowed to the options'
+``friction_cone_fraction`` of it and intersected with the tool file's ``push_angle +- theta_b`` (the
 operator's preference): :attr:`FaceFrame.push_angle` and :attr:`FaceFrame.theta_b` describe that
 admissible cone (its middle and half-width), so every consumer of the frame plans inside it.
 """
@@ -24,17 +24,22 @@ admissible cone (its middle and half-width), so every consumer of the frame plan
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.scene import Scene
-from tooltransfer.tools.model import Tool
+from tooltransfer.problems.task import OEOptions, schema_default
 from tooltransfer.tools.omni.dh import D_TOOL
-from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.omni.reach import reach_sector
 from tooltransfer.validation import check_array
+
+if TYPE_CHECKING:
+    from tooltransfer.planner.setting import Setting
+
+#: Default share of the friction cone's half-angle a plan may use (``oe.friction_cone_fraction``, the task schema's).
+CONE_FRACTION: float = schema_default(OEOptions, "friction_cone_fraction")
 
 
 @dataclass(frozen=True)
@@ -68,29 +73,36 @@ class FaceFrame:
     s: float = 0.0
 
     @classmethod
-    def build(cls, tool: Tool, face: str, platform: OmniPlatform, scene: Scene, *, s: float | None = None) -> FaceFrame:
-        """Frame of ``face`` of ``tool`` on ``platform`` for the ``scene``'s object (radius, friction
-        cone), contact at fraction ``s`` along the face (default the middle of its contact range).
+    def build(cls, setting: Setting, face: str, *, s: float | None = None,
+              friction_cone_fraction: float = CONE_FRACTION) -> FaceFrame:
+        """Frame of ``face`` of ``setting``'s tool on its Omni for its object (radius, friction cone
+        ``atan(mu)``), contact at fraction ``s`` along the face (default the middle of its contact
+        range); the planned directions may use ``friction_cone_fraction`` (0, 1] of the friction
+        cone's half-angle (the OE options' field: a plan that survives an error in ``mu``).
 
         Raises:
-            InputError: ``s`` outside the contact range, a face that places the object in front of
-                the arm's axis, or a face whose cone (``push_angle +- theta_b``) and friction cone
-                do not overlap (it cannot push at all).
+            InputError: ``friction_cone_fraction`` outside (0, 1], ``s`` outside the contact range, a
+                face that places the object in front of the arm's axis, or a face whose cone
+                (``push_angle +- theta_b``) and friction cone do not overlap (it cannot push at all).
         """
+        if not 0.0 < float(friction_cone_fraction) <= 1.0:
+            raise InputError("oe.friction_cone_fraction", "a number in (0, 1]", repr(friction_cone_fraction))
+        tool, platform = setting.tool, setting.platform
+        half_angle = friction_cone_fraction * setting.mechanics.friction_angle
         f = tool.face(face)
         s0, s1 = f.contact_range
         s = 0.5 * (s0 + s1) if s is None else float(s)
         if not s0 - 1e-12 <= s <= s1 + 1e-12:
             raise InputError("s", f"a fraction in face {face!r}'s contact range [{s0}, {s1}]", repr(s))
-        c = f.point(s) + scene.radius * f.normal
+        c = f.point(s) + setting.radius * f.normal
         sec = reach_sector(platform)
         u_lo, u_hi = sec.u_range[0] + c[1], sec.u_range[1] + c[1]
         if u_lo <= 0.0:
             raise InputError("tool", f"face {face!r} placing the object in front of the arm's axis", f"u {u_lo}")
-        lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b, scene.cone_half_angle)
+        lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b, half_angle)
         if hi <= lo:
             raise InputError(f"tool.faces.{face}", "a push cone (push_angle +- theta_b) that overlaps the friction "
-                             f"cone (+-{np.degrees(scene.cone_half_angle):.1f} deg about the normal)",
+                             f"cone (+-{np.degrees(half_angle):.1f} deg about the normal)",
                              f"no overlap (push_angle {f.push_angle:.4g}, normal {f.normal_angle:.4g} rad)")
         return cls(
             face=face,

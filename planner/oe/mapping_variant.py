@@ -20,7 +20,7 @@ Along the generalized universal path:
    contact cannot carry the travel), so the two variants are compared on equal terms.
 
 The faces' cones are the same admissible cones as the ``qp`` variant's (the friction cone about the
-normal, narrowed to the scene's fraction, intersected with the tool file's cone; see
+normal, narrowed to the options' ``friction_cone_fraction``, intersected with the tool file's cone; see
 :mod:`tooltransfer.planner.oe.face_frame`): (6) compresses the directions into them.
 
 As in the paper there is no reach constraint; the shared metrics show what that costs (cone
@@ -42,18 +42,17 @@ from tooltransfer.planner.oe.face_frame import FaceFrame
 from tooltransfer.planner.oe.mappings import angle_map, inner_map_points, outer_map_points, wrap_angle
 from tooltransfer.planner.oe.metrics import plan_metrics
 from tooltransfer.planner.oe.push_plan import PushPlan
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import Setting
 from tooltransfer.problems.task import OEOptions
-from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, Obstacle
-from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.validation import check_array
 
 _TASK = OEOptions.model_fields
 
 
 class MappingOptions(BaseModel):
-    """Options of the ``mapping`` variant: ``k`` and ``tube`` are the task's ``oe`` fields (defaults,
+    """Options of the ``mapping`` variant: ``k``, ``tube``, ``friction_cone_fraction``,
+    ``contact_margin`` and ``contact_span`` are the task's ``oe`` fields (defaults,
     bounds and descriptions of :class:`tooltransfer.problems.task.OEOptions`, reused), validated
     once by pydantic when built (:meth:`from_task` takes the task's validated values).
 
@@ -62,6 +61,10 @@ class MappingOptions(BaseModel):
         tube: radius of the tube about the universal path [m] (inner (7)).
         min_push: shortest push [samples]; shorter runs of one face join their neighbour.
         n_samples: samples of the condensed path.
+        friction_cone_fraction: share (0, 1] of the friction cone's half-angle the faces' cones use
+            (:meth:`tooltransfer.planner.oe.face_frame.FaceFrame.build`).
+        contact_margin, contact_span: where on a face the contact may be [m]
+            (:func:`tooltransfer.planner.oe.contacts.usable_range`).
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -70,11 +73,15 @@ class MappingOptions(BaseModel):
     tube: float = _TASK["tube"]
     min_push: int = Field(5, ge=1, strict=True)
     n_samples: int = Field(400, ge=1, strict=True)
+    friction_cone_fraction: float = _TASK["friction_cone_fraction"]
+    contact_margin: float = _TASK["contact_margin"]
+    contact_span: float = _TASK["contact_span"]
 
     @classmethod
     def from_task(cls, oe: OEOptions) -> MappingOptions:
         """The options of a task's ``oe`` section (validated by the task schema, so not again)."""
-        return cls.model_construct(k=oe.k, tube=oe.tube)
+        return cls.model_construct(k=oe.k, tube=oe.tube, friction_cone_fraction=oe.friction_cone_fraction,
+                                   contact_margin=oe.contact_margin, contact_span=oe.contact_span)
 
 
 def _as_disc(o: Obstacle) -> Disc:
@@ -126,13 +133,11 @@ def _labels(
 def condense_mapping(
     t: NDArray[np.float64],
     universal: NDArray[np.float64],
-    tool: Tool,
-    platform: OmniPlatform,
-    scene: Scene,
+    setting: Setting,
     target: NDArray[np.float64] | None = None,
     options: MappingOptions | None = None,
 ) -> PushPlan:
-    """Condense the generalized universal path for ``tool`` by the paper's mappings.
+    """Condense the generalized universal path for ``setting``'s tool by the paper's mappings.
 
     Args and returns as :func:`tooltransfer.planner.oe.qp_variant.condense_qp`.
     """
@@ -143,15 +148,15 @@ def condense_mapping(
     target = universal[-1] if target is None else check_array(target, "target", shape=(2,))
     tt = np.linspace(t[0], t[-1], opts.n_samples)
     gen = np.column_stack([np.interp(tt, t, universal[:, j]) for j in range(2)])
-    if not isinstance(scene, Scene):
-        raise InputError("scene", "a tooltransfer.planner.scene.Scene", type(scene).__name__)
-    ref = avoid_obstacles(gen, scene.obstacles, opts.k, scene.margin, scene.radius)
+    if not isinstance(setting, Setting):
+        raise InputError("setting", "a tooltransfer.planner.setting.Setting", type(setting).__name__)
+    ref = avoid_obstacles(gen, setting.obstacles, opts.k, setting.margin, setting.radius)
     # the outer map's tail moves every point a little, the start and target too: take the ends'
     # displacement out linearly in time so the path still runs from the start to the target
     s = ((tt - tt[0]) / (tt[-1] - tt[0]))[:, None]
     ref = ref - (1.0 - s) * (ref[0] - gen[0]) - s * (ref[-1] - gen[-1])
-    names = list(tool.face_names)
-    frames = [FaceFrame.build(tool, f, platform, scene) for f in names]
+    names = list(setting.tool.face_names)
+    frames = [FaceFrame.build(setting, f, friction_cone_fraction=opts.friction_cone_fraction) for f in names]
     v_ref = np.gradient(ref, tt, axis=0)
     lab = _labels(ref, v_ref, frames, opts.min_push)
     x = np.empty_like(ref)
@@ -173,13 +178,13 @@ def condense_mapping(
     ends = np.append(starts[1:], tt.size - 1)
     spans = [(names[lab[s]], np.arange(s, e + 1)) for s, e in zip(starts, ends, strict=True)]
     try:
-        pushes = realise_pushes(tool, spans, tt, x, scene, platform)
+        pushes = realise_pushes(setting, spans, tt, x, opts)
     except PushRefused as exc:
         return PushPlan("mapping", "infeasible", np.zeros(0), np.zeros((0, 2)), np.zeros((0, 2)), gen,
                         reason=f"the mapped path cannot be pushed: {exc}",
                         metrics={"compute_time": time.perf_counter() - start_time})
     plan = PushPlan("mapping", "solved", tt, x, v, gen, pushes=pushes)
-    metrics = plan_metrics(plan, dict(zip(names, frames, strict=True)), target, scene)
+    metrics = plan_metrics(plan, dict(zip(names, frames, strict=True)), target, setting)
     metrics["compute_time"] = time.perf_counter() - start_time
     return PushPlan("mapping", "solved", tt, x, v, gen, pushes=pushes, metrics=metrics)
 

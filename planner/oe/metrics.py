@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
@@ -12,8 +13,10 @@ from tooltransfer.planner.oe.constraints import HeadingCone
 from tooltransfer.planner.oe.face_frame import FaceFrame
 from tooltransfer.planner.oe.push_plan import PushPlan
 from tooltransfer.planner.oe.sequence_proxy import reach_distance
-from tooltransfer.planner.scene import Scene
 from tooltransfer.tools.objects import Disc
+
+if TYPE_CHECKING:
+    from tooltransfer.planner.setting import Setting
 
 
 def _deviation(x: NDArray[np.float64], t: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -28,7 +31,7 @@ def plan_metrics(
     plan: PushPlan,
     frames: Mapping[str, FaceFrame],
     target: NDArray[np.float64],
-    scene: Scene,
+    setting: Setting,
     *,
     speed_tol: float = 1e-3,
 ) -> dict[str, float]:
@@ -54,12 +57,12 @@ def plan_metrics(
         cone = max(cone, HeadingCone(fr).angle_violation(x[p.samples], v[p.samples], speed_tol))
         reach = max(reach, float(reach_distance(fr, x[p.samples]).max(initial=0.0)))
     clear = np.inf
-    for o in scene.obstacles:
+    for o in setting.obstacles:
         if isinstance(o, Disc):
             gap = np.linalg.norm(x - o.centre, axis=1) - o.radius
         else:
             gap = shapely.distance(o, shapely.points(x))
-        clear = min(clear, float(gap.min()) - scene.radius)
+        clear = min(clear, float(gap.min()) - setting.radius)
     dev = _deviation(x, t, plan.universal)
     return {
         "cone_violation_max": cone,
@@ -67,7 +70,7 @@ def plan_metrics(
         "contact_edge_margin_min": min((p.edge_margin for p in plan.pushes), default=float("nan")),
         "n_recontacts": float(sum(p.recontact for p in plan.pushes)),
         "obstacle_clearance_min": clear,
-        "margin": scene.margin,
+        "margin": setting.margin,
         "reach_violation_max": reach,
         "goal_error": float(np.linalg.norm(x[-1] - target)),
         "deviation_mean": float(dev.mean()),

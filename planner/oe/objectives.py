@@ -17,6 +17,7 @@ deviation [m^2]); rolling twice as far costs four times as much.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,8 +26,10 @@ from tooltransfer.dmp.affine import AffineRollout
 from tooltransfer.dmp.qp.objectives import Objective, Quadratic
 from tooltransfer.planner.oe.constraints import heading_gradient
 from tooltransfer.planner.oe.face_frame import FaceFrame
-from tooltransfer.planner.scene import Scene
 from tooltransfer.tools.pushing.inverse import FaceGeometry
+
+if TYPE_CHECKING:
+    from tooltransfer.planner.setting import Setting
 
 Window = tuple[FaceGeometry, FaceFrame, float, float, tuple[float, float]]
 """(face geometry, face frame, t_start [s], t_end [s], usable range (lo, hi) [m])."""
@@ -38,13 +41,13 @@ class RollingPenalty(Objective):
     Args:
         windows: one entry per push (see :data:`Window`).
         reference: the reference path (T, 2) [m] on the constraint grid (where ``a`` is evaluated).
-        scene: the object's radius and mechanics.
+        setting: the world (the object's radius, the mechanics).
         price: a re-contact's price [m^2].
     """
 
-    def __init__(self, windows: Sequence[Window], reference: NDArray[np.float64], scene: Scene,
+    def __init__(self, windows: Sequence[Window], reference: NDArray[np.float64], setting: Setting,
                  price: float) -> None:
-        self.windows, self.reference, self.scene, self.price = list(windows), reference, scene, float(price)
+        self.windows, self.reference, self.setting, self.price = list(windows), reference, setting, float(price)
 
     def quadratic(self, aff: AffineRollout) -> Quadratic:
         t, n_all = aff.t, aff.t.size
@@ -58,7 +61,7 @@ class RollingPenalty(Objective):
             psi = frame.heading(x)
             e = face.direction
             e_w = np.stack([np.cos(psi) * e[0] - np.sin(psi) * e[1], np.sin(psi) * e[0] + np.cos(psi) * e[1]], axis=1)
-            a = -self.scene.mechanics.rolling * e_w - face.sigma * self.scene.radius * heading_gradient(frame, x)
+            a = -self.setting.mechanics.rolling * e_w - face.sigma * self.setting.radius * heading_gradient(frame, x)
             r, c0 = aff.rows(k, None, a)  # a . v = r @ w + c0
             lam = 2.0 * self.price * float(t[-1] - t[0]) * float(t[k[-1]] - t[k[0]]) / width**2
             rows.append(r)

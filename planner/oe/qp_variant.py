@@ -3,12 +3,12 @@
 For a new tool, the generalized universal object path is condensed into pushes the tool can make
 on the Omni. A candidate push sequence (faces in order, switch times) is scored by the constrained
 DMP fit of :mod:`tooltransfer.dmp.qp`: track the universal path, with, during each push, the object's velocity in
-the active face's admissible cone (its friction cone about the normal, narrowed to the scene's
-fraction and intersected with the tool file's cone, turning with the tool heading, re-linearised
+the active face's admissible cone (its friction cone about the normal, narrowed to the options'
+``friction_cone_fraction`` and intersected with the tool file's cone, turning with the tool heading, re-linearised
 until it settles; :mod:`tooltransfer.planner.oe.face_frame`), the contact on the face's usable segment as it
 rolls (:class:`tooltransfer.planner.oe.constraints.ContactOnFace`), the object where the Omni can push it from
 with that face wherever the contact is on it (:func:`tooltransfer.planner.oe.constraints.reach_constraints` at
-both ends of the segment), obstacles kept out with the scene's margin beyond its radius, and the
+both ends of the segment), obstacles kept out with the setting's margin beyond its radius, and the
 target reached with zero velocity. At a switch instant
 both faces' rows hold, so the object stops there when their cones do not overlap (the tool moves
 round it while it stands still). Cost: the fit's objective (half the mean squared deviation from
@@ -62,11 +62,9 @@ from tooltransfer.planner.oe.face_frame import FaceFrame
 from tooltransfer.planner.oe.objectives import RollingPenalty
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import Setting
 from tooltransfer.problems.task import OEOptions
-from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
-from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pushing.inverse import FaceGeometry
 from tooltransfer.validation import check_array
 
@@ -81,7 +79,8 @@ changed by the last per-mille; the final fit runs to ``QPOptions.scp_rtol``)."""
 _TASK = OEOptions.model_fields
 #: The task's ``oe`` fields the ``qp`` variant uses: their defaults, bounds and descriptions are the
 #: task schema's (:class:`tooltransfer.problems.task.OEOptions`), reused, not written again.
-TASK_FIELDS = ("n_samples", "n_basis", "segments", "max_pushes", "candidates", "switch_price", "max_contacts")
+TASK_FIELDS = ("n_samples", "n_basis", "segments", "max_pushes", "candidates", "switch_price", "max_contacts",
+               "friction_cone_fraction", "contact_margin", "contact_span")
 
 
 class QPOptions(BaseModel):
@@ -112,6 +111,11 @@ class QPOptions(BaseModel):
             of the same face, no switch round the object);
         alternatives: further screened candidates a plan may hand out (``PushPlan.next_best``) when a
             later stage fails on it (a switch that finds no path, a check that fails).
+        friction_cone_fraction: share (0, 1] of the friction cone's half-angle ``atan(mu)`` the
+            planned object directions may use about a face's normal (a plan that survives an error in
+            ``mu``: :meth:`tooltransfer.planner.oe.face_frame.FaceFrame.build`).
+        contact_margin, contact_span: where on a face the contact may be [m]
+            (:func:`tooltransfer.planner.oe.contacts.usable_range`).
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -131,6 +135,9 @@ class QPOptions(BaseModel):
     alternatives: int = Field(4, ge=0, strict=True)
     recontact_price: float = Field(1e-7, ge=0, allow_inf_nan=False)
     scp_rtol: float = 1e-6
+    friction_cone_fraction: float = _TASK["friction_cone_fraction"]
+    contact_margin: float = _TASK["contact_margin"]
+    contact_span: float = _TASK["contact_span"]
 
     @classmethod
     def from_task(cls, oe: OEOptions) -> QPOptions:
@@ -157,27 +164,29 @@ class _Scored:
         return r.status == "solved" or (r.status == "inaccurate" and max(r.violations.values()) <= self.accept)
 
 
-class _Scene:
+class _FitSetup:
     """Everything fixed while candidates are scored."""
 
     def __init__(
-        self, t: NDArray[np.float64], universal: NDArray[np.float64], tool: Tool, platform: OmniPlatform,
-        target: NDArray[np.float64], scene: Scene, opts: QPOptions, free_start: bool = False,
+        self, t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
+        target: NDArray[np.float64], opts: QPOptions, free_start: bool = False,
     ) -> None:
-        self.t, self.universal, self.target, self.opts, self.scene = t, universal, target, opts, scene
+        self.t, self.universal, self.target, self.opts, self.setting = t, universal, target, opts, setting
         self.free_start = free_start
-        self.tool, self.platform = tool, platform
-        self.frames = {f: FaceFrame.build(tool, f, platform, scene) for f in tool.face_names}
+        tool = self.tool = setting.tool
+        self.platform = setting.platform
+        cone = opts.friction_cone_fraction
+        self.frames = {f: FaceFrame.build(setting, f, friction_cone_fraction=cone) for f in tool.face_names}
         self._face_rows: dict[str, tuple[FaceGeometry, tuple[float, float], list[FaceFrame]]] = {}
         for f in tool.face_names:
             g = FaceGeometry.of(tool, f)
-            lo, hi = usable_range(tool, f, scene)
-            ends = [FaceFrame.build(tool, f, platform, scene, s=s / g.length) for s in sorted({lo, hi})]
+            lo, hi = usable_range(tool, f, opts)
+            ends = [FaceFrame.build(setting, f, s=s / g.length, friction_cone_fraction=cone) for s in sorted({lo, hi})]
             self._face_rows[f] = (g, (lo, hi), ends)
         self.dmp = DMP(2, n_basis=opts.n_basis)
         self.fixed: list[Constraint] = [FixedEndPoint(target), ZeroEndVelocity()]
-        grow = scene.radius + scene.margin
-        for o in scene.obstacles:
+        grow = setting.radius + setting.margin
+        for o in setting.obstacles:
             if isinstance(o, Disc):
                 self.fixed.append(OutsideDisc(o.centre, o.radius + grow, family="obstacle"))
             else:
@@ -202,7 +211,7 @@ class _Scene:
                     rows = rows if start == lo else reach_constraints(end, window=(start, hi), near=near)
                 cons += rows
             if s_hi > s_lo:
-                cons.append(ContactOnFace(fr, g, self.scene.mechanics, self.scene.radius, s_lo, s_hi,
+                cons.append(ContactOnFace(fr, g, self.setting.mechanics, self.setting.radius, s_lo, s_hi,
                                           max_contacts=self.opts.max_contacts, window=(lo, hi)))
         objectives: list = [TrackPath(self.universal)]
         if self.opts.ridge > 0:
@@ -211,7 +220,7 @@ class _Scene:
             objectives.append(RollingPenalty(
                 [(self._face_rows[f][0], self.frames[f], lo, hi, self._face_rows[f][1])
                  for f, lo, hi in zip(faces, edges[:-1], edges[1:], strict=True)],
-                self.universal, self.scene, self.opts.recontact_price))
+                self.universal, self.setting, self.opts.recontact_price))
         return FitProblem(self.dmp, self.t, x0=self.universal[0], g=self.target, objectives=objectives,
                           constraints=cons)
 
@@ -292,9 +301,9 @@ class _Scene:
         return self._const
 
 
-def _precheck(scene: _Scene, check_start: bool = True) -> str:
-    ends = np.vstack([scene.universal[0], scene.target])
-    reach = {f: reach_distance(fr, ends) for f, fr in scene.frames.items()}
+def _precheck(fit: _FitSetup, check_start: bool = True) -> str:
+    ends = np.vstack([fit.universal[0], fit.target])
+    reach = {f: reach_distance(fr, ends) for f, fr in fit.frames.items()}
     for i, what in ((0, "start"), (1, "target")):
         if (i or check_start) and all(r[i] > 0 for r in reach.values()):
             gap = min(r[i] for r in reach.values())
@@ -302,19 +311,19 @@ def _precheck(scene: _Scene, check_start: bool = True) -> str:
     return ""
 
 
-def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64],
+def _pushes(fit: _FitSetup, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64],
             s_first: float | None = None, spans_wanted: int | None = None) -> tuple[Push, ...]:
     """The pushes of the fitted path (of its first ``spans_wanted`` faces), realised by the inverse
     push model (raises PushRefused)."""
     edges = (t[0], *best.switches, t[-1])
     spans = [(face, np.flatnonzero((t >= lo - 1e-12) & (t <= hi + 1e-12)))
              for face, lo, hi in zip(best.faces, edges[:-1], edges[1:], strict=True)]
-    pushes = realise_pushes(scene.tool, spans[:spans_wanted], t, x, scene.scene, scene.platform, s_first)
-    if scene.free_start:  # the fit's reach rows started late: the realised tool poses, exactly
+    pushes = realise_pushes(fit.setting, spans[:spans_wanted], t, x, fit.opts, s_first)
+    if fit.free_start:  # the fit's reach rows started late: the realised tool poses, exactly
         from tooltransfer.tools.omni.ik import joint_path
 
         for p in pushes:
-            jp = joint_path(scene.platform, p.tool_pose[:, :2])
+            jp = joint_path(fit.platform, p.tool_pose[:, :2])
             bad = np.flatnonzero(jp.refused)
             if bad.size:
                 where = np.round(p.tool_pose[bad[0], :2], 4).tolist()
@@ -324,7 +333,7 @@ def _pushes(scene: _Scene, best: _Scored, t: NDArray[np.float64], x: NDArray[np.
 
 
 def condense_sequence(
-    t: NDArray[np.float64], universal: NDArray[np.float64], tool: Tool, platform: OmniPlatform, scene: Scene,
+    t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
     target: NDArray[np.float64], faces: tuple[str, ...], switches: tuple[float, ...],
     options: QPOptions | None = None, *, s_first: float | None = None, first_face_only: bool = False,
     free_start: bool = False,
@@ -346,7 +355,7 @@ def condense_sequence(
     target = check_array(target, "target", shape=(2,))
     grid = np.linspace(t[0], t[-1], opts.n_samples)
     ref = np.column_stack([np.interp(grid, t, universal[:, j]) for j in range(2)])
-    fine = _Scene(grid, ref, tool, platform, target, scene, opts, free_start)
+    fine = _FitSetup(grid, ref, setting, target, opts, free_start)
     empty = np.zeros((0, 2))
     s = fine.score(tuple(faces), tuple(float(v) for v in switches), warm=True)
     if not s.feasible or s.result.rollout is None:
@@ -373,7 +382,7 @@ def _infeasible(ref: NDArray[np.float64], start_time: float, reason: str, n_qp: 
                     candidates=cands, metrics={"compute_time": time.perf_counter() - start_time})
 
 
-def _screened(screen: _Scene, grid: NDArray[np.float64], opts: QPOptions) -> list[_Scored]:
+def _screened(screen: _FitSetup, grid: NDArray[np.float64], opts: QPOptions) -> list[_Scored]:
     """Every candidate scored on the screening grid: the best-ranked push sequences of the proxy
     costs (switches at segment bounds), then the best feasible one's switches moved one segment
     either way while that lowers its cost (a local search on the cuts)."""
@@ -411,14 +420,14 @@ class _Finals:
     model realises is the plan, which can hand out the next one (``PushPlan.next_best``) when a
     later stage (a switch) fails on it. ``scored`` gathers every fit, screening and final."""
 
-    screen: _Scene
-    fine: _Scene
+    screen: _FitSetup
+    fine: _FitSetup
     scored: list[_Scored]
     order: list[_Scored]
     grid: NDArray[np.float64]
     ref: NDArray[np.float64]
     target: NDArray[np.float64]
-    scene: Scene
+    setting: Setting
     opts: QPOptions
     start_time: float
 
@@ -465,7 +474,7 @@ class _Finals:
         plan = PushPlan("qp", "solved", dense_t, x, v, self.ref, pushes=pushes, n_qp=n_qp, candidates=cands)
         from tooltransfer.planner.oe.metrics import plan_metrics  # local: metrics import the plan types
 
-        metrics = plan_metrics(plan, self.fine.frames, self.target, self.scene)
+        metrics = plan_metrics(plan, self.fine.frames, self.target, self.setting)
         metrics["compute_time"] = time.perf_counter() - self.start_time
         metrics.update({f"violation_{k}": val for k, val in best.result.violations.items()})
         per_qp = [sc.result.solve_time / max(sc.result.scp_iterations, 1) for sc in self.scored]
@@ -479,22 +488,20 @@ class _Finals:
 def condense_qp(
     t: NDArray[np.float64],
     universal: NDArray[np.float64],
-    tool: Tool,
-    platform: OmniPlatform,
-    scene: Scene,
+    setting: Setting,
     target: NDArray[np.float64] | None = None,
     options: QPOptions | None = None,
     *,
     free_start: bool = False,
 ) -> PushPlan:
-    """Condense the generalized universal path for ``tool`` on ``platform`` (the ``qp`` variant).
+    """Condense the generalized universal path for ``setting``'s tool on its Omni (the ``qp`` variant).
 
     Args:
         t: times (T,) [s] of the generalized universal path, increasing.
         universal: the path (T, 2) [m]; it starts at the object's start.
-        tool: the new tool; platform: the Omni carrying it.
-        scene: the object (radius, push mechanics), the obstacles (discs and convex shapely
-            polygons, kept ``scene.margin`` away from beyond the radius) and the friction-cone share.
+        setting: the world: the new tool, the Omni carrying it, the object (radius, push
+            mechanics), the obstacles (discs and convex shapely polygons, kept ``setting.margin``
+            away from beyond the radius).
         target: where the object must end [m] (default the path's end).
         free_start: each candidate's first reach rows apply from where the path enters them (the
             closed loop's re-plan from an observed object, :func:`condense_sequence`).
@@ -511,14 +518,14 @@ def condense_qp(
         return g, np.column_stack([np.interp(g, t, universal[:, j]) for j in range(2)])
 
     grid, ref = resample(opts.n_samples)
-    if not isinstance(scene, Scene):
-        raise InputError("scene", "a tooltransfer.planner.scene.Scene", type(scene).__name__)
-    fine = _Scene(grid, ref, tool, platform, target, scene, opts, free_start)
+    if not isinstance(setting, Setting):
+        raise InputError("setting", "a tooltransfer.planner.setting.Setting", type(setting).__name__)
+    fine = _FitSetup(grid, ref, setting, target, opts, free_start)
     # ranking needs no 1e-8 accuracy: the screening fits stop at 1e-5 (the final one at ``tol``)
     screen_opts = opts.model_copy(update={"tol": max(opts.tol, 1e-5), "accept": max(opts.accept, 1e-5),
                                           "scp_rtol": max(opts.scp_rtol, SCREEN_RTOL)})
-    screen = _Scene(*resample(min(opts.screen_samples, opts.n_samples)), tool, platform, target, scene,
-                    screen_opts, free_start)
+    screen = _FitSetup(*resample(min(opts.screen_samples, opts.n_samples)), setting, target, screen_opts,
+                       free_start)
 
     why = _precheck(screen, check_start=not free_start)
     if why:
@@ -526,4 +533,4 @@ def condense_qp(
     scored = _screened(screen, grid, opts)
     # the screening grid ranked the candidates: the best ones are solved again on the full grid, in order
     order = sorted({(s.faces, s.switches): s for s in scored if s.feasible}.values(), key=screen.cost)
-    return _Finals(screen, fine, scored, order, grid, ref, target, scene, opts, start_time).finalise(0, 0)
+    return _Finals(screen, fine, scored, order, grid, ref, target, setting, opts, start_time).finalise(0, 0)

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,10 @@ from tooltransfer.atomic import atomic_path
 from tooltransfer.planner.plan import Plan
 from tooltransfer.planner.skills import Skills
 from tooltransfer.tools.sim.execution import Execution
+
+if TYPE_CHECKING:
+    from tooltransfer.planner.setting import Setting
+    from tooltransfer.problems.task import Task
 
 
 def fig8(dataset: str | Path, skills: Skills, out: str | Path) -> tuple[Path, Path]:
@@ -76,38 +81,42 @@ def fig9(dataset: str | Path, out: str | Path) -> Path:
     return plot_learned_switches(demos, skills, out)
 
 
-def _condensed(task_path: str | Path) -> tuple:
-    """The task's tool, obstacles, margin used, target, generalized universal path (T, 2) [m] and its
-    condensed push plans with the mapping and the qp variants."""
-    from tooltransfer.planner.oe.generalize import generalize
-    from tooltransfer.planner.oe.mapping_variant import condense_mapping
-    from tooltransfer.planner.oe.qp_variant import condense_qp
-    from tooltransfer.planner.solve import effective_margin, mapping_options, qp_options, task_scene, task_skills
-    from tooltransfer.problems.task import load_task, task_obstacles, task_platform, task_tool
+def figure_setting(task_path: str | Path) -> tuple[Task, Skills, Setting]:
+    """The task of ``task_path``, its skills (without the SS skill) and its :class:`Setting`
+    (:func:`tooltransfer.planner.setting.setting_from_task`, as ``solve`` builds it)."""
+    from tooltransfer.planner.setting import setting_from_task, task_skills
+    from tooltransfer.problems.task import load_task
 
     task = load_task(task_path)
-    tool = task_tool(task)
-    platform, obstacles = task_platform(task, tool), task_obstacles(task)
-    margin = effective_margin(task, obstacles)
-    target = np.array(task.target)
     skills = task_skills(task, task_path, need_ss=False)
-    scene = task_scene(task, obstacles, margin, skills)
+    return task, skills, setting_from_task(task, skills, task_path)
+
+
+#: Legend labels of the OE variants in Fig. 10 (a variant not named here is labelled by its name).
+OE_LABELS = {"mapping": "mapping (paper)"}
+
+
+def _condensed(task_path: str | Path) -> tuple:
+    """The task, its setting, target, generalized universal path (T, 2) [m] and its condensed push
+    plans with every OE variant (:data:`tooltransfer.planner.variant_registry.OE_VARIANTS`)."""
+    from tooltransfer.planner.oe.generalize import generalize
+    from tooltransfer.planner.variant_registry import OE_VARIANTS
+
+    task, skills, setting = figure_setting(task_path)
+    target = np.array(task.target)
     t, x, _ = generalize(skills.oe.dmp, np.array(task.start), target)
-    plans = {
-        "mapping (paper)": condense_mapping(t, x, tool, platform, scene, target,
-                                            mapping_options(task)),
-        "qp": condense_qp(t, x, tool, platform, scene, target, qp_options(task)),
-    }
-    return task, tool, obstacles, margin, target, x, plans
+    plans = {OE_LABELS.get(name, name): v.condense(t, x, setting, target, v.options_from_task(task.oe))
+             for name, v in OE_VARIANTS.items()}
+    return task, setting, target, x, plans
 
 
 def fig10(task_path: str | Path, out: str | Path) -> Path:
     """Fig. 10: the task's condensed object paths with the mapping and the qp variants."""
     from tooltransfer.planner.plots.push_plans import plot_push_plans
 
-    task, tool, obstacles, margin, target, _, plans = _condensed(task_path)
-    return plot_push_plans(plans, tool, out, radius=task.object.radius, obstacles=obstacles, margin=margin,
-                           target=target, title=task.name)
+    task, setting, target, _, plans = _condensed(task_path)
+    return plot_push_plans(plans, setting.tool, out, radius=setting.radius, obstacles=list(setting.obstacles),
+                           margin=setting.margin, target=target, title=task.name)
 
 
 def fig11(skills: Skills, out: str | Path) -> Path:
@@ -137,11 +146,11 @@ def fig14(task_path: str | Path, out: str | Path, margins: tuple[float, ...] = (
     from tooltransfer.planner.plots.safety_margin import plot_safety_margin
     from tooltransfer.tools.objects import Disc
 
-    task, _, obstacles, _, _, x, plans = _condensed(task_path)
-    discs = [o for o in obstacles if isinstance(o, Disc)]
+    _, setting, _, x, plans = _condensed(task_path)
+    discs = [o for o in setting.obstacles if isinstance(o, Disc)]
     if not discs:
-        raise InputError("obstacles", "a task with a disc obstacle for Fig. 14", len(obstacles))
-    return plot_safety_margin(x, discs[0], plans, out, radius=task.object.radius, margins=margins)
+        raise InputError("obstacles", "a task with a disc obstacle for Fig. 14", len(setting.obstacles))
+    return plot_safety_margin(x, discs[0], plans, out, radius=setting.radius, margins=margins)
 
 
 def execution_gif(plan: Plan, ex: Execution, out: str | Path) -> Path:
