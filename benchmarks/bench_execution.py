@@ -72,11 +72,13 @@ from typing import Any
 
 import numpy as np
 
+from tooltransfer.planner import variant_registry
+
 ROOT = Path(__file__).resolve().parents[1]
 BATCH = ROOT / "problems" / "batch" / "execution_60.yaml"
 PAPER = (ROOT / "problems" / "paper" / "transfer_tool2.yaml", ROOT / "problems" / "paper" / "demo_tool1.yaml")
-OE_VARIANTS = ("qp", "mapping")
-SS_VARIANTS = ("opt", "dmp", "arch")
+OE_VARIANTS: tuple[str, ...] = tuple(variant_registry.OE_VARIANTS)
+SS_VARIANTS: tuple[str, ...] = tuple(variant_registry.SS_VARIANTS)
 WITHIN = (0.002, 0.005)
 """Final-error thresholds [m] of the shares reported."""
 
@@ -176,19 +178,20 @@ def _mechanics(plan: Any, task: Any, source: str) -> Any:
     mu, c = _finite(plan.metrics.get("mechanics_mu")), _finite(plan.metrics.get("mechanics_c"))
     if mu is not None and c is not None:
         return PushMechanics(mu, c, "given")
-    from tooltransfer.planner.solve import task_mechanics, task_skills
+    from tooltransfer.planner.setting import task_mechanics, task_skills
 
     return task_mechanics(task, task_skills(task, source, need_ss=False))
 
 
 def _mechanics_source(job: Job) -> str | None:
     """Where the planner's mechanics for the job's task come from (``identified``, ``task``,
-    ``default``; :func:`tooltransfer.planner.solve.task_mechanics`), None when that cannot be told."""
+    ``default``; :func:`tooltransfer.planner.setting.task_mechanics`), None when that cannot be told."""
     try:
-        from tooltransfer.planner.solve import task_mechanics, task_skills
+        from tooltransfer.planner.setting import task_mechanics, task_skills
 
         task = _task(job)
-        return task_mechanics(task, task_skills(task, job.source, need_ss=task.variants.ss != "arch")).source
+        need_ss = variant_registry.needs_ss_skill(task.variants.ss)
+        return task_mechanics(task, task_skills(task, job.source, need_ss=need_ss)).source
     except Exception:
         return None
 
@@ -199,12 +202,14 @@ def model_prediction(plan: Any, execution: Any, mech: Any) -> tuple[float, float
     start. Returns the predicted final puck's distance to the recorded final puck [m] (the
     recording's object track is the true pose: the platform adds no camera noise) and the largest
     distance along the run (the prediction at the object's sample times)."""
-    from tooltransfer.problems.task import task_from_dict, task_tool
+    from tooltransfer.planner.setting import setting_from_task
+    from tooltransfer.problems.task import task_from_dict
     from tooltransfer.tools.pushing.forward import simulate
 
     task = task_from_dict(plan.task, "plan.task")
+    setting = setting_from_task(task, mechanics=mech)
     ex = execution
-    trace = simulate(task_tool(task), ex.tool_pose, np.array(task.start), task.object.radius, mech)
+    trace = simulate(setting.tool, ex.tool_pose, np.array(task.start), setting.radius, setting.mechanics)
     final = float(np.linalg.norm(trace.final - ex.object_xy[-1]))
     pred = np.column_stack([np.interp(ex.t_object, ex.t_tool, trace.object_xy[:, j]) for j in range(2)])
     return final, float(np.linalg.norm(pred - ex.object_xy, axis=1).max())
@@ -226,14 +231,16 @@ def run_mismatch(plan: Any, job: Job, mech: Any) -> dict[str, Row]:
     ``closed_loop_replan_times``, ``mechanics`` ([mu, c] of the model plants) and ``wall`` [s]."""
     from tooltransfer.planner.closed_loop import execute_closed_loop
     from tooltransfer.planner.execution import ModelPlant
+    from tooltransfer.planner.setting import setting_from_task
     from tooltransfer.planner.simulate import simulate_plan, task_sim_config
-    from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
+    from tooltransfer.problems.task import task_from_dict
     from tooltransfer.tools.pushing.forward import simulate
     from tooltransfer.tools.pushing.mechanics import PushMechanics
 
     task = task_from_dict(plan.task, "plan.task")
-    tool = task_tool(task)
-    start, target, radius = np.array(task.start), np.array(task.target), task.object.radius
+    setting = setting_from_task(task, mechanics=mech)
+    tool = setting.tool
+    start, target, radius = np.array(task.start), np.array(task.target), setting.radius
     out: dict[str, Row] = {}
     for name in MISMATCH_PLANTS:
         res: Row = {"open_loop_status": None, "open_loop_error": None, "closed_loop_status": None,
@@ -270,7 +277,7 @@ def run_mismatch(plan: Any, job: Job, mech: Any) -> dict[str, Row]:
                         cl = execute_closed_loop(plan, seed=job.seed, config=config)
                     else:
                         plant = ModelPlant(tool, radius, plant_mech, start, plan.tool_pose[0],
-                                           platform=task_platform(task, tool), camera_noise=CAMERA_NOISE,
+                                           platform=setting.platform, camera_noise=CAMERA_NOISE,
                                            seed=job.seed)
                         cl = execute_closed_loop(plan, plant, seed=job.seed)
                 res.update(closed_loop_status=cl.status, closed_loop_reason=cl.reason, closed_loop_error=cl.final_error,
@@ -375,12 +382,12 @@ def warm_up(jobs: Sequence[tuple[dict[str, Any], str]]) -> None:
     """Import the planner and the platform and learn (or load) the skills the tasks name."""
     import tooltransfer.planner.closed_loop
     import tooltransfer.planner.simulate  # noqa: F401
-    from tooltransfer.planner.solve import task_skills
+    from tooltransfer.planner.setting import task_skills
     from tooltransfer.problems.task import task_from_dict
 
     for data, source in jobs:
         task = task_from_dict(data, source)
-        task_skills(task, source, need_ss=task.variants.ss != "arch")
+        task_skills(task, source, need_ss=variant_registry.needs_ss_skill(task.variants.ss))
 
 
 def _init_worker(skills: Sequence[tuple[dict[str, Any], str]]) -> None:

@@ -17,13 +17,15 @@ import numpy as np
 
 from tooltransfer.planner.oe import condense_qp
 from tooltransfer.planner.oe.mapping_variant import condense_mapping
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import Setting
 from tooltransfer.planner.ss.paper_cases import transfer_case
+from tooltransfer.tools.objects import DiscObject
 
 
 def main(reps: int = 7) -> None:
     case = transfer_case()
-    args = (case.t, case.x, case.tool, case.platform, Scene(0.0175, obstacles=case.obstacles), case.target)
+    setting = Setting(case.tool, case.platform, DiscObject(0.0175), obstacles=case.obstacles)
+    args = (case.t, case.x, setting, case.target)
     condense_qp(*args)
     condense_mapping(*args)
     tq, tm, plan = [], [], None

@@ -20,7 +20,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tooltransfer.errors import InputError
-from tooltransfer.problems.task import Task, resolve, task_obstacles, task_origin, task_platform, task_tool
+from tooltransfer.problems.task import (
+    SAFETY_MARGIN,
+    Task,
+    resolve,
+    task_obstacles,
+    task_origin,
+    task_platform,
+    task_tool,
+)
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc, DiscObject, Obstacle
 from tooltransfer.tools.omni.dh import D1, D_TOOL, L1, L2, THETA_TOOL
@@ -42,7 +50,7 @@ class Setting:
         mechanics: the push model's parameters (tool-object friction ``mu``, limit-surface ``c``).
         obstacles: discs and convex shapely polygons in the world [m].
         margin: safety margin [m] kept from the obstacles beyond the object's radius (the one the
-            plan can keep: :func:`effective_margin`).
+            plan can keep: :func:`effective_margin`; by default the task schema's ``safety_margin``).
     """
 
     tool: Tool
@@ -50,7 +58,7 @@ class Setting:
     obj: DiscObject
     mechanics: PushMechanics = PLATFORM_MECHANICS
     obstacles: tuple[Obstacle, ...] = ()
-    margin: float = 0.0
+    margin: float = SAFETY_MARGIN
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, DiscObject):

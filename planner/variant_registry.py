@@ -30,8 +30,8 @@ from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_map
 from tooltransfer.planner.oe.push_plan import PushPlan
 from tooltransfer.planner.oe.qp_variant import QPOptions, condense_qp
 from tooltransfer.planner.setting import Setting
-from tooltransfer.planner.ss import SwitchSkill
-from tooltransfer.planner.switches import arch_planner, dmp_planner, opt_planner, with_fallback
+from tooltransfer.planner.ss import SwitchSkill, optimize, recombine
+from tooltransfer.planner.switches import SkillSolver, arch_planner, dmp_planner, opt_planner, with_fallback
 from tooltransfer.problems.task import OEOptions, SSOptions
 
 #: ``condense(t (T,) [s], universal (T, 2) [m], setting, target (2,) [m] or None, options) -> PushPlan``.
@@ -79,12 +79,16 @@ class SSVariant:
         planner: its switch-planner factory (:data:`SwitchFactory`).
         needs_skill: whether it needs the SS skill (learned from the demonstrations).
         fallback: the variant whose path is taken where this one finds none, or None.
+        solve: how a skill variant solves one :class:`~tooltransfer.planner.ss.SwitchTask` with its
+            default options (``solve(skill, task) -> SwitchPath``, as the figures draw it); None for
+            a variant without a skill.
     """
 
     name: str
     planner: SwitchFactory
     needs_skill: bool
     fallback: str | None = None
+    solve: SkillSolver | None = None
 
 
 def _skill(name: str, skill: SwitchSkill | None) -> SwitchSkill:
@@ -103,9 +107,11 @@ OE_VARIANTS: Mapping[str, OEVariant] = MappingProxyType({
 #: ``arch`` does; ``dmp`` reports what recombination gives, as the paper's method would.
 SS_VARIANTS: Mapping[str, SSVariant] = MappingProxyType({
     "arch": SSVariant("arch", lambda setting, skill, ss: arch_planner(setting, ss.clearance), needs_skill=False),
-    "dmp": SSVariant("dmp", lambda setting, skill, ss: dmp_planner(_skill("dmp", skill), setting), needs_skill=True),
+    "dmp": SSVariant("dmp", lambda setting, skill, ss: dmp_planner(_skill("dmp", skill), setting), needs_skill=True,
+                     solve=recombine),
     "opt": SSVariant("opt", lambda setting, skill, ss: opt_planner(_skill("opt", skill), setting, ss.clearance,
-                                                                   ss.n_knots), needs_skill=True, fallback="arch"),
+                                                                   ss.n_knots), needs_skill=True, fallback="arch",
+                     solve=lambda skill, task: optimize(skill, task)),
 })
 
 

@@ -193,7 +193,7 @@ class OEOptions(_Model):
     """Options of OE condensing (:class:`tooltransfer.planner.oe.QPOptions` takes its fields from here)."""
 
     # the one source of these defaults, bounds and descriptions: QPOptions and MappingOptions reuse
-    # the fields, Scene its cone fraction and contact defaults (tests/test_options_once.py)
+    # the fields, FaceFrame its cone fraction (tests/test_options_once.py)
 
     # the bounds keep one solve within seconds and well under 1 GB: n_samples 2000 takes about 2 s and
     # 300 MB; n_basis 800 takes 9 s (100,000 asked for 1.2 TiB); n_knots 320 takes 9 s; the push-sequence

@@ -74,7 +74,7 @@ def test_closed_loop_on_a_mismatched_quasi_static_plant(plan_file: Path, mu: flo
     (factors of the identified values): it ends within 3 mm, no exception."""
     from tooltransfer.planner.closed_loop import execute_closed_loop
     from tooltransfer.planner.execution import ModelPlant, Plant
-    from tooltransfer.planner.solve import task_mechanics, task_skills
+    from tooltransfer.planner.setting import task_mechanics, task_skills
     from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
     from tooltransfer.tools.pushing.mechanics import PushMechanics
 
@@ -118,7 +118,7 @@ def test_the_loop_adapts_the_push_model_to_a_mismatched_plant(plan_file: Path) -
     identify c again: the model in force ends nearer the plant's c than the plan's."""
     from tooltransfer.planner.closed_loop import execute_closed_loop
     from tooltransfer.planner.execution import ModelPlant
-    from tooltransfer.planner.solve import task_mechanics, task_skills
+    from tooltransfer.planner.setting import task_mechanics, task_skills
     from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
     from tooltransfer.tools.pushing.mechanics import PushMechanics
 
@@ -142,7 +142,7 @@ def _loop_on(plan_file: Path, c_factor: float = 1.0, seed: int = 1):
     ``c_factor`` times the plan's (the tool at its first pose, nothing executed)."""
     from tooltransfer.planner.closed_loop import _Loop
     from tooltransfer.planner.execution import ModelPlant
-    from tooltransfer.planner.solve import task_mechanics, task_skills
+    from tooltransfer.planner.setting import task_mechanics, task_skills
     from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
     from tooltransfer.tools.pushing.mechanics import PushMechanics
 

@@ -53,7 +53,7 @@ def test_every_page_is_built(site: Path) -> None:
     modules = {next(iter(entry)) for entry in api} - {"Overview"}
     assert modules >= {"tooltransfer", "tooltransfer.dmp", "tooltransfer.dmp.qp", "tooltransfer.tools",
                        "tooltransfer.tools.pushing", "tooltransfer.tools.omni", "tooltransfer.planner.solve",
-                       "tooltransfer.planner.plan", "tooltransfer.planner.scene", "tooltransfer.planner.closed_loop",
+                       "tooltransfer.planner.plan", "tooltransfer.planner.setting", "tooltransfer.planner.closed_loop",
                        "tooltransfer.planner.execution", "tooltransfer.problems.task", "tooltransfer.problems.dataset"}
     for module in modules:
         html = _text(site / "api" / module / "index.html")
@@ -78,7 +78,7 @@ def test_the_api_reference_documents_the_entry_points(site: Path) -> None:
         "tooltransfer.problems.task": ["tooltransfer.problems.task.load_task", "tooltransfer.problems.task.Task"],
         "tooltransfer.problems.dataset": ["tooltransfer.problems.dataset.load_dataset"],
         "tooltransfer.planner.plan": ["tooltransfer.planner.plan.read_plan", "tooltransfer.planner.plan.Plan"],
-        "tooltransfer.planner.scene": ["tooltransfer.planner.scene.Scene"],
+        "tooltransfer.planner.setting": ["tooltransfer.planner.setting.Setting"],
     }
     for module, ids in anchors.items():
         html = _text(site / "api" / module / "index.html")

@@ -11,9 +11,10 @@ from tooltransfer.planner.oe import QPOptions, condense_qp
 from tooltransfer.planner.oe.mapping_variant import condense_mapping
 from tooltransfer.planner.plots.push_plans import plot_push_plans
 from tooltransfer.planner.plots.safety_margin import plot_safety_margin
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import Setting
 from tooltransfer.problems.fit_cases import minimum_jerk
 from tooltransfer.tools import Disc, load_tool
+from tooltransfer.tools.objects import DiscObject
 from tooltransfer.tools.omni.platform import OmniPlatform
 
 
@@ -25,9 +26,9 @@ def test_push_plan_and_safety_margin_figures(tmp_path: Path) -> None:
     x = np.vstack([minimum_jerk(np.array([0.05, 0.12]), np.array([-0.014, 0.146]), n // 2),
                    minimum_jerk(np.array([-0.014, 0.146]), np.array([-0.068, 0.173]), n - n // 2)])
     obs = Disc(np.array([0.01, 0.095]), 0.006)
-    scene = Scene(0.0175, obstacles=(obs,))
-    plans = {"mapping": condense_mapping(t, x, tool, plat, scene),
-             "qp": condense_qp(t, x, tool, plat, scene, options=QPOptions(candidates=3))}
+    setting = Setting(tool, plat, DiscObject(0.0175), obstacles=(obs,))
+    plans = {"mapping": condense_mapping(t, x, setting),
+             "qp": condense_qp(t, x, setting, options=QPOptions(candidates=3))}
     assert plans["qp"].status == "solved", plans["qp"].reason
     assert plans["qp"].metrics["obstacle_clearance_min"] >= 0.005 - 1e-6
     for path in (plot_push_plans(plans, tool, tmp_path / "fig10.png", radius=0.0175, obstacles=[obs], margin=0.005,

@@ -7,9 +7,10 @@ import pytest
 
 from tooltransfer.planner.oe.face_frame import FaceFrame
 from tooltransfer.planner.oe.learn import DemoPush, condense_recovered, learn_oe_skill, recover
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import Setting
 from tooltransfer.problems.fit_cases import minimum_jerk
 from tooltransfer.tools import load_tool
+from tooltransfer.tools.objects import DiscObject
 from tooltransfer.tools.omni.platform import OmniPlatform
 
 START = np.array([0.06, 0.10])
@@ -26,7 +27,7 @@ def demo(rng: np.random.Generator, noise: float = 0.0015) -> list[DemoPush]:
     a = START.copy()
     out = []
     for face, length in zip(FACES, LENGTHS, strict=True):
-        fr = FaceFrame.build(tool, face, plat, Scene(0.0175))
+        fr = FaceFrame.build(Setting(tool, plat, DiscObject(0.0175)), face)
         ang = float(fr.push_direction(a)[0]) + rng.uniform(-0.25, 0.25)
         b = a + length * rng.uniform(0.9, 1.1) * np.array([np.cos(ang), np.sin(ang)])
         t = np.arange(0.0, rng.uniform(1.5, 2.5), 1 / 30)

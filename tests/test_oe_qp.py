@@ -12,22 +12,28 @@ import yaml
 from tooltransfer.planner.oe import QPOptions, condense_qp
 from tooltransfer.planner.oe.constraints import HeadingCone, reach_constraints
 from tooltransfer.planner.oe.face_frame import FaceFrame
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import Setting
 from tooltransfer.problems.fit_cases import minimum_jerk
 from tooltransfer.tools import Disc, load_tool, tool_from_dict
 from tooltransfer.tools.library import library_names
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import DiscObject
 from tooltransfer.tools.omni.ik import inverse_kinematics
 from tooltransfer.tools.omni.platform import OmniPlatform
 
 R = 0.0175
-PUCK = Scene(R)
+
+
+def setting_for(tool: Tool, radius: float = R, **kw: object) -> Setting:
+    """The setting of ``tool`` on its Omni pushing a puck of ``radius`` [m] (``kw``: obstacles, margin)."""
+    return Setting(tool, OmniPlatform(a_t=tool.a_t), DiscObject(radius), **kw)  # type: ignore[arg-type]
 
 
 def _along_normal(tool_name: str, face: str, start: np.ndarray, length: float, n: int) -> np.ndarray:
     """``n`` points [m] from ``start`` along ``face``'s normal at the heading the Omni imposes there
     (a path the face pushes without sliding or leaving the face: what the mechanics allow)."""
     tool = load_tool(tool_name)
-    fr = FaceFrame.build(tool, face, OmniPlatform(a_t=tool.a_t), PUCK)
+    fr = FaceFrame.build(setting_for(tool), face)
     out = [np.asarray(start, float)]
     for _ in range(n - 1):
         d = float(fr.normal_direction(out[-1][None])[0])
@@ -56,7 +62,7 @@ def test_face_frame_pose_matches_the_omni_heading(name: str) -> None:
     plat = OmniPlatform(a_t=tool.a_t)
     rng = np.random.default_rng(1)
     for face in tool.face_names:
-        fr = FaceFrame.build(tool, face, plat, PUCK)
+        fr = FaceFrame.build(setting_for(tool), face)
         poly, disc = reach_constraints(fr)
         pts = rng.uniform([-0.25, -0.05], [0.25, 0.25], (4000, 2))
         inside = np.all(pts @ poly.A.T <= poly.b, axis=1) & (np.linalg.norm(pts - disc.center, axis=1) >= disc.radius)
@@ -70,7 +76,7 @@ def test_face_frame_pose_matches_the_omni_heading(name: str) -> None:
 def test_reach_rows_cover_nearly_all_of_the_exact_region() -> None:
     tool = load_tool("slope")
     plat = OmniPlatform(a_t=tool.a_t)
-    fr = FaceFrame.build(tool, "inclined", plat, PUCK)
+    fr = FaceFrame.build(setting_for(tool), "inclined")
     poly, disc = reach_constraints(fr, tol=2e-4)
     pts = np.random.default_rng(2).uniform([-0.25, -0.05], [0.25, 0.25], (20000, 2))
     inside = np.all(pts @ poly.A.T <= poly.b, axis=1) & (np.linalg.norm(pts - disc.center, axis=1) >= disc.radius)
@@ -83,7 +89,7 @@ def test_reach_rows_cover_nearly_all_of_the_exact_region() -> None:
 
 def test_heading_cone_rows_follow_the_heading() -> None:
     tool = load_tool("slope")
-    fr = FaceFrame.build(tool, "left", OmniPlatform(a_t=tool.a_t), PUCK)
+    fr = FaceFrame.build(setting_for(tool), "left")
     x = np.array([[0.05, 0.15], [-0.06, 0.15]])
     phi = fr.push_direction(x)
     assert abs(phi[0] - phi[1]) > 0.3  # the cone turns with the waist
@@ -100,7 +106,7 @@ def test_qp_variant_condenses_an_l_path_for_the_slope_tool() -> None:
     tool = load_tool("slope")
     t, x = l_scene()
     obstacle = Disc(np.array([0.02, 0.1]), 0.006)
-    plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), Scene(R, obstacles=(obstacle,)))
+    plan = condense_qp(t, x, setting_for(tool, obstacles=(obstacle,)))
     assert plan.status == "solved", plan.reason
     m = plan.metrics
     assert plan.faces[0] == "left" and "inclined" in plan.faces
@@ -129,7 +135,7 @@ def test_target_out_of_reach_is_infeasible_with_reason() -> None:
     tool = load_tool("slope")
     t, x = l_scene()
     x = x + np.linspace(0, 1, t.size)[:, None] * np.array([0.0, 0.3])  # ends 0.48 m from the base
-    plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), PUCK)
+    plan = condense_qp(t, x, setting_for(tool))
     assert plan.status == "infeasible"
     assert "target outside the Omni's reach for every face" in plan.reason
     assert plan.n_qp == 0
@@ -142,7 +148,7 @@ def test_a_tool_that_only_pushes_away_from_the_target_is_infeasible() -> None:
     tool = tool_from_dict(spec)
     t = np.linspace(0.0, 4.0, 150)
     x = minimum_jerk(np.array([0.0, 0.19]), np.array([0.0, 0.14]), t.size)  # towards the base
-    plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), PUCK, options=QPOptions(candidates=2))
+    plan = condense_qp(t, x, setting_for(tool), options=QPOptions(candidates=2))
     assert plan.status == "infeasible"
     assert "cone" in plan.reason
 
@@ -151,7 +157,7 @@ def test_qp_variant_keeps_the_margin_from_a_polygon_obstacle() -> None:
     tool = load_tool("slope")
     t, x = l_scene()
     box = shapely.box(0.0, 0.09, 0.02, 0.105)  # just below the leftward stretch: pass 6.5 mm higher
-    plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), Scene(R, obstacles=(box,), margin=0.004))
+    plan = condense_qp(t, x, setting_for(tool, obstacles=(box,), margin=0.004))
     assert plan.status == "solved", plan.reason
     gap = shapely.distance(box, shapely.points(plan.object_xy)).min() - R
     assert gap >= 0.004 - 1e-6
@@ -164,7 +170,7 @@ def test_mapping_variant_runs_from_start_to_target_and_reports_what_it_violates(
     tool = load_tool("slope")
     t, x = l_scene()
     obstacle = Disc(np.array([0.02, 0.1]), 0.006)
-    plan = condense_mapping(t, x, tool, OmniPlatform(a_t=tool.a_t), Scene(R, obstacles=(obstacle,)),
+    plan = condense_mapping(t, x, setting_for(tool, obstacles=(obstacle,)),
                             options=MappingOptions(tube=0.015))
     assert plan.status == "solved"
     assert np.allclose(plan.object_xy[0], START) and np.allclose(plan.object_xy[-1], TARGET)
@@ -186,7 +192,7 @@ def test_the_scene_radius_is_the_one_planned_for() -> None:
     t, x = l_scene()
     obstacle = Disc(np.array([0.02, 0.1]), 0.006)
     big = 0.024
-    plan = condense_qp(t, x, tool, OmniPlatform(a_t=tool.a_t), Scene(big, obstacles=(obstacle,)))
+    plan = condense_qp(t, x, setting_for(tool, big, obstacles=(obstacle,)))
     assert plan.status == "solved", plan.reason
     assert plan.metrics["obstacle_clearance_min"] >= 0.005 - 1e-6
     gap = np.linalg.norm(plan.object_xy - obstacle.centre, axis=1).min() - obstacle.radius - big
@@ -204,10 +210,9 @@ def test_the_friction_cone_narrows_the_face_cones() -> None:
     """The admissible cone is the friction cone's fraction about the normal, cut by the tool file's
     cone: for the slope's inclined face (normal 5 pi / 6, file cone 0.75 pi +- pi / 6)."""
     tool = load_tool("slope")
-    plat = OmniPlatform(a_t=tool.a_t)
     f = tool.face("inclined")
     for frac in (0.3, 0.5, 1.0):
-        fr = FaceFrame.build(tool, "inclined", plat, Scene(R, cone_fraction=frac))
+        fr = FaceFrame.build(setting_for(tool), "inclined", friction_cone_fraction=frac)
         half = frac * np.arctan(0.8)
         lo = max(f.normal_angle - half, f.push_angle - f.theta_b)
         hi = min(f.normal_angle + half, f.push_angle + f.theta_b)

@@ -9,15 +9,16 @@ import numpy as np
 from tooltransfer.planner.oe import condense_qp
 from tooltransfer.planner.oe.learn import condense_recovered
 from tooltransfer.planner.oe.mapping_variant import condense_mapping
-from tooltransfer.planner.scene import Scene
 from tooltransfer.planner.segmentation import segment
+from tooltransfer.planner.setting import Setting
 from tooltransfer.planner.ss.paper_cases import DEFAULT_DATASET, default_oe_skill, transfer_case
 from tooltransfer.problems.dataset import load_dataset
 from tooltransfer.tools import load_tool
+from tooltransfer.tools.objects import DiscObject
 
 
-def _scene(case: object) -> Scene:
-    return Scene(0.0175, obstacles=case.obstacles)  # type: ignore[attr-defined]
+def _setting(case: object) -> Setting:
+    return Setting(case.tool, case.platform, DiscObject(0.0175), obstacles=case.obstacles)  # type: ignore[attr-defined]
 
 
 def _face_changes(faces: tuple[str, ...]) -> tuple[str, ...]:
@@ -29,7 +30,7 @@ def test_qp_variant_alternates_leftward_and_left_forward_pushes() -> None:
     """The paper's Fig. 10 reads leftward twice and left-forward twice; with the push mechanics the
     faces still alternate, each push carried by one or more contacts of its face (re-contacts)."""
     case = transfer_case()
-    plan = condense_qp(case.t, case.x, case.tool, case.platform, _scene(case), case.target)
+    plan = condense_qp(case.t, case.x, _setting(case), case.target)
     assert plan.status == "solved", plan.reason
     changes = _face_changes(plan.faces)
     assert set(changes) == {"left", "inclined"} and len(changes) >= 3
@@ -44,8 +45,8 @@ def test_qp_variant_alternates_leftward_and_left_forward_pushes() -> None:
 
 def test_mapping_variant_also_plans_and_the_metrics_show_the_difference() -> None:
     case = transfer_case()
-    qp = condense_qp(case.t, case.x, case.tool, case.platform, _scene(case), case.target)
-    mp = condense_mapping(case.t, case.x, case.tool, case.platform, _scene(case), case.target)
+    qp = condense_qp(case.t, case.x, _setting(case), case.target)
+    mp = condense_mapping(case.t, case.x, _setting(case), case.target)
     assert mp.status == "solved"
     assert mp.metrics["goal_error"] <= 1e-9
     assert mp.metrics["cone_violation_max"] > 100 * qp.metrics["cone_violation_max"]

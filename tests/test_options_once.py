@@ -11,9 +11,10 @@ from typing import get_args
 import pytest
 
 from tooltransfer.planner.cli import build_parser
+from tooltransfer.planner.oe.face_frame import CONE_FRACTION
 from tooltransfer.planner.oe.mapping_variant import MappingOptions
 from tooltransfer.planner.oe.qp_variant import TASK_FIELDS, QPOptions
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import Setting
 from tooltransfer.planner.solve import mapping_options, qp_options
 from tooltransfer.planner.ss.opt_variant import OptOptions
 from tooltransfer.problems import variants
@@ -23,7 +24,10 @@ ROOT = Path(__file__).resolve().parents[1]
 BASE = {"name": "t", "tool": "slope", "start": [0.05, 0.12], "target": [-0.07, 0.18], "skills": {"dataset": "d"}}
 
 
-@pytest.mark.parametrize(("planner", "names"), [(QPOptions, TASK_FIELDS), (MappingOptions, ("k", "tube"))])
+MAPPING_FIELDS = ("k", "tube", "friction_cone_fraction", "contact_margin", "contact_span")
+
+
+@pytest.mark.parametrize(("planner", "names"), [(QPOptions, TASK_FIELDS), (MappingOptions, MAPPING_FIELDS)])
 def test_the_planner_options_take_the_schema_fields(planner: type, names: tuple[str, ...]) -> None:
     for name in names:
         mine, schema = planner.model_fields[name], OEOptions.model_fields[name]
@@ -46,10 +50,14 @@ def test_the_planner_options_refuse_what_the_schema_refuses() -> None:
         MappingOptions(k=1.0)
 
 
-def test_scene_and_switch_defaults_are_the_schema_defaults() -> None:
-    scene, oe = Scene(0.0175), OEOptions()
-    assert (scene.margin, scene.cone_fraction, scene.contact_margin, scene.contact_span) == (
-        Task.model_fields["safety_margin"].default, oe.friction_cone_fraction, oe.contact_margin, oe.contact_span)
+def test_setting_and_switch_defaults_are_the_schema_defaults() -> None:
+    from tooltransfer.tools import load_tool
+    from tooltransfer.tools.objects import DiscObject
+    from tooltransfer.tools.omni.platform import OmniPlatform
+
+    tool, oe = load_tool("slope"), OEOptions()
+    setting = Setting(tool, OmniPlatform(a_t=tool.a_t), DiscObject(0.0175))
+    assert (setting.margin, CONE_FRACTION) == (Task.model_fields["safety_margin"].default, oe.friction_cone_fraction)
     assert OptOptions().n_knots == SSOptions().n_knots
 
 

@@ -140,12 +140,13 @@ def batch_skills(spec: Any, batch_path: str | Path, first: Any) -> ShippedSkills
     from tooltransfer.errors import InputError
     from tooltransfer.planner.batch.spec import dataset_folder
     from tooltransfer.planner.skills import learn_skills
+    from tooltransfer.planner.variant_registry import needs_ss_skill
     from tooltransfer.problems.dataset import DatasetError
     from tooltransfer.problems.task import task_from_dict
 
     folder = dataset_folder(spec, batch_path)
     task = task_from_dict(first.data, str(Path(batch_path).resolve()))
-    needs_ss = any(ss != "arch" for _, ss in spec.variants.pairs())
+    needs_ss = any(needs_ss_skill(ss) for _, ss in spec.variants.pairs())
     try:
         skills = learn_skills(folder, task.oe.k, task.ss.virtual_motion, with_ss=True)
     except DatasetError:

@@ -3,7 +3,7 @@ variants (like Fig. 11). Each function takes an output path and writes the figur
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -12,7 +12,7 @@ from tooltransfer.planner.plots.save import save_figure
 from tooltransfer.planner.ss.demonstrated import DemoSwitch
 from tooltransfer.planner.ss.dmp_variant import recombine
 from tooltransfer.planner.ss.learn import SwitchSkill, decompose
-from tooltransfer.planner.ss.opt_variant import optimize
+from tooltransfer.planner.ss.result import SwitchPath
 from tooltransfer.planner.ss.task import SwitchTask
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.pose import Pose2D
@@ -93,21 +93,31 @@ def _draw_path(ax, task: SwitchTask, xy: np.ndarray, yaw: np.ndarray, steps: int
     ax.plot(*(1e3 * xy).T, "k-", lw=1.0)
 
 
+#: Fig. 11's own way of solving a switch with a skill variant, where it differs from the variant's
+#: (:attr:`tooltransfer.planner.variant_registry.SSVariant.solve`): the recombined path at 40 samples.
+FIG11_SOLVERS: dict[str, Callable[[SwitchSkill, SwitchTask], SwitchPath]] = {
+    "dmp": lambda skill, task: recombine(skill, task, n_samples=40),
+}
+
+
 def plot_generalized_switches(skill: SwitchSkill, tasks: Mapping[str, SwitchTask], out: str | Path) -> Path:
-    """Fig. 11 for both variants: one row per task, the ``dmp`` path (left) and the ``opt`` path
-    (right): the tool at the start (blue, its first face thick), five internal steps (grey) and the end
-    (orange, the second face in yellow), the tool centre point's path, the object (dark red) and the
-    obstacles, and for ``opt`` the path the NLP started from (green dotted: the ``dmp`` path or a
-    path round the object, :mod:`tooltransfer.planner.ss.initial`); each title gives the penetration measured with
-    shapely [mm]."""
-    fig, axes = _figure(2, len(tasks))
+    """Fig. 11 for the skill variants (:data:`tooltransfer.planner.variant_registry.SS_VARIANTS`): one
+    row per task, the ``dmp`` path (left) and the ``opt`` path (right): the tool at the start (blue,
+    its first face thick), five internal steps (grey) and the end (orange, the second face in
+    yellow), the tool centre point's path, the object (dark red) and the obstacles, and for ``opt``
+    the path the NLP started from (green dotted: the ``dmp`` path or a path round the object,
+    :mod:`tooltransfer.planner.ss.initial`); each title gives the penetration measured with shapely [mm]."""
+    from tooltransfer.planner.variant_registry import SS_VARIANTS
+
+    solvers = {name: FIG11_SOLVERS.get(name, v.solve) for name, v in SS_VARIANTS.items() if v.solve is not None}
+    fig, axes = _figure(len(solvers), len(tasks))
     for row, (name, task) in enumerate(tasks.items()):
-        for col, variant in enumerate(("dmp", "opt")):
+        for col, (variant, solve) in enumerate(solvers.items()):
             ax = axes[row, col]
-            path = recombine(skill, task, n_samples=40) if variant == "dmp" else optimize(skill, task)
+            path = solve(skill, task)
             if path.ok:
                 _draw_path(ax, task, path.xy, path.yaw)
-                if variant == "opt" and "x_start" in path.info:  # the NLP's start (tooltransfer.planner.ss.initial)
+                if "x_start" in path.info:  # the NLP's start (tooltransfer.planner.ss.initial)
                     start = np.asarray(path.info["x_start"])
                     ax.plot(*(1e3 * start).T, ":", color="tab:green", lw=1.0,
                             label=f"NLP start ({path.info['attempts'][-1]['start']})")
