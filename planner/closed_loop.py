@@ -6,13 +6,13 @@ After each chunk the loop observes the resting object (the mean of ``frames`` ca
 re-solves the rest of the task from there with the same condensing as the plan:
 
 1. the rest of the plan's object path, shifted to start at the observed object and blended back to
-   the target (a reference from here), with the rest of the plan's face sequence and switch times:
-   one fit of that sequence (:func:`tooltransfer.planner.oe.qp_variant.condense_sequence`, the contact starting
-   where the face already touches the object), and when it fails a new sequence search
-   (:func:`tooltransfer.planner.oe.qp_variant.condense_qp`) from here; ``mapping`` plans re-plan with the mapping.
-   Re-plans use the push model in force (identified again on line when it mispredicts), with the
-   task's contact budget carried over to that model's ``c`` (:meth:`_Loop.replan_options`), and a
-   re-plan whose tool outline overlaps an obstacle is refused as the nominal plan is;
+   the target, with the rest of the plan's faces and switch times
+   (:class:`tooltransfer.planner.oe.replan.PlanReference`): with the QP variant one fit of that
+   sequence (:func:`tooltransfer.planner.oe.qp_variant.condense_sequence`, the contact starting where the
+   face already touches the object), and when it fails a new search from here; another variant
+   re-plans with its own condensing. Re-plans use the push model in force (adapted on line when it
+   mispredicts: :mod:`tooltransfer.tools.pushing.adaptation`) and :mod:`tooltransfer.planner.oe.replan`'s
+   options and obstacle check;
 2. the next chunk: the first push of that re-plan, at most ``chunk`` of object travel (and at most
    ``approach`` of what is left once the target is near, so the object comes at it from short of it:
    faces cannot pull back), its tool path from the push model (the re-plan's tool poses); a change of
@@ -42,14 +42,22 @@ from numpy.typing import NDArray
 from tooltransfer.errors import InputError, ToolTransferError
 from tooltransfer.planner.execution import Plant
 from tooltransfer.planner.oe.correction import correction_references
+from tooltransfer.planner.oe.mapping_variant import MappingOptions
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.oe.qp_variant import QPOptions
-from tooltransfer.planner.oe.replan import PlanReference, contact_budget, refuse_tool_overlap, replan_scene
+from tooltransfer.planner.oe.replan import (
+    QP_REPLAN_SIZES,
+    PlanReference,
+    refuse_tool_overlap,
+    replan_options,
+    replan_setting,
+)
 from tooltransfer.planner.plan import Plan
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import setting_from_task, task_skills
 from tooltransfer.planner.ss.arch_variant import swept_clearance
 from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration
-from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
+from tooltransfer.planner.variant_registry import needs_ss_skill, oe_variant, switch_planner
+from tooltransfer.problems.task import Task, task_from_dict
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.pose import rotation
 from tooltransfer.tools.pushing.adaptation import Adaptation
@@ -102,38 +110,38 @@ class ClosedLoopReport:
 class _Loop:
     """One closed-loop run (see :func:`execute_closed_loop`)."""
 
-    def __init__(self, plan: Plan, task: Task, plant: Plant, frames: int, tolerance: float,
-                 adapt: bool = True, camera_noise: float = 0.0015) -> None:
+    def __init__(self, plan: Plan, task: Task, plant: Plant | None, frames: int, tolerance: float,
+                 adapt: bool = True, camera_noise: float = 0.0015, seed: int = 0,
+                 config: SimConfig | None = None) -> None:
         from tooltransfer.planner.recontact import recontact_planner
-        from tooltransfer.planner.solve import effective_margin, mapping_options, qp_options, task_scene, task_skills
-        from tooltransfer.planner.switches import arch_planner, skill_planner, with_fallback
+        from tooltransfer.planner.switches import with_fallback
 
-        self.plan, self.task, self.plant, self.frames, self.tolerance = plan, task, plant, frames, tolerance
-        self.noise = camera_noise / np.sqrt(frames)
-        self.tool = task_tool(task)
-        self.platform = task_platform(task, self.tool)
-        obstacles = task_obstacles(task)
-        self.skills = task_skills(task, need_ss=plan.variant.get("ss") in ("dmp", "opt"))
-        self.scene = task_scene(task, obstacles, effective_margin(task, obstacles), self.skills)
-        r, clear = task.object.radius, task.ss.clearance
-        arch = arch_planner(self.tool, self.platform, r, obstacles, clear)
-        self.switch = arch
-        if plan.variant.get("ss") in ("dmp", "opt") and self.skills.ss is not None:
-            self.switch = with_fallback(skill_planner(plan.variant["ss"], self.skills.ss, self.tool, self.platform, r,
-                                                      obstacles, clear, task.ss.n_knots), arch, "arch")
-        self.recontact = with_fallback(recontact_planner(self.tool, self.platform, r, obstacles), self.switch, "switch")
+        ss = plan.variant.get("ss", task.variants.ss)
+        skills = task_skills(task, need_ss=needs_ss_skill(ss))
+        self.setting = setting_from_task(task, skills)  # the world, as solve builds it
+        self.tool, self.platform = self.setting.tool, self.setting.platform
+        if plant is None:
+            from tooltransfer.planner.execution import sim_plant
+            from tooltransfer.planner.simulate import task_sim_config
+
+            plant = sim_plant(self.setting, config or task_sim_config(task), task.start, plan.joints[0], camera_noise,
+                              seed)
+        self.plant = plant
+        self.frames, self.tolerance, self.noise = frames, tolerance, camera_noise / np.sqrt(frames)
+        self.switch = switch_planner(ss, self.setting, skills.ss, task.ss)
+        self.recontact = with_fallback(recontact_planner(self.setting), self.switch, "switch")
         self.target = np.array(task.target)
-        self.variant = plan.variant.get("oe", "qp")
-        self.options = qp_options(task).model_copy(update={"n_samples": 40, "screen_samples": 30, "n_basis": 15,
-                                                            "candidates": 2, "alternatives": 0})
-        self.mapping = mapping_options(task)
-        self.c_plan = self.scene.mechanics.c
+        self.oe = oe_variant(plan.variant.get("oe", task.variants.oe))
+        self.options = self.oe.options_from_task(task.oe)
+        if isinstance(self.options, QPOptions):  # the QP variant's smaller fits, for re-plans made often
+            self.options = self.options.model_copy(update=QP_REPLAN_SIZES)
+        self.c_plan = self.setting.mechanics.c
         self.v, self.a = task.timing.max_tool_speed, task.timing.max_tool_accel
         self.face: str | None = None
         self.adapt = adapt
         self.pending: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self.before: NDArray[np.float64] | None = None
-        self.adaptation = Adaptation(self.tool, self.scene.radius, self.noise)
+        self.adaptation = Adaptation(self.tool, self.setting.radius, self.noise)
         self.staged = False
         self.n_pushes = self.n_switches = self.n_recontacts = 0
         self.replan_times: list[float] = []
@@ -170,48 +178,35 @@ class _Loop:
             self.pending = (t, poses)
 
     # ---------------------------------------------------------------- planning
-    def scene_at(self, o: NDArray[np.float64]) -> Scene:
-        """The scene for a re-plan from ``o`` (:func:`tooltransfer.planner.oe.replan.replan_scene`)."""
-        return replan_scene(self.scene, o)
-
-    def contact_s(self, o: NDArray[np.float64]) -> float | None:
-        """Where the face in contact touches the object at ``o`` [m along the face], if it does."""
-        if self.face is None:
-            return None
-        from tooltransfer.planner.switches import contact_fraction
-
-        pose = self.plant.tool_pose()
-        return contact_fraction(self.tool, self.face, o, pose, self.scene.radius) * self.tool.face(self.face).length
-
-    def replan_options(self) -> QPOptions:
-        """The re-plans' options: the plan's contact budget carried over to the push model in force
-        (:func:`tooltransfer.planner.oe.replan.contact_budget`)."""
-        return contact_budget(self.options, self.c_plan, self.scene.mechanics.c)
+    def replan_options(self) -> QPOptions | MappingOptions:
+        """The re-plans' options: the friction cone's share widened, the plan's contact budget carried
+        over to the push model in force (:func:`tooltransfer.planner.oe.replan.replan_options`)."""
+        return replan_options(self.options, self.c_plan, self.setting.mechanics.c)
 
     def replan(self, t: NDArray[np.float64], ref: NDArray[np.float64], faces: tuple[str, ...],
                switches: tuple[float, ...], o: NDArray[np.float64]) -> PushPlan:
-        """The rest of the task from the observed object ``o``: the sequence, else a new search."""
-        from tooltransfer.planner.oe.mapping_variant import condense_mapping
+        """The rest of the task from the observed object ``o``: with the QP variant the sequence
+        ``faces``, else a new search, both from a free start; with another its own condensing."""
         from tooltransfer.planner.oe.qp_variant import condense_qp, condense_sequence
+        from tooltransfer.planner.switches import contact_fraction
 
         start = time.perf_counter()
-        s_first = self.contact_s(o) if faces and faces[0] == self.face else None
-        scene = self.scene_at(o)
-        if self.variant == "mapping":
-            pp = self.clear_of_obstacles(condense_mapping(t, ref, self.tool, self.platform, scene, self.target,
-                                                          self.mapping))
+        s_first = None
+        if faces and faces[0] == self.face:  # the contact starts where the face touches the object
+            s = contact_fraction(self.tool, faces[0], o, self.plant.tool_pose(), self.setting.radius)
+            s_first = s * self.tool.face(faces[0]).length
+        setting, opts = replan_setting(self.setting, o), self.replan_options()
+        if not isinstance(opts, QPOptions):
+            pp = self.clear_of_obstacles(self.oe.condense(t, ref, setting, self.target, opts))
         else:
-            opts = self.replan_options()
             if faces:
-                pp = self.clear_of_obstacles(condense_sequence(t, ref, self.tool, self.platform, scene, self.target,
-                                                               faces, switches, opts, s_first=s_first,
-                                                               free_start=True))
+                pp = self.clear_of_obstacles(condense_sequence(t, ref, setting, self.target, faces, switches, opts,
+                                                               s_first=s_first, free_start=True))
                 if pp.status != "solved":
                     self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
                                     "new search")
             if not faces or pp.status != "solved":
-                pp = self.clear_of_obstacles(condense_qp(t, ref, self.tool, self.platform, scene, self.target, opts,
-                                                         free_start=True))
+                pp = self.clear_of_obstacles(condense_qp(t, ref, setting, self.target, opts, free_start=True))
         self.replan_times.append(time.perf_counter() - start)
         if pp.status == "solved" and not pp.pushes:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")
@@ -220,14 +215,14 @@ class _Loop:
     def clear_of_obstacles(self, pp: PushPlan) -> PushPlan:
         """``pp``, or refused when the tool outline overlaps an obstacle along what the loop executes
         next (:func:`tooltransfer.planner.oe.replan.refuse_tool_overlap`)."""
-        return refuse_tool_overlap(self.tool, self.scene.obstacles, pp)
+        return refuse_tool_overlap(self.tool, self.setting.obstacles, pp)
 
     def correction(self, o: NDArray[np.float64]) -> PushPlan:
         """A correction from ``o`` once the plan's path is used up: each way of
         :func:`tooltransfer.planner.oe.correction.correction_references` in turn, fitted as its
         sequence, until one is solved (the last, a new search along the straight way)."""
         pp: PushPlan | None = None
-        for way in correction_references(self.tool, self.platform, self.scene, o, self.target):
+        for way in correction_references(self.setting, self.options.friction_cone_fraction, o, self.target):
             pp = self.replan(way.t, way.ref, way.faces, way.switches, o)
             if pp.status == "solved":
                 return pp
@@ -256,7 +251,7 @@ class _Loop:
                 what = f"switch {self.face} -> {face}" if change else f"re-contact of {face}"
                 raise _Stop("failed", f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
             xy = sw.xy
-        clear = [swept_clearance(self.tool, self.platform, xy[j:j + 1], o, self.scene.radius) for j in range(len(xy))]
+        clear = [swept_clearance(self.tool, self.platform, xy[j:j + 1], o, self.setting.radius) for j in range(len(xy))]
         j = next((j for j, c in enumerate(clear) if c >= 0.5 * BACK_OFF), 0)
         self.move(np.vstack([back, xy[j:]]))
         if change:
@@ -294,28 +289,17 @@ class _Loop:
             return
         t, poses = self.pending
         self.pending = None
-        mechanics, note = self.adaptation.learn(t, poses, self.before, o, self.scene.mechanics)
+        mechanics, note = self.adaptation.learn(t, poses, self.before, o, self.setting.mechanics)
         if note:
             self.log.append(note)
         if mechanics is not None:
-            self.scene = replace(self.scene, mechanics=mechanics)
+            self.setting = replace(self.setting, mechanics=mechanics)
 
 
 class _Stop(ToolTransferError):
     def __init__(self, status: str, reason: str) -> None:
         self.status, self.reason = status, reason
         super().__init__(reason)
-
-
-def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, config: SimConfig | None) -> Plant:
-    from tooltransfer.planner.execution import SimPlant
-    from tooltransfer.planner.simulate import task_sim_config
-    from tooltransfer.tools.sim import SimPlatform
-
-    tool = task_tool(task)
-    sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task), config or task_sim_config(task))
-    sim.reset(np.array(task.start), q0=plan.joints[0])
-    return SimPlant(sim, camera_noise, seed)
 
 
 @dataclass(frozen=True)
@@ -445,7 +429,7 @@ def _report(status: str, reason: str, loop: _Loop | None, plant: Plant | None, t
         status, reason, err, loop.n_pushes if loop else 0, loop.n_switches if loop else 0,
         loop.n_recontacts if loop else 0, len(loop.replan_times) if loop else 0,
         loop.replan_times if loop else [], loop.errors if loop else [], time.perf_counter() - start,
-        execution, loop.log if loop else [], loop.scene.mechanics if loop else None,
+        execution, loop.log if loop else [], loop.setting.mechanics if loop else None,
         loop.adaptation.times if loop else [])
 
 
@@ -473,8 +457,8 @@ def execute_closed_loop(
             (or three times the averaged camera noise, if more) from where the plan in force puts it;
             closer, the plan in force goes on (re-planning on the camera's noise would only add it).
         adapt: identify ``mu`` and ``c`` again from the executed chunks when the model mispredicts one
-            by more than ``ADAPT_ERROR``, so the re-plans use the plant's mechanics (the report's
-            ``mechanics``; the identification's times are ``adapt_times``).
+            by more than :data:`tooltransfer.tools.pushing.adaptation.ADAPT_ERROR`, so the re-plans use
+            the plant's mechanics (the report's ``mechanics``; the identifications' times ``adapt_times``).
         camera_noise: the camera's noise per frame [m]: the default plant's, and the noise the re-plan
             threshold and the adaptation's prior (:mod:`tooltransfer.tools.pushing.adaptation`) assume
             for any plant.
@@ -486,8 +470,7 @@ def execute_closed_loop(
     status, reason = "rounds", ""
     loop: _Loop | None = None
     try:
-        plant = plant if plant is not None else _default_plant(plan, task, camera_noise, seed, config)
-        loop = _Loop(plan, task, plant, frames, tolerance, adapt, camera_noise)
+        loop = _Loop(plan, task, plant, frames, tolerance, adapt, camera_noise, seed, config)
         approach_m = np.asarray(plan.phase) == "approach"
         loop.move(plan.tool_pose[approach_m, :2])
         loop.face = plan.pushes[0].faces[0]
@@ -513,4 +496,4 @@ def execute_closed_loop(
         status, reason = stop.status, stop.reason
     except Exception as exc:  # no exception escapes: a refused move ends the run with its reason
         status, reason = "failed", f"{type(exc).__name__}: {exc}"
-    return _report(status, reason, loop, plant, tolerance, start)
+    return _report(status, reason, loop, loop.plant if loop is not None else plant, tolerance, start)

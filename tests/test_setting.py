@@ -22,8 +22,8 @@ ROOT = Path(__file__).resolve().parents[1]
 BUILDERS = {"task_tool", "task_platform", "task_obstacles", "effective_margin", "DiscObject"}
 #: Modules that may call them anyway, with why: the batch generator probes the Omni's reach before a task exists.
 ALLOWED = {"planner/batch/generate.py": {"task_tool", "task_platform"}}
-#: Modules still to move onto :func:`setting_from_task` (the closed loop, moved by its own change).
-PENDING = {"planner/closed_loop.py"}
+#: Modules still to move onto :func:`setting_from_task` (none left).
+PENDING: set[str] = set()
 
 
 def _world(setting: Setting) -> dict:

@@ -18,9 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.planner.oe.face_frame import FaceFrame
-from tooltransfer.planner.scene import Scene
-from tooltransfer.tools.model import Tool
-from tooltransfer.tools.omni.platform import OmniPlatform
+from tooltransfer.planner.setting import Setting
 
 #: The shortest this many ways along the faces' normals are tried before the straight way.
 CORRECTION_WAYS = 3
@@ -41,14 +39,16 @@ def _unit(angle: float) -> NDArray[np.float64]:
     return np.array([np.cos(angle), np.sin(angle)])
 
 
-def correction_references(tool: Tool, platform: OmniPlatform, scene: Scene, o: NDArray[np.float64],
+def correction_references(setting: Setting, friction_cone_fraction: float, o: NDArray[np.float64],
                           target: NDArray[np.float64]) -> list[CorrectionReference]:
-    """The references to try, in order, from the object at ``o`` (2,) [m] to ``target`` (2,) [m]:
-    the :data:`CORRECTION_WAYS` shortest ways along one face's normal or a corner of two (module
-    docstring), then the straight way with no faces."""
+    """The references to try, in order, from the object at ``o`` (2,) [m] to ``target`` (2,) [m] in
+    ``setting``: the :data:`CORRECTION_WAYS` shortest ways along one face's normal or a corner of two
+    (module docstring; the faces' cones for ``friction_cone_fraction``, the plan's share of the
+    friction cone), then the straight way with no faces."""
     r = target - o
     d = float(np.hypot(*r))
-    frames = {f: FaceFrame.build(tool, f, platform, scene) for f in tool.face_names}
+    frames = {f: FaceFrame.build(setting, f, friction_cone_fraction=friction_cone_fraction)
+              for f in setting.tool.face_names}
     normal = {f: _unit(float(fr.normal_direction(o[None])[0])) for f, fr in frames.items()}
     legs: list[tuple[float, tuple[str, ...], NDArray[np.float64]]] = []
     for f, fr in frames.items():

@@ -7,9 +7,10 @@ it. What such a re-plan is made of lives here:
 * :class:`PlanReference`: the plan's pushes on their own time axis (switches and approach taken
   out) and, from any time on it, the rest of the plan's object path shifted to start at the observed
   object and blended back to the target, with the rest of the faces and switch times;
-* :func:`replan_scene`: the scene from the observed object (the safety margin at most the object's
-  clearance there, the friction cone's share widened by :data:`REPLAN_CONE_WIDENING`);
-* :func:`contact_budget`: the plan's contact budget carried over to the push model in force;
+* :func:`replan_setting`: the setting from the observed object (the safety margin at most the
+  object's clearance there);
+* :func:`replan_options`: the friction cone's share widened by :data:`REPLAN_CONE_WIDENING`, and the
+  plan's contact budget carried over to the push model in force;
 * :func:`refuse_tool_overlap`: a re-plan whose tool outline overlaps an obstacle is refused, as the
   nominal plan is.
 
@@ -21,23 +22,31 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.planner.oe.contacts import MIN_PIECE
+from tooltransfer.planner.oe.mapping_variant import MappingOptions
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.oe.qp_variant import QPOptions
 from tooltransfer.planner.plan import Plan
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import Setting
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Obstacle
 
+#: The options of an OE variant (:data:`tooltransfer.planner.variant_registry.OE_VARIANTS`).
+Options = TypeVar("Options", QPOptions, MappingOptions)
+
 #: A re-plan may use this many times the share of the friction cone the nominal plan uses (the task's
-#: ``oe.friction_cone_fraction``), up to the whole cone (:func:`replan_scene`).
+#: ``oe.friction_cone_fraction``), up to the whole cone (:func:`replan_options`).
 REPLAN_CONE_WIDENING = 1.5
-#: The most contacts (re-contacts + 1) one push of a re-plan may use (:func:`contact_budget`).
+#: The most contacts (re-contacts + 1) one push of a re-plan may use (:func:`replan_options`).
 MAX_REPLAN_CONTACTS = 30
+#: The QP variant's sizes for re-plans (:class:`~tooltransfer.planner.oe.qp_variant.QPOptions`): a
+#: closed loop re-plans from every strayed observation, on a short rest of the path.
+QP_REPLAN_SIZES = {"n_samples": 40, "screen_samples": 30, "n_basis": 15, "candidates": 2, "alternatives": 0}
 
 
 @dataclass(frozen=True)
@@ -128,42 +137,48 @@ class PlanReference:
         return float(self.tau[-1])
 
 
-def replan_scene(scene: Scene, o: NDArray[np.float64]) -> Scene:
-    """The scene for a re-plan from the object at ``o`` (2,) [m]: the safety margin at most the
+def replan_setting(setting: Setting, o: NDArray[np.float64]) -> Setting:
+    """The setting for a re-plan from the object at ``o`` (2,) [m]: the safety margin at most the
     object's clearance there (an object pushed closer to an obstacle than the margin keeps that
-    clearance, as a start touching one does: :func:`tooltransfer.planner.solve.effective_margin`),
-    and the friction cone's share widened by :data:`REPLAN_CONE_WIDENING`: the nominal plan keeps
-    part of the cone in reserve so that it survives an error in the mechanics, and a re-plan, made
-    from where the object was seen, spends that reserve on the correction (a plant whose object
-    drifts toward the face's normal needs directions beyond the nominal share to come back)."""
+    clearance, as a start touching one does: :func:`tooltransfer.planner.setting.effective_margin`)."""
     import shapely
 
     from tooltransfer.tools.objects import Disc
 
-    disc = shapely.Point(o).buffer(scene.radius, quad_segs=64)
+    disc = shapely.Point(o).buffer(setting.radius, quad_segs=64)
     gap = min((float(shapely.distance(disc, ob.polygon() if isinstance(ob, Disc) else ob))
-               for ob in scene.obstacles), default=np.inf)
-    near = scene if gap >= scene.margin else replace(scene, margin=max(0.0, gap - 1e-4))
-    return replace(near, cone_fraction=min(1.0, REPLAN_CONE_WIDENING * near.cone_fraction))
+               for ob in setting.obstacles), default=np.inf)
+    return setting if gap >= setting.margin else replace(setting, margin=max(0.0, gap - 1e-4))
 
 
-def contact_budget(options: QPOptions, c_plan: float, c: float) -> QPOptions:
-    """The re-plans' options: the plan's contact budget (``options.max_contacts`` at the plan's
-    ``c_plan``) carried over to the push model in force (``c``).
+def replan_options(options: Options, c_plan: float, c: float) -> Options:
+    """The re-plans' options (any OE variant's, with a ``friction_cone_fraction``).
 
-    A sticking contact rolls ``1/c^2`` [m] along the face per metre of the object's sideways travel
+    The friction cone's share is widened by :data:`REPLAN_CONE_WIDENING` (at most the whole cone):
+    the nominal plan keeps part of the cone in reserve so that it survives an error in the
+    mechanics, and a re-plan, made from where the object was seen, spends that reserve on the
+    correction (a plant whose object drifts toward the face's normal needs directions beyond the
+    nominal share to come back).
+
+    Options with a contact budget (the QP variant's ``max_contacts`` per push at the plan's ``c_plan``)
+    carry it over to the push model in force (``c``). A sticking contact rolls ``1/c^2`` [m] along the face
+    per metre of the object's sideways travel
     (:class:`tooltransfer.planner.oe.constraints.ContactOnFace`), so the sideways travel the task's
-    ``max_contacts`` contacts per push carry at the plan's ``c`` needs ``(c_plan / c)^2`` times as
-    many contacts once the adaptation finds a smaller ``c``: the re-plans may use that many (never
-    fewer than the task's, at most :data:`MAX_REPLAN_CONTACTS`, which may exceed the task file's bound
-    on ``oe.max_contacts``: that bounds what the nominal plan is asked for, this follows from it).
-    Re-contacts are short moves of the same face; refusing them would leave the object on the drift
-    the smaller ``c`` causes, toward the face's normal. ``options`` itself when the budget is the same.
+    contacts carry at the plan's ``c`` needs ``(c_plan / c)^2`` times as many once the adaptation
+    finds a smaller ``c``: the re-plans may use that many (never fewer than the task's, at most
+    :data:`MAX_REPLAN_CONTACTS`, which may exceed the task file's bound on ``oe.max_contacts``: that
+    bounds what the nominal plan is asked for, this follows from it). Re-contacts are short moves of
+    the same face; refusing them would leave the object on the drift the smaller ``c`` causes,
+    toward the face's normal.
     """
-    ratio = (c_plan / c) ** 2
-    n = int(np.clip(np.ceil(options.max_contacts * ratio - 1e-9), options.max_contacts,
-                    max(options.max_contacts, MAX_REPLAN_CONTACTS)))
-    return options if n == options.max_contacts else options.model_copy(update={"max_contacts": n})
+    update: dict[str, float | int] = {
+        "friction_cone_fraction": min(1.0, REPLAN_CONE_WIDENING * options.friction_cone_fraction)}
+    if isinstance(options, QPOptions):
+        n0 = options.max_contacts
+        n = int(np.clip(np.ceil(n0 * (c_plan / c) ** 2 - 1e-9), n0, max(n0, MAX_REPLAN_CONTACTS)))
+        if n != n0:
+            update["max_contacts"] = n
+    return options.model_copy(update=update)
 
 
 def refuse_tool_overlap(tool: Tool, obstacles: Sequence[Obstacle], pp: PushPlan) -> PushPlan:
