@@ -29,7 +29,8 @@ test: $(PY)
 TYPED := -p tooltransfer.dmp -m tooltransfer -m tooltransfer.errors -m tooltransfer.validation \
 	-m tooltransfer.problems.task -m tooltransfer.problems.named -m tooltransfer.planner.solve \
 	-m tooltransfer.planner.plan -m tooltransfer.planner.closed_loop -m tooltransfer.planner.execution \
-	-m tooltransfer.planner.export -m tooltransfer.planner.ss.nlp -m tooltransfer.planner.ss.knot_rows
+	-m tooltransfer.planner.export -m tooltransfer.planner.ss.nlp -m tooltransfer.planner.ss.knot_rows \
+	-m tooltransfer.planner.setting -m tooltransfer.planner.variant_registry
 typecheck: $(PY)
 	@mkdir -p build/mypy && ln -sfn "$(CURDIR)" build/mypy/tooltransfer
 	cd build/mypy && MYPYPATH=. $(abspath $(PY)) -m mypy --config-file "$(CURDIR)/pyproject.toml" $(TYPED)

@@ -39,14 +39,15 @@ if TYPE_CHECKING:
     from tooltransfer.planner.skills import Skills
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Setting:
-    """The world a plan acts in, as one planning input.
+    """The world a plan acts in, as one planning input. Two settings are equal when they describe
+    the same world (:meth:`describe`, the mechanics and the margin).
 
     Attributes:
         tool: the tool the Omni carries.
         platform: the Omni carrying ``tool`` (its ``a_t``, base, joint limits).
-        obj: the pushed object, a disc; its radius is validated here, once (:class:`DiscObject`).
+        obj: the pushed object, a disc (:class:`DiscObject`, which validates its radius: the one place).
         mechanics: the push model's parameters (tool-object friction ``mu``, limit-surface ``c``).
         obstacles: discs and convex shapely polygons in the world [m].
         margin: safety margin [m] kept from the obstacles beyond the object's radius (the one the
@@ -70,6 +71,13 @@ class Setting:
             raise InputError("setting.margin", "a finite length [m] >= 0", repr(m))
         object.__setattr__(self, "margin", float(m))
         object.__setattr__(self, "obstacles", tuple(self.obstacles))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Setting):
+            return NotImplemented
+        return (self.describe(), self.mechanics, self.margin) == (other.describe(), other.mechanics, other.margin)
+
+    __hash__ = None  # type: ignore[assignment]  # equal settings need not be the same objects
 
     @property
     def radius(self) -> float:
@@ -169,11 +177,12 @@ def effective_margin(task: Task, obstacles: Sequence[Obstacle]) -> float:
 
 
 def setting_from_task(task: Task, skills: Skills | None = None, task_path: str | Path | None = None, *,
-                      mechanics: PushMechanics | None = None) -> Setting:
+                      mechanics: PushMechanics | None = None, margin: float | None = None) -> Setting:
     """The :class:`Setting` of ``task``: its tool, platform, obstacles and object, the push mechanics
     (``mechanics`` when given, e.g. those a plan file records; else :func:`task_mechanics`: the task's
-    override, else the ``skills``' identified ones, else the platform's) and the safety margin the
-    plan can keep (:func:`effective_margin`).
+    override, else the ``skills``' identified ones, else the platform's) and the safety margin
+    (``margin`` [m] when given, e.g. to check a plan file whatever its task's obstacles; else the one
+    the plan can keep, :func:`effective_margin`).
 
     Without ``skills`` or ``mechanics``, a task without a mechanics override learns or reads its
     skills (:func:`task_skills`, relative to ``task_path``; the SS skill is not learned) for their
@@ -186,7 +195,8 @@ def setting_from_task(task: Task, skills: Skills | None = None, task_path: str |
     tool = task_tool(task)
     platform = task_platform(task, tool)
     obstacles = tuple(task_obstacles(task))
-    margin = effective_margin(task, obstacles)
+    if margin is None:
+        margin = effective_margin(task, obstacles)
     if mechanics is None:
         if skills is None and task.object.mechanics is None:
             skills = task_skills(task, task_path, need_ss=False)

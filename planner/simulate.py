@@ -62,7 +62,7 @@ def simulate_plan(plan: Plan, config: SimConfig | None = None) -> SimulationRepo
                          "simulation's bound, --force or not)",
                          f"{plan.t.size} samples, {plan.t[-1] - plan.t[0]:.6g} s" if plan.t.size else "no samples")
     task = task_from_dict(plan.task, "plan.task")
-    setting = setting_from_task(task, mechanics=task_mechanics(task))  # MuJoCo has its own contact model
+    setting = setting_from_task(task, mechanics=task_mechanics(task), margin=task.safety_margin)  # MuJoCo's physics
     from tooltransfer.tools.sim.platform import SimPlatform  # mujoco: the optional sim extra
 
     sim = SimPlatform(setting.tool, setting.platform, list(setting.obstacles), config or task_sim_config(task))
@@ -185,12 +185,12 @@ def _plan_mechanics(plan: Plan, source: str, task: Task) -> PushMechanics:
 
 
 def _check_replay(plan: Plan, source: str, task: Task, setting: Setting, start: NDArray[np.float64]) -> None:
-    """The planned tool path, replayed through the push model from ``start`` [m] with the setting's
-    mechanics (the plan's, :func:`_plan_mechanics`), moves the object along the planned path."""
+    """The planned tool path, replayed through the push model from ``start`` [m] with the plan's
+    mechanics (:func:`_plan_mechanics`), moves the object along the planned path."""
     from tooltransfer.tools.pushing.forward import simulate
 
     t = plan.t
-    replay = simulate(setting.tool, plan.tool_pose, start, setting.radius, setting.mechanics)
+    replay = simulate(setting.tool, plan.tool_pose, start, setting.radius, _plan_mechanics(plan, source, task))
     off = np.hypot(*(replay.object_xy - plan.object_xy).T)
     tol = max(REPLAY_TOL, 10 * task.oe.self_consistency_tol)
     if off.max() > tol:
@@ -238,10 +238,9 @@ def check_plan(plan: Plan, source: str = "plan") -> None:
     if not 0.0 <= t[0] <= 1.0:
         _fail(source, "samples.t[0]", "a plan starting at 0 s", f"{t[0]:.6g} s")
     task = task_from_dict(plan.task, f"{source}: task")
-    try:
-        setting = setting_from_task(task, mechanics=_plan_mechanics(plan, source, task))
-    except InputError as exc:  # e.g. the task's object overlapping an obstacle at its start
-        _fail(source, f"task.{exc.field}", exc.expected, exc.got)
+    # the geometry (the replay takes the plan's own mechanics, :func:`_check_replay`; the obstacles are
+    # checked against the tool path, not through the margin)
+    setting = setting_from_task(task, mechanics=task_mechanics(task), margin=task.safety_margin)
     start, target = np.array(task.start), np.array(task.target)
     for k, point, name in ((0, start, "start"), (t.size - 1, target, "target")):
         off = float(np.hypot(*(plan.object_xy[k] - point)))

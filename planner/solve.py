@@ -14,10 +14,11 @@ tool path from the start and must reproduce the planned object path within
 ``oe.self_consistency_tol`` (a switch that knocks the object, a push the mechanics would not
 deliver, fail here with the time and place).
 
-Switch variants (:mod:`tooltransfer.planner.switches`): ``arch`` (the geometric reference of
-:mod:`tooltransfer.planner.ss.arch_variant`),
-``dmp`` (the SS skill recombined, eq. 18; its penetration is reported, not avoided) and ``opt`` (the
-CasADi NLP, non-penetrating, checked with shapely).
+Switch variants (:data:`tooltransfer.planner.variant_registry.SS_VARIANTS`, planners in
+:mod:`tooltransfer.planner.switches`): ``arch`` (the geometric reference of
+:mod:`tooltransfer.planner.ss.arch_variant`), ``dmp`` (the SS skill recombined, eq. 18; its penetration
+is reported, not avoided) and ``opt`` (the CasADi NLP, non-penetrating, checked with shapely; where it
+finds no path, the ``arch`` one).
 """
 
 from __future__ import annotations
