@@ -6,13 +6,13 @@ After each chunk the loop observes the resting object (the mean of ``frames`` ca
 re-solves the rest of the task from there with the same condensing as the plan:
 
 1. the rest of the plan's object path, shifted to start at the observed object and blended back to
-   the target (a reference from here), with the rest of the plan's face sequence and switch times:
-   one fit of that sequence (:func:`tooltransfer.planner.oe.qp_variant.condense_sequence`, the contact starting
-   where the face already touches the object), and when it fails a new sequence search
-   (:func:`tooltransfer.planner.oe.qp_variant.condense_qp`) from here; ``mapping`` plans re-plan with the mapping.
-   Re-plans use the push model in force (identified again on line when it mispredicts), with the
-   task's contact budget carried over to that model's ``c`` (:meth:`_Loop.replan_options`), and a
-   re-plan whose tool outline overlaps an obstacle is refused as the nominal plan is;
+   the target, with the rest of the plan's faces and switch times
+   (:class:`tooltransfer.planner.oe.replan.PlanReference`): with the QP variant one fit of that
+   sequence (:func:`tooltransfer.planner.oe.qp_variant.condense_sequence`, the contact starting where the
+   face already touches the object), and when it fails a new search from here; another variant
+   re-plans with its own condensing. Re-plans use the push model in force (adapted on line when it
+   mispredicts: :mod:`tooltransfer.tools.pushing.adaptation`) and :mod:`tooltransfer.planner.oe.replan`'s
+   options and obstacle check;
 2. the next chunk: the first push of that re-plan, at most ``chunk`` of object travel (and at most
    ``approach`` of what is left once the target is near, so the object comes at it from short of it:
    faces cannot pull back), its tool path from the push model (the re-plan's tool poses); a change of
@@ -40,16 +40,27 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError, ToolTransferError
-from tooltransfer.planner.oe.contacts import MIN_PIECE
+from tooltransfer.planner.execution import Plant
+from tooltransfer.planner.oe.correction import correction_references
+from tooltransfer.planner.oe.mapping_variant import MappingOptions
 from tooltransfer.planner.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.oe.qp_variant import QPOptions
+from tooltransfer.planner.oe.replan import (
+    QP_REPLAN_SIZES,
+    PlanReference,
+    refuse_tool_overlap,
+    replan_options,
+    replan_setting,
+)
 from tooltransfer.planner.plan import Plan
-from tooltransfer.planner.scene import Scene
+from tooltransfer.planner.setting import setting_from_task, task_skills
 from tooltransfer.planner.ss.arch_variant import swept_clearance
 from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration
-from tooltransfer.problems.task import Task, task_from_dict, task_obstacles, task_platform, task_tool
+from tooltransfer.planner.variant_registry import needs_ss_skill, oe_variant, switch_planner
+from tooltransfer.problems.task import Task, task_from_dict
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.pose import rotation
+from tooltransfer.tools.pushing.adaptation import Adaptation
 
 if TYPE_CHECKING:
     from tooltransfer.tools.sim import SimConfig
@@ -58,21 +69,9 @@ if TYPE_CHECKING:
 SAME_POSE = 3e-4
 #: How far [m] the tool first backs off along the contact's normal before a switch or a re-contact.
 BACK_OFF = 0.002
-#: A push chunk the model predicted farther off than this [m] triggers the model's adaptation.
-ADAPT_ERROR = 0.001
-#: The adaptation identifies the model from at most this many of the last push chunks.
-ADAPT_CHUNKS = 6
-#: Standard deviation of the adaptation's prior on ``log mu`` and ``log c`` (centred on the model in
-#: force) for chunks the model in force fits within the camera's noise (:meth:`_Loop.learn`).
-ADAPT_PRIOR_SD = 0.5
-#: A re-plan may use this many times the share of the friction cone the nominal plan uses (the task's
-#: ``oe.friction_cone_fraction``), up to the whole cone (:meth:`_Loop.scene_at`).
-REPLAN_CONE_WIDENING = 1.5
 #: Once the model has mispredicted two chunks, the last this many metres are pushed along the faces'
 #: normals (:meth:`_Loop.correction`).
 STAGE = 0.025
-#: The most contacts (re-contacts + 1) one push of a re-plan may use (:meth:`_Loop.replan_options`).
-MAX_REPLAN_CONTACTS = 30
 
 
 @dataclass(frozen=True)
@@ -108,124 +107,41 @@ class ClosedLoopReport:
     adapt_times: list[float] = field(default_factory=list)
 
 
-@dataclass(frozen=True)
-class _Reference:
-    """The plan's pushes on their own time axis (``tau`` [s], switches and approach taken out), as a
-    push plan whose pushes carry the plan's tool poses."""
-
-    plan: PushPlan
-    spans: tuple[tuple[str, float, float], ...]
-    lead_ins: tuple[NDArray[np.float64] | None, ...]
-    """per push, the plan's own tool path (K, 2) [m] from the previous push's end (its switch or
-    re-contact), None for the first."""
-
-    @classmethod
-    def of(cls, plan: Plan) -> _Reference:
-        taus: list[NDArray[np.float64]] = []
-        xys: list[NDArray[np.float64]] = []
-        poses: list[NDArray[np.float64]] = []
-        spans: list[tuple[str, float, float]] = []
-        pushes: list[Push] = []
-        leads: list[NDArray[np.float64] | None] = []
-        now, n = 0.0, 0
-        phase = np.asarray(plan.phase)
-        prev_end: float | None = None
-        for seg in plan.pushes:
-            if prev_end is None:
-                leads.append(None)
-            else:
-                between = (plan.t >= prev_end - 1e-9) & (plan.t <= seg.t_start + 1e-9)
-                leads.append(plan.tool_pose[between, :2].copy())
-            prev_end = seg.t_end
-            m = np.flatnonzero((plan.t >= seg.t_start - 1e-9) & (plan.t <= seg.t_end + 1e-9) & (phase == "push"))
-            tt = plan.t[m] - seg.t_start + now
-            first = 1 if taus else 0  # consecutive pushes share the object's position at the switch
-            idx = np.arange(n - first, n - first + m.size)
-            taus.append(tt[first:])
-            xys.append(plan.object_xy[m][first:])
-            poses.append(plan.tool_pose[m])
-            face = seg.faces[0]
-            end = now + seg.t_end - seg.t_start
-            pushes.append(Push(face, now, end, 0.0, idx, plan.tool_pose[m],
-                               recontact=bool(pushes) and pushes[-1].face == face))
-            if spans and spans[-1][0] == face:  # a re-contact: a re-plan places its own contacts
-                spans[-1] = (face, spans[-1][1], end)
-            else:
-                spans.append((face, now, end))
-            now, n = end, n + m.size - first
-        tau, xy = np.concatenate(taus), np.vstack(xys)
-        v = np.gradient(xy, tau, axis=0) if tau.size > 2 else np.zeros_like(xy)
-        return cls(PushPlan(plan.variant.get("oe", "qp"), "solved", tau, xy, v, xy, pushes=tuple(pushes)),
-                   tuple(spans), tuple(leads))
-
-    @property
-    def tau(self) -> NDArray[np.float64]:
-        return self.plan.t
-
-    @property
-    def xy(self) -> NDArray[np.float64]:
-        return self.plan.object_xy
-
-    def rest(self, tau0: float, start: NDArray[np.float64], target: NDArray[np.float64]) -> tuple:
-        """Times (K,) from 0, the reference (K, 2) from ``start`` blended back to the plan by the end
-        (and exactly to ``target``), and the faces with their switch times after ``tau0``."""
-        keep = self.tau > tau0 + 1e-9
-        tt = np.concatenate([[tau0], self.tau[keep]])
-        here = [np.interp(tau0, self.tau, self.xy[:, j]) for j in range(2)]
-        xy = np.vstack([here, self.xy[keep]])
-        u = (tt - tt[0]) / max(tt[-1] - tt[0], 1e-9)
-        ref = xy + (1.0 - u)[:, None] * (start - xy[0]) + u[:, None] * (target - xy[-1])
-        spans = [(f, max(a, tau0) - tau0, b - tau0) for f, a, b in self.spans if b > tau0 + 1e-9]
-        if len(spans) > 1:  # a face with less than MIN_PIECE of the plan left: the next face from here
-            ahead = (tt <= tau0 + spans[0][2] + 1e-9)
-            if np.sum(np.linalg.norm(np.diff(ref[ahead], axis=0), axis=1)) < MIN_PIECE:
-                spans = [(spans[1][0], 0.0, spans[1][2]), *spans[2:]]
-        faces = tuple(f for f, _, _ in spans)
-        switches = tuple(b for _, _, b in spans[:-1])
-        return tt - tau0, ref, faces, switches
-
-    @property
-    def end(self) -> float:
-        return float(self.tau[-1])
-
-
 class _Loop:
     """One closed-loop run (see :func:`execute_closed_loop`)."""
 
-    def __init__(self, plan: Plan, task: Task, plant: object, frames: int, tolerance: float,
-                 adapt: bool = True, camera_noise: float = 0.0015) -> None:
+    def __init__(self, plan: Plan, task: Task, plant: Plant | None, frames: int, tolerance: float,
+                 adapt: bool = True, camera_noise: float = 0.0015, seed: int = 0,
+                 config: SimConfig | None = None) -> None:
         from tooltransfer.planner.recontact import recontact_planner
-        from tooltransfer.planner.solve import effective_margin, mapping_options, qp_options, task_scene, task_skills
-        from tooltransfer.planner.switches import arch_planner, skill_planner, with_fallback
+        from tooltransfer.planner.switches import with_fallback
 
-        self.plan, self.task, self.plant, self.frames, self.tolerance = plan, task, plant, frames, tolerance
-        self.noise = camera_noise / np.sqrt(frames)
-        self.tool = task_tool(task)
-        self.platform = task_platform(task, self.tool)
-        obstacles = task_obstacles(task)
-        self.skills = task_skills(task, need_ss=plan.variant.get("ss") in ("dmp", "opt"))
-        self.scene = task_scene(task, obstacles, effective_margin(task, obstacles), self.skills)
-        r, clear = task.object.radius, task.ss.clearance
-        arch = arch_planner(self.tool, self.platform, r, obstacles, clear)
-        self.switch = arch
-        if plan.variant.get("ss") in ("dmp", "opt") and self.skills.ss is not None:
-            self.switch = with_fallback(skill_planner(plan.variant["ss"], self.skills.ss, self.tool, self.platform, r,
-                                                      obstacles, clear, task.ss.n_knots), arch, "arch")
-        self.recontact = with_fallback(recontact_planner(self.tool, self.platform, r, obstacles), self.switch, "switch")
+        ss = plan.variant.get("ss", task.variants.ss)
+        skills = task_skills(task, need_ss=needs_ss_skill(ss))
+        self.setting = setting_from_task(task, skills)  # the world, as solve builds it
+        self.tool, self.platform = self.setting.tool, self.setting.platform
+        if plant is None:
+            from tooltransfer.planner.execution import sim_plant
+            from tooltransfer.planner.simulate import task_sim_config
+
+            plant = sim_plant(self.setting, config or task_sim_config(task), task.start, plan.joints[0], camera_noise,
+                              seed)
+        self.plant = plant
+        self.frames, self.tolerance, self.noise = frames, tolerance, camera_noise / np.sqrt(frames)
+        self.switch = switch_planner(ss, self.setting, skills.ss, task.ss)
+        self.recontact = with_fallback(recontact_planner(self.setting), self.switch, "switch")
         self.target = np.array(task.target)
-        self.variant = plan.variant.get("oe", "qp")
-        self.options = qp_options(task).model_copy(update={"n_samples": 40, "screen_samples": 30, "n_basis": 15,
-                                                            "candidates": 2, "alternatives": 0})
-        self.mapping = mapping_options(task)
-        self.c_plan = self.scene.mechanics.c
+        self.oe = oe_variant(plan.variant.get("oe", task.variants.oe))
+        self.options = self.oe.options_from_task(task.oe)
+        if isinstance(self.options, QPOptions):  # the QP variant's smaller fits, for re-plans made often
+            self.options = self.options.model_copy(update=QP_REPLAN_SIZES)
+        self.c_plan = self.setting.mechanics.c
         self.v, self.a = task.timing.max_tool_speed, task.timing.max_tool_accel
         self.face: str | None = None
         self.adapt = adapt
         self.pending: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self.before: NDArray[np.float64] | None = None
-        self.chunks: list = []
-        self.adapt_times: list[float] = []
-        self.mispredicted = 0
+        self.adaptation = Adaptation(self.tool, self.setting.radius, self.noise)
         self.staged = False
         self.n_pushes = self.n_switches = self.n_recontacts = 0
         self.replan_times: list[float] = []
@@ -235,7 +151,7 @@ class _Loop:
     # ---------------------------------------------------------------- sensing and moving
     def observe(self) -> NDArray[np.float64]:
         """The resting object as the camera measures it: the mean of ``frames`` frames."""
-        return np.mean([self.plant.observe_object() for _ in range(self.frames)], axis=0)  # type: ignore[attr-defined]
+        return np.mean([self.plant.observe_object() for _ in range(self.frames)], axis=0)
 
     def true_error(self) -> float:
         here = getattr(self.plant, "true_object", None)
@@ -252,145 +168,66 @@ class _Loop:
         n = max(3, int(np.ceil(dur / 0.01)) + 1)
         t, path = min_jerk_along(xy, dur, n)
         jp = joint_path(self.platform, path)
-        if np.any(~np.isfinite(jp.heading)) or np.any(jp.violation > 0):
-            k = int(np.argmax(~np.isfinite(jp.heading) | (jp.violation > 0)))
+        bad = np.flatnonzero(jp.refused)
+        if bad.size:
             raise InputError("tool path", "a move within the Omni's reach and joint limits",
-                             f"{np.round(path[k], 4).tolist()} m")
+                             f"{np.round(path[bad[0]], 4).tolist()} m")
         poses = np.column_stack([path, jp.heading])
-        self.plant.move_tool(t, poses)  # type: ignore[attr-defined]
+        self.plant.move_tool(t, poses)
         if record:
             self.pending = (t, poses)
 
     # ---------------------------------------------------------------- planning
-    def scene_at(self, o: NDArray[np.float64]) -> Scene:
-        """The scene for a re-plan from ``o``: the safety margin at most the object's clearance there
-        (an object pushed closer to an obstacle than the margin keeps that clearance, as a start
-        touching one does: :func:`tooltransfer.planner.solve.effective_margin`), and the friction cone's
-        share widened by :data:`REPLAN_CONE_WIDENING`: the nominal plan keeps part of the cone in
-        reserve so that it survives an error in the mechanics, and a re-plan, made from where the
-        object was seen, spends that reserve on the correction (a plant whose object drifts toward the
-        face's normal needs directions beyond the nominal share to come back)."""
-        import shapely
-
-        from tooltransfer.tools.objects import Disc
-
-        disc = shapely.Point(o).buffer(self.scene.radius, quad_segs=64)
-        gap = min((float(shapely.distance(disc, ob.polygon() if isinstance(ob, Disc) else ob))
-                   for ob in self.scene.obstacles), default=np.inf)
-        scene = self.scene if gap >= self.scene.margin else replace(self.scene, margin=max(0.0, gap - 1e-4))
-        return replace(scene, cone_fraction=min(1.0, REPLAN_CONE_WIDENING * scene.cone_fraction))
-
-    def contact_s(self, o: NDArray[np.float64]) -> float | None:
-        """Where the face in contact touches the object at ``o`` [m along the face], if it does."""
-        if self.face is None:
-            return None
-        from tooltransfer.planner.switches import contact_fraction
-
-        pose = self.plant.tool_pose()  # type: ignore[attr-defined]
-        return contact_fraction(self.tool, self.face, o, pose, self.scene.radius) * self.tool.face(self.face).length
-
-    def replan_options(self) -> QPOptions:
-        """The re-plans' options: the plan's contact budget carried over to the push model in force.
-
-        A sticking contact rolls ``1/c^2`` [m] along the face per metre of the object's sideways
-        travel (:class:`tooltransfer.planner.oe.constraints.ContactOnFace`), so the sideways travel the
-        task's ``max_contacts`` contacts per push carry at the plan's ``c`` needs ``(c_plan / c)^2``
-        times as many contacts once the adaptation finds a smaller ``c``: the re-plans may use that
-        many (never fewer than the task's, at most :data:`MAX_REPLAN_CONTACTS`, which may exceed the
-        task file's bound on ``oe.max_contacts``: that bounds what the nominal plan is asked for, this
-        follows from it). Re-contacts are short moves of the same face; refusing them would leave the
-        object on the drift the smaller ``c`` causes, toward the face's normal."""
-        ratio = (self.c_plan / self.scene.mechanics.c) ** 2
-        n = int(np.clip(np.ceil(self.options.max_contacts * ratio - 1e-9), self.options.max_contacts,
-                        max(self.options.max_contacts, MAX_REPLAN_CONTACTS)))
-        return self.options if n == self.options.max_contacts else self.options.model_copy(update={"max_contacts": n})
+    def replan_options(self) -> QPOptions | MappingOptions:
+        """The re-plans' options: the friction cone's share widened, the plan's contact budget carried
+        over to the push model in force (:func:`tooltransfer.planner.oe.replan.replan_options`)."""
+        return replan_options(self.options, self.c_plan, self.setting.mechanics.c)
 
     def replan(self, t: NDArray[np.float64], ref: NDArray[np.float64], faces: tuple[str, ...],
                switches: tuple[float, ...], o: NDArray[np.float64]) -> PushPlan:
-        """The rest of the task from the observed object ``o``: the sequence, else a new search."""
-        from tooltransfer.planner.oe.mapping_variant import condense_mapping
+        """The rest of the task from the observed object ``o``: with the QP variant the sequence
+        ``faces``, else a new search, both from a free start; with another its own condensing."""
         from tooltransfer.planner.oe.qp_variant import condense_qp, condense_sequence
+        from tooltransfer.planner.switches import contact_fraction
 
         start = time.perf_counter()
-        s_first = self.contact_s(o) if faces and faces[0] == self.face else None
-        scene = self.scene_at(o)
-        if self.variant == "mapping":
-            pp = self.clear_of_obstacles(condense_mapping(t, ref, self.tool, self.platform, scene, self.target,
-                                                          self.mapping))
+        s_first = None
+        if faces and faces[0] == self.face:  # the contact starts where the face touches the object
+            s = contact_fraction(self.tool, faces[0], o, self.plant.tool_pose(), self.setting.radius)
+            s_first = s * self.tool.face(faces[0]).length
+        setting, opts = replan_setting(self.setting, o), self.replan_options()
+        if not isinstance(opts, QPOptions):
+            pp = self.clear_of_obstacles(self.oe.condense(t, ref, setting, self.target, opts))
         else:
-            opts = self.replan_options()
             if faces:
-                pp = self.clear_of_obstacles(condense_sequence(t, ref, self.tool, self.platform, scene, self.target,
-                                                               faces, switches, opts, s_first=s_first,
-                                                               free_start=True))
+                pp = self.clear_of_obstacles(condense_sequence(t, ref, setting, self.target, faces, switches, opts,
+                                                               s_first=s_first, free_start=True))
                 if pp.status != "solved":
                     self.log.append(f"re-plan of {' -> '.join(faces)} from {np.round(o, 4).tolist()}: {pp.reason}; "
                                     "new search")
             if not faces or pp.status != "solved":
-                pp = self.clear_of_obstacles(condense_qp(t, ref, self.tool, self.platform, scene, self.target, opts,
-                                                         free_start=True))
+                pp = self.clear_of_obstacles(condense_qp(t, ref, setting, self.target, opts, free_start=True))
         self.replan_times.append(time.perf_counter() - start)
         if pp.status == "solved" and not pp.pushes:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")
         return pp
 
     def clear_of_obstacles(self, pp: PushPlan) -> PushPlan:
-        """``pp`` (as it is when not solved or without a push), or ``pp`` refused when the tool
-        outline overlaps an obstacle at a pose of its first push (the one the loop executes next) or
-        at the second push's contact pose (where the switch or re-contact after it must end, a pose
-        the switch planner refuses): the fit keeps the object clear of the obstacles, not the tool,
-        and the nominal plan is refused for the same overlap (:func:`tooltransfer.planner.solve.solve`).
-        The later poses are left to the re-plans made from the observed object before they run. A
-        refused re-plan lets the caller try another (a new search, a correction's next leg)."""
-        from tooltransfer.planner.tool_clearance import tool_obstacle_clearance
-
-        if not self.scene.obstacles or pp.status != "solved" or not pp.pushes:
-            return pp
-        poses = np.vstack([pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
-        near = tool_obstacle_clearance(self.tool, poses, self.scene.obstacles)
-        if near.distance > 0.0:
-            return pp
-        where = np.round(poses[near.sample, :2], 4).tolist()
-        return replace(pp, status="infeasible",
-                       reason=f"the tool outline overlaps obstacles[{near.obstacle}] with the tool at {where} m")
+        """``pp``, or refused when the tool outline overlaps an obstacle along what the loop executes
+        next (:func:`tooltransfer.planner.oe.replan.refuse_tool_overlap`)."""
+        return refuse_tool_overlap(self.tool, self.setting.obstacles, pp)
 
     def correction(self, o: NDArray[np.float64]) -> PushPlan:
-        """A correction from ``o`` once the plan's path is used up: along the faces' normals (where
-        the object goes whatever ``c`` is): one face whose admissible cone holds the way to the
-        target, else the shortest corner of two faces' normals that splits it (``r = a u1 + b u2``,
-        ``a, b > 0``), each fitted as that sequence; a new search along the straight way when none
-        of them works."""
-        from tooltransfer.planner.oe.face_frame import FaceFrame
-
-        r = self.target - o
-        d = float(np.hypot(*r))
-        frames = {f: FaceFrame.build(self.tool, f, self.platform, self.scene) for f in self.tool.face_names}
-        normal = {f: _unit(float(fr.normal_direction(o[None])[0])) for f, fr in frames.items()}
-        legs: list[tuple[float, tuple[str, ...], NDArray[np.float64]]] = []
-        for f, fr in frames.items():
-            off = float((np.arctan2(r[1], r[0]) - fr.push_direction(o[None])[0] + np.pi) % (2 * np.pi) - np.pi)
-            if abs(off) <= fr.theta_b:
-                legs.append((d, (f,), np.vstack([o, self.target])))
-        for f1 in frames:
-            for f2 in frames:
-                m = np.column_stack([normal[f1], normal[f2]])
-                if f1 == f2 or abs(np.linalg.det(m)) < 1e-3:
-                    continue
-                a, b = np.linalg.solve(m, r)
-                if a > 1e-4 and b > 1e-4:
-                    legs.append((float(a + b), (f1, f2), np.vstack([o, o + a * normal[f1], self.target])))
-        for length, faces, corners in sorted(legs, key=lambda leg: leg[0])[:3]:
-            seg = np.linalg.norm(np.diff(corners, axis=0), axis=1)
-            s = np.concatenate([[0.0], np.cumsum(seg)])
-            t = np.linspace(0.0, max(1.0, length / 0.01), 40)
-            u = np.linspace(0.0, s[-1], t.size)
-            ref = np.column_stack([np.interp(u, s, corners[:, j]) for j in range(2)])
-            switches = (float(t[-1] * s[1] / s[-1]),) if len(faces) == 2 else ()
-            pp = self.replan(t, ref, faces, switches, o)
+        """A correction from ``o`` once the plan's path is used up: each way of
+        :func:`tooltransfer.planner.oe.correction.correction_references` in turn, fitted as its
+        sequence, until one is solved (the last, a new search along the straight way)."""
+        pp: PushPlan | None = None
+        for way in correction_references(self.setting, self.options.friction_cone_fraction, o, self.target):
+            pp = self.replan(way.t, way.ref, way.faces, way.switches, o)
             if pp.status == "solved":
                 return pp
-        t = np.linspace(0.0, max(1.0, d / 0.01), 30)
-        return self.replan(t, o + np.linspace(0.0, 1.0, t.size)[:, None] * r, (), (), o)
+        assert pp is not None  # the straight way is always among the references
+        return pp
 
     # ---------------------------------------------------------------- executing
     def leave(self, o: NDArray[np.float64], pose: NDArray[np.float64], face: str, start: NDArray[np.float64],
@@ -414,7 +251,7 @@ class _Loop:
                 what = f"switch {self.face} -> {face}" if change else f"re-contact of {face}"
                 raise _Stop("failed", f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
             xy = sw.xy
-        clear = [swept_clearance(self.tool, self.platform, xy[j:j + 1], o, self.scene.radius) for j in range(len(xy))]
+        clear = [swept_clearance(self.tool, self.platform, xy[j:j + 1], o, self.setting.radius) for j in range(len(xy))]
         j = next((j for j, c in enumerate(clear) if c >= 0.5 * BACK_OFF), 0)
         self.move(np.vstack([back, xy[j:]]))
         if change:
@@ -427,18 +264,17 @@ class _Loop:
         """Bring ``p``'s face to its contact pose at sample ``k0`` of the push (switch, re-contact or
         none; along ``lead_in`` (K, 2) [m], the plan's own path, when given), then push along ``p``
         for at most ``length`` [m] of object travel; returns the push sample reached."""
-        pose = self.plant.tool_pose()  # type: ignore[attr-defined]
+        pose = self.plant.tool_pose()
         start = p.tool_pose[k0]
         change = self.face is not None and self.face != p.face
         if change or np.hypot(*(pose[:2] - start[:2])) > SAME_POSE:
             self.leave(o, pose, p.face, start, change, lead_in)
         self.face = p.face
-        self.face = p.face
         xy = pp.object_xy[p.samples[k0:]]
         travel = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
         k = int(np.searchsorted(travel, length, side="right")) - 1
         k = k0 + max(1, min(k, len(xy) - 1))
-        here = self.plant.tool_pose()  # type: ignore[attr-defined]
+        here = self.plant.tool_pose()
         self.before = self.observe() if self.adapt else o
         self.move(np.vstack([here[:2], p.tool_pose[k0: k + 1, :2]]), record=self.adapt)
         self.n_pushes += 1
@@ -446,69 +282,24 @@ class _Loop:
 
     # ---------------------------------------------------------------- adapting the model
     def learn(self, o: NDArray[np.float64]) -> None:
-        """The last push chunk observed at its end ``o``: keep it, and when the model predicted it more
-        than ``ADAPT_ERROR`` off, identify ``mu`` and ``c`` again from the last chunks
-        (:func:`tooltransfer.tools.pushing.identify.identify_mechanics`, started from and pulled towards the
-        mechanics in force), so the re-plans use the plant's own. The identification weighs its prior
-        in units of the chunks' misfit at the model in force, so its standard deviation here is
-        :data:`ADAPT_PRIOR_SD` times the ratio of that misfit [m] to the camera's averaged noise
-        (``camera_noise / sqrt(frames)`` [m]; the ratio at least 1): the pull towards the model in
-        force stays that of a fit within the noise and does not grow with how far the model
-        mispredicts (a strong pull would keep ``c`` near the model the chunks refute, and the re-plans
-        on the drift that model causes)."""
-        from tooltransfer.tools.pushing.forward import simulate
-        from tooltransfer.tools.pushing.identify import RecordedPush, identify_mechanics
-
+        """The last push chunk observed at its end ``o``: hand it to the model's adaptation
+        (:class:`tooltransfer.tools.pushing.adaptation.Adaptation`), whose model, when it adapts one,
+        the re-plans use from here."""
         if self.pending is None or self.before is None:
             return
         t, poses = self.pending
         self.pending = None
-        self.chunks.append(RecordedPush(t, poses, np.array([t[-1]]), o[None], self.before, o,
-                                        f"chunk {len(self.chunks)}"))
-        predicted = simulate(self.tool, poses, self.before, self.scene.radius, self.scene.mechanics).final
-        if np.hypot(*(predicted - o)) <= ADAPT_ERROR:
-            return
-        self.mispredicted += 1
-        if len(self.chunks) < 2 or self.mispredicted % 2:
-            return  # every second misprediction: the identification takes a few tenths of a second
-        start = time.perf_counter()
-        recent = self.chunks[-ADAPT_CHUNKS:]
-        miss = [simulate(self.tool, c.tool_pose, c.object_start, self.scene.radius, self.scene.mechanics).final
-                - c.object_xy[-1] for c in recent]
-        misfit = float(np.sqrt(np.mean(np.square(miss))))
-        try:
-            ident = identify_mechanics(self.tool, self.scene.radius, recent, initial=self.scene.mechanics,
-                                       prior_sd=ADAPT_PRIOR_SD * max(1.0, misfit / self.noise), max_step=5e-4)
-        except Exception as exc:  # an identification that cannot run leaves the model as it is
-            self.log.append(f"no adaptation ({type(exc).__name__}: {exc})")
-            return
-        finally:
-            self.adapt_times.append(time.perf_counter() - start)
-        m = ident.mechanics
-        if ident.c_excited or ident.mu_excited:
-            self.scene = replace(self.scene, mechanics=m)
-            self.log.append(f"adapted the push model to mu {m.mu:.3f}, c {m.c:.3f} from {len(ident.names)} chunks")
-
-
-def _unit(angle: float) -> NDArray[np.float64]:
-    return np.array([np.cos(angle), np.sin(angle)])
+        mechanics, note = self.adaptation.learn(t, poses, self.before, o, self.setting.mechanics)
+        if note:
+            self.log.append(note)
+        if mechanics is not None:
+            self.setting = replace(self.setting, mechanics=mechanics)
 
 
 class _Stop(ToolTransferError):
     def __init__(self, status: str, reason: str) -> None:
         self.status, self.reason = status, reason
         super().__init__(reason)
-
-
-def _default_plant(plan: Plan, task: Task, camera_noise: float, seed: int, config: SimConfig | None) -> object:
-    from tooltransfer.planner.execution import SimPlant
-    from tooltransfer.planner.simulate import task_sim_config
-    from tooltransfer.tools.sim import SimPlatform
-
-    tool = task_tool(task)
-    sim = SimPlatform(tool, task_platform(task, tool), task_obstacles(task), config or task_sim_config(task))
-    sim.reset(np.array(task.start), q0=plan.joints[0])
-    return SimPlant(sim, camera_noise, seed)
 
 
 @dataclass(frozen=True)
@@ -540,7 +331,7 @@ class _InForce:
         self.plan, self.base, self.i, self.k = plan, base, 0, 0
 
 
-def _plan_the_rest(loop: _Loop, ref: _Reference, f: _InForce) -> bool:
+def _plan_the_rest(loop: _Loop, ref: PlanReference, f: _InForce) -> bool:
     """A re-plan realised its first face only and the plan in force is used up short of its end:
     plan the rest from the observed object. Whether a plan was put in force."""
     current = f.plan
@@ -559,7 +350,7 @@ def _plan_the_rest(loop: _Loop, ref: _Reference, f: _InForce) -> bool:
     return False
 
 
-def _plan_done(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> tuple[str, str] | None:
+def _plan_done(loop: _Loop, ref: PlanReference, f: _InForce, pace: _Pace) -> tuple[str, str] | None:
     """The plan in force is done: is the object there (three observations averaged)? If not, a
     correction round. Returns the run's ``(status, reason)`` when it ends here, None when a
     correction is in force."""
@@ -578,7 +369,7 @@ def _plan_done(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> tuple[
     return None
 
 
-def _next_chunk(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> bool:
+def _next_chunk(loop: _Loop, ref: PlanReference, f: _InForce, pace: _Pace) -> bool:
     """Observe, re-plan if the object strays more than the threshold from where the plan in force
     puts it, stage the last stretch for a mispredicting plant, then push one chunk. Whether the
     object was observed at the target (the run ends)."""
@@ -606,7 +397,7 @@ def _next_chunk(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> bool:
         else:  # nothing better from here: the plan in force goes on
             loop.log.append(f"no re-plan from {np.round(o, 4).tolist()} m ({pp.reason}); the plan goes on")
     left = float(np.sum(np.linalg.norm(np.diff(f.plan.object_xy[p.samples[f.k]:], axis=0), axis=1)))
-    if loop.mispredicted >= 2 and not loop.staged and left < STAGE:
+    if loop.adaptation.mispredicted >= 2 and not loop.staged and left < STAGE:
         # a plant the model mispredicts: the last stretch along the faces' normals, where the
         # object goes where it is aimed whatever its limit surface (an object pushed past the
         # target by a sideways push that fell short cannot be pushed back)
@@ -626,7 +417,7 @@ def _next_chunk(loop: _Loop, ref: _Reference, f: _InForce, pace: _Pace) -> bool:
     return False
 
 
-def _report(status: str, reason: str, loop: _Loop | None, plant: object | None, tolerance: float,
+def _report(status: str, reason: str, loop: _Loop | None, plant: Plant | None, tolerance: float,
             start: float) -> ClosedLoopReport:
     """The run's report; a run that ended otherwise but sees the object within ``tolerance`` [m]
     (one more observation) counts as reached. ``start``: the run's ``perf_counter`` start [s]."""
@@ -638,12 +429,12 @@ def _report(status: str, reason: str, loop: _Loop | None, plant: object | None, 
         status, reason, err, loop.n_pushes if loop else 0, loop.n_switches if loop else 0,
         loop.n_recontacts if loop else 0, len(loop.replan_times) if loop else 0,
         loop.replan_times if loop else [], loop.errors if loop else [], time.perf_counter() - start,
-        execution, loop.log if loop else [], loop.scene.mechanics if loop else None,
-        loop.adapt_times if loop else [])
+        execution, loop.log if loop else [], loop.setting.mechanics if loop else None,
+        loop.adaptation.times if loop else [])
 
 
 def execute_closed_loop(
-    plan: Plan, plant: object | None = None, *, tolerance: float = 0.001, chunk: float = 0.015,
+    plan: Plan, plant: Plant | None = None, *, tolerance: float = 0.001, chunk: float = 0.015,
     approach: float = 0.6, max_rounds: int = 4, max_chunks: int = 120, frames: int = 10,
     replan_threshold: float = 0.001, adapt: bool = True, camera_noise: float = 0.0015, seed: int = 0,
     config: SimConfig | None = None,
@@ -666,10 +457,11 @@ def execute_closed_loop(
             (or three times the averaged camera noise, if more) from where the plan in force puts it;
             closer, the plan in force goes on (re-planning on the camera's noise would only add it).
         adapt: identify ``mu`` and ``c`` again from the executed chunks when the model mispredicts one
-            by more than ``ADAPT_ERROR``, so the re-plans use the plant's mechanics (the report's
-            ``mechanics``; the identification's times are ``adapt_times``).
+            by more than :data:`tooltransfer.tools.pushing.adaptation.ADAPT_ERROR`, so the re-plans use
+            the plant's mechanics (the report's ``mechanics``; the identifications' times ``adapt_times``).
         camera_noise: the camera's noise per frame [m]: the default plant's, and the noise the re-plan
-            threshold and the adaptation's prior (:meth:`_Loop.learn`) assume for any plant.
+            threshold and the adaptation's prior (:mod:`tooltransfer.tools.pushing.adaptation`) assume
+            for any plant.
     """
     if not isinstance(plan, Plan) or plan.status != "solved":
         raise InputError("plan", "a solved plan", getattr(plan, "status", type(plan).__name__))
@@ -678,12 +470,11 @@ def execute_closed_loop(
     status, reason = "rounds", ""
     loop: _Loop | None = None
     try:
-        plant = plant if plant is not None else _default_plant(plan, task, camera_noise, seed, config)
-        loop = _Loop(plan, task, plant, frames, tolerance, adapt, camera_noise)
+        loop = _Loop(plan, task, plant, frames, tolerance, adapt, camera_noise, seed, config)
         approach_m = np.asarray(plan.phase) == "approach"
         loop.move(plan.tool_pose[approach_m, :2])
         loop.face = plan.pushes[0].faces[0]
-        ref = _Reference.of(plan)
+        ref = PlanReference.of(plan)
         f = _InForce(ref.plan)
         pace = _Pace(tolerance, max(replan_threshold, 3.0 * camera_noise / np.sqrt(frames)), chunk, approach,
                      max_rounds)
@@ -705,4 +496,4 @@ def execute_closed_loop(
         status, reason = stop.status, stop.reason
     except Exception as exc:  # no exception escapes: a refused move ends the run with its reason
         status, reason = "failed", f"{type(exc).__name__}: {exc}"
-    return _report(status, reason, loop, plant, tolerance, start)
+    return _report(status, reason, loop, loop.plant if loop is not None else plant, tolerance, start)

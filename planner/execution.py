@@ -10,10 +10,10 @@
   the waist, so a plant may take the yaw as a check rather than a command.
 
 Plants here: :class:`SimPlant`, the MuJoCo platform (PD tracking through the Omni's inverse
-kinematics, the camera's noise); :class:`ModelPlant`, the quasi-static push model of
-:mod:`tooltransfer.tools.pushing` (a plant with other mechanics than the planner assumes, for tests and for
-studies of mismatch). Both also answer ``true_object()`` (not part of the protocol), so reports give
-the true error rather than the camera's.
+kinematics, the camera's noise; :func:`sim_plant` builds it for a setting); :class:`ModelPlant`, the
+quasi-static push model of :mod:`tooltransfer.tools.pushing` (a plant with other mechanics than the
+planner assumes, for tests and for studies of mismatch). Both also answer ``true_object()`` (not
+part of the protocol), so reports give the true error rather than the camera's.
 
 Wrapping a real device: implement the three methods over its drivers, e.g. for a Phantom Omni with
 a camera, ``observe_object`` returns the latest camera estimate of the puck's centre transformed
@@ -26,7 +26,7 @@ and streams them to the device's PD loop at its rate, blocking until the last sa
 
 from __future__ import annotations
 
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,6 +38,10 @@ from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pushing.forward import simulate
 from tooltransfer.tools.pushing.mechanics import PushMechanics
 from tooltransfer.validation import check_array
+
+if TYPE_CHECKING:
+    from tooltransfer.planner.setting import Setting
+    from tooltransfer.tools.sim import SimConfig
 
 
 @runtime_checkable
@@ -106,6 +110,18 @@ class SimPlant:
         return Execution.concat(self.parts) if self.parts else None
 
 
+def sim_plant(setting: Setting, config: SimConfig, start: ArrayLike, q0: ArrayLike, camera_noise: float = 0.0015,
+              seed: int = 0) -> SimPlant:
+    """The MuJoCo platform of ``setting`` (its tool, Omni and obstacles; ``config`` the simulation's
+    settings) with the object at ``start`` (2,) [m] and the arm at joints ``q0`` (3,) [rad], as a
+    :class:`SimPlant` with a camera of ``camera_noise`` [m] per frame (seed ``seed``)."""
+    from tooltransfer.tools.sim import SimPlatform
+
+    sim = SimPlatform(setting.tool, setting.platform, list(setting.obstacles), config)
+    sim.reset(np.array(start), q0=q0)
+    return SimPlant(sim, camera_noise, seed)
+
+
 class ModelPlant:
     """The quasi-static push model as a :class:`Plant`: the tool follows the commanded poses exactly,
     the object moves as :func:`tooltransfer.tools.pushing.forward.simulate` says with ``mechanics`` (which may
@@ -141,7 +157,7 @@ class ModelPlant:
     def move_tool(self, t: NDArray[np.float64], tool_pose: NDArray[np.float64]) -> None:
         _, pose = _check_path(t, tool_pose)
         if self.platform is not None:
-            bad = np.flatnonzero(joint_path(self.platform, pose[:, :2]).violation > 0)
+            bad = np.flatnonzero(joint_path(self.platform, pose[:, :2]).refused)
             if bad.size:
                 raise InputError("tool_pose", "a path the Omni reaches within its joint limits",
                                  f"sample {int(bad[0])} at {np.round(pose[bad[0], :2], 4).tolist()} m")

@@ -51,7 +51,7 @@ def recontact_planner(setting: Setting, back_off: float = 0.002) -> SwitchPlanne
             corners = np.vstack([pose_a[:2], pose_a[:2] - d * na, pose_b[:2] - d * nb, pose_b[:2]])
             dense = densify(corners, 0.0005)
             jp = joint_path(platform, dense)
-            bad = np.flatnonzero(~np.isfinite(jp.heading) | (jp.violation > 0))
+            bad = np.flatnonzero(jp.refused)
             if bad.size:
                 return SwitchPath("recontact", "infeasible", f"the re-contact of {face_a!r} leaves the Omni's "
                                   f"reach at {np.round(dense[bad[0]], 4).tolist()} m")

@@ -155,22 +155,40 @@ def _loop_on(plan_file: Path, c_factor: float = 1.0, seed: int = 1):
     return plan, _Loop(plan, task, plant, 10, 0.001)
 
 
+def test_the_loop_acts_in_the_world_solve_planned_for(plan_file: Path) -> None:
+    """The closed loop builds its world once, as ``solve`` does: the task's :class:`Setting`."""
+    from tooltransfer.planner.setting import setting_from_task, task_skills
+    from tooltransfer.problems.task import task_from_dict
+
+    plan, loop = _loop_on(plan_file)
+    task = task_from_dict(plan.task)
+    setting = setting_from_task(task, task_skills(task))
+    assert loop.setting.describe() == setting.describe()
+    for key in ("platform", "tool", "obstacles"):
+        assert getattr(plan, key) == setting.describe()[key], key
+    m = loop.setting.mechanics
+    assert (m.mu, m.c, m.source, loop.setting.margin) == (setting.mechanics.mu, setting.mechanics.c,
+                                                         setting.mechanics.source, setting.margin)
+    assert (plan.metrics["mechanics_mu"], plan.metrics["mechanics_c"]) == (m.mu, m.c)
+    assert plan.metrics["safety_margin_used"] == loop.setting.margin
+
+
 def test_replans_carry_the_contact_budget_over_to_the_adapted_c(plan_file: Path) -> None:
     """The contact rolls 1/c^2 per sideways travel: at 0.6 x the plan's c the re-plans may use
     1/0.36 times the task's contacts per push, never fewer than the task's, at most the cap."""
 
-    from tooltransfer.planner.closed_loop import MAX_REPLAN_CONTACTS
+    from tooltransfer.planner.oe.replan import MAX_REPLAN_CONTACTS
 
     _, loop = _loop_on(plan_file)
     task_contacts = loop.options.max_contacts
     assert loop.replan_options().max_contacts == task_contacts
-    m = loop.scene.mechanics
-    loop.scene = replace(loop.scene, mechanics=m.with_values(m.mu, 0.6 * m.c))
+    m = loop.setting.mechanics
+    loop.setting = replace(loop.setting, mechanics=m.with_values(m.mu, 0.6 * m.c))
     assert loop.replan_options().max_contacts == int(np.ceil(task_contacts / 0.36 - 1e-9))
     assert loop.replan_options().n_samples == loop.options.n_samples  # nothing else changes
-    loop.scene = replace(loop.scene, mechanics=m.with_values(m.mu, min(2.0, 1.4 * m.c)))
+    loop.setting = replace(loop.setting, mechanics=m.with_values(m.mu, min(2.0, 1.4 * m.c)))
     assert loop.replan_options().max_contacts == task_contacts
-    loop.scene = replace(loop.scene, mechanics=m.with_values(m.mu, 0.05 * m.c))
+    loop.setting = replace(loop.setting, mechanics=m.with_values(m.mu, 0.05 * m.c))
     assert loop.replan_options().max_contacts == MAX_REPLAN_CONTACTS
 
 
@@ -179,36 +197,37 @@ def test_a_replan_whose_tool_overlaps_an_obstacle_is_refused(plan_file: Path) ->
     overlaps one along the push executed next, or at the contact pose the switch after it ends in,
     is refused with the obstacle and the pose, as the nominal plan is; later poses are re-planned
     before they run."""
-    from tooltransfer.planner.closed_loop import _Reference
+    from tooltransfer.planner.oe.replan import PlanReference
     from tooltransfer.tools.objects import Disc
 
     plan, loop = _loop_on(plan_file)
-    pp = _Reference.of(plan).plan
+    pp = PlanReference.of(plan).plan
     assert len(pp.pushes) >= 3
-    loop.scene = replace(loop.scene, obstacles=())
+    loop.setting = replace(loop.setting, obstacles=())
     assert loop.clear_of_obstacles(pp) is pp
     far = Disc(np.array([50.0, 50.0]), 0.005)
-    loop.scene = replace(loop.scene, obstacles=(far,))
+    loop.setting = replace(loop.setting, obstacles=(far,))
     assert loop.clear_of_obstacles(pp).status == "solved"
     first = pp.pushes[0].tool_pose
     for pose in (first[len(first) // 2], pp.pushes[1].tool_pose[0]):
-        loop.scene = replace(loop.scene, obstacles=(far, Disc(pose[:2].copy(), 0.002)))
+        loop.setting = replace(loop.setting, obstacles=(far, Disc(pose[:2].copy(), 0.002)))
         refused = loop.clear_of_obstacles(pp)
         assert refused.status == "infeasible"
         assert "obstacles[1]" in refused.reason and "overlaps" in refused.reason
     later = pp.pushes[-1].tool_pose[-1]
     assert min(np.hypot(*(p.tool_pose[:, :2] - later[:2]).T).min() for p in pp.pushes[:2]) > 0.05
-    loop.scene = replace(loop.scene, obstacles=(far, Disc(later[:2].copy(), 0.002)))
+    loop.setting = replace(loop.setting, obstacles=(far, Disc(later[:2].copy(), 0.002)))
     assert loop.clear_of_obstacles(pp).status == "solved"
 
 
 def test_a_straying_correction_is_corrected_from_the_observed_object(plan_file: Path) -> None:
     """With a correction in force (past the plan's path), an object observed off it by more than
     the re-plan threshold gets a new correction from where it is; on it, the correction goes on."""
-    from tooltransfer.planner.closed_loop import _InForce, _next_chunk, _Pace, _Reference
+    from tooltransfer.planner.closed_loop import _InForce, _next_chunk, _Pace
+    from tooltransfer.planner.oe.replan import PlanReference
 
     plan, loop = _loop_on(plan_file)
-    ref = _Reference.of(plan)
+    ref = PlanReference.of(plan)
     pace = _Pace(0.001, 0.001, 0.015, 0.6, 4)
     calls: list[np.ndarray] = []
 
@@ -236,7 +255,8 @@ def test_the_adaptations_prior_is_weighed_in_units_of_the_camera_noise(plan_file
     it (the prior's standard deviation grows with the misfit over the noise, never below
     ADAPT_PRIOR_SD), and the model in force ends near the plant's c."""
     import tooltransfer.tools.pushing.identify as identify
-    from tooltransfer.planner.closed_loop import ADAPT_PRIOR_SD, execute_closed_loop
+    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.tools.pushing.adaptation import ADAPT_PRIOR_SD
 
     seen: list[float] = []
     real = identify.identify_mechanics
@@ -247,7 +267,7 @@ def test_the_adaptations_prior_is_weighed_in_units_of_the_camera_noise(plan_file
 
     monkeypatch.setattr(identify, "identify_mechanics", spy)
     plan, loop = _loop_on(plan_file, c_factor=0.6)
-    c_plan = loop.scene.mechanics.c
+    c_plan = loop.setting.mechanics.c
     rep = execute_closed_loop(plan, loop.plant)
     assert seen, rep.log
     assert min(seen) >= ADAPT_PRIOR_SD

@@ -23,9 +23,8 @@ BUILDERS = {"task_tool", "task_platform", "task_obstacles", "effective_margin", 
 #: Modules (by file name) that may call them anyway, with why: the batch generator probes the Omni's
 #: reach before a task exists.
 ALLOWED = {"generate.py": {"task_tool", "task_platform"}}
-#: The setting module, and modules still to move onto :func:`setting_from_task` (the closed loop, by
-#: its own change), by file name.
-SKIPPED = {"setting.py", "closed_loop.py"}
+#: The setting module, and modules still to move onto :func:`setting_from_task` (none left), by file name.
+SKIPPED = {"setting.py"}
 
 
 def _world(setting: Setting) -> dict:

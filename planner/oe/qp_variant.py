@@ -324,7 +324,7 @@ def _pushes(fit: _FitSetup, best: _Scored, t: NDArray[np.float64], x: NDArray[np
 
         for p in pushes:
             jp = joint_path(fit.platform, p.tool_pose[:, :2])
-            bad = np.flatnonzero(~np.isfinite(jp.heading) | (jp.violation > 0))
+            bad = np.flatnonzero(jp.refused)
             if bad.size:
                 where = np.round(p.tool_pose[bad[0], :2], 4).tolist()
                 raise PushRefused(f"face {p.face!r} would hold the tool at {where} m, outside the Omni's reach "

@@ -195,6 +195,12 @@ class JointPath:
     violation: NDArray[np.float64]
     heading: NDArray[np.float64]
 
+    @property
+    def refused(self) -> NDArray[np.bool_]:
+        """Shape (T,): the samples the Omni cannot take, out of its reach (no heading) or with the
+        chosen branch outside the joint limits; a path is executable where none is set."""
+        return ~np.isfinite(self.heading) | (self.violation > 0)
+
 
 def joint_path(platform: OmniPlatform, points: ArrayLike) -> JointPath:
     """Vectorized inverse kinematics along a tool path ``points`` (T, 2) [m] on the pushing plane.
