@@ -29,7 +29,7 @@ closed-loop final errors over solved plans (median, p90, max, share within 2 mm 
 count every solved plan, an execution that raised counts as a miss), the model prediction error
 (median, p90, max) and the largest self-consistency, the closed loop's statuses and re-plan times
 (median, p90, max over every re-plan), a table of the plants (nominal and mismatched: within 3 mm
-open and closed loop, closed-loop median, statuses) with the issue's targets (closed loop nominal
+open and closed loop, closed-loop median, statuses) with the targets (closed loop nominal
 >= 95 % within 2 mm without exception, mismatched >= 90 % within 3 mm, re-plan median <= 30 ms), a
 per-tool table, the paper tasks, the slowest tasks and the total time. ``--json PATH`` writes every
 per-task row (and the run's settings) for comparing runs.
@@ -73,6 +73,7 @@ from typing import Any
 import numpy as np
 
 from tooltransfer.planner import variant_registry
+from tooltransfer.planner.batch.execute import finite_or_none
 
 ROOT = Path(__file__).resolve().parents[1]
 BATCH = ROOT / "problems" / "batch" / "execution_60.yaml"
@@ -151,16 +152,8 @@ def _exception(exc: BaseException) -> str:
     return f"exception: {type(exc).__name__}: {msg[:300]}"
 
 
-def _finite(v: Any) -> float | None:
-    try:
-        f = float(v)
-    except (TypeError, ValueError):
-        return None
-    return f if math.isfinite(f) else None
-
-
 def _count(v: Any) -> int | None:
-    f = _finite(v)
+    f = finite_or_none(v)
     return None if f is None else round(f)
 
 
@@ -175,7 +168,7 @@ def _mechanics(plan: Any, task: Any, source: str) -> Any:
     """The push mechanics the plan was made with (its metrics; the task's, for a plan without them)."""
     from tooltransfer.tools.pushing.mechanics import PushMechanics
 
-    mu, c = _finite(plan.metrics.get("mechanics_mu")), _finite(plan.metrics.get("mechanics_c"))
+    mu, c = finite_or_none(plan.metrics.get("mechanics_mu")), finite_or_none(plan.metrics.get("mechanics_c"))
     if mu is not None and c is not None:
         return PushMechanics(mu, c, "given")
     from tooltransfer.planner.setting import task_mechanics, task_skills
@@ -319,18 +312,20 @@ def run_task(job: Job) -> Row:
     m = plan.metrics
     row.update(status=plan.status, reason=plan.reason or "", plan_wall=time.perf_counter() - wall,
                plan_cpu=time.process_time() - cpu, n_pushes=_count(m.get("n_pushes")),
-               n_recontacts=_count(m.get("n_recontacts")), self_consistency=_finite(m.get("self_consistency_max")),
-               mechanics_mu=_finite(m.get("mechanics_mu")), mechanics_c=_finite(m.get("mechanics_c")),
-               friction_cone_margin_min=_finite(m.get("friction_cone_margin_min")),
-               contact_edge_margin_min=_finite(m.get("contact_edge_margin_min")),
+               n_recontacts=_count(m.get("n_recontacts")),
+               self_consistency=finite_or_none(m.get("self_consistency_max")),
+               mechanics_mu=finite_or_none(m.get("mechanics_mu")),
+               mechanics_c=finite_or_none(m.get("mechanics_c")),
+               friction_cone_margin_min=finite_or_none(m.get("friction_cone_margin_min")),
+               contact_edge_margin_min=finite_or_none(m.get("contact_edge_margin_min")),
                mechanics_source=_mechanics_source(job),
-               time_skills=_finite(m.get("time_skills")), time_oe=_finite(m.get("time_oe")),
-               time_switches_and_timing=_finite(m.get("time_switches_and_timing")))
+               time_skills=finite_or_none(m.get("time_skills")), time_oe=finite_or_none(m.get("time_oe")),
+               time_switches_and_timing=finite_or_none(m.get("time_switches_and_timing")))
     if plan.status == "solved":
         from tooltransfer.planner.closed_loop import execute_closed_loop
         from tooltransfer.planner.simulate import simulate_plan
 
-        row.update(n_switches=len(plan.switches), duration=_finite(m.get("duration")))
+        row.update(n_switches=len(plan.switches), duration=finite_or_none(m.get("duration")))
         mech = None
         try:
             mech = _mechanics(plan, _task(job), job.source)
@@ -582,7 +577,7 @@ def _plant_runs(solved: Sequence[Row], name: str | None) -> list[Row]:
 
 
 def _mismatch_table(con: Any, solved: Sequence[Row]) -> None:
-    """The plants table (the nominal platform and :data:`MISMATCH_PLANTS`) and the issue's targets."""
+    """The plants table (the nominal platform and :data:`MISMATCH_PLANTS`) and the targets."""
     from rich import box
     from rich.table import Table
 

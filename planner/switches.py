@@ -75,7 +75,7 @@ def arch_planner(setting: Setting, clearance: float) -> SwitchPlanner:
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
              pose_b: NDArray[np.float64]) -> SwitchPath:
         ends = joint_path(platform, np.vstack([pose_a[:2], pose_b[:2]]))
-        if np.any(~np.isfinite(ends.heading) | (ends.violation > 0)):
+        if np.any(ends.refused):
             return SwitchPath("arch", "infeasible", f"a contact pose of the switch {face_a} -> {face_b} "
                               f"(object at {np.round(obj, 4).tolist()} m) is outside the Omni's reach")
         da = pose_a[2] + tool.face(face_a).push_angle
@@ -87,7 +87,7 @@ def arch_planner(setting: Setting, clearance: float) -> SwitchPlanner:
             return SwitchPath("arch", "infeasible", str(exc))
         dense = densify(xy, 0.0005)
         reach = joint_path(platform, dense)
-        bad = np.flatnonzero(~np.isfinite(reach.heading) | (reach.violation > 0))
+        bad = np.flatnonzero(reach.refused)
         if bad.size:
             return SwitchPath("arch", "infeasible", f"the arch leaves the Omni's reach at "
                               f"{np.round(dense[bad[0]], 4).tolist()} m (object at {np.round(obj, 4).tolist()} m)")

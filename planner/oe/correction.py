@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.planner.oe.face_frame import FaceFrame
 from tooltransfer.planner.setting import Setting
+from tooltransfer.tools.pose import wrap_angle
 
 #: The shortest this many ways along the faces' normals are tried before the straight way.
 CORRECTION_WAYS = 3
@@ -52,7 +53,7 @@ def correction_references(setting: Setting, friction_cone_fraction: float, o: ND
     normal = {f: _unit(float(fr.normal_direction(o[None])[0])) for f, fr in frames.items()}
     legs: list[tuple[float, tuple[str, ...], NDArray[np.float64]]] = []
     for f, fr in frames.items():
-        off = float((np.arctan2(r[1], r[0]) - fr.push_direction(o[None])[0] + np.pi) % (2 * np.pi) - np.pi)
+        off = float(wrap_angle(np.arctan2(r[1], r[0]) - fr.push_direction(o[None])[0]))
         if abs(off) <= fr.theta_b:
             legs.append((d, (f,), np.vstack([o, target])))
     for f1 in frames:
