@@ -28,7 +28,7 @@ COPY --from=build /wheels /wheels
 # bokeh: the scheduler's and the workers' dashboards (optional for the batch)
 RUN pip install --no-cache-dir "$(ls /wheels/*.whl)[sim,dask]" "bokeh>=3.1" \
     && rm -rf /wheels \
-    && python -c "import tooltransfer.planner.batch.execute, tooltransfer.planner.solve, tooltransfer.planner.closed_loop, tooltransfer.planner.simulate; \
+    && python -c "import tooltransfer.planner.apps.batch.execute, tooltransfer.planner.planning.solve, tooltransfer.planner.execution.closed_loop, tooltransfer.planner.execution.simulate; \
 from tooltransfer.dmp.qp.native import compiled_path; assert compiled_path(), 'the compiled core was not built'"
 # `dask-worker` and `dask-scheduler`: the commands dask's Kubernetes operator starts its pods with
 RUN printf '#!/bin/sh\nexec dask worker "$@"\n' > /usr/local/bin/dask-worker \

@@ -27,10 +27,10 @@ test: $(PY)
 
 # mypy on the DMP core and the public entry points ([tool.mypy] in pyproject.toml says why the link)
 TYPED := -p tooltransfer.dmp -m tooltransfer -m tooltransfer.errors -m tooltransfer.validation \
-	-m tooltransfer.problems.task -m tooltransfer.problems.named -m tooltransfer.planner.solve \
-	-m tooltransfer.planner.plan -m tooltransfer.planner.closed_loop -m tooltransfer.planner.execution \
-	-m tooltransfer.planner.export -m tooltransfer.planner.ss.nlp -m tooltransfer.planner.ss.knot_rows \
-	-m tooltransfer.planner.setting -m tooltransfer.planner.variant_registry
+	-m tooltransfer.problems.task -m tooltransfer.problems.named -m tooltransfer.planner.planning.solve \
+	-m tooltransfer.planner.planning.plan -m tooltransfer.planner.execution.closed_loop -m tooltransfer.planner.execution.plant \
+	-m tooltransfer.planner.execution.export -m tooltransfer.planner.planning.ss.nlp -m tooltransfer.planner.planning.ss.knot_rows \
+	-m tooltransfer.planner.planning.setting -m tooltransfer.planner.planning.variant_registry
 typecheck: $(PY)
 	@mkdir -p build/mypy && ln -sfn "$(CURDIR)" build/mypy/tooltransfer
 	cd build/mypy && MYPYPATH=. $(abspath $(PY)) -m mypy --config-file "$(CURDIR)/pyproject.toml" $(TYPED)
@@ -58,7 +58,7 @@ docs: $(PY)
 # Deterministic (the same bytes on the same versions of the dependencies); about 10 s.
 figures: $(PY)
 	$(PY) -m pip install -q -e ".[all]"
-	$(PY) -m tooltransfer.planner.plots.paper_figures docs/images
+	$(PY) -m tooltransfer.planner.apps.plots.paper_figures docs/images
 
 # The Dockerfile built without a Docker engine, then a batch on its workers (docs/cluster.md; root,
 # network and debootstrap; tests/image/dockerfile_without_engine.py)

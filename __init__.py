@@ -26,8 +26,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from tooltransfer.dmp.primitive import DMP
     from tooltransfer.errors import InfeasibleError, InputError, ToolTransferError
-    from tooltransfer.planner.plan import Plan, read_plan
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.plan import Plan, read_plan
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import Task, load_task
 
 __all__ = [
@@ -49,9 +49,9 @@ _HOMES = {
     "InfeasibleError": "tooltransfer.errors",
     "InputError": "tooltransfer.errors",
     "ToolTransferError": "tooltransfer.errors",
-    "Plan": "tooltransfer.planner.plan",
-    "read_plan": "tooltransfer.planner.plan",
-    "solve": "tooltransfer.planner.solve",
+    "Plan": "tooltransfer.planner.planning.plan",
+    "read_plan": "tooltransfer.planner.planning.plan",
+    "solve": "tooltransfer.planner.planning.solve",
     "Task": "tooltransfer.problems.task",
     "load_task": "tooltransfer.problems.task",
 }

@@ -41,7 +41,7 @@ def _subset(folder: Path, count: int, name: str, **changes: object) -> Path:
 
 
 def _run(batch: Path, db: Path, **kw: object) -> dict[str, float]:
-    from tooltransfer.planner.batch.runner import run_batch
+    from tooltransfer.planner.apps.batch.runner import run_batch
 
     t0, c0 = time.perf_counter(), time.process_time()
     s = run_batch(batch, db, progress=False, **kw)

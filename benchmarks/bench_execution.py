@@ -2,9 +2,9 @@
 
 Run with `python benchmarks/bench_execution.py` (or `make bench-exec`). For every task:
 
-1. plan it (:func:`tooltransfer.planner.solve.solve`): status, reason, planning wall and CPU time;
-2. a solved plan is executed open loop (:func:`tooltransfer.planner.simulate.simulate_plan`) and closed loop
-   (:func:`tooltransfer.planner.closed_loop.execute_closed_loop`, a fixed camera-noise seed): the puck's final
+1. plan it (:func:`tooltransfer.planner.planning.solve.solve`): status, reason, planning wall and CPU time;
+2. a solved plan is executed open loop (:func:`tooltransfer.planner.execution.simulate.simulate_plan`) and closed loop
+   (:func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`, a fixed camera-noise seed): the puck's final
    distance to the target [m], the closed loop's status, re-plans (count and wall times) and
    re-contacts. An exception in either (or in the planner) is recorded as
    ``"exception: <type>: <message>"`` and counted; the benchmark goes on;
@@ -15,7 +15,7 @@ Run with `python benchmarks/bench_execution.py` (or `make bench-exec`). For ever
    planned re-contacts;
 4. unless ``--no-mismatch``, the plan on mismatched plants (:data:`MISMATCH_PLANTS`), open and closed
    loop: MuJoCo with tool friction 0.5 and table friction 0.2, and the quasi-static
-   :class:`tooltransfer.planner.execution.ModelPlant` with mu and c 0.6 and 1.4 times the plan's (camera noise
+   :class:`tooltransfer.planner.execution.plant.ModelPlant` with mu and c 0.6 and 1.4 times the plan's (camera noise
    1.5 mm; open loop there is the push model run on the plan's tool poses).
 
 Tasks: the generated batch ``problems/batch/execution_60.yaml`` (60 tasks, five library tools in
@@ -72,8 +72,8 @@ from typing import Any
 
 import numpy as np
 
-from tooltransfer.planner import variant_registry
-from tooltransfer.planner.batch.execute import finite_or_none
+from tooltransfer.planner.apps.batch.execute import finite_or_none
+from tooltransfer.planner.planning import variant_registry
 
 ROOT = Path(__file__).resolve().parents[1]
 BATCH = ROOT / "problems" / "batch" / "execution_60.yaml"
@@ -171,16 +171,16 @@ def _mechanics(plan: Any, task: Any, source: str) -> Any:
     mu, c = finite_or_none(plan.metrics.get("mechanics_mu")), finite_or_none(plan.metrics.get("mechanics_c"))
     if mu is not None and c is not None:
         return PushMechanics(mu, c, "given")
-    from tooltransfer.planner.setting import task_mechanics, task_skills
+    from tooltransfer.planner.planning.setting import task_mechanics, task_skills
 
     return task_mechanics(task, task_skills(task, source, need_ss=False))
 
 
 def _mechanics_source(job: Job) -> str | None:
     """Where the planner's mechanics for the job's task come from (``identified``, ``task``,
-    ``default``; :func:`tooltransfer.planner.setting.task_mechanics`), None when that cannot be told."""
+    ``default``; :func:`tooltransfer.planner.planning.setting.task_mechanics`), None when that cannot be told."""
     try:
-        from tooltransfer.planner.setting import task_mechanics, task_skills
+        from tooltransfer.planner.planning.setting import task_mechanics, task_skills
 
         task = _task(job)
         need_ss = variant_registry.needs_ss_skill(task.variants.ss)
@@ -195,7 +195,7 @@ def model_prediction(plan: Any, execution: Any, mech: Any) -> tuple[float, float
     start. Returns the predicted final puck's distance to the recorded final puck [m] (the
     recording's object track is the true pose: the platform adds no camera noise) and the largest
     distance along the run (the prediction at the object's sample times)."""
-    from tooltransfer.planner.setting import setting_from_task
+    from tooltransfer.planner.planning.setting import setting_from_task
     from tooltransfer.problems.task import task_from_dict
     from tooltransfer.tools.pushing.forward import simulate
 
@@ -222,10 +222,10 @@ def run_mismatch(plan: Any, job: Job, mech: Any) -> dict[str, Row]:
     job runs it. Per plant: ``open_loop_status`` (``"ok"`` or the exception), ``open_loop_error``,
     ``closed_loop_status``, ``closed_loop_reason``, ``closed_loop_error``, ``closed_loop_n_replans``,
     ``closed_loop_replan_times``, ``mechanics`` ([mu, c] of the model plants) and ``wall`` [s]."""
-    from tooltransfer.planner.closed_loop import execute_closed_loop
-    from tooltransfer.planner.execution import ModelPlant
-    from tooltransfer.planner.setting import setting_from_task
-    from tooltransfer.planner.simulate import simulate_plan, task_sim_config
+    from tooltransfer.planner.execution.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution.plant import ModelPlant
+    from tooltransfer.planner.execution.simulate import simulate_plan, task_sim_config
+    from tooltransfer.planner.planning.setting import setting_from_task
     from tooltransfer.problems.task import task_from_dict
     from tooltransfer.tools.pushing.forward import simulate
     from tooltransfer.tools.pushing.mechanics import PushMechanics
@@ -299,7 +299,7 @@ def run_task(job: Job) -> Row:
                 "closed_loop_wall": None, "closed_loop_n_pushes": None, "closed_loop_n_switches": None,
                 "closed_loop_n_recontacts": None, "closed_loop_n_replans": None, "closed_loop_replan_times": None,
                 "mismatch": None, "mismatch_wall": None, "worker": os.getpid()}
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.solve import solve
 
     wall, cpu = time.perf_counter(), time.process_time()
     try:
@@ -322,8 +322,8 @@ def run_task(job: Job) -> Row:
                time_skills=finite_or_none(m.get("time_skills")), time_oe=finite_or_none(m.get("time_oe")),
                time_switches_and_timing=finite_or_none(m.get("time_switches_and_timing")))
     if plan.status == "solved":
-        from tooltransfer.planner.closed_loop import execute_closed_loop
-        from tooltransfer.planner.simulate import simulate_plan
+        from tooltransfer.planner.execution.closed_loop import execute_closed_loop
+        from tooltransfer.planner.execution.simulate import simulate_plan
 
         row.update(n_switches=len(plan.switches), duration=finite_or_none(m.get("duration")))
         mech = None
@@ -375,9 +375,9 @@ def run_task(job: Job) -> Row:
 
 def warm_up(jobs: Sequence[tuple[dict[str, Any], str]]) -> None:
     """Import the planner and the platform and learn (or load) the skills the tasks name."""
-    import tooltransfer.planner.closed_loop
-    import tooltransfer.planner.simulate  # noqa: F401
-    from tooltransfer.planner.setting import task_skills
+    import tooltransfer.planner.execution.closed_loop
+    import tooltransfer.planner.execution.simulate  # noqa: F401
+    from tooltransfer.planner.planning.setting import task_skills
     from tooltransfer.problems.task import task_from_dict
 
     for data, source in jobs:
@@ -410,8 +410,8 @@ def make_jobs(batch: Path, count: int | None, variants: Sequence[tuple[str, str]
     tasks in order, each with every variant."""
     import yaml
 
-    from tooltransfer.planner.batch.generate import generate_tasks
-    from tooltransfer.planner.batch.spec import load_batch
+    from tooltransfer.planner.apps.batch.generate import generate_tasks
+    from tooltransfer.planner.apps.batch.spec import load_batch
     from tooltransfer.problems.task import load_task, task_obstacles
 
     spec = load_batch(batch)
@@ -867,7 +867,7 @@ def main(argv: Sequence[str] | None = None) -> None:
               f"variants {variants}; closed loop {'on, seed ' + str(args.seed) if args.closed_loop else 'off'}; "
               f"mismatched plants {'on' if args.mismatch else 'off'}); "
               f"{args.workers} workers")
-    from tooltransfer.planner.skills import cache_dir
+    from tooltransfer.planner.learning.skills import cache_dir
 
     con.print(f"commit {commit}; skills cache {cache_dir()}")
     done = 0

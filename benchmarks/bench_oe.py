@@ -15,10 +15,10 @@ import time
 
 import numpy as np
 
-from tooltransfer.planner.oe import condense_qp
-from tooltransfer.planner.oe.mapping_variant import condense_mapping
-from tooltransfer.planner.setting import Setting
-from tooltransfer.planner.ss.paper_cases import transfer_case
+from tooltransfer.planner.planning.oe import condense_qp
+from tooltransfer.planner.planning.oe.mapping_variant import condense_mapping
+from tooltransfer.planner.planning.setting import Setting
+from tooltransfer.planner.planning.ss.paper_cases import transfer_case
 from tooltransfer.tools.objects import DiscObject
 
 

@@ -4,7 +4,7 @@ A new process each time, the skills cached on disk after the first run, the pack
 compiled first (as ``pip install`` leaves it: a checkout whose ``.pyc`` files are stale, e.g. under
 ``PYTHONDONTWRITEBYTECODE=1``, would compile its sources on every start). Prints the medians of
 several runs of the whole process (wall time and CPU time, user + system of the child), of
-``tooltransfer --help`` (wall), and of planning alone in-process (:func:`tooltransfer.planner.solve.solve`,
+``tooltransfer --help`` (wall), and of planning alone in-process (:func:`tooltransfer.planner.planning.solve.solve`,
 its switch NLPs built each run, as in a new process). Targets: whole-process solve at
 most 0.8 s, ``--help`` at most 0.25 s.
 
@@ -74,8 +74,8 @@ def main() -> None:
               f"CPU {med['this build'][1] / med['peer'][1]:.2f}")
     print(f"tooltransfer --help: median {np.median(helps):.3f} s wall")
 
-    from tooltransfer.planner.solve import solve
-    from tooltransfer.planner.ss.nlp import clear_cache
+    from tooltransfer.planner.planning.solve import solve
+    from tooltransfer.planner.planning.ss.nlp import clear_cache
     from tooltransfer.problems.task import load_task
 
     task = load_task(TASK)

@@ -19,10 +19,17 @@ from typing import Any
 
 import numpy as np
 
-from tooltransfer.planner.ss import OptOptions, SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
-from tooltransfer.planner.ss.adapter import dataset_switches, default_dataset
-from tooltransfer.planner.ss.cases import FIG11, fig11_task, random_task
-from tooltransfer.planner.ss.nlp import Capsule
+from tooltransfer.planner.learning.switch_dataset import dataset_switches, default_dataset
+from tooltransfer.planner.planning.ss import (
+    OptOptions,
+    SwitchSkill,
+    SwitchTask,
+    learn_switch_skill,
+    optimize,
+    recombine,
+)
+from tooltransfer.planner.planning.ss.cases import FIG11, fig11_task, random_task
+from tooltransfer.planner.planning.ss.nlp import Capsule
 from tooltransfer.tools.library import load_tool
 
 
@@ -127,9 +134,9 @@ _FRESH = """
 import time
 t0 = time.perf_counter()
 import casadi as ca
-from tooltransfer.planner.ss.bodies import all_bodies
-from tooltransfer.planner.ss.cases import fig11_task
-from tooltransfer.planner.ss.nlp import build_nlp
+from tooltransfer.planner.planning.ss.bodies import all_bodies
+from tooltransfer.planner.planning.ss.cases import fig11_task
+from tooltransfer.planner.planning.ss.nlp import build_nlp
 t1 = time.perf_counter()
 task = fig11_task("fig11a")
 bodies = all_bodies(task.shape, task.obstacles)

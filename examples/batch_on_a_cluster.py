@@ -46,8 +46,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--simulate", action="store_true", help="also execute every solved plan, open and closed loop")
     args = ap.parse_args(argv)
 
-    from tooltransfer.planner.batch.report import write_report
-    from tooltransfer.planner.batch.runner import run_batch
+    from tooltransfer.planner.apps.batch.report import write_report
+    from tooltransfer.planner.apps.batch.runner import run_batch
 
     args.out.mkdir(parents=True, exist_ok=True)
     db = args.out / "results.sqlite"

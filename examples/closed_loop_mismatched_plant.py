@@ -1,13 +1,13 @@
 """Closed loop on a plant the plan mispredicts, through the ``Plant`` protocol.
 
 The plan is made with the push mechanics identified from the demonstrations (``mu``, ``c``). The
-plant here is :class:`tooltransfer.planner.execution.ModelPlant`: the quasi-static push model with ``mu`` and
+plant here is :class:`tooltransfer.planner.execution.plant.ModelPlant`: the quasi-static push model with ``mu`` and
 ``c`` scaled (0.6x by default), a camera with 1.5 mm noise per frame, and the Omni's joint limits
 checked on every commanded path. The same plan is executed twice on it:
 
 * open loop: the whole planned tool path at once, the way the paper executed its plans;
-* closed loop: :func:`tooltransfer.planner.closed_loop.execute_closed_loop`, which pushes a chunk, observes the
-  puck, re-plans the rest when it is off the plan, and identifies ``mu`` and ``c`` again when the
+* closed loop: :func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`, which pushes a chunk, observes
+  the puck, re-plans the rest when it is off the plan, and identifies ``mu`` and ``c`` again when the
   model mispredicts.
 
 The plant is wrapped in :class:`LoggedPlant`, a class of its own with the protocol's three methods:
@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer import problems
-from tooltransfer.planner.execution import ModelPlant, Plant
+from tooltransfer.planner.execution.plant import ModelPlant, Plant
 
 TRANSFER = Path(problems.__file__).resolve().parent / "paper" / "transfer_tool2.yaml"
 
@@ -74,8 +74,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=3, help="camera noise seed")
     args = ap.parse_args(argv)
 
-    from tooltransfer.planner.closed_loop import execute_closed_loop
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.execution.closed_loop import execute_closed_loop
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import load_task, task_platform, task_tool
     from tooltransfer.tools.pushing.mechanics import PushMechanics
 

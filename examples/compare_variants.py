@@ -48,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--csv", type=Path, help="write the table as CSV")
     args = ap.parse_args(argv)
 
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import load_task
 
     task = load_task(args.task)
@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
         row: dict[str, object] = {"status": plan.status, "reason": plan.reason}
         row.update({key: plan.metrics.get(key) for key, *_ in METRICS})
         if args.simulate and plan.status == "solved":
-            from tooltransfer.planner.simulate import simulate_plan
+            from tooltransfer.planner.execution.simulate import simulate_plan
 
             row["open_loop_error"] = simulate_plan(plan).final_error
         rows[pair] = row

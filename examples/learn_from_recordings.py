@@ -55,7 +55,7 @@ def my_recordings() -> tuple[Meta, list[Demonstration]]:
 
 def describe(folder: Path) -> None:
     """What the planner will see in the dataset: streams, rates and the segmentation."""
-    from tooltransfer.planner.segmentation import segment
+    from tooltransfer.planner.learning.segmentation import segment
 
     ds = load_dataset(folder)                   # raises DatasetError naming the file, row and column
     tool = ds.tool()
@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="first write my_recordings() as a dataset folder DIR, then learn from it")
     args = ap.parse_args(argv)
 
-    from tooltransfer.planner.skills import learn_skills
+    from tooltransfer.planner.learning.skills import learn_skills
 
     folder = args.dataset
     if args.convert is not None:

@@ -37,7 +37,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--plot", action="store_true", help="draw the plan (Fig. 12 style)")
     args = ap.parse_args(argv)
 
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import resolve, task_from_dict
 
     tool = load_tool(args.tool)
@@ -69,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
     plan_file = plan.write(args.out / "plan.json")
     print(f"wrote {task_file} and {plan_file}")
     if args.plot and plan.status == "solved":
-        from tooltransfer.planner.plots.execution import plot_plan
+        from tooltransfer.planner.apps.plots.execution import plot_plan
 
         print(f"wrote {plot_plan(plan, args.out / 'plan.png')}")
     return 0 if plan.status == "solved" else 1

@@ -338,7 +338,7 @@ def _read_csv(path: Path) -> tuple[Demonstration, NDArray[np.int64], NDArray[np.
 
 def load_meta(folder: str | Path) -> Meta:
     """Read and validate ``meta.yaml`` of a dataset folder (errors name the field path)."""
-    from tooltransfer.tools.yaml_file import read_yaml
+    from tooltransfer.yaml_file import read_yaml
 
     meta_path = Path(folder) / "meta.yaml"
     raw = read_yaml(meta_path, DatasetError, "meta.yaml")
@@ -361,8 +361,8 @@ def load_dataset(folder: str | Path) -> Dataset:
     :data:`RATE_FACTOR` of ``rates`` (times in seconds), the object and tool streams cover the same
     time, joints lie within the Omni's limits widened by :data:`JOINT_SLACK`, tool and object
     positions within its reach region grown by :data:`REACH_SLACK` (positions in metres, not
-    millimetres). The segmentation (:func:`tooltransfer.planner.segmentation.segment`) checks the rest against the
-    recordings themselves: the tool poses against the joints' forward kinematics, and the contacts
+    millimetres). The segmentation (:func:`tooltransfer.planner.learning.segmentation.segment`) checks the rest against
+    the recordings themselves: the tool poses against the joints' forward kinematics, and the contacts
     against the declared tool's outline.
 
     Raises:
@@ -474,7 +474,7 @@ def _read_truth(path: Path, meta: Meta) -> dict[str, Any] | None:
     ``pushes`` (face, t_start, t_end) and ``switches`` lists; errors name the file and the field."""
     if not path.is_file():
         return None
-    from tooltransfer.tools.yaml_file import read_yaml
+    from tooltransfer.yaml_file import read_yaml
 
     truth = read_yaml(path, DatasetError, "truth.yaml")
     if truth is None:

@@ -27,6 +27,7 @@ from tooltransfer.problems.variants import (
     SSVariant,
     VirtualMotion,
 )
+from tooltransfer.timing import min_jerk_duration as min_jerk_time
 from tooltransfer.tools.errors import ToolSpecError, UnknownToolError
 
 if TYPE_CHECKING:
@@ -50,7 +51,8 @@ Length = Annotated[float, Field(ge=0.0, le=0.2, allow_inf_nan=False, strict=True
 #: Longest plan a task may ask for [s] (``simulate`` refuses plans of more than 1800 s): the plan
 #: samples its approach, switches and retreat at :data:`PLAN_RATE`, so this bounds its samples too.
 MAX_PLAN_DURATION = 900.0
-#: Sample rate of a plan's approach, switches and retreat [Hz] (:func:`tooltransfer.planner.assemble.assemble`).
+#: Sample rate of a plan's approach, switches and retreat [Hz]
+#: (:func:`tooltransfer.planner.planning.assemble.assemble`).
 PLAN_RATE = 100.0
 #: Largest push-sequence search of the ``qp`` variant (:func:`push_search_steps`; a few seconds at most).
 MAX_SEARCH_STEPS = 200_000
@@ -63,7 +65,7 @@ class TaskFileError(InputError):
     """A task file is unreadable or invalid; names the file, the field path and what was expected."""
 
     def __init__(self, path: str, field: str, expected: str, got: object | None = None) -> None:
-        from tooltransfer.tools.yaml_file import clip
+        from tooltransfer.yaml_file import clip
 
         self.path = path
         # a value echoed in the message is cut at 100 characters (a field name at 200): one line, however
@@ -190,7 +192,7 @@ class Variants(_Model):
 
 
 class OEOptions(_Model):
-    """Options of OE condensing (:class:`tooltransfer.planner.oe.QPOptions` takes its fields from here)."""
+    """Options of OE condensing (:class:`tooltransfer.planner.planning.oe.QPOptions` takes its fields from here)."""
 
     # the one source of these defaults, bounds and descriptions: QPOptions and MappingOptions reuse
     # the fields, FaceFrame its cone fraction (tests/test_options_once.py)
@@ -302,15 +304,10 @@ def schema_default(model: type[BaseModel], name: str) -> Any:
     return model.model_fields[name].default
 
 
-def min_jerk_time(length: float, v_max: float, a_max: float) -> float:
-    """Shortest duration [s] of a minimum-jerk move of ``length`` [m] within ``v_max`` [m/s] and
-    ``a_max`` [m/s^2] (as :func:`tooltransfer.planner.timing.min_jerk_duration`)."""
-    return max(1.875 * length / v_max, float(np.sqrt(10.0 / np.sqrt(3.0) * length / a_max))) if length > 0 else 0.0
-
 
 def push_search_steps(n_faces: int, max_pushes: int, segments: int) -> int:
     """Work of the ``qp`` variant's push-sequence search
-    (:func:`tooltransfer.planner.oe.sequence_proxy.ranked_sequences`) in steps of equal cost (their
+    (:func:`tooltransfer.planner.planning.oe.sequence_proxy.ranked_sequences`) in steps of equal cost (their
     time in ``benchmarks/README.md``): every face order of at most ``max_pushes`` pushes is enumerated
     (about 1/6 step each) and the ones without a face twice in a row split ``segments`` phases by
     dynamic programming (``pushes x segments`` steps each)."""
@@ -395,7 +392,7 @@ def _check_search(task: Task, n_faces: int, source: str) -> None:
 
 def load_task(path: str | Path) -> Task:
     """Read and validate a task file (YAML or JSON)."""
-    from tooltransfer.tools.yaml_file import read_yaml
+    from tooltransfer.yaml_file import read_yaml
 
     task = task_from_dict(read_yaml(path, TaskFileError, "task file"), str(path))
     task._source = str(Path(path).resolve())

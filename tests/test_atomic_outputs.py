@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 def test_a_figure_that_fails_half_way_leaves_the_old_file(tmp_path: Path) -> None:
     import matplotlib.pyplot as plt
 
-    from tooltransfer.planner.plots.save import save_figure
+    from tooltransfer.planner.apps.plots.save import save_figure
 
     out = tmp_path / "fig.png"
     out.write_bytes(b"old figure")
@@ -32,7 +32,7 @@ def test_a_figure_that_fails_half_way_leaves_the_old_file(tmp_path: Path) -> Non
 
 
 def test_a_table_that_fails_half_way_is_not_written(tmp_path: Path) -> None:
-    from tooltransfer.planner.batch.report import write_csv
+    from tooltransfer.planner.apps.batch.report import write_csv
 
     class Bad:
         def __str__(self) -> str:

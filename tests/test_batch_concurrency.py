@@ -19,9 +19,9 @@ import pytest
 import yaml
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.batch.spec import load_batch
-from tooltransfer.planner.batch.store import ResultStore, lock_store
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.batch.spec import load_batch
+from tooltransfer.planner.apps.batch.store import ResultStore, lock_store
+from tooltransfer.planner.apps.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASET = ROOT / "problems" / "data" / "finger_demos"
@@ -36,7 +36,7 @@ def _batch(tmp_path: Path, name: str = "conc", count: int = 4, dataset: Path = D
 
 
 def _spawn(args: list[str]) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "tooltransfer.planner.cli", *args], stdout=subprocess.PIPE,
+    return subprocess.Popen([sys.executable, "-m", "tooltransfer.planner.apps.cli", *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True,
                             env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
 
@@ -79,7 +79,7 @@ def test_a_second_run_on_a_store_in_use_is_refused_and_the_first_keeps_each_pair
 def test_the_lock_goes_with_a_killed_holder(tmp_path) -> None:
     db = tmp_path / "k.sqlite"
     holder = subprocess.Popen([sys.executable, "-c", "import sys, time\n"
-                               "from tooltransfer.planner.batch.store import lock_store\n"
+                               "from tooltransfer.planner.apps.batch.store import lock_store\n"
                                f"with lock_store({str(db)!r}):\n    print('held', flush=True)\n    time.sleep(60)"],
                               stdout=subprocess.PIPE, text=True)
     try:
@@ -96,8 +96,8 @@ def test_the_lock_goes_with_a_killed_holder(tmp_path) -> None:
 
 
 def test_a_million_tasks_are_generated_as_the_run_goes(tmp_path) -> None:
-    from tooltransfer.planner.batch.generate import generate_task
-    from tooltransfer.planner.batch.runner import _lazy_jobs, _warmup
+    from tooltransfer.planner.apps.batch.generate import generate_task
+    from tooltransfer.planner.apps.batch.runner import _lazy_jobs, _warmup
 
     batch = _batch(tmp_path, name="huge", count=1_000_000)
     spec = load_batch(batch)
@@ -181,7 +181,7 @@ def test_a_dask_worker_without_the_package_is_refused_before_the_first_job(tmp_p
 def test_dask_workers_that_cannot_read_the_dataset_are_refused() -> None:
     from distributed import Client, LocalCluster
 
-    from tooltransfer.planner.batch.dask_plugin import check_workers
+    from tooltransfer.planner.apps.batch.dask_plugin import check_workers
 
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster, \
             Client(cluster) as client:
@@ -191,7 +191,7 @@ def test_dask_workers_that_cannot_read_the_dataset_are_refused() -> None:
 
 
 def test_an_address_where_no_scheduler_answers_is_refused_in_seconds() -> None:
-    from tooltransfer.planner.batch.executors import open_executor
+    from tooltransfer.planner.apps.batch.executors import open_executor
 
     silent = socket.socket()
     silent.bind(("127.0.0.1", 0))

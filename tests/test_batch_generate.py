@@ -11,9 +11,9 @@ import pytest
 import shapely
 import yaml
 
-from tooltransfer.planner.batch.generate import _reach, generate_tasks, write_tasks
-from tooltransfer.planner.batch.spec import batch_from_dict, load_batch
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.batch.generate import _reach, generate_tasks, write_tasks
+from tooltransfer.planner.apps.batch.spec import batch_from_dict, load_batch
+from tooltransfer.planner.apps.cli import main
 from tooltransfer.problems.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -16,7 +16,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASET = str(ROOT / "problems" / "data" / "finger_demos")

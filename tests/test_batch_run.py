@@ -16,13 +16,13 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tooltransfer.planner.batch.executors import open_executor
-from tooltransfer.planner.batch.report import summarize, write_report
-from tooltransfer.planner.batch.runner import run_batch, run_jobs
-from tooltransfer.planner.batch.stats import wilson
-from tooltransfer.planner.batch.store import ResultStore
-from tooltransfer.planner.batch.worker import Job
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.batch.executors import open_executor
+from tooltransfer.planner.apps.batch.report import summarize, write_report
+from tooltransfer.planner.apps.batch.runner import run_batch, run_jobs
+from tooltransfer.planner.apps.batch.stats import wilson
+from tooltransfer.planner.apps.batch.store import ResultStore
+from tooltransfer.planner.apps.batch.worker import Job
+from tooltransfer.planner.apps.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASET = ROOT / "problems" / "data" / "finger_demos"
@@ -109,7 +109,8 @@ def test_a_killed_worker_process_is_replaced(tmp_path) -> None:
 
 def _spawn(args: list[str]) -> subprocess.Popen:
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
-    return subprocess.Popen([sys.executable, "-m", "tooltransfer.planner.cli", *args], env=env, stdout=subprocess.PIPE,
+    return subprocess.Popen([sys.executable, "-m", "tooltransfer.planner.apps.cli", *args], env=env,
+                            stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from tooltransfer.planner.batch.sandbox import Sandbox
-from tooltransfer.planner.batch.worker import Job, run_job
+from tooltransfer.planner.apps.batch.sandbox import Sandbox
+from tooltransfer.planner.apps.batch.worker import Job, run_job
 
 
 @pytest.fixture(scope="module")

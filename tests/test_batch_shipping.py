@@ -1,4 +1,4 @@
-"""The learned skills travel with the batch (tooltransfer.planner.batch.shipping): Dask workers started in another
+"""The learned skills travel with the batch (tooltransfer.planner.apps.batch.shipping): Dask workers started in another
 working directory, on a machine where the batch's dataset does not exist, run a batch to completion;
 workers that join later get the skills too; the process pool reads one file the run removes; a job
 whose skills are not on its worker becomes an error row naming it."""
@@ -15,11 +15,11 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tooltransfer.planner.batch import shipping
-from tooltransfer.planner.batch.executors import open_executor
-from tooltransfer.planner.batch.runner import run_batch
-from tooltransfer.planner.batch.store import ResultStore
-from tooltransfer.planner.batch.worker import Job, run_job
+from tooltransfer.planner.apps.batch import shipping
+from tooltransfer.planner.apps.batch.executors import open_executor
+from tooltransfer.planner.apps.batch.runner import run_batch
+from tooltransfer.planner.apps.batch.store import ResultStore
+from tooltransfer.planner.apps.batch.worker import Job, run_job
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASET = ROOT / "problems" / "data" / "finger_demos"
@@ -38,8 +38,8 @@ def _batch(folder: Path, dataset: Path, count: int = 3, **extra) -> Path:
 
 
 def _skills(tmp_path: Path) -> shipping.ShippedSkills:
-    from tooltransfer.planner.batch.generate import generate_task
-    from tooltransfer.planner.batch.spec import load_batch
+    from tooltransfer.planner.apps.batch.generate import generate_task
+    from tooltransfer.planner.apps.batch.spec import load_batch
 
     batch = _batch(tmp_path / "b", DATASET, count=1)
     spec = load_batch(batch)
@@ -105,7 +105,7 @@ def test_workers_in_another_folder_without_the_dataset_run_the_batch(tmp_path, m
 def test_workers_that_join_later_get_the_skills_and_jobs_and_the_run_removes_them(tmp_path, monkeypatch) -> None:
     from distributed import Client, LocalCluster
 
-    from tooltransfer.planner.batch import dask_plugin
+    from tooltransfer.planner.apps.batch import dask_plugin
 
     skills = _skills(tmp_path)
     monkeypatch.setattr(dask_plugin, "RECOUNT", 0.0)
@@ -165,8 +165,8 @@ def test_a_dataset_that_cannot_be_shipped(tmp_path, monkeypatch, ss: str) -> Non
     """Demonstrations that never switch faces have no SS skill, so no skills file: with arch switches only the
     run goes on the old way (None: the workers read the dataset), a variant that needs the SS skill is refused."""
     from tooltransfer.errors import InputError
-    from tooltransfer.planner.batch.generate import generate_task
-    from tooltransfer.planner.batch.spec import load_batch
+    from tooltransfer.planner.apps.batch.generate import generate_task
+    from tooltransfer.planner.apps.batch.spec import load_batch
 
     batch = _batch(tmp_path / "b", DATASET, count=1, variants={"oe": ["qp"], "ss": [ss]})
     spec = load_batch(batch)
@@ -175,7 +175,7 @@ def test_a_dataset_that_cannot_be_shipped(tmp_path, monkeypatch, ss: str) -> Non
     def no_switches(*args, **kwargs):
         raise InputError("skills.dataset", "a dataset whose demonstrations switch faces at least once", "x")
 
-    monkeypatch.setattr("tooltransfer.planner.skills.learn_skills", no_switches)
+    monkeypatch.setattr("tooltransfer.planner.learning.skills.learn_skills", no_switches)
     if ss == "arch":
         assert shipping.batch_skills(spec, batch, first) is None
     else:

@@ -16,12 +16,12 @@ import pytest
 import yaml
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.batch.report import EXEC_TOLS, summarize, write_report
-from tooltransfer.planner.batch.runner import batch_jobs, open_batch_store
-from tooltransfer.planner.batch.spec import batch_from_dict, load_batch
-from tooltransfer.planner.batch.store import RESULT_COLUMNS, ResultStore
-from tooltransfer.planner.batch.worker import Job, Stage, run_job
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.batch.report import EXEC_TOLS, summarize, write_report
+from tooltransfer.planner.apps.batch.runner import batch_jobs, open_batch_store
+from tooltransfer.planner.apps.batch.spec import batch_from_dict, load_batch
+from tooltransfer.planner.apps.batch.store import RESULT_COLUMNS, ResultStore
+from tooltransfer.planner.apps.batch.worker import Job, Stage, run_job
+from tooltransfer.planner.apps.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 DATASET = ROOT / "problems" / "data" / "finger_demos"

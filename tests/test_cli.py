@@ -3,7 +3,7 @@ command has --help with an example; compare covers every variant pair."""
 
 from __future__ import annotations
 
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.cli import main
 
 
 def test_demo_runs_the_transfer_job(tmp_path, capsys) -> None:
@@ -23,7 +23,7 @@ def test_every_command_has_help_with_an_example(capsys) -> None:
 
     import pytest
 
-    from tooltransfer.planner.cli import build_parser
+    from tooltransfer.planner.apps.cli import build_parser
 
     def commands(parser: argparse.ArgumentParser, prefix: list[str]) -> list[list[str]]:
         subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
@@ -85,7 +85,7 @@ def test_a_reader_that_has_gone_ends_the_command_silently_with_141() -> None:
     read_end, write_end = os.pipe()
     os.close(read_end)  # the reader is gone before the first line is written
     try:
-        done = subprocess.run([sys.executable, "-m", "tooltransfer.planner.cli", "tasks"], stdout=write_end,
+        done = subprocess.run([sys.executable, "-m", "tooltransfer.planner.apps.cli", "tasks"], stdout=write_end,
                               stderr=subprocess.PIPE, text=True, timeout=120)
     finally:
         os.close(write_end)
@@ -106,7 +106,7 @@ def test_a_quick_exit_still_runs_the_exit_handlers_and_flushes(tmp_path) -> None
             "class Kept:\n"
             f"    def __del__(self, p=pathlib.Path({str(torn)!r})): p.write_text('teardown')\n"
             "kept = Kept()  # freed only by the interpreter's teardown\n"
-            "from tooltransfer.planner.cli import main\n"
+            "from tooltransfer.planner.apps.cli import main\n"
             "sys.argv = ['tooltransfer', 'tasks']\n"
             "sys.exit(main())\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)

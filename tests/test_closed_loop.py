@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.plan import read_plan
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.planning.plan import read_plan
 
 TRANSFER = Path(__file__).resolve().parents[1] / "problems" / "paper" / "transfer_tool2.yaml"
 
@@ -39,7 +39,7 @@ def test_closed_loop_reaches_the_target_where_open_loop_drifts(plan_file: Path, 
 
 
 def test_closed_loop_report_is_consistent(plan_file: Path) -> None:
-    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution.closed_loop import execute_closed_loop
 
     plan = read_plan(plan_file)
     rep = execute_closed_loop(plan)
@@ -53,7 +53,7 @@ def test_closed_loop_report_is_consistent(plan_file: Path) -> None:
 
 @pytest.mark.parametrize("seed", range(4))
 def test_closed_loop_within_5_mm_whatever_the_camera_noise(plan_file: Path, seed: int) -> None:
-    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution.closed_loop import execute_closed_loop
 
     rep = execute_closed_loop(read_plan(plan_file), seed=seed)
     assert rep.status == "reached", rep.reason
@@ -72,9 +72,9 @@ def test_unsolved_plan_is_not_executed(tmp_path: Path, capsys) -> None:
 def test_closed_loop_on_a_mismatched_quasi_static_plant(plan_file: Path, mu: float, c: float) -> None:
     """The same loop through the Plant protocol on the push model with mu and c off the planner's
     (factors of the identified values): it ends within 3 mm, no exception."""
-    from tooltransfer.planner.closed_loop import execute_closed_loop
-    from tooltransfer.planner.execution import ModelPlant, Plant
-    from tooltransfer.planner.setting import task_mechanics, task_skills
+    from tooltransfer.planner.execution.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution.plant import ModelPlant, Plant
+    from tooltransfer.planner.planning.setting import task_mechanics, task_skills
     from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
     from tooltransfer.tools.pushing.mechanics import PushMechanics
 
@@ -92,7 +92,7 @@ def test_closed_loop_on_a_mismatched_quasi_static_plant(plan_file: Path, mu: flo
 
 
 def test_a_plant_that_refuses_a_move_ends_the_run_with_its_reason(plan_file: Path) -> None:
-    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution.closed_loop import execute_closed_loop
 
     class Jammed:
         """A plant whose arm refuses to move (e.g. a driver fault)."""
@@ -116,9 +116,9 @@ def test_a_plant_that_refuses_a_move_ends_the_run_with_its_reason(plan_file: Pat
 def test_the_loop_adapts_the_push_model_to_a_mismatched_plant(plan_file: Path) -> None:
     """On a plant whose limit surface is 0.6 x the identified one, the chunks the model mispredicts
     identify c again: the model in force ends nearer the plant's c than the plan's."""
-    from tooltransfer.planner.closed_loop import execute_closed_loop
-    from tooltransfer.planner.execution import ModelPlant
-    from tooltransfer.planner.setting import task_mechanics, task_skills
+    from tooltransfer.planner.execution.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution.plant import ModelPlant
+    from tooltransfer.planner.planning.setting import task_mechanics, task_skills
     from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
     from tooltransfer.tools.pushing.mechanics import PushMechanics
 
@@ -140,9 +140,9 @@ def test_the_loop_adapts_the_push_model_to_a_mismatched_plant(plan_file: Path) -
 def _loop_on(plan_file: Path, c_factor: float = 1.0, seed: int = 1):
     """A closed-loop run's state on the transfer plan, with a quasi-static plant whose c is
     ``c_factor`` times the plan's (the tool at its first pose, nothing executed)."""
-    from tooltransfer.planner.closed_loop import _Loop
-    from tooltransfer.planner.execution import ModelPlant
-    from tooltransfer.planner.setting import task_mechanics, task_skills
+    from tooltransfer.planner.execution.closed_loop import _Loop
+    from tooltransfer.planner.execution.plant import ModelPlant
+    from tooltransfer.planner.planning.setting import task_mechanics, task_skills
     from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
     from tooltransfer.tools.pushing.mechanics import PushMechanics
 
@@ -157,7 +157,7 @@ def _loop_on(plan_file: Path, c_factor: float = 1.0, seed: int = 1):
 
 def test_the_loop_acts_in_the_world_solve_planned_for(plan_file: Path) -> None:
     """The closed loop builds its world once, as ``solve`` does: the task's :class:`Setting`."""
-    from tooltransfer.planner.setting import setting_from_task, task_skills
+    from tooltransfer.planner.planning.setting import setting_from_task, task_skills
     from tooltransfer.problems.task import task_from_dict
 
     plan, loop = _loop_on(plan_file)
@@ -177,7 +177,7 @@ def test_replans_carry_the_contact_budget_over_to_the_adapted_c(plan_file: Path)
     """The contact rolls 1/c^2 per sideways travel: at 0.6 x the plan's c the re-plans may use
     1/0.36 times the task's contacts per push, never fewer than the task's, at most the cap."""
 
-    from tooltransfer.planner.oe.replan import MAX_REPLAN_CONTACTS
+    from tooltransfer.planner.planning.oe.replan import MAX_REPLAN_CONTACTS
 
     _, loop = _loop_on(plan_file)
     task_contacts = loop.options.max_contacts
@@ -197,7 +197,7 @@ def test_a_replan_whose_tool_overlaps_an_obstacle_is_refused(plan_file: Path) ->
     overlaps one along the push executed next, or at the contact pose the switch after it ends in,
     is refused with the obstacle and the pose, as the nominal plan is; later poses are re-planned
     before they run."""
-    from tooltransfer.planner.oe.replan import PlanReference
+    from tooltransfer.planner.planning.oe.replan import PlanReference
     from tooltransfer.tools.objects import Disc
 
     plan, loop = _loop_on(plan_file)
@@ -223,8 +223,8 @@ def test_a_replan_whose_tool_overlaps_an_obstacle_is_refused(plan_file: Path) ->
 def test_a_straying_correction_is_corrected_from_the_observed_object(plan_file: Path) -> None:
     """With a correction in force (past the plan's path), an object observed off it by more than
     the re-plan threshold gets a new correction from where it is; on it, the correction goes on."""
-    from tooltransfer.planner.closed_loop import _InForce, _next_chunk, _Pace
-    from tooltransfer.planner.oe.replan import PlanReference
+    from tooltransfer.planner.execution.closed_loop import _InForce, _next_chunk, _Pace
+    from tooltransfer.planner.planning.oe.replan import PlanReference
 
     plan, loop = _loop_on(plan_file)
     ref = PlanReference.of(plan)
@@ -255,7 +255,7 @@ def test_the_adaptations_prior_is_weighed_in_units_of_the_camera_noise(plan_file
     it (the prior's standard deviation grows with the misfit over the noise, never below
     ADAPT_PRIOR_SD), and the model in force ends near the plant's c."""
     import tooltransfer.tools.pushing.identify as identify
-    from tooltransfer.planner.closed_loop import execute_closed_loop
+    from tooltransfer.planner.execution.closed_loop import execute_closed_loop
     from tooltransfer.tools.pushing.adaptation import ADAPT_PRIOR_SD
 
     seen: list[float] = []

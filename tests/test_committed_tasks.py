@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from tooltransfer.planner.solve import solve
+from tooltransfer.planner.planning.solve import solve
 from tooltransfer.problems.task import load_task
 
 ROOT = Path(__file__).resolve().parents[1] / "problems"

@@ -223,9 +223,11 @@ def test_environment_variable_forces_the_numpy_core_silently() -> None:
 
 
 def test_planner_solves_the_transfer_task_without_the_compiled_core() -> None:
-    """``tooltransfer.planner.solve.solve`` on the paper's transfer task, in a fresh process with the core disabled."""
+    """``tooltransfer.planner.planning.solve.solve`` on the paper's transfer task, in a fresh process with the core
+    disabled."""
     code = (
-        "import json\nfrom tooltransfer.planner.solve import solve\nfrom tooltransfer.problems.task import load_task\n"
+        "import json\nfrom tooltransfer.planner.planning.solve import solve\n"
+        "from tooltransfer.problems.task import load_task\n"
         "from tooltransfer.dmp.qp import native\n"
         "path = 'problems/paper/transfer_tool2.yaml'\nplan = solve(load_task(path), path)\n"
         "print(json.dumps({'core': native.core().name, 'status': plan.status, 'reason': plan.reason,"

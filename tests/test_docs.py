@@ -52,9 +52,11 @@ def test_every_page_is_built(site: Path) -> None:
     api = next(item["API reference"] for item in nav if "API reference" in item)
     modules = {next(iter(entry)) for entry in api} - {"Overview"}
     assert modules >= {"tooltransfer", "tooltransfer.dmp", "tooltransfer.dmp.qp", "tooltransfer.tools",
-                       "tooltransfer.tools.pushing", "tooltransfer.tools.omni", "tooltransfer.planner.solve",
-                       "tooltransfer.planner.plan", "tooltransfer.planner.setting", "tooltransfer.planner.closed_loop",
-                       "tooltransfer.planner.execution", "tooltransfer.problems.task", "tooltransfer.problems.dataset"}
+                       "tooltransfer.tools.pushing", "tooltransfer.tools.omni", "tooltransfer.planner.planning.solve",
+                       "tooltransfer.planner.planning.plan", "tooltransfer.planner.planning.setting",
+                       "tooltransfer.planner.execution.closed_loop",
+                       "tooltransfer.planner.execution.plant", "tooltransfer.problems.task",
+                       "tooltransfer.problems.dataset"}
     for module in modules:
         html = _text(site / "api" / module / "index.html")
         assert f'id="{module}' in html, module
@@ -63,12 +65,12 @@ def test_every_page_is_built(site: Path) -> None:
 @needs_mkdocs
 def test_the_api_reference_documents_the_entry_points(site: Path) -> None:
     anchors = {
-        "tooltransfer.planner.solve": ["tooltransfer.planner.solve.solve"],
-        "tooltransfer.planner.closed_loop": ["tooltransfer.planner.closed_loop.execute_closed_loop",
-                                             "tooltransfer.planner.closed_loop.ClosedLoopReport"],
-        "tooltransfer.planner.execution": ["tooltransfer.planner.execution.Plant",
-                                           "tooltransfer.planner.execution.ModelPlant",
-                                           "tooltransfer.planner.execution.SimPlant"],
+        "tooltransfer.planner.planning.solve": ["tooltransfer.planner.planning.solve.solve"],
+        "tooltransfer.planner.execution.closed_loop": ["tooltransfer.planner.execution.closed_loop.execute_closed_loop",
+                                             "tooltransfer.planner.execution.closed_loop.ClosedLoopReport"],
+        "tooltransfer.planner.execution.plant": ["tooltransfer.planner.execution.plant.Plant",
+                                           "tooltransfer.planner.execution.plant.ModelPlant",
+                                           "tooltransfer.planner.execution.plant.SimPlant"],
         "tooltransfer.dmp.qp": ["tooltransfer.dmp.qp.solve_fit", "tooltransfer.dmp.qp.VelocityCone"],
         "tooltransfer.dmp": ["tooltransfer.dmp.DMP"],
         "tooltransfer.tools.pushing": ["tooltransfer.tools.pushing.mechanics.PushMechanics",
@@ -77,8 +79,9 @@ def test_the_api_reference_documents_the_entry_points(site: Path) -> None:
                                        "tooltransfer.tools.pushing.identify"],
         "tooltransfer.problems.task": ["tooltransfer.problems.task.load_task", "tooltransfer.problems.task.Task"],
         "tooltransfer.problems.dataset": ["tooltransfer.problems.dataset.load_dataset"],
-        "tooltransfer.planner.plan": ["tooltransfer.planner.plan.read_plan", "tooltransfer.planner.plan.Plan"],
-        "tooltransfer.planner.setting": ["tooltransfer.planner.setting.Setting"],
+        "tooltransfer.planner.planning.plan": ["tooltransfer.planner.planning.plan.read_plan",
+                                               "tooltransfer.planner.planning.plan.Plan"],
+        "tooltransfer.planner.planning.setting": ["tooltransfer.planner.planning.setting.Setting"],
     }
     for module, ids in anchors.items():
         html = _text(site / "api" / module / "index.html")

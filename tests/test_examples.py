@@ -44,7 +44,7 @@ def test_example_help(script: str, tmp_path: Path) -> None:
 
 
 def test_learn_from_recordings(tmp_path: Path) -> None:
-    from tooltransfer.planner.skills import Skills
+    from tooltransfer.planner.learning.skills import Skills
 
     out = run("learn_from_recordings.py", "--convert", str(tmp_path / "my_dataset"),
               "-o", str(tmp_path / "skills.json"), cwd=tmp_path)
@@ -56,7 +56,7 @@ def test_learn_from_recordings(tmp_path: Path) -> None:
 
 
 def test_plan_with_a_new_tool(tmp_path: Path) -> None:
-    from tooltransfer.planner.plan import read_plan
+    from tooltransfer.planner.planning.plan import read_plan
     from tooltransfer.problems.task import load_task
 
     out = run("plan_with_a_new_tool.py", "--out", str(tmp_path), "--plot", cwd=tmp_path)

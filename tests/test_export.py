@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.export import (
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.execution.export import (
     FORMATS,
     SUFFIXES,
     Trajectory,
@@ -21,8 +21,8 @@ from tooltransfer.planner.export import (
     joint_trajectory_message,
     read_trajectory,
 )
-from tooltransfer.planner.plan import JOINT_NAMES, Plan, PlanFileError, joint_rates, read_plan
-from tooltransfer.planner.simulate import check_plan
+from tooltransfer.planner.execution.simulate import check_plan
+from tooltransfer.planner.planning.plan import JOINT_NAMES, Plan, PlanFileError, joint_rates, read_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 TASK = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
@@ -30,7 +30,7 @@ TASK = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
 
 @pytest.fixture(scope="module")
 def plan_path(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import load_task
 
     plan = solve(load_task(TASK), TASK)
@@ -85,7 +85,7 @@ def test_the_plan_carries_its_joint_rates_and_names(plan: Plan) -> None:
 
 
 def test_through_the_jacobian_the_joint_velocities_give_the_tool_velocity(plan: Plan) -> None:
-    from tooltransfer.planner.segmentation.geometry import table_poses
+    from tooltransfer.planner.learning.segmentation.geometry import table_poses
 
     p = plan.platform
 
@@ -228,7 +228,7 @@ def test_the_joint_trajectory_is_shaped_like_the_ros_message(plan: Plan) -> None
 
 
 def test_a_time_just_below_a_second_carries_over() -> None:
-    from tooltransfer.planner.export import _duration
+    from tooltransfer.planner.execution.export import _duration
 
     assert _duration(0.9999999999) == {"sec": 1, "nanosec": 0}
     assert _duration(2.5) == {"sec": 2, "nanosec": 500_000_000}

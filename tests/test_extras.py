@@ -19,7 +19,7 @@ BLOCK = ("mujoco", "matplotlib", "PIL", "dask", "distributed")
 def _cli(tmp: Path, *argv: str) -> subprocess.CompletedProcess:
     code = ("import sys\n"
             f"for name in {BLOCK!r}:\n    sys.modules[name] = None\n"
-            "from tooltransfer.planner.cli import main\n"
+            "from tooltransfer.planner.apps.cli import main\n"
             f"sys.exit(main({list(argv)!r}))\n")
     return subprocess.run([sys.executable, "-c", code], cwd=tmp, capture_output=True, text=True, timeout=600,
                           check=False)

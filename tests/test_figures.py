@@ -16,7 +16,7 @@ DATASET = ROOT / "problems" / "data" / "finger_demos"
 
 
 def test_the_readme_shows_the_committed_figures() -> None:
-    from tooltransfer.planner.plots.paper_figures import README_FIGURES
+    from tooltransfer.planner.apps.plots.paper_figures import README_FIGURES
 
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     shown = re.findall(r"!\[[^\]]+\]\((docs/images/[^)]+\.png)\)", readme)
@@ -25,7 +25,7 @@ def test_the_readme_shows_the_committed_figures() -> None:
         data = (ROOT / rel).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and 10_000 < len(data) < 300_000, (rel, len(data))
     make = (ROOT / "Makefile").read_text(encoding="utf-8")
-    recipe = r"^figures: .*\n(\t.*\n)*\t\$\(PY\) -m tooltransfer\.planner\.plots\.paper_figures docs/images$"
+    recipe = r"^figures: .*\n(\t.*\n)*\t\$\(PY\) -m tooltransfer\.planner\.apps\.plots\.paper_figures docs/images$"
     assert re.search(recipe, make, re.MULTILINE)
     assert "<!-- include: README.md | Two figures" in (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
 
@@ -55,7 +55,7 @@ def _labels(fig) -> list[str]:  # type: ignore[no-untyped-def]
 
 @pytest.fixture(scope="module")
 def plans() -> dict:
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems import PAPER_PAIRS as PAIRS
     from tooltransfer.problems.task import load_task
 
@@ -69,8 +69,8 @@ def plans() -> dict:
 
 
 def test_every_figure_draws_lengths_in_mm(tmp_path: Path, drawn: list, plans: dict) -> None:
-    from tooltransfer.planner.plots import paper_figures as figures
-    from tooltransfer.planner.skills import learn_skills
+    from tooltransfer.planner.apps.plots import paper_figures as figures
+    from tooltransfer.planner.learning.skills import learn_skills
 
     skills = learn_skills(DATASET)
     figures.fig8(DATASET, skills, tmp_path)
@@ -78,7 +78,7 @@ def test_every_figure_draws_lengths_in_mm(tmp_path: Path, drawn: list, plans: di
     figures.fig11(skills, tmp_path / "fig11.png")
     figures.fig14(ROOT / "problems" / "paper" / "fig14_safety_margin.yaml", tmp_path / "fig14.png")
     figures.fig12(plans["qp/opt"], tmp_path / "fig12.png")
-    from tooltransfer.planner.plots.execution import plot_plans
+    from tooltransfer.planner.apps.plots.execution import plot_plans
 
     plot_plans(plans, tmp_path / "compare.png")
     assert len(drawn) == 7
@@ -93,7 +93,7 @@ def test_every_figure_draws_lengths_in_mm(tmp_path: Path, drawn: list, plans: di
 
 
 def test_the_compare_panels_and_fig12_share_their_axes(tmp_path: Path, drawn: list, plans: dict) -> None:
-    from tooltransfer.planner.plots.execution import plot_plan, plot_plans
+    from tooltransfer.planner.apps.plots.execution import plot_plan, plot_plans
 
     plot_plans(plans, tmp_path / "compare.png")
     plot_plan(plans["qp/opt"], tmp_path / "fig12.png")
@@ -113,7 +113,7 @@ def test_the_compare_panels_and_fig12_share_their_axes(tmp_path: Path, drawn: li
 def test_make_figures_writes_small_palette_images(tmp_path: Path) -> None:
     from PIL import Image
 
-    from tooltransfer.planner.plots.paper_figures import README_FIGURES, readme_figures
+    from tooltransfer.planner.apps.plots.paper_figures import README_FIGURES, readme_figures
 
     paths = readme_figures(tmp_path)
     assert [p.name for p in paths] == list(README_FIGURES)

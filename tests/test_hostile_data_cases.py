@@ -18,8 +18,8 @@ import pytest
 import yaml
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.segmentation import load_fixed_points, segment
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.learning.segmentation import load_fixed_points, segment
 from tooltransfer.problems import dataset as dataset_module
 from tooltransfer.problems.dataset import DatasetError, load_dataset
 

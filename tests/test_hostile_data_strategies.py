@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from test_hostile_data_cases import copy_dataset
 
-from tooltransfer.planner.segmentation import segment
+from tooltransfer.planner.learning.segmentation import segment
 from tooltransfer.problems.dataset import DatasetError, load_dataset
 
 SETTINGS = settings(derandomize=True, deadline=None, database=None, max_examples=25,

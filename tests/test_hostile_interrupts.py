@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-import tooltransfer.planner.cli
-from tooltransfer.planner.cli import main
+import tooltransfer.planner.apps.cli
+from tooltransfer.planner.apps.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 TASK = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
@@ -59,13 +59,13 @@ def _leaves(parser: argparse.ArgumentParser, prefix: tuple[str, ...] = ()) -> di
 
 
 def test_every_command_is_covered(tmp_path: Path) -> None:
-    assert set(_leaves(tooltransfer.planner.cli.build_parser())) == set(_argv(tmp_path))
+    assert set(_leaves(tooltransfer.planner.apps.cli.build_parser())) == set(_argv(tmp_path))
 
 
 @pytest.fixture
 def interrupting(monkeypatch: pytest.MonkeyPatch) -> None:
     """Every command raises KeyboardInterrupt as soon as it starts its work."""
-    build = tooltransfer.planner.cli.build_parser
+    build = tooltransfer.planner.apps.cli.build_parser
 
     def stop(args: argparse.Namespace) -> int:
         raise KeyboardInterrupt
@@ -76,7 +76,7 @@ def interrupting(monkeypatch: pytest.MonkeyPatch) -> None:
             leaf.set_defaults(func=stop)
         return p
 
-    monkeypatch.setattr(tooltransfer.planner.cli, "build_parser", parser)
+    monkeypatch.setattr(tooltransfer.planner.apps.cli, "build_parser", parser)
 
 
 @pytest.mark.parametrize("command", sorted(_argv(Path("x"))))
@@ -91,12 +91,12 @@ def test_ctrl_c_in_any_command_exits_130_with_one_line(tmp_path: Path, capsys, i
 
 
 def test_ctrl_c_mid_solve_leaves_the_old_plan(tmp_path: Path, monkeypatch, capsys) -> None:
-    import tooltransfer.planner.solve
+    import tooltransfer.planner.planning.solve
 
     def stop(*args: object, **kwargs: object) -> None:
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(tooltransfer.planner.solve, "condense_qp", stop)
+    monkeypatch.setattr(tooltransfer.planner.planning.solve, "condense_qp", stop)
     out = tmp_path / "plan.json"
     out.write_text("old plan")
     assert main(["solve", str(TASK), "-o", str(out)]) == 130
@@ -128,7 +128,7 @@ def plan_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _interrupt(argv: list[str], after: float, env: dict[str, str] | None = None) -> tuple[int, str]:
-    proc = subprocess.Popen([sys.executable, "-m", "tooltransfer.planner.cli", *argv], stdout=subprocess.DEVNULL,
+    proc = subprocess.Popen([sys.executable, "-m", "tooltransfer.planner.apps.cli", *argv], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True, cwd=ROOT,
                             env={**os.environ, "OPENBLAS_NUM_THREADS": "1", **(env or {})})
     time.sleep(after)
@@ -166,16 +166,16 @@ def test_an_interrupt_inside_an_extensions_own_evaluation_still_exits_130(tmp_pa
     by SIGINT (``python -m``) although the CLI handled it; the CLI clears the mark (set by hand here)."""
     (tmp_path / "interrupted_cli.py").write_text(
         "import ctypes, sys\n"
-        "import tooltransfer.planner.cli\n"
+        "import tooltransfer.planner.apps.cli\n"
         "def stop(args):\n"
         "    try:\n"
         "        ctypes.c_int.in_dll(ctypes.pythonapi, '_Py_UnhandledKeyboardInterrupt').value = 1\n"
         "    except ValueError:\n"
         "        pass\n"
         "    raise KeyboardInterrupt\n"
-        "tooltransfer.planner.cli._cmd_schema = stop\n"
+        "tooltransfer.planner.apps.cli._cmd_schema = stop\n"
         "sys.argv = ['tooltransfer', 'schema']\n"
-        "sys.exit(tooltransfer.planner.cli.main())\n"
+        "sys.exit(tooltransfer.planner.apps.cli.main())\n"
     )
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     res = subprocess.run([sys.executable, "-m", "interrupted_cli"], capture_output=True, text=True, cwd=tmp_path,
@@ -186,7 +186,7 @@ def test_an_interrupt_inside_an_extensions_own_evaluation_still_exits_130(tmp_pa
 def test_a_ctrl_c_that_a_c_extension_turned_into_another_error_exits_130(monkeypatch, capsys) -> None:
     """CasADi's ``nlpsol`` hit by a Ctrl-C while it builds returns ``SystemError: ... returned a result
     with an exception set`` with the ``KeyboardInterrupt`` as its cause (seen with casadi 3.6.1)."""
-    import tooltransfer.planner.cli as cli
+    import tooltransfer.planner.apps.cli as cli
 
     def hit(args):  # type: ignore[no-untyped-def]
         try:

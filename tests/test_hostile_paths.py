@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tooltransfer.atomic import atomic_path, write_bytes
-from tooltransfer.planner.cli import file_stem, main
+from tooltransfer.planner.apps.cli import file_stem, main
 from tooltransfer.problems.task import TaskFileError, task_from_dict
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -194,8 +194,8 @@ def _disk_full(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_plan_and_skills_files_are_never_half_written(tmp_path: Path, monkeypatch) -> None:
-    from tooltransfer.planner.plan import Plan
-    from tooltransfer.planner.skills import learn_skills
+    from tooltransfer.planner.learning.skills import learn_skills
+    from tooltransfer.planner.planning.plan import Plan
 
     plan = Plan(status="infeasible", variant={"oe": "qp", "ss": "arch"}, task={"name": "x"}, platform={}, object={},
                 tool={}, obstacles=[], reason="why")

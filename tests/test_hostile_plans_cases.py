@@ -18,10 +18,10 @@ import numpy as np
 import pytest
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.plan import PlanFileError, read_plan
-from tooltransfer.planner.segmentation.geometry import table_poses
-from tooltransfer.planner.simulate import check_plan
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.execution.simulate import check_plan
+from tooltransfer.planner.learning.segmentation.geometry import table_poses
+from tooltransfer.planner.planning.plan import PlanFileError, read_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="module")
 def plan_doc(tmp_path_factory: pytest.TempPathFactory) -> dict:
     """The transfer task's qp/opt plan as JSON data."""
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import load_task
 
     path = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
@@ -227,7 +227,7 @@ def test_files_that_are_not_plans(tmp_path: Path, raw: str | bytes, words: tuple
 
 
 def test_a_plan_file_too_large_is_refused_before_it_is_read(tmp_path: Path, monkeypatch) -> None:
-    import tooltransfer.planner.plan as plan_module
+    import tooltransfer.planner.planning.plan as plan_module
 
     p = tmp_path / "plan.json"
     p.write_text(" " * 5000 + "{}")

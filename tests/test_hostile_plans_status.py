@@ -13,11 +13,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import tooltransfer.planner.solve as solve_module
-from tooltransfer.planner.batch.report import print_report, summarize, top_reasons
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.plan import read_plan
-from tooltransfer.planner.solve import HARD_CHECKS, hard_check_failures
+import tooltransfer.planner.planning.solve as solve_module
+from tooltransfer.planner.apps.batch.report import print_report, summarize, top_reasons
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.planning.plan import read_plan
+from tooltransfer.planner.planning.solve import HARD_CHECKS, hard_check_failures
 
 ROOT = Path(__file__).resolve().parents[1]
 TRANSFER = ROOT / "problems" / "paper" / "transfer_tool2.yaml"

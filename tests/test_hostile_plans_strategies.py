@@ -14,8 +14,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.plan import read_plan
-from tooltransfer.planner.simulate import check_plan
+from tooltransfer.planner.execution.simulate import check_plan
+from tooltransfer.planner.planning.plan import read_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 SETTINGS = settings(derandomize=True, deadline=None, database=None, max_examples=30,
@@ -27,7 +27,7 @@ JUNK = st.one_of(st.none(), st.booleans(), st.integers(-10**20, 10**20), st.samp
 
 @pytest.fixture(scope="module")
 def plan_doc(tmp_path_factory: pytest.TempPathFactory) -> dict:
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import load_task
 
     path = ROOT / "problems" / "paper" / "fig14_safety_margin.yaml"

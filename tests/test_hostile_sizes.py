@@ -19,7 +19,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.cli import main
 from tooltransfer.problems.task import (
     MAX_PLAN_DURATION,
     MAX_SEARCH_STEPS,
@@ -87,7 +87,7 @@ def test_every_task_option_has_a_bound_in_the_schema() -> None:
 
 
 def test_every_batch_number_and_list_is_bounded() -> None:
-    from tooltransfer.planner.batch.spec import BatchSpec
+    from tooltransfer.planner.apps.batch.spec import BatchSpec
 
     s = BatchSpec.model_json_schema()
     bad = [".".join(p) for kind, p, sch, _ in _leaves(s, s.get("$defs", {}))
@@ -253,7 +253,7 @@ def test_the_search_cap_follows_its_model(n_faces: int, max_pushes: int, segment
 
 
 def test_the_largest_search_allowed_takes_seconds_not_minutes() -> None:
-    from tooltransfer.planner.oe.sequence_proxy import ranked_sequences
+    from tooltransfer.planner.planning.oe.sequence_proxy import ranked_sequences
 
     f, k = 4, 10
     p = max(p for p in range(1, 9) if push_search_steps(f, p, k) <= MAX_SEARCH_STEPS)
@@ -279,7 +279,7 @@ def test_the_plan_duration_is_capped_naming_the_timing_field(timing: dict, field
 
 
 def test_batch_values_beyond_their_bounds_are_refused_naming_the_field() -> None:
-    from tooltransfer.planner.batch.spec import BatchFileError, batch_from_dict
+    from tooltransfer.planner.apps.batch.spec import BatchFileError, batch_from_dict
 
     base = {"name": "b", "count": 1, "tools": ["slope"], "dataset": "."}
     for change, field in [({"timeout": 1e9}, "timeout"), ({"distance": [0.04, 50]}, "distance[1]"),
@@ -295,7 +295,7 @@ def test_batch_values_beyond_their_bounds_are_refused_naming_the_field() -> None
 
 @pytest.fixture(scope="module")
 def slow_plan(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.solve import solve
 
     data = {**BASE, "variants": {"oe": "qp", "ss": "arch"},
             "timing": {"max_tool_speed": 0.005, "max_tool_accel": 0.005, "approach_distance": 0.1}}

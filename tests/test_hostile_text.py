@@ -21,8 +21,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.cli import main
-from tooltransfer.tools.yaml_file import MAX_ALIAS_EXPANSION, MAX_DEPTH, parse_yaml, read_yaml
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.yaml_file import MAX_ALIAS_EXPANSION, MAX_DEPTH, parse_yaml, read_yaml
 
 HERE = Path(__file__).parent
 FIXTURES = HERE / "hostile" / "text"
@@ -162,7 +162,7 @@ def test_hostile_dataset_files_exit_2_naming_the_file(tmp_path: Path, case: str,
 
 @pytest.mark.parametrize("case", ["duplicate", "bomb", "utf-16", "exponent"])
 def test_hostile_batch_files(tmp_path: Path, case: str) -> None:
-    from tooltransfer.planner.batch.spec import BatchFileError, load_batch
+    from tooltransfer.planner.apps.batch.spec import BatchFileError, load_batch
 
     text = BATCH.read_text().replace("../data/finger_demos", str(DATA))
     laughs = "".join(f"  l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * 10 if i else ["x"] * 10) + "]\n" for i in range(6))

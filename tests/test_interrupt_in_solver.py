@@ -15,7 +15,7 @@ import time
 import casadi as ca
 import pytest
 
-from tooltransfer.planner.ss.interrupts import keep_interrupts
+from tooltransfer.planner.planning.ss.interrupts import keep_interrupts
 
 
 def _swallowing_solver() -> str:

@@ -1,4 +1,5 @@
-"""Property tests for tooltransfer.planner.oe.mappings: eqs. (6) and (7) of the paper, their exact inverses, clipping.
+"""Property tests for tooltransfer.planner.learning.oe_mappings: eqs. (6) and (7) of the paper, their exact inverses,
+clipping.
 
 Accuracy statements tested here (see the module docstring for the derivations):
 
@@ -23,7 +24,7 @@ from hypothesis import event, example, given, settings
 from hypothesis import strategies as st
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.oe import mappings as mp
+from tooltransfer.planner.learning import oe_mappings as mp
 
 pytestmark = pytest.mark.filterwarnings("error")  # any warning (overflow, invalid, divide) fails a test
 

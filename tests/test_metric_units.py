@@ -1,4 +1,4 @@
-"""Every plan metric has its unit in one table (tooltransfer.planner.metric_units), which the command
+"""Every plan metric has its unit in one table (tooltransfer.planner.common.metric_units), which the command
 line's summary, the plan file, the batch store's report and the paper's report use instead of
 guessing from the name."""
 
@@ -10,14 +10,14 @@ from pathlib import Path
 import pytest
 from rich.console import Console
 
-from tooltransfer.planner.batch.execute import METRIC_COLUMNS
-from tooltransfer.planner.batch.report import print_report, summarize, top_reasons
-from tooltransfer.planner.batch.store import RESULT_COLUMNS, TASK_COLUMNS
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.metric_units import COLUMN_UNITS, UNITS, column_unit, display, label, shown, unit
-from tooltransfer.planner.paper_run import ROWS
-from tooltransfer.planner.plan import read_plan
-from tooltransfer.planner.solve import HARD_CHECKS
+from tooltransfer.planner.apps.batch.execute import METRIC_COLUMNS
+from tooltransfer.planner.apps.batch.report import print_report, summarize, top_reasons
+from tooltransfer.planner.apps.batch.store import RESULT_COLUMNS, TASK_COLUMNS
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.apps.paper_run import ROWS
+from tooltransfer.planner.common.metric_units import COLUMN_UNITS, UNITS, column_unit, display, label, shown, unit
+from tooltransfer.planner.planning.plan import read_plan
+from tooltransfer.planner.planning.solve import HARD_CHECKS
 
 TRANSFER = Path(__file__).resolve().parents[1] / "problems" / "paper" / "transfer_tool2.yaml"
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.cli import main
 from tooltransfer.problems.named import bundled_tasks, task_file
 
 ROOT = Path(__file__).resolve().parents[1]

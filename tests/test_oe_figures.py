@@ -7,11 +7,11 @@ from pathlib import Path
 import matplotlib.image as mpimg
 import numpy as np
 
-from tooltransfer.planner.oe import QPOptions, condense_qp
-from tooltransfer.planner.oe.mapping_variant import condense_mapping
-from tooltransfer.planner.plots.push_plans import plot_push_plans
-from tooltransfer.planner.plots.safety_margin import plot_safety_margin
-from tooltransfer.planner.setting import Setting
+from tooltransfer.planner.apps.plots.push_plans import plot_push_plans
+from tooltransfer.planner.apps.plots.safety_margin import plot_safety_margin
+from tooltransfer.planner.planning.oe import QPOptions, condense_qp
+from tooltransfer.planner.planning.oe.mapping_variant import condense_mapping
+from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.problems.fit_cases import minimum_jerk
 from tooltransfer.tools import Disc, load_tool
 from tooltransfer.tools.objects import DiscObject

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tooltransfer.planner.oe.face_frame import FaceFrame
-from tooltransfer.planner.oe.learn import DemoPush, condense_recovered, learn_oe_skill, recover
-from tooltransfer.planner.setting import Setting
+from tooltransfer.planner.learning.oe_skill import DemoPush, condense_recovered, learn_oe_skill, recover
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame
+from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.problems.fit_cases import minimum_jerk
 from tooltransfer.tools import load_tool
 from tooltransfer.tools.objects import DiscObject
@@ -94,7 +94,7 @@ def test_skill_fitted_on_all_recovered_demonstrations(n_demos: int) -> None:
 
 def test_skill_file_round_trip_and_refusals(tmp_path) -> None:
     from tooltransfer.errors import SkillFileError
-    from tooltransfer.planner.oe.learn import OESkill
+    from tooltransfer.planner.learning.oe_skill import OESkill
 
     skill = learn_oe_skill([demo(np.random.default_rng(5))], load_tool("finger"), k=0.5, n_basis=20)
     path = skill.save(tmp_path / "oe.json")

@@ -9,10 +9,10 @@ import pytest
 import shapely
 import yaml
 
-from tooltransfer.planner.oe import QPOptions, condense_qp
-from tooltransfer.planner.oe.constraints import HeadingCone, reach_constraints
-from tooltransfer.planner.oe.face_frame import FaceFrame
-from tooltransfer.planner.setting import Setting
+from tooltransfer.planner.planning.oe import QPOptions, condense_qp
+from tooltransfer.planner.planning.oe.constraints import HeadingCone, reach_constraints
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame
+from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.problems.fit_cases import minimum_jerk
 from tooltransfer.tools import Disc, load_tool, tool_from_dict
 from tooltransfer.tools.library import library_names
@@ -165,7 +165,7 @@ def test_qp_variant_keeps_the_margin_from_a_polygon_obstacle() -> None:
 
 
 def test_mapping_variant_runs_from_start_to_target_and_reports_what_it_violates() -> None:
-    from tooltransfer.planner.oe.mapping_variant import MappingOptions, condense_mapping
+    from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions, condense_mapping
 
     tool = load_tool("slope")
     t, x = l_scene()

@@ -6,12 +6,12 @@ from collections import Counter
 
 import numpy as np
 
-from tooltransfer.planner.oe import condense_qp
-from tooltransfer.planner.oe.learn import condense_recovered
-from tooltransfer.planner.oe.mapping_variant import condense_mapping
-from tooltransfer.planner.segmentation import segment
-from tooltransfer.planner.setting import Setting
-from tooltransfer.planner.ss.paper_cases import DEFAULT_DATASET, default_oe_skill, transfer_case
+from tooltransfer.planner.learning.oe_skill import condense_recovered
+from tooltransfer.planner.learning.segmentation import segment
+from tooltransfer.planner.planning.oe import condense_qp
+from tooltransfer.planner.planning.oe.mapping_variant import condense_mapping
+from tooltransfer.planner.planning.setting import Setting
+from tooltransfer.planner.planning.ss.paper_cases import DEFAULT_DATASET, default_oe_skill, transfer_case
 from tooltransfer.problems.dataset import load_dataset
 from tooltransfer.tools import load_tool
 from tooltransfer.tools.objects import DiscObject

@@ -26,12 +26,12 @@ import pytest
 import yaml
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.operator.generate import JOINT_STEP, generate_demonstrations
-from tooltransfer.planner.operator.operator import MIN_CONTACT
-from tooltransfer.planner.segmentation.geometry import nearest_on_segments, to_tool_frame
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.apps.operator.generate import JOINT_STEP, generate_demonstrations
+from tooltransfer.planner.apps.operator.operator import MIN_CONTACT
+from tooltransfer.planner.learning.segmentation.geometry import nearest_on_segments, to_tool_frame
 from tooltransfer.problems.dataset import Dataset, load_dataset
-from tooltransfer.problems.scenes import DEMO_SCENE
+from tooltransfer.problems.demo_scene import DEMO_SCENE
 from tooltransfer.tools.omni.ik import joint_path, table_pose
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.omni.reach import reach_sector
@@ -69,7 +69,7 @@ def _generate(out: Path, core: str | None) -> tuple[Path, float]:
         env["OPENBLAS_CORETYPE"] = core
     code = ("import sys, time\n"
             "from pathlib import Path\n"
-            "from tooltransfer.planner.operator.generate import generate_demonstrations\n"
+            "from tooltransfer.planner.apps.operator.generate import generate_demonstrations\n"
             "t0 = time.perf_counter()\n"
             "generate_demonstrations(Path(sys.argv[1]), n=8, seed=0)\n"
             "print(time.perf_counter() - t0)\n")

@@ -10,13 +10,13 @@ from typing import get_args
 
 import pytest
 
-from tooltransfer.planner.cli import build_parser
-from tooltransfer.planner.oe.face_frame import CONE_FRACTION
-from tooltransfer.planner.oe.mapping_variant import MappingOptions
-from tooltransfer.planner.oe.qp_variant import TASK_FIELDS, QPOptions
-from tooltransfer.planner.setting import Setting
-from tooltransfer.planner.solve import mapping_options, qp_options
-from tooltransfer.planner.ss.opt_variant import OptOptions
+from tooltransfer.planner.apps.cli import build_parser
+from tooltransfer.planner.planning.oe.face_frame import CONE_FRACTION
+from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions
+from tooltransfer.planner.planning.oe.qp_variant import TASK_FIELDS, QPOptions
+from tooltransfer.planner.planning.setting import Setting
+from tooltransfer.planner.planning.solve import mapping_options, qp_options
+from tooltransfer.planner.planning.ss.opt_variant import OptOptions
 from tooltransfer.problems import variants
 from tooltransfer.problems.task import OEOptions, SSOptions, Task, Variants, task_from_dict
 

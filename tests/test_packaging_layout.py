@@ -25,7 +25,7 @@ def test_the_package_list_is_every_folder_of_the_four() -> None:
         if d.is_dir() and d.name != "__pycache__"
     }
     assert set(setuptools["packages"]) == folders
-    assert PYPROJECT["project"]["scripts"] == {"tooltransfer": "tooltransfer.planner.cli:main"}
+    assert PYPROJECT["project"]["scripts"] == {"tooltransfer": "tooltransfer.planner.apps.cli:main"}
 
 
 def test_the_entry_point_from_another_folder(tmp_path: Path) -> None:

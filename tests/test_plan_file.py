@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tooltransfer.planner.plan import Plan, PlanFileError, Segment, read_plan
+from tooltransfer.planner.planning.plan import Plan, PlanFileError, Segment, read_plan
 
 
 def small_plan() -> Plan:

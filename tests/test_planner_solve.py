@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.plan import read_plan
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.planning.plan import read_plan
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER, HARD = ROOT / "problems" / "paper", ROOT / "problems" / "hard"
@@ -57,7 +57,7 @@ def test_bad_task_file_exits_2_naming_the_field(tmp_path: Path, capsys) -> None:
 
 
 def test_switches_keep_clear_of_the_obstacles(tmp_path: Path) -> None:
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import load_task
 
     plan = solve(load_task(PAPER / "transfer_tool2.yaml"), PAPER / "transfer_tool2.yaml")
@@ -84,9 +84,9 @@ def test_a_path_whose_first_step_rolls_off_the_face_is_refused_not_a_crash() -> 
     """Generated batch task small-00018 with the mapping variant: one step of the mapped path rolls
     the contact across more than the finger's usable face (it raised an InputError from the push
     model's inverse before)."""
-    from tooltransfer.planner.batch.generate import generate_task
-    from tooltransfer.planner.batch.spec import dataset_folder, load_batch
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.apps.batch.generate import generate_task
+    from tooltransfer.planner.apps.batch.spec import dataset_folder, load_batch
+    from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import task_from_dict
 
     batch = ROOT / "problems" / "batch" / "small.yaml"

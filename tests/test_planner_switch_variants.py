@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import shapely
 
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.plan import read_plan
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.planning.plan import read_plan
 
 PAPER = Path(__file__).resolve().parents[1] / "problems" / "paper"
 

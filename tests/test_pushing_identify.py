@@ -1,5 +1,5 @@
 """Identifying the push mechanics (mu, c) from recorded pushes (tooltransfer.tools.pushing.identify,
-tooltransfer.planner.identify).
+tooltransfer.planner.learning.identify).
 
 * Synthetic recordings made by the forward model itself (known mu, c; camera noise 1.5 mm at
   30 Hz): the fit recovers them within a few standard deviations, and the deviations shrink
@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, Phase, example, given, settings
 from hypothesis import strategies as st
 
 from tooltransfer.errors import InputError, SkillFileError
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.cli import main
 from tooltransfer.problems.dataset import load_dataset
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.objects import OBJECT_RADIUS
@@ -164,7 +164,7 @@ def test_the_calibration_recording_is_a_dataset_of_straight_pushes(calibration: 
 
 
 def test_the_identified_model_predicts_the_platforms_pushes(calibration: Path) -> None:
-    from tooltransfer.planner.identify import identify_dataset
+    from tooltransfer.planner.learning.identify import identify_dataset
 
     ident = identify_dataset(calibration)
     m = ident.mechanics
@@ -184,7 +184,7 @@ def test_the_identified_model_predicts_the_platforms_pushes(calibration: Path) -
 
 def test_skills_files_carry_the_mechanics_and_old_files_load(tmp_path: Path, calibration: Path,
                                                               capsys: pytest.CaptureFixture[str]) -> None:
-    from tooltransfer.planner.skills import Skills, learn_skills
+    from tooltransfer.planner.learning.skills import Skills, learn_skills
 
     out = tmp_path / "skills.json"
     assert main(["learn", str(DATA), "--calibration", str(calibration), "-o", str(out)]) == 0

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.cli import main
-from tooltransfer.planner.operator.generate import generate_demonstrations
-from tooltransfer.planner.segmentation import Segmentation, segment
-from tooltransfer.planner.segmentation.rest import camera_noise, still_tail
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.apps.operator.generate import generate_demonstrations
+from tooltransfer.planner.learning.segmentation import Segmentation, segment
+from tooltransfer.planner.learning.segmentation.rest import camera_noise, still_tail
 from tooltransfer.problems.dataset import Dataset, Demonstration, load_dataset
 from tooltransfer.tools import load_tool
 from tooltransfer.tools.objects import OBJECT_RADIUS

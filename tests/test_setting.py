@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.setting import Setting, setting_from_task, task_skills
+from tooltransfer.planner.planning.setting import Setting, setting_from_task, task_skills
 from tooltransfer.problems import PAPER_TRANSFER
 from tooltransfer.problems.task import load_task
 from tooltransfer.tools import load_tool
@@ -18,7 +18,7 @@ from tooltransfer.tools.objects import DiscObject
 from tooltransfer.tools.omni.platform import OmniPlatform
 
 ROOT = Path(__file__).resolve().parents[1]
-#: The task-to-world helpers only :mod:`tooltransfer.planner.setting` calls.
+#: The task-to-world helpers only :mod:`tooltransfer.planner.planning.setting` calls.
 BUILDERS = {"task_tool", "task_platform", "task_obstacles", "effective_margin", "DiscObject"}
 #: Modules (by file name) that may call them anyway, with why: the batch generator probes the Omni's
 #: reach before a task exists.
@@ -33,8 +33,8 @@ def _world(setting: Setting) -> dict:
 
 
 def test_solve_and_the_figures_plan_for_the_task_setting() -> None:
-    from tooltransfer.planner.plots.paper_figures import figure_setting
-    from tooltransfer.planner.solve import solve
+    from tooltransfer.planner.apps.plots.paper_figures import figure_setting
+    from tooltransfer.planner.planning.solve import solve
 
     task = load_task(PAPER_TRANSFER)
     setting = setting_from_task(task, task_skills(task))
@@ -84,4 +84,4 @@ def test_only_the_setting_module_builds_the_world_from_a_task() -> None:
         extra = (_calls(path) & BUILDERS) - ALLOWED.get(path.name, set())
         if extra:
             bad.append(f"{path.relative_to(ROOT).as_posix()}: {sorted(extra)}")
-    assert not bad, "the world built outside tooltransfer.planner.setting:\n" + "\n".join(bad)
+    assert not bad, "the world built outside tooltransfer.planner.planning.setting:\n" + "\n".join(bad)

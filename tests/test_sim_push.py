@@ -4,7 +4,7 @@ A straight forward push with the upper face moves the puck forward with the tool
 penetration, and reports the contact on the upper face. The tool's heading is not free on the
 Omni (it follows q1), so the face turns as the tool moves sideways and the round puck, pushed
 along the face's normal, rolls along the face and drifts: the platform shows this (measured
-figures in the docstrings; ``planner/plots/heading_drift.py`` draws it).
+figures in the docstrings; ``planner/apps/plots/heading_drift.py`` draws it).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from tooltransfer.planner.cli import main
+from tooltransfer.planner.apps.cli import main
 
 ROOT = Path(__file__).resolve().parents[1] / "problems"
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tooltransfer.planner.ss import SwitchTask, learn_switch_skill, optimize, recombine
-from tooltransfer.planner.ss.adapter import dataset_switches, default_dataset
+from tooltransfer.planner.learning.switch_dataset import dataset_switches, default_dataset
+from tooltransfer.planner.planning.ss import SwitchTask, learn_switch_skill, optimize, recombine
 from tooltransfer.tools.library import load_tool
 
 

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from tooltransfer.planner.plots.switches import plot_generalized_switches, plot_learned_switches
-from tooltransfer.planner.ss import learn_switch_skill
-from tooltransfer.planner.ss.cases import fig11_task
-from tooltransfer.planner.ss.synthetic import synthetic_switches
+from tooltransfer.planner.apps.plots.switches import plot_generalized_switches, plot_learned_switches
+from tooltransfer.planner.planning.ss import learn_switch_skill
+from tooltransfer.planner.planning.ss.cases import fig11_task
+from tooltransfer.planner.planning.ss.synthetic import synthetic_switches
 
 
 def test_figures_are_written(tmp_path) -> None:

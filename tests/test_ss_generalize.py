@@ -7,9 +7,9 @@ import itertools
 import numpy as np
 import pytest
 
-from tooltransfer.planner.ss import SwitchSkill, SwitchTask, learn_switch_skill, recombine
-from tooltransfer.planner.ss.cases import fig11_task
-from tooltransfer.planner.ss.synthetic import synthetic_switches
+from tooltransfer.planner.planning.ss import SwitchSkill, SwitchTask, learn_switch_skill, recombine
+from tooltransfer.planner.planning.ss.cases import fig11_task
+from tooltransfer.planner.planning.ss.synthetic import synthetic_switches
 from tooltransfer.tools.clearance import swept_penetration_depth
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.pose import Pose2D
@@ -22,7 +22,7 @@ def skill(request: pytest.FixtureRequest) -> SwitchSkill:
 
 def exact_penetration(task: SwitchTask, xy: np.ndarray, yaw: np.ndarray) -> float:
     """Largest penetration over the steps, from tooltransfer.tools.clearance (independent of
-    tooltransfer.planner.ss.verify)."""
+    tooltransfer.planner.planning.ss.verify)."""
     poses = [Pose2D(*p, a) for p, a in zip(xy, yaw, strict=True)]
     return max(swept_penetration_depth(task.tool, a, b, task.shape) for a, b in itertools.pairwise(poses))
 
@@ -67,7 +67,7 @@ def test_unreachable_end_contact_is_infeasible_with_the_reason(skill: SwitchSkil
 
 
 def test_cached_linear_map_equals_fit_and_rollout(skill: SwitchSkill) -> None:
-    # tooltransfer.planner.ss.recombination: the fit of f^o and the rollout as one linear map per grid
+    # tooltransfer.planner.planning.ss.recombination: the fit of f^o and the rollout as one linear map per grid
     rng = np.random.default_rng(3)
     for tool, fa, fb in [("finger", "upper", "left"), ("t_shape", "left", "top"), ("trapezoid", "left", "inclined")]:
         task = SwitchTask(load_tool(tool), fa, fb, np.array([rng.uniform(-0.03, 0.03), rng.uniform(0.14, 0.18)]))
@@ -80,7 +80,7 @@ def test_cached_linear_map_equals_fit_and_rollout(skill: SwitchSkill) -> None:
 
 
 def test_vectorized_disc_depths_equal_tools_clearance(skill: SwitchSkill) -> None:
-    from tooltransfer.planner.ss.verify import sweep_check
+    from tooltransfer.planner.planning.ss.verify import sweep_check
 
     for name in ("fig11a", "fig11a_stem", "fig11b"):
         task = fig11_task(name)

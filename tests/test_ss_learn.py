@@ -9,10 +9,10 @@ import pytest
 
 from tooltransfer.dmp.primitive import DMP
 from tooltransfer.errors import InputError, SkillFileError
-from tooltransfer.planner.ss import DemoSwitch, SwitchSkill, learn_switch_skill
-from tooltransfer.planner.ss.learn import decompose
-from tooltransfer.planner.ss.synthetic import synthetic_switches
-from tooltransfer.planner.ss.virtual import virtual_motion
+from tooltransfer.planner.learning.switch_skill import decompose
+from tooltransfer.planner.learning.virtual_motion import virtual_motion
+from tooltransfer.planner.planning.ss import DemoSwitch, SwitchSkill, learn_switch_skill
+from tooltransfer.planner.planning.ss.synthetic import synthetic_switches
 from tooltransfer.tools.objects import Disc
 
 

@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 import shapely
 
-from tooltransfer.planner.ss import OptOptions, SwitchTask, learn_switch_skill, optimize
-from tooltransfer.planner.ss import nlp as nlp_module
-from tooltransfer.planner.ss.bodies import UNIT, all_bodies
-from tooltransfer.planner.ss.cases import fig11_task
-from tooltransfer.planner.ss.nlp import build_nlp, clear_cache
-from tooltransfer.planner.ss.synthetic import synthetic_switches
+from tooltransfer.planner.planning.ss import OptOptions, SwitchTask, learn_switch_skill, optimize
+from tooltransfer.planner.planning.ss import nlp as nlp_module
+from tooltransfer.planner.planning.ss.bodies import UNIT, all_bodies
+from tooltransfer.planner.planning.ss.cases import fig11_task
+from tooltransfer.planner.planning.ss.nlp import build_nlp, clear_cache
+from tooltransfer.planner.planning.ss.synthetic import synthetic_switches
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.heading import heading

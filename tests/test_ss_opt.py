@@ -10,9 +10,16 @@ import shapely
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from tooltransfer.planner.ss import OptOptions, SwitchSkill, SwitchTask, learn_switch_skill, optimize, recombine
-from tooltransfer.planner.ss.cases import fig11_task, random_task
-from tooltransfer.planner.ss.synthetic import synthetic_switches
+from tooltransfer.planner.planning.ss import (
+    OptOptions,
+    SwitchSkill,
+    SwitchTask,
+    learn_switch_skill,
+    optimize,
+    recombine,
+)
+from tooltransfer.planner.planning.ss.cases import fig11_task, random_task
+from tooltransfer.planner.planning.ss.synthetic import synthetic_switches
 from tooltransfer.tools.clearance import swept_penetration_depth
 from tooltransfer.tools.library import load_tool
 from tooltransfer.tools.model import Face, Tool
@@ -134,7 +141,7 @@ def test_hard_switches_are_solved_from_a_path_round_the_object(skill: SwitchSkil
 
 
 def test_round_paths_join_the_contacts_outside_the_c_obstacle() -> None:
-    from tooltransfer.planner.ss.initial import c_obstacle, round_paths
+    from tooltransfer.planner.planning.ss.initial import c_obstacle, round_paths
 
     task = fig11_task("fig11a_stem")
     a, b = task.contact("from"), task.contact("to")
@@ -179,7 +186,7 @@ def test_polygon_object_with_disc_and_polygon_obstacles(skill: SwitchSkill) -> N
                       obstacles=(Disc(c + np.array([0.055, 0.02]), 0.01), shapely.box(-0.075, 0.17, -0.06, 0.185)))
     # the upper face meets the square flush (its heading iteration alternates between two corners):
     # the contact has the Omni's heading at its position and touches without overlap
-    from tooltransfer.planner.ss.verify import pose_depth_and_gap
+    from tooltransfer.planner.planning.ss.verify import pose_depth_and_gap
     from tooltransfer.tools.omni.heading import heading
 
     a = task.contact("from")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tooltransfer.planner.timing import min_jerk_along, min_jerk_duration, stretch_factor
+from tooltransfer.timing import min_jerk_along, min_jerk_duration, stretch_factor
 
 
 @pytest.mark.parametrize(("length", "v_max", "a_max"), [(0.1, 0.05, 0.25), (0.01, 0.05, 0.01), (0.3, 0.02, 5.0)])

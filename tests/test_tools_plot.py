@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from tooltransfer.planner.plots.tool_library import plot_tool_library
+from tooltransfer.planner.apps.plots.tool_library import plot_tool_library
 
 
 def test_plot_tools_writes_png(tmp_path: Path) -> None:

@@ -10,7 +10,7 @@ from typing import get_args
 import pytest
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner import variant_registry as reg
+from tooltransfer.planner.planning import variant_registry as reg
 from tooltransfer.problems.task import SSOptions
 from tooltransfer.problems.variants import OEVariant, SSVariant
 
@@ -20,8 +20,8 @@ SCANNED = ("dmp", "planner", "problems", "tools", "benchmarks")
 NAMES = frozenset(get_args(OEVariant)) | frozenset(get_args(SSVariant))
 #: Comparisons with a variant's spelling that are not a variant choice, with why.
 NOT_VARIANTS = {
-    "kind != 'arch'",  # the SS skill's virtual object motion, "arch" or "line" (ss/virtual.py)
-    "init == 'dmp'",  # the NLP's initial path: the recombined one (ss/opt_variant.py)
+    "kind != 'arch'",  # the SS skill's virtual object motion, "arch" or "line" (learning/virtual_motion.py)
+    "init == 'dmp'",  # the NLP's initial path: the recombined one (planning/ss/opt_variant.py)
     "self.init not in ('auto', 'dmp')",  # the same option's validation
 }
 #: The registry module, and modules still to move onto it (none left), by file name.
@@ -53,7 +53,7 @@ def test_no_string_comparison_with_a_variant_name_outside_the_registry() -> None
             continue
         rel = path.relative_to(ROOT).as_posix()
         bad += [f"{rel}: {expr}" for expr in _variant_comparisons(path) if expr not in NOT_VARIANTS]
-    assert not bad, "variant choice outside tooltransfer.planner.variant_registry:\n" + "\n".join(bad)
+    assert not bad, "variant choice outside tooltransfer.planner.planning.variant_registry:\n" + "\n".join(bad)
 
 
 def test_the_scan_sees_each_kind_of_comparison(tmp_path: Path) -> None:
@@ -87,7 +87,7 @@ def test_the_one_fallback_rule() -> None:
 
 
 def test_a_skill_variant_without_a_skill_is_refused() -> None:
-    from tooltransfer.planner.setting import Setting
+    from tooltransfer.planner.planning.setting import Setting
     from tooltransfer.tools import load_tool
     from tooltransfer.tools.objects import DiscObject
     from tooltransfer.tools.omni.platform import OmniPlatform

@@ -18,7 +18,7 @@
    file under ``docs/`` is rewritten relative to the page, any other becomes its text followed by the
    path in code, and an image outside ``docs/`` becomes its caption and path.
 
-2. **Module docstrings and schemas.** ``<!-- docstring: tooltransfer.planner.plan -->`` is replaced by that
+2. **Module docstrings and schemas.** ``<!-- docstring: tooltransfer.planner.planning.plan -->`` is replaced by that
    module's docstring (read from its source, not imported; a reST ``::`` before a literal block
    becomes ``:``). ``<!-- schema: tooltransfer.problems.task.Task -->`` imports the pydantic model and writes a
    table of its fields, nested models as dotted paths (type, default, description). Pages outside
@@ -26,8 +26,8 @@
    would give one identifier two URLs.
 
 3. **Sphinx roles in docstrings.** The code's docstrings cross-reference with Sphinx roles
-   (``:func:`tooltransfer.planner.solve.solve```), which Markdown renders as ``:func:<code>...</code>``. The role
-   is dropped and the name becomes an optional mkdocs-autorefs reference: a link where the name is
+   (``:func:`tooltransfer.planner.planning.solve.solve```), which Markdown renders as ``:func:<code>...</code>``. The
+   role is dropped and the name becomes an optional mkdocs-autorefs reference: a link where the name is
    documented on the site, plain code where it is not (never a warning). ``~a.b.C`` shows ``C``.
 """
 

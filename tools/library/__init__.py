@@ -204,7 +204,7 @@ def library_names() -> tuple[str, ...]:
 
 def read_tool_file(path: str | Path) -> Tool:
     """Load and validate one tool file."""
-    from tooltransfer.tools.yaml_file import read_yaml
+    from tooltransfer.yaml_file import read_yaml
 
     p = Path(path)
 

@@ -3,8 +3,8 @@
 The tool centre point at world position ``x`` (2,) is reached with the waist angle (forward branch)
 ``a = phi(x - b) - atan2(d_t, u)``, ``u = sqrt(|x - b|^2 - d_t^2)``, where ``b`` is the joint-1 axis,
 ``phi`` the polar angle and ``d_t`` the DH tool row's offset; ``a = base_yaw + q1`` and the tool yaw
-is ``a - pi/2`` (see :mod:`tooltransfer.planner.oe.face_frame`). This is smooth wherever ``|x - b| > d_t``, which
-the reach rows of the switch NLP guarantee (the inner reach radius is larger than ``d_t``), so the
+is ``a - pi/2`` (see :mod:`tooltransfer.planner.planning.oe.face_frame`). This is smooth wherever ``|x - b| > d_t``,
+which the reach rows of the switch NLP guarantee (the inner reach radius is larger than ``d_t``), so the
 switch NLP can use the heading as a function of position.
 """
 

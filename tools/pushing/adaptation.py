@@ -1,7 +1,7 @@
 """Adapting the push model on line: ``mu`` and ``c`` identified again from the pushes just executed.
 
 A robot that pushes in chunks and observes the resting object after each one (the closed loop of
-:func:`tooltransfer.planner.closed_loop.execute_closed_loop`) hands every chunk to an
+:func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`) hands every chunk to an
 :class:`Adaptation`: the commanded tool poses and the object observed at rest before and after it,
 kept as a :class:`~tooltransfer.tools.pushing.identify.RecordedPush`. A chunk the model in force
 predicts (:func:`tooltransfer.tools.pushing.forward.simulate`) more than :data:`ADAPT_ERROR` off is

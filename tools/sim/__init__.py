@@ -11,7 +11,7 @@
 * :mod:`tooltransfer.tools.sim.platform`: :class:`SimPlatform`, stateful: reset, execute in chunks, observe.
 * :mod:`tooltransfer.tools.sim.batch`: :func:`execute_many`, many executions on a thread pool.
 * :mod:`tooltransfer.tools.sim.scenarios`: scripted pushes (a straight push, the sideways sweep that shows the
-  heading drift) used by the tests, the benchmark and ``planner/plots/heading_drift.py``.
+  heading drift) used by the tests, the benchmark and ``planner/apps/plots/heading_drift.py``.
 
 SI units and the world frame of docs/design.md section 2 throughout.
 """

@@ -1,0 +1,197 @@
+"""The results of a batch in SQLite: one row per (task, variant), written as each one finishes.
+
+Tables: ``meta`` (batch name, digest, batch file as JSON), ``tasks`` (one row per generated task
+with its difficulty measures and task JSON) and ``results`` (OMPL-like: task id, tool, variant,
+status ``solved|violated|infeasible|error|timeout``, reason, per-stage planning times [s], number of
+QPs, violation maxima, clearances [m], goal error [m], path length [m], pushes, switches, worker, start
+and finish times (Unix seconds); every plan metric is kept in ``metrics_json``; with ``--simulate``
+the executions of a solved plan: open loop (``open_loop_*``, also under the schema-1 names
+``sim_*``) and closed loop (``closed_loop_*``), each with a status, a reason and a wall time). The
+journal is WAL; each row is committed on its own, so a process killed at any point loses at most
+the rows not yet written, and ``(task_id, variant)`` is the primary key: a row can never be stored
+twice.
+
+Schema 2 added the execution columns. A schema-1 file (no ``open_loop_*``/``closed_loop_*``
+columns) still opens for reading (:meth:`ResultStore.rows` gives its ``sim_final_error`` as
+``open_loop_error``); :func:`tooltransfer.planner.apps.batch.runner.open_batch_store` refuses to resume it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import sqlite3
+from collections.abc import Iterable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from tooltransfer.errors import InputError
+
+SCHEMA_VERSION = "2"
+#: Schemas :class:`ResultStore` can read (only the current one is resumed).
+READABLE_SCHEMAS = ("1", "2")
+
+#: Columns of ``results`` and their SQL types.
+RESULT_COLUMNS: dict[str, str] = {
+    "task_id": "TEXT NOT NULL", "variant": "TEXT NOT NULL", "oe": "TEXT", "ss": "TEXT", "tool": "TEXT",
+    "status": "TEXT NOT NULL", "reason": "TEXT",
+    "time_total": "REAL", "cpu_time": "REAL", "time_skills": "REAL", "time_oe": "REAL",
+    "time_switches_and_timing": "REAL", "n_qp": "REAL",
+    "cone_violation_max": "REAL", "reach_violation_max": "REAL", "penetration_max": "REAL",
+    "joint_limit_violation_max": "REAL", "obstacle_clearance_min": "REAL", "switch_clearance_min": "REAL",
+    "switch_obstacle_clearance_min": "REAL", "goal_error": "REAL", "path_length": "REAL", "n_pushes": "REAL",
+    "n_switches": "INTEGER", "duration": "REAL",
+    "sim_final_error": "REAL", "sim_tool_deviation": "REAL", "sim_wall_time": "REAL", "sim_success": "INTEGER",
+    "open_loop_status": "TEXT", "open_loop_reason": "TEXT", "open_loop_error": "REAL", "open_loop_wall_time": "REAL",
+    "closed_loop_status": "TEXT", "closed_loop_reason": "TEXT", "closed_loop_error": "REAL",
+    "closed_loop_pushes": "INTEGER", "closed_loop_switches": "INTEGER", "closed_loop_recontacts": "INTEGER",
+    "closed_loop_replans": "INTEGER", "closed_loop_replan_time_median": "REAL", "closed_loop_replan_time_max": "REAL",
+    "closed_loop_wall_time": "REAL", "closed_loop_seed": "INTEGER",
+    "wall_time": "REAL", "worker": "TEXT", "started_at": "REAL", "finished_at": "REAL",
+    "metrics_json": "TEXT", "detail": "TEXT",
+}
+
+TASK_COLUMNS: dict[str, str] = {
+    "task_id": "TEXT PRIMARY KEY", "idx": "INTEGER", "tool": "TEXT", "n_obstacles": "INTEGER",
+    "start_reach": "REAL", "target_reach": "REAL", "reach_margin": "REAL", "distance": "REAL", "task_json": "TEXT",
+}
+
+
+class ResultStore:
+    """A batch's SQLite file (created if missing).
+
+    Args:
+        path: the database file.
+    """
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.db = sqlite3.connect(self.path, timeout=30.0)
+            self.db.execute("PRAGMA journal_mode=WAL")
+            self.db.execute("PRAGMA synchronous=NORMAL")  # WAL + NORMAL: durable against a killed process
+            cols = ", ".join(f"{k} {v}" for k, v in RESULT_COLUMNS.items())
+            tcols = ", ".join(f"{k} {v}" for k, v in TASK_COLUMNS.items())
+            with self.db:
+                self.db.execute("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT)")
+                self.db.execute(f"CREATE TABLE IF NOT EXISTS tasks ({tcols})")
+                self.db.execute(f"CREATE TABLE IF NOT EXISTS results ({cols}, PRIMARY KEY (task_id, variant))")
+        except sqlite3.DatabaseError as exc:
+            raise InputError("--db", "an SQLite results file (or a new path)", f"{self.path}: {exc}") from None
+        version = self.meta().get("schema")
+        if version is None:
+            self.set_meta(schema=SCHEMA_VERSION)
+            version = SCHEMA_VERSION
+        elif version not in READABLE_SCHEMAS:
+            raise InputError("--db", f"a results file of schema {' or '.join(READABLE_SCHEMAS)}", f"schema {version}")
+        #: the file's schema (see the module docstring)
+        self.schema = version
+
+    def close(self) -> None:
+        self.db.close()
+
+    def __enter__(self) -> ResultStore:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def meta(self) -> dict[str, str]:
+        return dict(self.db.execute("SELECT key, value FROM meta").fetchall())
+
+    def set_meta(self, **values: str) -> None:
+        with self.db:
+            self.db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", values.items())
+
+    def add_tasks(self, tasks: Iterable[dict[str, Any]]) -> None:
+        """Record tasks (already recorded ids are kept as they are)."""
+        keys = list(TASK_COLUMNS)
+        sql = f"INSERT OR IGNORE INTO tasks ({', '.join(keys)}) VALUES ({', '.join('?' * len(keys))})"
+        with self.db:
+            self.db.executemany(sql, ([t.get(k) for k in keys] for t in tasks))
+
+    def done(self) -> set[tuple[str, str]]:
+        """The (task id, variant) pairs already stored."""
+        return set(self.db.execute("SELECT task_id, variant FROM results").fetchall())
+
+    def done_for(self, task_ids: Sequence[str]) -> set[tuple[str, str]]:
+        """The (task id, variant) pairs already stored for these tasks."""
+        out: set[tuple[str, str]] = set()
+        for i in range(0, len(task_ids), 500):
+            part = list(task_ids[i : i + 500])
+            sql = f"SELECT task_id, variant FROM results WHERE task_id IN ({', '.join('?' * len(part))})"
+            out.update(self.db.execute(sql, part).fetchall())
+        return out
+
+    def put(self, row: dict[str, Any]) -> None:
+        """Store one result row and commit it (raises ``sqlite3.IntegrityError`` for a stored key)."""
+        keys = [k for k in RESULT_COLUMNS if k in row]
+        vals = [json.dumps(row[k]) if isinstance(row[k], dict | list) else row[k] for k in keys]
+        with self.db:
+            self.db.execute(f"INSERT INTO results ({', '.join(keys)}) VALUES ({', '.join('?' * len(keys))})", vals)
+
+    def forget(self, statuses: Sequence[str]) -> int:
+        """Delete the rows of these statuses (to run them again); how many were deleted."""
+        with self.db:
+            cur = self.db.execute(f"DELETE FROM results WHERE status IN ({', '.join('?' * len(statuses))})",
+                                  list(statuses))
+        return cur.rowcount
+
+    def rows(self) -> list[dict[str, Any]]:
+        """Every result joined with its task's difficulty measures, in task and variant order."""
+        cur = self.db.execute(
+            "SELECT r.*, t.n_obstacles, t.start_reach, t.target_reach, t.reach_margin, t.distance, t.idx "
+            "FROM results r LEFT JOIN tasks t USING (task_id) ORDER BY t.idx, r.task_id, r.variant")
+        names = [d[0] for d in cur.description]
+        rows = [dict(zip(names, r, strict=True)) for r in cur.fetchall()]
+        if "open_loop_error" not in names:  # schema 1: its simulation was open loop
+            for r in rows:
+                if r.get("sim_final_error") is not None:
+                    r.update(open_loop_status="done", open_loop_error=r["sim_final_error"],
+                             open_loop_wall_time=r.get("sim_wall_time"))
+        return rows
+
+    def count(self) -> int:
+        return int(self.db.execute("SELECT COUNT(*) FROM results").fetchone()[0])
+
+
+@contextmanager
+def lock_store(path: str | Path) -> Iterator[Path]:
+    """Hold the exclusive lock of the store ``path`` while a ``batch run`` writes it: an advisory lock
+    (``flock``) on ``<path>.lock``, released when the process ends however it ends (a SIGKILL too),
+    so a second run on the same store is refused at once instead of computing every pair again.
+
+    Raises:
+        InputError: naming ``--db``, the store and the process holding it.
+    """
+    p = Path(path)
+    lock = p.with_name(p.name + ".lock")
+    try:
+        lock.parent.mkdir(parents=True, exist_ok=True)
+        fh = open(lock, "a+")  # held open for the lock's lifetime
+    except OSError as exc:
+        raise InputError("--db", "a results file whose folder is writable (for its lock file)",
+                         f"{lock}: {exc.strerror}") from None
+    try:
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX: no lock (documented)
+            yield lock
+            return
+        try:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            fh.seek(0)
+            holder = fh.read().strip()[:100] or "another process"
+            raise InputError(f"--db {p}", "a results file no other `tooltransfer batch run` is writing (wait for it "
+                             f"to finish, or run into another --db; lock {lock.name})", f"in use by {holder}") from None
+        fh.seek(0)
+        fh.truncate()
+        fh.write(f"process {os.getpid()} on {socket.gethostname()}\n")
+        fh.flush()
+        yield lock
+    finally:
+        fh.close()  # releases the lock

@@ -1,0 +1,12 @@
+"""Segmenting demonstrations into pushes and switches (docs/design.md section 5, step 1): see
+:mod:`tooltransfer.planner.learning.segmentation.core` for the method."""
+
+from tooltransfer.planner.learning.segmentation.core import (
+    PushSegment,
+    Segmentation,
+    SwitchSegment,
+    load_fixed_points,
+    segment,
+)
+
+__all__ = ["PushSegment", "Segmentation", "SwitchSegment", "load_fixed_points", "segment"]

@@ -1,7 +1,0 @@
-"""OE skill condensing for a new tool (docs/design.md section 5): push plans, the ``qp`` variant, metrics."""
-
-from tooltransfer.planner.oe.face_frame import FaceFrame
-from tooltransfer.planner.oe.push_plan import Push, PushPlan
-from tooltransfer.planner.oe.qp_variant import QPOptions, condense_qp
-
-__all__ = ["FaceFrame", "Push", "PushPlan", "QPOptions", "condense_qp"]

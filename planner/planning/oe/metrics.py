@@ -1,0 +1,80 @@
+"""Metrics of a push plan, one function for both OE variants, computed on the plan's dense path."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+
+from tooltransfer.planner.planning.oe.constraints import HeadingCone
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame
+from tooltransfer.planner.planning.oe.push_plan import PushPlan
+from tooltransfer.planner.planning.oe.sequence_proxy import reach_distance
+from tooltransfer.tools.objects import Disc
+
+if TYPE_CHECKING:
+    from tooltransfer.planner.planning.setting import Setting
+
+
+def _deviation(x: NDArray[np.float64], t: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Distance [m] from each point of ``x`` (T, 2) to the universal path ``ref`` (R, 2) at the same
+    phase (``ref`` resampled on ``t``)."""
+    tr = np.linspace(t[0], t[-1], ref.shape[0])
+    r = np.column_stack([np.interp(t, tr, ref[:, j]) for j in range(2)])
+    return np.linalg.norm(x - r, axis=1)
+
+
+def plan_metrics(
+    plan: PushPlan,
+    frames: Mapping[str, FaceFrame],
+    target: NDArray[np.float64],
+    setting: Setting,
+    *,
+    speed_tol: float = 1e-3,
+) -> dict[str, float]:
+    """The shared metrics of a solved plan.
+
+    Returns a dict with: ``cone_violation_max`` [rad] (largest angle by which the object's motion
+    leaves the active face's admissible cone, over samples moving faster than ``speed_tol`` [m/s]:
+    1 mm/s by default, where the fit's tolerance of 1e-6 m/s bounds the angle by 1e-3 rad; slower,
+    a path coming to a stop points anywhere);
+    ``friction_cone_margin_min`` [rad] (least ``atan(mu) - |phi_c|`` over the pushes: negative means
+    a contact that would slide); ``contact_edge_margin_min`` [m] (least distance of the contact from
+    the ends of its face's usable range: negative means it leaves the face); ``n_recontacts``;
+    ``obstacle_clearance_min`` [m] (object edge to obstacle edge, inf without obstacles; below
+    ``margin`` means the safety margin is not kept); ``reach_violation_max`` [m] (distance outside
+    the active face's exact reach region); ``goal_error`` [m]; ``deviation_mean``,
+    ``deviation_max`` [m] (from the universal path at the same phase); ``n_pushes``;
+    ``path_length`` [m].
+    """
+    x, v, t = plan.object_xy, plan.object_v, plan.t
+    cone, reach = 0.0, 0.0
+    for p in plan.pushes:
+        fr = frames[p.face]
+        cone = max(cone, HeadingCone(fr).angle_violation(x[p.samples], v[p.samples], speed_tol))
+        reach = max(reach, float(reach_distance(fr, x[p.samples]).max(initial=0.0)))
+    clear = np.inf
+    for o in setting.obstacles:
+        if isinstance(o, Disc):
+            gap = np.linalg.norm(x - o.centre, axis=1) - o.radius
+        else:
+            gap = shapely.distance(o, shapely.points(x))
+        clear = min(clear, float(gap.min()) - setting.radius)
+    dev = _deviation(x, t, plan.universal)
+    return {
+        "cone_violation_max": cone,
+        "friction_cone_margin_min": min((p.cone_margin for p in plan.pushes), default=float("nan")),
+        "contact_edge_margin_min": min((p.edge_margin for p in plan.pushes), default=float("nan")),
+        "n_recontacts": float(sum(p.recontact for p in plan.pushes)),
+        "obstacle_clearance_min": clear,
+        "margin": setting.margin,
+        "reach_violation_max": reach,
+        "goal_error": float(np.linalg.norm(x[-1] - target)),
+        "deviation_mean": float(dev.mean()),
+        "deviation_max": float(dev.max()),
+        "n_pushes": float(len(plan.pushes)),
+        "path_length": float(np.sum(np.linalg.norm(np.diff(x, axis=0), axis=1))),
+    }

@@ -1,0 +1,536 @@
+"""The ``qp`` variant of OE condensing (this project, docs/design.md section 5 step 5).
+
+For a new tool, the generalized universal object path is condensed into pushes the tool can make
+on the Omni. A candidate push sequence (faces in order, switch times) is scored by the constrained
+DMP fit of :mod:`tooltransfer.dmp.qp`: track the universal path, with, during each push, the object's velocity in
+the active face's admissible cone (its friction cone about the normal, narrowed to the options'
+``friction_cone_fraction`` and intersected with the tool file's cone, turning with the tool heading, re-linearised
+until it settles; :mod:`tooltransfer.planner.planning.oe.face_frame`), the contact on the face's usable segment as it
+rolls (:class:`tooltransfer.planner.planning.oe.constraints.ContactOnFace`), the object where the Omni can push it from
+with that face wherever the contact is on it (:func:`tooltransfer.planner.planning.oe.constraints.reach_constraints` at
+both ends of the segment), obstacles kept out with the setting's margin beyond its radius, and the
+target reached with zero velocity. At a switch instant
+both faces' rows hold, so the object stops there when their cones do not overlap (the tool moves
+round it while it stands still). Cost: the fit's objective (half the mean squared deviation from
+the universal path [m^2]) plus ``switch_price`` per face change.
+
+Search (:func:`condense_qp`), bounded and pruned, not exhaustive:
+
+1. pre-checks: the start and the target must each be in reach of some face (else ``infeasible``);
+2. every face order of at most ``max_pushes`` pushes is ranked by a proxy
+   (:mod:`tooltransfer.planner.planning.oe.sequence_proxy`) with switch times on a grid of ``segments`` equal phases;
+3. the ``candidates`` best are scored by the QP (one sequential-convex solve each) on a coarser
+   screening grid;
+4. the best feasible one has each switch moved by one segment either way, kept when it lowers
+   the cost (one pass);
+5. the cheapest screened candidates are solved again on the full grid; the first feasible one
+   whose pushes the inverse push model realises (:mod:`tooltransfer.planner.planning.oe.contacts`: tool poses, the
+   contact's start, re-contacts where one contact cannot carry the travel) is the plan.
+
+What it guarantees: the returned plan satisfies every constraint family on the dense grid (the
+measured violations are in its metrics), and it is the cheapest of the sequences scored; it does
+not guarantee the global optimum over all sequences and switch times. ``infeasible`` means the
+pre-checks failed or no scored candidate was feasible; the reason names which and why.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
+
+from tooltransfer.dmp import DMP
+from tooltransfer.dmp.qp import (
+    FitProblem,
+    FitResult,
+    FixedEndPoint,
+    OutsideDisc,
+    OutsidePolygon,
+    Ridge,
+    TrackPath,
+    ZeroEndVelocity,
+    solve_fit,
+)
+from tooltransfer.dmp.qp.constraints.base import Constraint
+from tooltransfer.errors import InputError
+from tooltransfer.planner.planning.oe.constraints import ContactOnFace, HeadingCone, reach_constraints, reach_entry
+from tooltransfer.planner.planning.oe.contacts import PushRefused, realise_pushes, usable_range
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame
+from tooltransfer.planner.planning.oe.objectives import RollingPenalty
+from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
+from tooltransfer.planner.planning.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
+from tooltransfer.planner.planning.setting import Setting
+from tooltransfer.problems.task import OEOptions
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.pushing.inverse import FaceGeometry
+from tooltransfer.validation import check_array
+
+FINAL_TRIES = 3
+"""Screened candidates solved on the full grid, in order of cost, before the search gives up."""
+
+SCREEN_RTOL = 1e-3
+"""Relative objective change at which a screening fit stops re-linearising (the ranking is not
+changed by the last per-mille; the final fit runs to ``QPOptions.scp_rtol``)."""
+
+
+_TASK = OEOptions.model_fields
+#: The task's ``oe`` fields the ``qp`` variant uses: their defaults, bounds and descriptions are the
+#: task schema's (:class:`tooltransfer.problems.task.OEOptions`), reused, not written again.
+TASK_FIELDS = ("n_samples", "n_basis", "segments", "max_pushes", "candidates", "switch_price", "max_contacts",
+               "friction_cone_fraction", "contact_margin", "contact_span")
+
+
+class QPOptions(BaseModel):
+    """Options of the ``qp`` variant: the task's ``oe`` fields of :data:`TASK_FIELDS` (defaults,
+    bounds and descriptions of :class:`tooltransfer.problems.task.OEOptions`) and the search's own.
+    Validated once, by pydantic, when built (:meth:`from_task` takes the task's already validated
+    values); ``model_copy(update=...)`` makes a variant of it.
+
+    Attributes:
+        screen_samples: constraint-grid samples while candidates are ranked (a coarser grid; the
+            best candidates are then solved again on the full grid, the first feasible one wins).
+        switch_price: cost of one face change [m^2], in the units of the objective (half the mean
+            squared deviation): the default weighs a face change like 0.63 mm of RMS deviation; on the
+            transfer case the push count depends on it (benchmarks/README.md).
+        ridge: weight of a ridge on the weights [m^2 per weight^2]; 0 by default (tracking on more
+            samples than basis functions is already well posed; weights are O(100), so even 1e-10
+            outweighs a millimetre of deviation).
+        tol: violation [m, m/s] the fit aims at (rows violated by more are added). 1e-6 (1 um/s,
+            10 um over a 10 s push): at 1e-7 and below the linearised cone and contact rows of a later
+            sequential round admit spurious infeasibility proofs (benchmarks/README.md);
+        accept: largest true violation [m, m/s] of a candidate still counted feasible (the heading
+            cone is exact only where it was linearised, so rounds stop a little short of ``tol``);
+        max_scp: sequential-convex rounds per candidate.
+        scp_rtol: the sequential-convex loop stops when the objective changes by less than this
+            (relative) and the path meets every linearised row (screening fits use
+            ``SCREEN_RTOL``: ranking needs no more);
+        recontact_price: cost of one re-contact [m^2] (half a face change by default: a short move
+            of the same face, no switch round the object);
+        alternatives: further screened candidates a plan may hand out (``PushPlan.next_best``) when a
+            later stage fails on it (a switch that finds no path, a check that fails).
+        friction_cone_fraction: share (0, 1] of the friction cone's half-angle ``atan(mu)`` the
+            planned object directions may use about a face's normal (a plan that survives an error in
+            ``mu``: :meth:`tooltransfer.planner.planning.oe.face_frame.FaceFrame.build`).
+        contact_margin, contact_span: where on a face the contact may be [m]
+            (:func:`tooltransfer.planner.planning.oe.contacts.usable_range`).
+    """
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    n_samples: int = _TASK["n_samples"]
+    screen_samples: int = Field(60, ge=1, strict=True)
+    n_basis: int = _TASK["n_basis"]
+    segments: int = _TASK["segments"]
+    max_pushes: int = _TASK["max_pushes"]
+    candidates: int = _TASK["candidates"]
+    switch_price: float = _TASK["switch_price"]
+    ridge: float = Field(0.0, ge=0, allow_inf_nan=False)
+    tol: float = Field(1e-6, gt=0, allow_inf_nan=False)
+    accept: float = Field(1e-6, gt=0, allow_inf_nan=False)
+    max_scp: int = Field(12, ge=1, strict=True)
+    max_contacts: int = _TASK["max_contacts"]
+    alternatives: int = Field(4, ge=0, strict=True)
+    recontact_price: float = Field(1e-7, ge=0, allow_inf_nan=False)
+    scp_rtol: float = 1e-6
+    friction_cone_fraction: float = _TASK["friction_cone_fraction"]
+    contact_margin: float = _TASK["contact_margin"]
+    contact_span: float = _TASK["contact_span"]
+
+    @classmethod
+    def from_task(cls, oe: OEOptions) -> QPOptions:
+        """The options of a task's ``oe`` section (validated by the task schema, so not again), the
+        search's own fields at their defaults."""
+        return cls.model_construct(**oe.model_dump(include=set(TASK_FIELDS)))
+
+
+@dataclass(frozen=True)
+class _Scored:
+    faces: tuple[str, ...]
+    switches: tuple[float, ...]
+    result: FitResult
+
+    accept: float
+    contacts: int = 0
+    """contacts the pushes of the fitted path need (one per push plus the re-contacts)."""
+    excess: float = 0.0
+    """contact travel [m] beyond what ``max_contacts`` contacts per push carry (screening fits)."""
+
+    @property
+    def feasible(self) -> bool:
+        r = self.result
+        return r.status == "solved" or (r.status == "inaccurate" and max(r.violations.values()) <= self.accept)
+
+
+class _FitSetup:
+    """Everything fixed while candidates are scored."""
+
+    def __init__(
+        self, t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
+        target: NDArray[np.float64], opts: QPOptions, free_start: bool = False,
+    ) -> None:
+        self.t, self.universal, self.target, self.opts, self.setting = t, universal, target, opts, setting
+        self.free_start = free_start
+        tool = self.tool = setting.tool
+        self.platform = setting.platform
+        cone = opts.friction_cone_fraction
+        self.frames = {f: FaceFrame.build(setting, f, friction_cone_fraction=cone) for f in tool.face_names}
+        self._face_rows: dict[str, tuple[FaceGeometry, tuple[float, float], list[FaceFrame]]] = {}
+        for f in tool.face_names:
+            g = FaceGeometry.of(tool, f)
+            lo, hi = usable_range(tool, f, opts)
+            ends = [FaceFrame.build(setting, f, s=s / g.length, friction_cone_fraction=cone) for s in sorted({lo, hi})]
+            self._face_rows[f] = (g, (lo, hi), ends)
+        self.dmp = DMP(2, n_basis=opts.n_basis)
+        self.fixed: list[Constraint] = [FixedEndPoint(target), ZeroEndVelocity()]
+        grow = setting.radius + setting.margin
+        for o in setting.obstacles:
+            if isinstance(o, Disc):
+                self.fixed.append(OutsideDisc(o.centre, o.radius + grow, family="obstacle"))
+            else:
+                ring = np.asarray(o.exterior.coords)[:-1]
+                self.fixed.append(OutsidePolygon(ring, grow, family="obstacle"))
+        self._const: float | None = None
+
+    def problem(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> FitProblem:
+        edges = (self.t[0], *switches, self.t[-1])
+        cons = list(self.fixed)
+        for n, (face, lo, hi) in enumerate(zip(faces, edges[:-1], edges[1:], strict=True)):
+            fr = self.frames[face]
+            g, (s_lo, s_hi), ends = self._face_rows[face]
+            cons.append(HeadingCone(fr, window=(lo, hi)))
+            ref = self.universal[(self.t >= lo - 1e-12) & (self.t <= hi + 1e-12)] - fr.base
+            ang = np.arctan2(ref[:, 1], ref[:, 0])
+            near = (float(ang.min()), float(ang.max())) if ang.size else None
+            for end in ends:  # the Omni reaches the tool wherever the contact is on the face
+                rows = reach_constraints(end, window=(lo, hi), near=near)
+                if self.free_start and n == 0:
+                    start = self._entry(rows, lo, hi)
+                    rows = rows if start == lo else reach_constraints(end, window=(start, hi), near=near)
+                cons += rows
+            if s_hi > s_lo:
+                cons.append(ContactOnFace(fr, g, self.setting.mechanics, self.setting.radius, s_lo, s_hi,
+                                          max_contacts=self.opts.max_contacts, window=(lo, hi)))
+        objectives: list = [TrackPath(self.universal)]
+        if self.opts.ridge > 0:
+            objectives.append(Ridge(self.opts.ridge))
+        if self.opts.recontact_price > 0:
+            objectives.append(RollingPenalty(
+                [(self._face_rows[f][0], self.frames[f], lo, hi, self._face_rows[f][1])
+                 for f, lo, hi in zip(faces, edges[:-1], edges[1:], strict=True)],
+                self.universal, self.setting, self.opts.recontact_price))
+        return FitProblem(self.dmp, self.t, x0=self.universal[0], g=self.target, objectives=objectives,
+                          constraints=cons)
+
+    def _entry(self, rows: list[Constraint], lo: float, hi: float) -> float:
+        """When one contact end's reach ``rows`` start to apply in a re-plan's first window
+        ``[lo, hi]`` [s]: where the reference first satisfies them. A re-plan starts where the object
+        is, possibly outside the region every contact on the face reaches it from though inside the
+        one the actual contact does (the realised tool poses are then checked against the joint
+        limits exactly, :func:`condense_sequence`); ``lo`` when the reference starts inside or never
+        enters."""
+        inside = np.flatnonzero((self.t >= lo - 1e-12) & (self.t <= hi + 1e-12))
+        k = reach_entry(rows, self.universal[inside])
+        return lo if k == 0 or k >= inside.size else float(self.t[inside[k]])
+
+    def score(self, faces: tuple[str, ...], switches: tuple[float, ...], *, contact_rows: bool = True,
+              warm: bool = False) -> _Scored:
+        """The candidate's fit: first without the contact rows (cone, reach, obstacles and the ends).
+
+        Without ``contact_rows`` (screening) the contacts that path needs and the excess contact
+        travel beyond ``max_contacts`` contacts per push are only measured, for the cost. With them
+        (the final fit), the fit is repeated with the contact rows (:class:`ContactOnFace`, first
+        linearised at that path) when a push needs more than ``max_contacts`` contacts. Every fit
+        carries the rolling penalty (:class:`tooltransfer.planner.planning.oe.objectives.RollingPenalty`), so the number
+        of contacts is priced, not only bounded. A candidate the first stage finds infeasible is so for
+        the second.
+        """
+        problem = self.problem(faces, switches)
+        kw = {"tol": self.opts.tol, "max_scp": self.opts.max_scp, "scp_rtol": self.opts.scp_rtol}
+        contact = [c for c in problem.constraints if isinstance(c, ContactOnFace)]
+        first = replace(problem, constraints=[c for c in problem.constraints if not isinstance(c, ContactOnFace)])
+        x_start = None
+        if warm:
+            td = first.t_dense
+            x_start = np.column_stack([np.interp(td, self.t, self.universal[:, j]) for j in range(2)])
+        res = solve_fit(first, x_start=x_start, **kw)
+        scored = _Scored(faces, switches, res, self.opts.accept)
+        if not contact or res.rollout is None or not scored.feasible:
+            return scored
+        roll = res.rollout
+        t = roll.t + self.t[0]
+
+        def counts(r: FitResult) -> list[int]:
+            assert r.rollout is not None
+            return [max(1, int(np.ceil(c.need(t, r.rollout.x, r.rollout.v) / (c.hi - c.lo) - 1e-9))) for c in contact]
+
+        need = counts(res)
+        excess = sum(max(0.0, c.need(t, roll.x, roll.v) - c.max_contacts * (c.hi - c.lo)) for c in contact)
+        n = sum(need) + len(faces) - len(contact)
+        if not contact_rows:
+            return replace(scored, contacts=n, excess=excess)
+        if excess > 0.0:
+            res = solve_fit(problem, x_start=roll.x, **kw)
+            scored = _Scored(faces, switches, res, self.opts.accept)
+            if res.rollout is None or not scored.feasible:
+                return scored
+            need = counts(res)
+            n = sum(need) + len(faces) - len(contact)
+            scored = replace(scored, contacts=n)
+        return scored
+
+    def cost(self, s: _Scored) -> float:
+        """Half the mean squared deviation [m^2], plus the prices of the face changes and the
+        re-contacts, plus the squared excess contact travel of a screening fit [m^2] (what the
+        contact rows would have to bend away)."""
+        if not s.feasible:
+            return np.inf
+        recontacts = max(0, s.contacts - len(s.faces))
+        return (s.result.objective + self._offset + self.opts.switch_price * (len(s.faces) - 1)
+                + self.opts.recontact_price * recontacts + s.excess**2)
+
+    @property
+    def _offset(self) -> float:
+        """Constant the tracking objective drops (so costs read as half the mean squared deviation
+        [m^2]): ``0.5 mean |x_free - ref|^2`` on the grid, the same for every candidate."""
+        if self._const is None:
+            free = self.problem((next(iter(self.frames)),), ()).affine("grid").x_free
+            self._const = 0.5 * float(np.mean(np.sum((free - self.universal) ** 2, axis=1)))
+        return self._const
+
+
+def _precheck(fit: _FitSetup, check_start: bool = True) -> str:
+    ends = np.vstack([fit.universal[0], fit.target])
+    reach = {f: reach_distance(fr, ends) for f, fr in fit.frames.items()}
+    for i, what in ((0, "start"), (1, "target")):
+        if (i or check_start) and all(r[i] > 0 for r in reach.values()):
+            gap = min(r[i] for r in reach.values())
+            return f"{what} outside the Omni's reach for every face (nearest face {gap * 1e3:.1f} mm away)"
+    return ""
+
+
+def _pushes(fit: _FitSetup, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64],
+            s_first: float | None = None, spans_wanted: int | None = None) -> tuple[Push, ...]:
+    """The pushes of the fitted path (of its first ``spans_wanted`` faces), realised by the inverse
+    push model (raises PushRefused)."""
+    edges = (t[0], *best.switches, t[-1])
+    spans = [(face, np.flatnonzero((t >= lo - 1e-12) & (t <= hi + 1e-12)))
+             for face, lo, hi in zip(best.faces, edges[:-1], edges[1:], strict=True)]
+    pushes = realise_pushes(fit.setting, spans[:spans_wanted], t, x, fit.opts, s_first)
+    if fit.free_start:  # the fit's reach rows started late: the realised tool poses, exactly
+        from tooltransfer.tools.omni.ik import joint_path
+
+        for p in pushes:
+            jp = joint_path(fit.platform, p.tool_pose[:, :2])
+            bad = np.flatnonzero(jp.refused)
+            if bad.size:
+                where = np.round(p.tool_pose[bad[0], :2], 4).tolist()
+                raise PushRefused(f"face {p.face!r} would hold the tool at {where} m, outside the Omni's reach "
+                                  "or joint limits")
+    return pushes
+
+
+def condense_sequence(
+    t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
+    target: NDArray[np.float64], faces: tuple[str, ...], switches: tuple[float, ...],
+    options: QPOptions | None = None, *, s_first: float | None = None, first_face_only: bool = False,
+    free_start: bool = False,
+) -> PushPlan:
+    """One push sequence (``faces`` with switches at times ``switches`` [s]) fitted to the path
+    ``universal`` (T, 2) [m] on times ``t`` (T,) [s] and realised, without the search: the closed
+    loop's re-plan of the rest of a task from the observed object (``universal`` then runs from it).
+    The fit's non-convex rows are first linearised at ``universal`` (warm-started from the plan in
+    force, when that is what it is). ``s_first`` [m]: where the first face already touches the
+    object; ``first_face_only``: realise only the first face's pushes (what a receding horizon
+    executes before it re-plans; the pushes then end before the path does); ``free_start``: the
+    first face's reach rows apply from where the path enters them (an object observed off the plan
+    may start outside the region every contact on the face reaches it from), the realised tool poses
+    then checked exactly. ``infeasible`` with the reason when the fit or the realisation fails."""
+    start_time = time.perf_counter()
+    opts = options or QPOptions()
+    t = check_array(t, "t", ndim=1)
+    universal = check_array(universal, "universal", shape=(t.size, 2))
+    target = check_array(target, "target", shape=(2,))
+    grid = np.linspace(t[0], t[-1], opts.n_samples)
+    ref = np.column_stack([np.interp(grid, t, universal[:, j]) for j in range(2)])
+    fine = _FitSetup(grid, ref, setting, target, opts, free_start)
+    empty = np.zeros((0, 2))
+    s = fine.score(tuple(faces), tuple(float(v) for v in switches), warm=True)
+    if not s.feasible or s.result.rollout is None:
+        fams = ", ".join(s.result.families or tuple(k for k, v in s.result.violations.items() if v > opts.tol))
+        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, n_qp=s.result.scp_iterations,
+                        reason=f"the sequence {' -> '.join(faces)} is infeasible from here ({fams or 'unknown'})",
+                        metrics={"compute_time": time.perf_counter() - start_time})
+    roll = s.result.rollout
+    dense_t, x, v = roll.t + grid[0], roll.x, roll.v
+    try:
+        pushes = _pushes(fine, s, dense_t, x, s_first, 1 if first_face_only else None)
+    except PushRefused as exc:
+        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=str(exc),
+                        metrics={"compute_time": time.perf_counter() - start_time})
+    return PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, n_qp=s.result.scp_iterations,
+                    metrics={"compute_time": time.perf_counter() - start_time})
+
+
+def _infeasible(ref: NDArray[np.float64], start_time: float, reason: str, n_qp: int = 0, cands: tuple = ()) -> PushPlan:
+    """The plan when no push sequence works, with the ``reason``, the fits spent and the candidates
+    scored; ``ref`` the resampled universal path, ``start_time`` the condensation's start [s]."""
+    empty = np.zeros((0, 2))
+    return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=reason, n_qp=n_qp,
+                    candidates=cands, metrics={"compute_time": time.perf_counter() - start_time})
+
+
+def _screened(screen: _FitSetup, grid: NDArray[np.float64], opts: QPOptions) -> list[_Scored]:
+    """Every candidate scored on the screening grid: the best-ranked push sequences of the proxy
+    costs (switches at segment bounds), then the best feasible one's switches moved one segment
+    either way while that lowers its cost (a local search on the cuts)."""
+    v_ref = np.gradient(screen.universal, screen.t, axis=0)
+    names = list(screen.frames)
+    frames = [screen.frames[n] for n in names]
+    costs = segment_costs(screen.t, screen.universal, v_ref, frames, opts.segments)
+    bounds = np.linspace(grid[0], grid[-1], opts.segments + 1)
+    ranked = ranked_sequences(costs, names, opts.max_pushes, opts.switch_price)[: opts.candidates]
+    scored = [screen.score(faces, tuple(float(bounds[c]) for c in cuts), contact_rows=False)
+              for faces, cuts, _ in ranked]
+    feasible = [s for s in scored if s.feasible]
+    if feasible:
+        best = min(feasible, key=screen.cost)
+        cuts = [int(np.argmin(np.abs(bounds - s))) for s in best.switches]
+        for i in range(len(cuts)):
+            for step in (-1, 1):
+                trial = list(cuts)
+                trial[i] += step
+                lo = trial[i - 1] if i > 0 else 0
+                hi = trial[i + 1] if i + 1 < len(trial) else opts.segments
+                if not lo < trial[i] < hi:
+                    continue
+                s = screen.score(best.faces, tuple(float(bounds[c]) for c in trial), contact_rows=False)
+                scored.append(s)
+                if screen.cost(s) < screen.cost(best):
+                    best, cuts = s, trial
+    return scored
+
+
+@dataclass
+class _Finals:
+    """The final stage of one condensation: the candidates the screening grid ranked (``order``)
+    are solved again on the full grid (``fine``), in order; the first feasible one that the push
+    model realises is the plan, which can hand out the next one (``PushPlan.next_best``) when a
+    later stage (a switch) fails on it. ``scored`` gathers every fit, screening and final."""
+
+    screen: _FitSetup
+    fine: _FitSetup
+    scored: list[_Scored]
+    order: list[_Scored]
+    grid: NDArray[np.float64]
+    ref: NDArray[np.float64]
+    target: NDArray[np.float64]
+    setting: Setting
+    opts: QPOptions
+    start_time: float
+
+    def _spent(self) -> tuple[int, tuple]:
+        """The fits spent so far and the candidates scored (faces, switches, cost or None)."""
+        n_qp = sum(sc.result.scp_iterations for sc in self.scored)
+        cands = tuple((sc.faces, sc.switches, None if not sc.feasible else self.screen.cost(sc)) for sc in self.scored)
+        return n_qp, cands
+
+    def finalise(self, start: int, tried: int) -> PushPlan:
+        """The plan from the candidates ``order[start:]`` (at most ``FINAL_TRIES`` of them), after
+        ``tried`` final fits; infeasible with the reason when none works."""
+        why = ""
+        for i in range(start, min(len(self.order), start + FINAL_TRIES)):
+            s = self.order[i]
+            final = self.fine.score(s.faces, s.switches)
+            self.scored.append(final)
+            if not final.feasible or final.result.rollout is None:
+                continue
+            roll = final.result.rollout
+            dense_t, x, v = roll.t + self.grid[0], roll.x, roll.v
+            try:
+                pushes = _pushes(self.fine, final, dense_t, x)
+            except PushRefused as exc:
+                why = f"the push sequence {' -> '.join(final.faces)} cannot be realised: {exc}"
+                continue
+            return self._solved(final, dense_t, x, v, pushes, i + 1, tried + i + 1 - start)
+        n_qp, cands = self._spent()
+        if why:
+            return _infeasible(self.ref, self.start_time, why, n_qp, cands)
+        fams = sorted({f for sc in self.scored for f in (sc.result.families or tuple(
+            k for k, val in sc.result.violations.items() if val > self.opts.tol))})
+        return _infeasible(
+            self.ref, self.start_time,
+            f"none of the {len(self.scored)} push sequences scored is feasible "
+            f"(constraint families in conflict: {', '.join(fams) or 'unknown'})", n_qp, cands,
+        )
+
+    def _solved(self, best: _Scored, dense_t: NDArray[np.float64], x: NDArray[np.float64], v: NDArray[np.float64],
+                pushes: tuple[Push, ...], after: int, tried: int) -> PushPlan:
+        """The solved plan of ``best`` (dense path ``x`` [m], ``v`` [m/s] at ``dense_t`` [s]) with its
+        metrics; ``after``: the next candidate's index, ``tried``: final fits so far."""
+        n_qp, cands = self._spent()
+        plan = PushPlan("qp", "solved", dense_t, x, v, self.ref, pushes=pushes, n_qp=n_qp, candidates=cands)
+        from tooltransfer.planner.planning.oe.metrics import plan_metrics  # local: metrics import the plan types
+
+        metrics = plan_metrics(plan, self.fine.frames, self.target, self.setting)
+        metrics["compute_time"] = time.perf_counter() - self.start_time
+        metrics.update({f"violation_{k}": val for k, val in best.result.violations.items()})
+        per_qp = [sc.result.solve_time / max(sc.result.scp_iterations, 1) for sc in self.scored]
+        metrics.update({"n_qp": float(n_qp), "qp_time_median": float(np.median(per_qp)),
+                        "qp_time_max": max(per_qp), "final_candidates": float(tried)})
+        more = after < len(self.order) and tried < self.opts.alternatives + FINAL_TRIES
+        return PushPlan("qp", "solved", dense_t, x, v, self.ref, pushes=pushes, metrics=metrics, n_qp=n_qp,
+                        candidates=cands, next_best=(lambda: self.finalise(after, tried)) if more else None)
+
+
+def condense_qp(
+    t: NDArray[np.float64],
+    universal: NDArray[np.float64],
+    setting: Setting,
+    target: NDArray[np.float64] | None = None,
+    options: QPOptions | None = None,
+    *,
+    free_start: bool = False,
+) -> PushPlan:
+    """Condense the generalized universal path for ``setting``'s tool on its Omni (the ``qp`` variant).
+
+    Args:
+        t: times (T,) [s] of the generalized universal path, increasing.
+        universal: the path (T, 2) [m]; it starts at the object's start.
+        setting: the world: the new tool, the Omni carrying it, the object (radius, push
+            mechanics), the obstacles (discs and convex shapely polygons, kept ``setting.margin``
+            away from beyond the radius).
+        target: where the object must end [m] (default the path's end).
+        free_start: each candidate's first reach rows apply from where the path enters them (the
+            closed loop's re-plan from an observed object, :func:`condense_sequence`).
+    Returns:
+        a :class:`PushPlan` (``status == "infeasible"`` with the reason when no plan is found).
+    """
+    start_time = time.perf_counter()
+    opts = options or QPOptions()
+    t = check_array(t, "t", ndim=1)
+    universal = check_array(universal, "universal", shape=(t.size, 2))
+    target = universal[-1] if target is None else check_array(target, "target", shape=(2,))
+    def resample(n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        g = np.linspace(t[0], t[-1], n)
+        return g, np.column_stack([np.interp(g, t, universal[:, j]) for j in range(2)])
+
+    grid, ref = resample(opts.n_samples)
+    if not isinstance(setting, Setting):
+        raise InputError("setting", "a tooltransfer.planner.planning.setting.Setting", type(setting).__name__)
+    fine = _FitSetup(grid, ref, setting, target, opts, free_start)
+    # ranking needs no 1e-8 accuracy: the screening fits stop at 1e-5 (the final one at ``tol``)
+    screen_opts = opts.model_copy(update={"tol": max(opts.tol, 1e-5), "accept": max(opts.accept, 1e-5),
+                                          "scp_rtol": max(opts.scp_rtol, SCREEN_RTOL)})
+    screen = _FitSetup(*resample(min(opts.screen_samples, opts.n_samples)), setting, target, screen_opts,
+                       free_start)
+
+    why = _precheck(screen, check_start=not free_start)
+    if why:
+        return _infeasible(ref, start_time, why)
+    scored = _screened(screen, grid, opts)
+    # the screening grid ranked the candidates: the best ones are solved again on the full grid, in order
+    order = sorted({(s.faces, s.switches): s for s in scored if s.feasible}.values(), key=screen.cost)
+    return _Finals(screen, fine, scored, order, grid, ref, target, setting, opts, start_time).finalise(0, 0)
