@@ -48,7 +48,7 @@ def _imports(path: Path, module_level_only: bool) -> set[str]:
 
 def _layer(module: str) -> tuple[int, ...]:
     """(layer, planner sub-package, part of apps), compared on the length both have: modules of one
-    sub-package are ordered by the next number only; tooltransfer.planner and .planner.apps sit on top."""
+    sub-package are ordered by the next number only; tooltransfer.planner sits on its sub-packages."""
     parts = module.split(".")
     top = LAYERS[parts[1]]
     if parts[1] != "planner":
@@ -58,7 +58,7 @@ def _layer(module: str) -> tuple[int, ...]:
     sub = PLANNER[parts[2]]
     if parts[2] != "apps":
         return (top, sub)
-    return (top, sub, APPS.get(parts[3], APPS_TOP) if len(parts) > 3 else APPS_TOP + 1)
+    return (top, sub, APPS.get(parts[3], APPS_TOP)) if len(parts) > 3 else (top, sub)
 
 
 def _runs_up(mod: str, dep: str) -> bool:
