@@ -173,7 +173,7 @@ def test_an_interrupt_inside_an_extensions_own_evaluation_still_exits_130(tmp_pa
         "    except ValueError:\n"
         "        pass\n"
         "    raise KeyboardInterrupt\n"
-        "tooltransfer.planner.apps.cli._cmd_schema = stop\n"
+        "tooltransfer.planner.apps.cli_planning.cmd_schema = stop\n"
         "sys.argv = ['tooltransfer', 'schema']\n"
         "sys.exit(tooltransfer.planner.apps.cli.main())\n"
     )

@@ -20,7 +20,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tooltransfer.atomic import atomic_path, write_bytes
-from tooltransfer.planner.apps.cli import file_stem, main
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.apps.cli_output import file_stem
 from tooltransfer.problems.task import TaskFileError, task_from_dict
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -12,316 +12,23 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import sys
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 # nothing heavy is imported before main() runs: a Ctrl-C while numpy and the rest load is caught too
+from tooltransfer.planner.apps import cli_learning, cli_planning
 from tooltransfer.planner.common.command_line import (
     EXIT_BAD_INPUT,
     EXIT_BROKEN_PIPE,
-    EXIT_INFEASIBLE,
     EXIT_INTERRUPTED,
-    EXIT_OK,
     check_output,
     missing_extra,
 )
 
 #: The tools command's default figure (its folder is made when missing; an explicit path's must exist).
 DEFAULT_TOOLS_FIGURE = Path("out/tools.png")
-
-
-def _spinner(text: str, quiet: bool = False) -> object:
-    """A progress display for a step that takes more than a second (nothing when ``quiet``)."""
-    import contextlib
-
-    if quiet:
-        return contextlib.nullcontext()
-    from rich.console import Console
-
-    return Console(stderr=True).status(text)
-
-
-def _print_summary(summary: dict[str, object], title: str) -> None:
-    """A two-column rich table of a summary, each number with its unit from
-    :data:`tooltransfer.planner.common.metric_units.UNITS` (lengths in m are printed in mm)."""
-    from rich.console import Console
-    from rich.markup import escape
-    from rich.table import Table
-
-    from tooltransfer.planner.common.metric_units import shown
-
-    table = Table(title=title, title_justify="left", show_header=False)
-    table.add_column("key")
-    table.add_column("value", justify="right")
-    for k, v in summary.items():
-        if isinstance(v, float):
-            label, text = shown(k, v)
-            table.add_row(escape(label), text)
-        else:
-            table.add_row(k, str(v))
-    Console().print(table)
-
-
-def _execute(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str, object], dict[str, object]]:
-    """Execute a solved plan on the simulated platform open loop (and closed loop on request): the
-    summary fields and the executions by mode."""
-    import numpy as np
-
-    from tooltransfer.planner.execution.simulate import simulate_plan
-
-    with _spinner("simulating open loop", quiet=quiet):
-        rep = simulate_plan(plan)  # type: ignore[arg-type]
-    summary: dict[str, object] = {
-        "open_loop_final_error": rep.final_error, "open_loop_tool_deviation": rep.tool_deviation,
-        "open_loop_tracking_error": rep.tracking_error, "open_loop_wall_time": rep.wall_time,
-        "real_time_factor": float(plan.t[-1] / rep.wall_time)}  # type: ignore[attr-defined]
-    executions: dict[str, object] = {"open loop": rep.execution}
-    if closed_loop:
-        from tooltransfer.planner.execution.closed_loop import execute_closed_loop
-
-        with _spinner("executing closed loop (re-planning from the observed puck)", quiet=quiet):
-            cl = execute_closed_loop(plan)  # type: ignore[arg-type]
-        executions["closed loop"] = cl.execution
-        summary.update({"closed_loop_final_error": cl.final_error, "closed_loop_status": cl.status,
-                        "closed_loop_reason": cl.reason, "closed_loop_pushes": cl.n_pushes,
-                        "closed_loop_switches": cl.n_switches, "closed_loop_recontacts": cl.n_recontacts,
-                        "closed_loop_replans": cl.n_replans,
-                        "closed_loop_replan_time_median": float(np.median(cl.replan_times)) if cl.replan_times
-                        else 0.0, "closed_loop_wall_time": cl.wall_time})
-    return summary, executions
-
-
-def _cmd_paper(args: argparse.Namespace) -> int:
-    from tooltransfer.planner.apps.paper_run import run_paper
-
-    print(run_paper(args.out))
-    print(f"wrote the figures, plan files and report.txt to {args.out}/")
-    return EXIT_OK
-
-
-def _cmd_compare(args: argparse.Namespace) -> int:
-    import json
-
-    from rich.console import Console
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
-    from tooltransfer.planner.apps.paper_run import compare
-
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), transient=True,
-                  disable=args.json) as bar:
-        job = bar.add_task("compare", total=None)
-        table, plans = compare(args.task, args.out, lambda text: bar.update(job, description=text))
-    if args.json:
-        print(json.dumps({name: {"status": p.status, "reason": p.reason, "metrics": p.metrics}
-                          for name, p in plans.items()}, default=float))
-    else:
-        Console().print(table)
-        print(f"wrote the plans (plan_*.json) and the figure compare_*.png to {args.out}/")
-    return EXIT_OK if all(p.status == "solved" for p in plans.values()) else EXIT_INFEASIBLE
-
-
-def _cmd_demos(args: argparse.Namespace) -> int:
-    import time
-
-    t0 = time.perf_counter()
-    if args.calibration:
-        from tooltransfer.planner.apps.operator.calibration import generate_calibration
-        from tooltransfer.problems.dataset import load_meta
-
-        out = generate_calibration(args.out, seed=args.seed, tool=args.tool)
-        n = len(load_meta(out).demonstrations)
-        print(f"wrote a calibration recording ({n} trials of straight pushes) to {out} in "
-              f"{time.perf_counter() - t0:.1f} s")
-        return EXIT_OK
-    from tooltransfer.planner.apps.operator.generate import generate_demonstrations
-
-    out = generate_demonstrations(args.out, n=args.n, seed=args.seed, tool=args.tool)
-    print(f"wrote {args.n} demonstrations to {out} in {time.perf_counter() - t0:.1f} s")
-    return EXIT_OK
-
-
-def _cmd_learn(args: argparse.Namespace) -> int:
-    import time
-
-    from tooltransfer.planner.learning.skills import learn_skills
-
-    t0 = time.perf_counter()
-    skills = learn_skills(args.dataset, k=args.k, virtual=args.virtual, calibration=args.calibration)
-    path = skills.save(args.out)
-    ss = skills.ss
-    assert ss is not None  # learn_skills(with_ss=True)
-    print(f"learned from {args.dataset} in {time.perf_counter() - t0:.1f} s: OE skill (k = {skills.oe.k}, "
-          f"{len(skills.oe.recovered)} recovered demonstrations), SS skill ({ss.faces[0]} -> {ss.faces[1]}, "
-          f"{ss.n_demos} switches, virtual motion {ss.virtual!r}); wrote {path}")
-    m, info = skills.mechanics, skills.identification
-    if m is not None and info is not None:
-        print(f"push mechanics from {info['n_pushes']} pushes of {info['dataset']} ({info['kind']}): "
-              f"mu = {m.mu:.3f} +- {m.mu_std:.3f}, c = {m.c:.3f} +- {m.c_std:.3f}; predicted end positions "
-              f"within {1e3 * info['end_error_median']:.2f} mm (median), {1e3 * info['end_error_p90']:.2f} mm (p90)")
-        if info["message"]:
-            print(f"note: {info['message']}")
-    return EXIT_OK
-
-
-def _cmd_segment(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from tooltransfer.planner.learning.segmentation import load_fixed_points, segment
-    from tooltransfer.problems.dataset import load_dataset
-
-    ds = load_dataset(args.dataset)
-    tool = ds.tool()
-    fixed = {} if args.fixed_points is None else load_fixed_points(args.fixed_points,
-                                                                    [d.name for d in ds.demonstrations])
-    segs = [segment(d, tool, radius=float(ds.meta.object_radius), fixed_points=fixed.get(d.name))
-            for d in ds.demonstrations]
-    for d, s in zip(ds.demonstrations, segs, strict=True):
-        faces = " ".join(f"{p.face}[{p.t_start:.2f}-{p.t_end:.2f}]" for p in s.pushes)
-        corners = ", ".join(f"({x:.4f}, {y:.4f})" for x, y in np.asarray(s.fixed_points))
-        print(f"{d.name}: {len(s.pushes)} pushes, {len(s.switches)} switches "
-              f"({', '.join(f'{w.face_from}->{w.face_to}' for w in s.switches)}), fixed points [m]: {corners}")
-        if args.verbose:
-            print(f"    {faces}")
-    if args.figure:
-        from tooltransfer.planner.apps.plots.demonstrations import plot_demonstrations
-
-        with _written(args.figure) as tmp:
-            plot_demonstrations(ds, segs, tool, tmp)
-        print(f"wrote {args.figure}")
-    return EXIT_OK
-
-
-def _cmd_solve(args: argparse.Namespace) -> int:
-    import json
-
-    from tooltransfer.errors import InputError
-    from tooltransfer.planner.planning.solve import solve
-    from tooltransfer.problems.task import load_task
-    from tooltransfer.problems.variants import OEVariant, SSVariant, choices
-
-    task = load_task(args.task)
-    figure = None
-    if args.plot:  # checked before the solve: the default is named after the task
-        figure = Path(args.plot) if isinstance(args.plot, str) else (
-            args.out.with_suffix(".png") if args.out else Path(f"plan_{file_stem(task.name)}.png"))
-        check_output("--plot", figure)
-    chosen = {"oe": args.oe, "ss": args.ss}
-    if args.variant:
-        oe, _, ss = args.variant.partition("/")
-        if oe not in choices(OEVariant) or ss not in choices(SSVariant):
-            raise InputError("--variant", f"OE/SS with OE in {{{', '.join(choices(OEVariant))}}} and SS in "
-                             f"{{{', '.join(choices(SSVariant))}}}, e.g. qp/opt", args.variant)
-        chosen = {"oe": args.oe or oe, "ss": args.ss or ss}
-    if any(chosen.values()):
-        variants = task.variants.model_copy(update={k: v for k, v in chosen.items() if v})
-        task = task.model_copy(update={"variants": variants})
-    with _spinner(f"planning {args.task}", quiet=args.json):
-        plan = solve(task, args.task)
-    if args.out:
-        plan.write(args.out)
-    m = plan.metrics
-    summary = {"status": plan.status, "reason": plan.reason, "variant": f"{plan.variant['oe']}/{plan.variant['ss']}",
-               "pushes": " ".join(p.faces[0] for p in plan.pushes), "plan": str(args.out) if args.out else None,
-               **{k: m[k] for k in ("goal_error", "cone_violation_max", "reach_violation_max", "obstacle_clearance_min",
-                                    "tool_obstacle_clearance_min", "switch_clearance_min", "switch_penetration_max",
-                                    "joint_limit_violation_max", "duration") if k in m},
-               # the solve's wall time; a plan that stopped early has no time_total: the stages it ran
-               "planning_time": m.get("time_total", sum(v for k, v in m.items() if k.startswith("time_")))}
-    executions: dict = {}
-    if args.simulate and plan.status == "solved":
-        outcome, executions = _execute(plan, closed_loop=True, quiet=args.json)
-        summary.update(outcome)
-    if args.plot and plan.status == "solved":
-        from tooltransfer.planner.apps.plots.paper_figures import fig12
-
-        with _written(figure) as tmp:
-            fig12(plan, tmp, executions)
-        summary["figure"] = str(figure)
-    if args.json:
-        print(json.dumps(summary, default=float))
-    else:
-        _print_summary(summary, f"{task.name}: {plan.status}")
-    return EXIT_OK if plan.status == "solved" else EXIT_INFEASIBLE
-
-
-def _cmd_simulate(args: argparse.Namespace) -> int:
-    import json
-
-    from tooltransfer.planner.execution.simulate import plan_to_use
-
-    plan = plan_to_use(args.plan, args.force, "runs", "running")
-    if plan is None:
-        return EXIT_INFEASIBLE
-    summary, executions = _execute(plan, closed_loop=args.closed_loop, quiet=args.json)
-    if args.figure:
-        from tooltransfer.planner.apps.plots.paper_figures import fig12
-
-        with _written(args.figure) as tmp:
-            fig12(plan, tmp, executions)
-        summary["figure"] = str(args.figure)
-    if args.gif:
-        from tooltransfer.planner.apps.plots.paper_figures import execution_gif
-
-        with _spinner(f"writing {args.gif}", quiet=args.json), _written(args.gif) as tmp:
-            execution_gif(plan, list(executions.values())[-1], tmp)
-        summary["gif"] = str(args.gif)
-    if args.json:
-        print(json.dumps(summary, default=float))
-    else:
-        _print_summary(summary, f"simulation of {args.plan}")
-    return EXIT_OK
-
-
-def _cmd_export(args: argparse.Namespace) -> int:
-    from tooltransfer.planner.execution.export import run_export
-
-    return run_export(args)
-
-
-def _cmd_schema(args: argparse.Namespace) -> int:
-    from tooltransfer.problems.task import task_json_schema
-
-    text = task_json_schema()
-    if args.out:
-        from tooltransfer.atomic import write_text
-
-        write_text(args.out, text + "\n")
-        print(f"wrote {args.out}")
-    else:
-        print(text)
-    return EXIT_OK
-
-
-def _cmd_tools(args: argparse.Namespace) -> int:
-    from tooltransfer.planner.apps.plots.tool_library import plot_tool_library
-
-    with _written(args.out) as tmp:
-        plot_tool_library(tmp)
-    print(f"wrote {args.out}")
-    return EXIT_OK
-
-
-@contextmanager
-def _written(path: Path) -> Iterator[Path]:
-    """A temporary path beside ``path`` for a writer that takes a path (a figure): it replaces
-    ``path`` once the writer is done, and is removed if the writer fails
-    (:func:`tooltransfer.atomic.atomic_path`)."""
-    from tooltransfer.atomic import atomic_path
-
-    with atomic_path(path) as tmp:
-        yield tmp
-
-
-def file_stem(name: str, limit: int = 100) -> str:
-    """``name`` made a safe file-name stem: letters, digits, ``.``, ``_`` and ``-`` kept, anything
-    else (``/``, ``..``, spaces, control characters) one ``_``, at most ``limit`` characters, never
-    empty or starting with a dot."""
-    stem = re.sub(r"[^A-Za-z0-9._-]+", "_", name)[:limit].lstrip(".") or "task"
-    return stem
 
 
 #: Output options by command: (argument name, option as shown, kind; see :func:`check_output`).
@@ -397,30 +104,6 @@ def _unexpected(exc: BaseException) -> str:
     return f"internal error, a bug (-v shows the traceback for a report): {type(exc).__name__}: {exc}"
 
 
-
-def _task_file(value: str) -> Path:
-    """A task argument: a file, or the name of a bundled task (:mod:`tooltransfer.problems.named`)."""
-    from tooltransfer.problems.named import task_file
-
-    return task_file(value)
-
-
-def _cmd_tasks(args: argparse.Namespace) -> int:
-    from tooltransfer.problems.named import bundled_tasks
-    from tooltransfer.problems.task import TaskFileError
-    from tooltransfer.yaml_file import read_yaml
-
-    for name, path in bundled_tasks().items():
-        doc = read_yaml(path, TaskFileError, "task file")
-        text = " ".join(str(doc.get("description", "")).split()) if isinstance(doc, dict) else ""
-        if not text:  # the hard cases say what they are in their first comment line
-            comments = [ln.lstrip("# ").strip() for ln in path.read_text(encoding="utf-8").splitlines()
-                        if ln.startswith("#")]
-            text = comments[0] if comments else ""
-        print(f"{name:34s} {text[:120]}" if not args.paths else f"{name:34s} {path}")
-    return EXIT_OK
-
-
 def _add(sub: argparse._SubParsersAction, name: str, helptext: str, example: str,
          func: Callable[[argparse.Namespace], int]) -> argparse.ArgumentParser:
     p = sub.add_parser(name, help=helptext, description=helptext, epilog=f"example:\n  {example}",
@@ -456,16 +139,18 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     p = _add(sub, "paper", "the paper's transfer scenario (the job of `make demo`): learn from the committed "
              "demonstrations, compare the variants on the transfer to tool 2, simulate the qp plan",
-             "tooltransfer paper --out out", _cmd_paper)
+             "tooltransfer paper --out out", cli_planning.cmd_paper)
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     p = _add(sub, "compare", "solve a task with every variant pair (oe mapping|qp x ss dmp|opt): a metrics table "
-             "and one figure", "tooltransfer compare problems/paper/transfer_tool2.yaml --out out", _cmd_compare)
-    p.add_argument("task", type=_task_file, help="task file (YAML) or a bundled task's name (tooltransfer tasks)")
+             "and one figure", "tooltransfer compare problems/paper/transfer_tool2.yaml --out out",
+             cli_planning.cmd_compare)
+    p.add_argument("task", type=cli_planning.task_file,
+                   help="task file (YAML) or a bundled task's name (tooltransfer tasks)")
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     p.add_argument("--json", action="store_true", help="print every plan's status and metrics as JSON")
     p = _add(sub, "demos", "generate demonstrations (or a calibration recording) with the scripted operator on the "
              "simulated Omni", "tooltransfer demos --tool finger --n 8 --seed 0 --out problems/data/finger_demos\n"
-             "  tooltransfer demos --calibration --out out/calibration", _cmd_demos)
+             "  tooltransfer demos --calibration --out out/calibration", cli_learning.cmd_demos)
     p.add_argument("--tool", default="finger", help="demonstration tool (tool 1)")
     p.add_argument("--n", type=int, default=8, help="number of demonstrations (not used with --calibration)")
     p.add_argument("--calibration", action="store_true",
@@ -476,7 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = _add(sub, "learn", "learn the OE and SS skills from a demonstration dataset into one skills file",
              "tooltransfer learn problems/data/finger_demos -o out/skills.json\n"
              "  tooltransfer learn problems/data/finger_demos --calibration out/calibration -o out/skills.json",
-             _cmd_learn)
+             cli_learning.cmd_learn)
     p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs)")
     p.add_argument("-o", "--out", type=Path, required=True, help="skills file to write (JSON)")
     p.add_argument("--k", type=float, default=MAPPING_K, help="adjusting factor of the mappings (6)-(7), in (0, 1)")
@@ -486,17 +171,18 @@ def build_parser() -> argparse.ArgumentParser:
                    help="identify the push mechanics from this calibration recording (tooltransfer demos "
                    "--calibration) instead of the dataset's pushes")
     p = _add(sub, "segment", "segment a dataset into pushes and switches (and draw it)",
-             "tooltransfer segment problems/data/finger_demos --figure out/demos.png", _cmd_segment)
+             "tooltransfer segment problems/data/finger_demos --figure out/demos.png", cli_learning.cmd_segment)
     p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs, see the README)")
     p.add_argument("--figure", type=Path, default=None, help="write the figure (Figs. 4b/8a style) here")
     p.add_argument("--fixed-points", type=Path, default=None,
                    help="JSON file {demo name: [[x, y], ...]} [m] overriding the automatic corners")
     p = _add(sub, "tasks", "list the bundled task files by name (solve and compare take a name or a file)",
-             "tooltransfer tasks\n  tooltransfer solve paper/transfer_tool2", _cmd_tasks)
+             "tooltransfer tasks\n  tooltransfer solve paper/transfer_tool2", cli_planning.cmd_tasks)
     p.add_argument("--paths", action="store_true", help="print each task's file instead of its description")
     p = _add(sub, "solve", "plan a task file: pushes, switches, approach, timing, joints",
-             "tooltransfer solve problems/paper/transfer_tool2.yaml -o out/plan.json", _cmd_solve)
-    p.add_argument("task", type=_task_file, help="task file (YAML) or a bundled task's name (tooltransfer tasks)")
+             "tooltransfer solve problems/paper/transfer_tool2.yaml -o out/plan.json", cli_planning.cmd_solve)
+    p.add_argument("task", type=cli_planning.task_file,
+                   help="task file (YAML) or a bundled task's name (tooltransfer tasks)")
     p.add_argument("-o", "--out", type=Path, default=None, help="write the plan (JSON) here")
     p.add_argument("--oe", choices=choices(OEVariant), default=None, help="override the task's OE variant")
     p.add_argument("--ss", choices=choices(SSVariant), default=None, help="override the task's switch variant")
@@ -508,7 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p = _add(sub, "simulate", "execute a plan file on the simulated platform (open loop, and closed loop on request)",
              "tooltransfer simulate out/plan.json --closed-loop --figure out/fig12.png --gif out/run.gif",
-             _cmd_simulate)
+             cli_planning.cmd_simulate)
     p.add_argument("plan", type=Path, help="plan file (JSON)")
     p.add_argument("--closed-loop", action="store_true",
                    help="also execute closed loop (re-plan the corners from the observed puck)")
@@ -519,7 +205,8 @@ def build_parser() -> argparse.ArgumentParser:
                    "task (or a violated plan) anyway, with a warning")
     p = _add(sub, "export", "write a plan's joint trajectory (positions, velocities, accelerations) for a real arm: "
              "CSV, NumPy .npz or a ROS JointTrajectory as JSON",
-             "tooltransfer export out/plan.json --format joint-trajectory -o out/plan.trajectory.json", _cmd_export)
+             "tooltransfer export out/plan.json --format joint-trajectory -o out/plan.trajectory.json",
+             cli_planning.cmd_export)
     p.add_argument("plan", type=Path, help="plan file (JSON)")
     p.add_argument("--format", choices=("csv", "npz", "joint-trajectory"), required=True, help="what to write")
     p.add_argument("-o", "--out", type=Path, default=None,
@@ -529,10 +216,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="export a plan that fails its checks against itself and "
                    "its task (or a violated plan) anyway, with a warning")
     p = _add(sub, "schema", "print the JSON Schema of task files (for editors)",
-             "tooltransfer schema > task.schema.json", _cmd_schema)
+             "tooltransfer schema > task.schema.json", cli_planning.cmd_schema)
     p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")
     p = _add(sub, "tools", "draw the tool library (faces, cones) and the Omni's reach",
-             "tooltransfer tools --out out/tools.png", _cmd_tools)
+             "tooltransfer tools --out out/tools.png", cli_planning.cmd_tools)
     p.add_argument("--out", type=Path, default=DEFAULT_TOOLS_FIGURE, help="output PNG")
     from tooltransfer.planner.apps.batch.commands import add_batch_parser
 

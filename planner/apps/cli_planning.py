@@ -1,0 +1,203 @@
+"""The command line's planning and running commands: ``paper``, ``compare``, ``tasks``, ``solve``,
+``simulate``, ``export``, ``schema`` and ``tools``. Each takes the parsed arguments and returns the exit
+code; :mod:`tooltransfer.planner.apps.cli` parses and dispatches. Heavy imports happen inside the commands.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from tooltransfer.planner.apps.cli_output import file_stem, print_summary, spinner, written
+from tooltransfer.planner.common.command_line import EXIT_INFEASIBLE, EXIT_OK, check_output
+
+
+def execute_plan(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str, object], dict[str, object]]:
+    """Execute a solved plan on the simulated platform open loop (and closed loop on request): the
+    summary fields and the executions by mode."""
+    import numpy as np
+
+    from tooltransfer.planner.execution.simulate import simulate_plan
+
+    with spinner("simulating open loop", quiet=quiet):
+        rep = simulate_plan(plan)  # type: ignore[arg-type]
+    summary: dict[str, object] = {
+        "open_loop_final_error": rep.final_error, "open_loop_tool_deviation": rep.tool_deviation,
+        "open_loop_tracking_error": rep.tracking_error, "open_loop_wall_time": rep.wall_time,
+        "real_time_factor": float(plan.t[-1] / rep.wall_time)}  # type: ignore[attr-defined]
+    executions: dict[str, object] = {"open loop": rep.execution}
+    if closed_loop:
+        from tooltransfer.planner.execution.closed_loop import execute_closed_loop
+
+        with spinner("executing closed loop (re-planning from the observed puck)", quiet=quiet):
+            cl = execute_closed_loop(plan)  # type: ignore[arg-type]
+        executions["closed loop"] = cl.execution
+        summary.update({"closed_loop_final_error": cl.final_error, "closed_loop_status": cl.status,
+                        "closed_loop_reason": cl.reason, "closed_loop_pushes": cl.n_pushes,
+                        "closed_loop_switches": cl.n_switches, "closed_loop_recontacts": cl.n_recontacts,
+                        "closed_loop_replans": cl.n_replans,
+                        "closed_loop_replan_time_median": float(np.median(cl.replan_times)) if cl.replan_times
+                        else 0.0, "closed_loop_wall_time": cl.wall_time})
+    return summary, executions
+
+
+def cmd_paper(args: argparse.Namespace) -> int:
+    from tooltransfer.planner.apps.paper_run import run_paper
+
+    print(run_paper(args.out))
+    print(f"wrote the figures, plan files and report.txt to {args.out}/")
+    return EXIT_OK
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    import json
+
+    from rich.console import Console
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from tooltransfer.planner.apps.paper_run import compare
+
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), transient=True,
+                  disable=args.json) as bar:
+        job = bar.add_task("compare", total=None)
+        table, plans = compare(args.task, args.out, lambda text: bar.update(job, description=text))
+    if args.json:
+        print(json.dumps({name: {"status": p.status, "reason": p.reason, "metrics": p.metrics}
+                          for name, p in plans.items()}, default=float))
+    else:
+        Console().print(table)
+        print(f"wrote the plans (plan_*.json) and the figure compare_*.png to {args.out}/")
+    return EXIT_OK if all(p.status == "solved" for p in plans.values()) else EXIT_INFEASIBLE
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    import json
+
+    from tooltransfer.errors import InputError
+    from tooltransfer.planner.planning.solve import solve
+    from tooltransfer.problems.task import load_task
+    from tooltransfer.problems.variants import OEVariant, SSVariant, choices
+
+    task = load_task(args.task)
+    figure = None
+    if args.plot:  # checked before the solve: the default is named after the task
+        figure = Path(args.plot) if isinstance(args.plot, str) else (
+            args.out.with_suffix(".png") if args.out else Path(f"plan_{file_stem(task.name)}.png"))
+        check_output("--plot", figure)
+    chosen = {"oe": args.oe, "ss": args.ss}
+    if args.variant:
+        oe, _, ss = args.variant.partition("/")
+        if oe not in choices(OEVariant) or ss not in choices(SSVariant):
+            raise InputError("--variant", f"OE/SS with OE in {{{', '.join(choices(OEVariant))}}} and SS in "
+                             f"{{{', '.join(choices(SSVariant))}}}, e.g. qp/opt", args.variant)
+        chosen = {"oe": args.oe or oe, "ss": args.ss or ss}
+    if any(chosen.values()):
+        variants = task.variants.model_copy(update={k: v for k, v in chosen.items() if v})
+        task = task.model_copy(update={"variants": variants})
+    with spinner(f"planning {args.task}", quiet=args.json):
+        plan = solve(task, args.task)
+    if args.out:
+        plan.write(args.out)
+    m = plan.metrics
+    summary = {"status": plan.status, "reason": plan.reason, "variant": f"{plan.variant['oe']}/{plan.variant['ss']}",
+               "pushes": " ".join(p.faces[0] for p in plan.pushes), "plan": str(args.out) if args.out else None,
+               **{k: m[k] for k in ("goal_error", "cone_violation_max", "reach_violation_max", "obstacle_clearance_min",
+                                    "tool_obstacle_clearance_min", "switch_clearance_min", "switch_penetration_max",
+                                    "joint_limit_violation_max", "duration") if k in m},
+               # the solve's wall time; a plan that stopped early has no time_total: the stages it ran
+               "planning_time": m.get("time_total", sum(v for k, v in m.items() if k.startswith("time_")))}
+    executions: dict = {}
+    if args.simulate and plan.status == "solved":
+        outcome, executions = execute_plan(plan, closed_loop=True, quiet=args.json)
+        summary.update(outcome)
+    if args.plot and plan.status == "solved":
+        from tooltransfer.planner.apps.plots.paper_figures import fig12
+
+        with written(figure) as tmp:
+            fig12(plan, tmp, executions)
+        summary["figure"] = str(figure)
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        print_summary(summary, f"{task.name}: {plan.status}")
+    return EXIT_OK if plan.status == "solved" else EXIT_INFEASIBLE
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    import json
+
+    from tooltransfer.planner.execution.simulate import plan_to_use
+
+    plan = plan_to_use(args.plan, args.force, "runs", "running")
+    if plan is None:
+        return EXIT_INFEASIBLE
+    summary, executions = execute_plan(plan, closed_loop=args.closed_loop, quiet=args.json)
+    if args.figure:
+        from tooltransfer.planner.apps.plots.paper_figures import fig12
+
+        with written(args.figure) as tmp:
+            fig12(plan, tmp, executions)
+        summary["figure"] = str(args.figure)
+    if args.gif:
+        from tooltransfer.planner.apps.plots.paper_figures import execution_gif
+
+        with spinner(f"writing {args.gif}", quiet=args.json), written(args.gif) as tmp:
+            execution_gif(plan, list(executions.values())[-1], tmp)
+        summary["gif"] = str(args.gif)
+    if args.json:
+        print(json.dumps(summary, default=float))
+    else:
+        print_summary(summary, f"simulation of {args.plan}")
+    return EXIT_OK
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from tooltransfer.planner.execution.export import run_export
+
+    return run_export(args)
+
+
+def cmd_schema(args: argparse.Namespace) -> int:
+    from tooltransfer.problems.task import task_json_schema
+
+    text = task_json_schema()
+    if args.out:
+        from tooltransfer.atomic import write_text
+
+        write_text(args.out, text + "\n")
+        print(f"wrote {args.out}")
+    else:
+        print(text)
+    return EXIT_OK
+
+
+def cmd_tools(args: argparse.Namespace) -> int:
+    from tooltransfer.planner.apps.plots.tool_library import plot_tool_library
+
+    with written(args.out) as tmp:
+        plot_tool_library(tmp)
+    print(f"wrote {args.out}")
+    return EXIT_OK
+
+
+def task_file(value: str) -> Path:
+    """A task argument: a file, or the name of a bundled task (:mod:`tooltransfer.problems.named`)."""
+    from tooltransfer.problems.named import task_file
+
+    return task_file(value)
+
+
+def cmd_tasks(args: argparse.Namespace) -> int:
+    from tooltransfer.problems.named import bundled_tasks
+    from tooltransfer.problems.task import TaskFileError
+    from tooltransfer.yaml_file import read_yaml
+
+    for name, path in bundled_tasks().items():
+        doc = read_yaml(path, TaskFileError, "task file")
+        text = " ".join(str(doc.get("description", "")).split()) if isinstance(doc, dict) else ""
+        if not text:  # the hard cases say what they are in their first comment line
+            comments = [ln.lstrip("# ").strip() for ln in path.read_text(encoding="utf-8").splitlines()
+                        if ln.startswith("#")]
+            text = comments[0] if comments else ""
+        print(f"{name:34s} {text[:120]}" if not args.paths else f"{name:34s} {path}")
+    return EXIT_OK
