@@ -187,6 +187,7 @@ def test_a_ctrl_c_that_a_c_extension_turned_into_another_error_exits_130(monkeyp
     """CasADi's ``nlpsol`` hit by a Ctrl-C while it builds returns ``SystemError: ... returned a result
     with an exception set`` with the ``KeyboardInterrupt`` as its cause (seen with casadi 3.6.1)."""
     import tooltransfer.planner.apps.cli as cli
+    import tooltransfer.planner.apps.cli_planning as cli_planning
 
     def hit(args):  # type: ignore[no-untyped-def]
         try:
@@ -194,6 +195,6 @@ def test_a_ctrl_c_that_a_c_extension_turned_into_another_error_exits_130(monkeyp
         except KeyboardInterrupt as exc:
             raise SystemError("<built-in function nlpsol> returned a result with an exception set") from exc
 
-    monkeypatch.setattr(cli, "_cmd_schema", hit)
+    monkeypatch.setattr(cli_planning, "cmd_schema", hit)
     assert cli.main(["schema"]) == 130
     assert capsys.readouterr().err.strip() == INTERRUPTED
