@@ -1,5 +1,5 @@
-"""Property tests for tooltransfer.planner.learning.oe_mappings: eqs. (6) and (7) of the paper, their exact inverses,
-clipping.
+"""Property tests for the OE mappings (tooltransfer.planner.learning.oe_mappings, oe_outer_mappings,
+oe_point_mappings, oe_map_parameters): eqs. (6) and (7) of the paper, their exact inverses, clipping.
 
 Accuracy statements tested here (see the module docstring for the derivations):
 
@@ -24,7 +24,10 @@ from hypothesis import event, example, given, settings
 from hypothesis import strategies as st
 
 from tooltransfer.errors import InputError
+from tooltransfer.planner.learning import oe_map_parameters as prm
 from tooltransfer.planner.learning import oe_mappings as mp
+from tooltransfer.planner.learning import oe_outer_mappings as om
+from tooltransfer.planner.learning import oe_point_mappings as pm
 
 pytestmark = pytest.mark.filterwarnings("error")  # any warning (overflow, invalid, divide) fails a test
 
@@ -41,16 +44,16 @@ SETTINGS_DECIMAL = settings(derandomize=True, max_examples=120, deadline=None)
 # every valid parameter: for the safety properties (bounds, monotonicity, no warnings, backward stability)
 ks = st.floats(TINY, 1.0, exclude_max=True)
 theta_bs = st.floats(TINY, math.pi / 2)
-r_bs = st.floats(TINY, mp.MAX_RADIUS)
+r_bs = st.floats(TINY, prm.MAX_RADIUS)
 # physically meaningful parameters: for the accuracy claims (a cone of 1 urad, a nanometre to a kilometre; any
 # k in [1e-6, 1)); near-underflow bounds leave intermediate values subnormal, with fewer significant bits
 ks_acc = st.floats(1e-6, 1.0, exclude_max=True)
 theta_bs_acc = st.floats(1e-6, math.pi / 2)
 r_bs_acc = st.floats(1e-9, 1e3)
-deltas = st.floats(0.0, mp.MAX_RADIUS)
+deltas = st.floats(0.0, prm.MAX_RADIUS)
 special = [0.0, 5e-324, 1e-310, 1e-300, 1e-12, 1.0, 37.0, 1e12, 1e300]
 any_reals = st.floats(allow_nan=False, allow_infinity=False) | st.sampled_from(special + [-x for x in special] + [FMAX])
-radii = st.floats(0.0, mp.MAX_RADIUS) | st.sampled_from(special)
+radii = st.floats(0.0, prm.MAX_RADIUS) | st.sampled_from(special)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -169,7 +172,7 @@ def test_inner_image_strictly_inside_ball(rp: float, r_b: float, k: float) -> No
 @example(rp=0.0, r_b=0.05, k=0.5, delta=0.01)
 @example(rp=1e-300, r_b=1e-300, k=0.5, delta=0.0)
 def test_outer_image_outside_margin(rp: float, r_b: float, k: float, delta: float) -> None:
-    rg = mp.outer_radius(rp, r_b, k, delta=delta)
+    rg = om.outer_radius(rp, r_b, k, delta=delta)
     R = r_b + delta
     assert np.isfinite(rg)
     assert rg >= R
@@ -183,7 +186,7 @@ def test_outer_image_outside_margin(rp: float, r_b: float, k: float, delta: floa
 @SETTINGS
 @given(rp=radii, r_b=r_bs, k=ks)
 def test_printed_outer_image_in_half_open_band(rp: float, r_b: float, k: float) -> None:
-    rg = mp.outer_radius_printed(rp, r_b, k)
+    rg = om.outer_radius_printed(rp, r_b, k)
     assert r_b < rg <= 2.0 * r_b
     if rp == 0.0:
         assert rg == 2.0 * r_b
@@ -199,8 +202,8 @@ def test_vectorized_shapes_and_huge_tiny_zero() -> None:
     np.testing.assert_allclose(mp.angle_inverse(th[:, :2], 0.4, 0.3), x[:, :2], rtol=RTOL, atol=0.0)
     r = np.abs(x)
     assert mp.inner_radius(r, 0.1, 0.3).shape == (2, 3)
-    assert mp.outer_radius(r, 0.1, 0.3).shape == (2, 3)
-    assert mp.outer_radius(r, 0.1, 0.3)[0, 2] == 1e300  # identity far away (tail effect)
+    assert om.outer_radius(r, 0.1, 0.3).shape == (2, 3)
+    assert om.outer_radius(r, 0.1, 0.3)[0, 2] == 1e300  # identity far away (tail effect)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -237,7 +240,7 @@ def test_saturating_inverse_accurate(frac: float, b: float, k: float) -> None:
 @given(rp=st.floats(0.0, 1e6), R=r_bs_acc, k=ks)
 @example(rp=1e-12, R=1.0, k=1.0 - 2**-40)
 def test_outer_forward_accurate(rp: float, R: float, k: float) -> None:
-    got = float(mp.outer_radius(rp, R, k))
+    got = float(om.outer_radius(rp, R, k))
     assert rel_err(got, ref_outer(rp, R, k)) <= ACC
 
 
@@ -247,7 +250,7 @@ def test_outer_forward_accurate(rp: float, R: float, k: float) -> None:
 @example(excess=0.0, R=1.0, k=0.5)
 def test_outer_inverse_accurate(excess: float, R: float, k: float) -> None:
     rg = R + excess
-    got = float(mp.outer_radius_inverse(rg, R, k))
+    got = float(om.outer_radius_inverse(rg, R, k))
     ref = ref_outer_inverse(rg, R, k)
     if rg == R:
         assert got == 0.0
@@ -333,8 +336,8 @@ def test_inner_round_trip(rp: float, r_b: float, k: float) -> None:
 @example(rp=1e-3, r_b=1.0, k=0.5, delta=0.1)
 @example(rp=1e300, r_b=1e-300, k=0.5, delta=0.0)
 def test_outer_round_trip(rp: float, r_b: float, k: float, delta: float) -> None:
-    rg = float(mp.outer_radius(rp, r_b, k, delta=delta))
-    back = float(mp.outer_radius_inverse(rg, r_b, k, delta=delta))
+    rg = float(om.outer_radius(rp, r_b, k, delta=delta))
+    back = float(om.outer_radius_inverse(rg, r_b, k, delta=delta))
     assert back >= 0.0
     R = r_b + delta
     q = rp / R
@@ -345,15 +348,15 @@ def test_outer_round_trip(rp: float, r_b: float, k: float, delta: float) -> None
         assert abs(back - rp) <= RTOL * rp
     if rp == 0.0:
         assert back == 0.0
-    again = float(mp.outer_radius(back, r_b, k, delta=delta))
+    again = float(om.outer_radius(back, r_b, k, delta=delta))
     assert abs(again - rg) <= 8 * ulp_gap(rg, again)
 
 
 @SETTINGS
 @given(rp=radii, r_b=r_bs, k=ks)
 def test_printed_outer_round_trip(rp: float, r_b: float, k: float) -> None:
-    rg = float(mp.outer_radius_printed(rp, r_b, k))
-    back = float(mp.outer_radius_printed_inverse(rg, r_b, k))
+    rg = float(om.outer_radius_printed(rp, r_b, k))
+    back = float(om.outer_radius_printed_inverse(rg, r_b, k))
     # condition number of the printed inverse: (e^u + 1)/u, u = k r_p / r_b (r_g - r_b = r_b e^{-u} holds the
     # information and r_g is rounded at the scale of r_b: ill-conditioned both near r_p = 0 and far away)
     u = k * (rp / r_b) if rp / r_b < 1e300 else math.inf
@@ -361,7 +364,7 @@ def test_printed_outer_round_trip(rp: float, r_b: float, k: float) -> None:
     if physical(r_b, k, radius=True) and kappa <= KAPPA_MAX:
         event("relative round trip checked")
         assert abs(back - rp) <= RTOL * rp
-    again = float(mp.outer_radius_printed(back, r_b, k))
+    again = float(om.outer_radius_printed(back, r_b, k))
     assert abs(again - rg) <= 8 * ulp_gap(rg, again)
 
 
@@ -400,12 +403,12 @@ def test_outer_round_trip_relative(e: float, r_b: float, k: float, delta_frac: f
     delta = delta_frac * r_b
     R = r_b + delta
     rp = R * 10.0**e
-    rg = float(mp.outer_radius(rp, r_b, k, delta=delta))
+    rg = float(om.outer_radius(rp, r_b, k, delta=delta))
     kappa = rg / rp / (1.0 - k * math.exp(-k * rp / R))
     if kappa > KAPPA_MAX:
         return
     event("relative round trip checked")
-    back = float(mp.outer_radius_inverse(rg, r_b, k, delta=delta))
+    back = float(om.outer_radius_inverse(rg, r_b, k, delta=delta))
     assert abs(back - rp) <= RTOL * rp
 
 
@@ -417,7 +420,7 @@ def test_printed_outer_round_trip_relative(e: float, r_b: float, k: float) -> No
     if u == 0.0 or (math.exp(u) + 1.0) / u > KAPPA_MAX:
         return
     event("relative round trip checked")
-    back = float(mp.outer_radius_printed_inverse(mp.outer_radius_printed(rp, r_b, k), r_b, k))
+    back = float(om.outer_radius_printed_inverse(om.outer_radius_printed(rp, r_b, k), r_b, k))
     assert abs(back - rp) <= RTOL * rp
 
 
@@ -456,7 +459,7 @@ def test_radial_maps_monotone(a: float, b: float, r_b: float, k: float, delta: f
     R = r_b + delta
 
     def outer(x: float) -> np.ndarray:
-        return mp.outer_radius(x, r_b, k, delta=delta)
+        return om.outer_radius(x, r_b, k, delta=delta)
 
     _check_monotone(outer, a, b, lambda x: ref_outer(x, R, k), slack_ulps=1)
 
@@ -486,14 +489,14 @@ def test_monotone_on_consecutive_doubles(k: float, b: float) -> None:
         assert np.all(np.diff(mp.inner_radius(xs, b, k)) >= 0.0)
         tb = min(b, math.pi / 2)
         assert np.all(np.diff(mp.angle_map(xs, tb, k)) >= 0.0)
-        assert np.all(np.diff(mp.outer_radius_printed(xs, b, k)) <= 0.0)
-        y = mp.outer_radius(xs, b, k)
+        assert np.all(np.diff(om.outer_radius_printed(xs, b, k)) <= 0.0)
+        y = om.outer_radius(xs, b, k)
         assert _steps_in_ulps(y).min() >= -1.0
         yi = mp.inner_radius(xs, b, k)
         assert np.all(np.diff(mp.inner_radius_inverse(np.unique(yi), b, k)) >= 0.0)
         ys = _consecutive(float(y[xs.size // 2]))
         ys = ys[ys >= b]
-        assert _steps_in_ulps(mp.outer_radius_inverse(ys, b, k)).min() >= -1.0
+        assert _steps_in_ulps(om.outer_radius_inverse(ys, b, k)).min() >= -1.0
     # inverse switches: t = y / b crosses 1/2 and TINY; up to the largest double below the bound
     for y0 in (0.5 * b, TINY * b * 3, float(np.nextafter(b, 0.0)) - 2000 * float(np.spacing(b / 2))):
         ys = _consecutive(y0)
@@ -506,7 +509,7 @@ def test_monotone_on_consecutive_doubles(k: float, b: float) -> None:
 def test_printed_outer_reverses_order(a: float, b: float, r_b: float, k: float) -> None:
     """The printed outer (7) is non-increasing, strictly where resolvable; the monotone form is not."""
     a, b = min(a, b), max(a, b)
-    fa, fb = float(mp.outer_radius_printed(a, r_b, k)), float(mp.outer_radius_printed(b, r_b, k))
+    fa, fb = float(om.outer_radius_printed(a, r_b, k)), float(om.outer_radius_printed(b, r_b, k))
     assert fa >= fb
     with localcontext() as ctx:
         ctx.prec = 60
@@ -517,15 +520,15 @@ def test_printed_outer_reverses_order(a: float, b: float, r_b: float, k: float) 
     if gap > _d(4 * ulp_gap(fa, fb)):
         event("strict order checked")
         assert fa > fb
-        assert float(mp.outer_radius(a, r_b, k)) < float(mp.outer_radius(b, r_b, k))
+        assert float(om.outer_radius(a, r_b, k)) < float(om.outer_radius(b, r_b, k))
 
 
 def test_printed_outer_turns_an_approach_inside_out() -> None:
     """A straight approach to an obstacle: the printed map sends the nearest point farthest away."""
     r_b, k = 0.05, 0.5
     rp = np.array([0.0, 0.01, 0.05, 0.2, 1.0])  # moving away from the obstacle centre
-    printed = mp.outer_radius_printed(rp, r_b, k)
-    monotone = mp.outer_radius(rp, r_b, k)
+    printed = om.outer_radius_printed(rp, r_b, k)
+    monotone = om.outer_radius(rp, r_b, k)
     assert printed[0] == pytest.approx(2 * r_b, rel=1e-15)  # the centre goes to 2 r_b ...
     assert printed[-1] == pytest.approx(r_b * (1 + math.exp(-10.0)), rel=1e-15)  # ... far points to r_b
     assert np.all(np.diff(printed) < 0.0)
@@ -568,31 +571,31 @@ def test_inner_inverse_on_or_beyond_bound(r_g: float) -> None:
 def test_outer_inverse_inside_margin() -> None:
     r_b, k, delta = 0.05, 0.5, 0.01
     R = r_b + delta
-    assert float(mp.outer_radius_inverse(R, r_b, k, delta=delta)) == 0.0  # on the closed bound: fine
+    assert float(om.outer_radius_inverse(R, r_b, k, delta=delta)) == 0.0  # on the closed bound: fine
     for rg in (0.0, r_b, float(np.nextafter(R, 0.0))):
         with pytest.raises(InputError) as info:
-            mp.outer_radius_inverse(rg, r_b, k, delta=delta)
+            om.outer_radius_inverse(rg, r_b, k, delta=delta)
         assert info.value.field == "r_g" and "clip=True" in info.value.expected
-        assert float(mp.outer_radius_inverse(rg, r_b, k, delta=delta, clip=True)) == 0.0
+        assert float(om.outer_radius_inverse(rg, r_b, k, delta=delta, clip=True)) == 0.0
 
 
 def test_printed_outer_inverse_bounds() -> None:
     r_b, k = 0.05, 0.5
-    assert float(mp.outer_radius_printed_inverse(2 * r_b, r_b, k)) == 0.0
+    assert float(om.outer_radius_printed_inverse(2 * r_b, r_b, k)) == 0.0
     for rg in (r_b, 0.01, 2 * r_b * (1 + 1e-9)):
         with pytest.raises(InputError):
-            mp.outer_radius_printed_inverse(rg, r_b, k)
-    assert float(mp.outer_radius_printed_inverse(0.3, r_b, k, clip=True)) == 0.0
-    low = float(mp.outer_radius_printed_inverse(r_b, r_b, k, clip=True))
-    assert low == float(mp.outer_radius_printed_inverse(np.nextafter(r_b, np.inf), r_b, k))
+            om.outer_radius_printed_inverse(rg, r_b, k)
+    assert float(om.outer_radius_printed_inverse(0.3, r_b, k, clip=True)) == 0.0
+    low = float(om.outer_radius_printed_inverse(r_b, r_b, k, clip=True))
+    assert low == float(om.outer_radius_printed_inverse(np.nextafter(r_b, np.inf), r_b, k))
     assert low > 30 * r_b / k
 
 
 def test_safety_margin_is_r_b_plus_delta() -> None:
     rp = np.array([0.0, 0.02, 0.3])
     R = 0.05 + 0.01  # computed in floating point, as the module does
-    np.testing.assert_array_equal(mp.outer_radius(rp, 0.05, 0.4, delta=0.01), mp.outer_radius(rp, R, 0.4))
-    assert np.all(mp.outer_radius(rp, 0.05, 0.4, delta=0.01) > mp.outer_radius(rp, 0.05, 0.4))
+    np.testing.assert_array_equal(om.outer_radius(rp, 0.05, 0.4, delta=0.01), om.outer_radius(rp, R, 0.4))
+    assert np.all(om.outer_radius(rp, 0.05, 0.4, delta=0.01) > om.outer_radius(rp, 0.05, 0.4))
 
 
 # --------------------------------------------------------------------------------------------------
@@ -604,7 +607,7 @@ def test_bad_k(k: object) -> None:
     for call in (
         lambda: mp.angle_map(0.1, 0.3, k),  # type: ignore[arg-type]
         lambda: mp.inner_radius_inverse(0.01, 0.1, k),  # type: ignore[arg-type]
-        lambda: mp.outer_radius(0.01, 0.1, k),  # type: ignore[arg-type]
+        lambda: om.outer_radius(0.01, 0.1, k),  # type: ignore[arg-type]
     ):
         with pytest.raises(InputError) as info:
             call()
@@ -621,7 +624,7 @@ def test_bad_theta_b(theta_b: float) -> None:
 
 @pytest.mark.parametrize("r_b", [0.0, -1.0, math.inf, math.nan, 2e300])
 def test_bad_r_b(r_b: float) -> None:
-    for call in (lambda: mp.inner_radius(0.1, r_b, 0.5), lambda: mp.outer_radius_inverse(1.0, r_b, 0.5)):
+    for call in (lambda: mp.inner_radius(0.1, r_b, 0.5), lambda: om.outer_radius_inverse(1.0, r_b, 0.5)):
         with pytest.raises(InputError) as info:
             call()
         assert info.value.field == "r_b"
@@ -629,7 +632,7 @@ def test_bad_r_b(r_b: float) -> None:
 
 def test_bad_inputs() -> None:
     with pytest.raises(InputError, match="delta"):
-        mp.outer_radius(0.1, 0.05, 0.5, delta=-1e-3)
+        om.outer_radius(0.1, 0.05, 0.5, delta=-1e-3)
     with pytest.raises(InputError, match="theta_g"):
         mp.angle_map([0.1, math.nan], 0.3, 0.5)
     with pytest.raises(InputError, match="theta_g"):
@@ -637,7 +640,7 @@ def test_bad_inputs() -> None:
     with pytest.raises(InputError, match="r_p"):
         mp.inner_radius([0.1, -1e-9], 0.05, 0.5)
     with pytest.raises(InputError, match="r_p"):
-        mp.outer_radius(FMAX, 1e300, 1e-300)  # the image overflows
+        om.outer_radius(FMAX, 1e300, 1e-300)  # the image overflows
     with pytest.raises(InputError, match="r_b"):
         mp.inner_radius(0.1, 1e-310, 0.5)  # a subnormal bound leaves no room for the image
     with pytest.raises(InputError, match="theta_b"):
@@ -645,9 +648,9 @@ def test_bad_inputs() -> None:
     with pytest.raises(InputError, match="r_g"):
         mp.inner_radius_inverse(-1e-9, 0.05, 0.5, clip=True)  # a negative radius is not clipped
     with pytest.raises(InputError, match="x_p"):
-        mp.outer_map_points([[0.1, 0.2]], [0.1, 0.2], 0.05, 0.5)  # the centre has no image direction
+        pm.outer_map_points([[0.1, 0.2]], [0.1, 0.2], 0.05, 0.5)  # the centre has no image direction
     with pytest.raises(InputError, match="center"):
-        mp.inner_map_points(np.zeros((4, 2)), np.zeros((3, 2)), 0.05, 0.5)
+        pm.inner_map_points(np.zeros((4, 2)), np.zeros((3, 2)), 0.05, 0.5)
 
 
 def test_inverse_overflow_is_an_input_error() -> None:
@@ -674,12 +677,12 @@ def test_inner_points_tube_and_round_trip(
 ) -> None:
     x = np.array(pts)
     centers = np.array(c) + 0.1 * x[::-1]  # one centre per point: a tube around a path
-    xg = mp.inner_map_points(x, centers, r_b, k)
+    xg = pm.inner_map_points(x, centers, r_b, k)
     assert xg.shape == x.shape
     d = np.linalg.norm(xg - centers, axis=1)
     # the image radius is < r_b; adding the offset to the centre rounds at the scale of the centre
     assert np.all(d < r_b + 4 * EPS * (np.abs(centers).max(axis=1) + r_b))
-    back = mp.inner_inverse_points(xg, centers, r_b, k, clip=True)
+    back = pm.inner_inverse_points(xg, centers, r_b, k, clip=True)
     u = k * np.linalg.norm(x - centers, axis=1) / r_b
     ok = u <= 5.0  # kappa <= 30, and e^u / k <= 1.5e3 amplifies the centre's rounding below 1e-12
     scale = np.abs(x).max(axis=1) + np.abs(centers).max(axis=1)
@@ -703,10 +706,10 @@ def test_outer_points_keep_out_and_round_trip(
     x = x[keep]
     if x.size == 0:
         return
-    xg = mp.outer_map_points(x, centre, r_b, k, delta=delta)
+    xg = pm.outer_map_points(x, centre, r_b, k, delta=delta)
     d = np.linalg.norm(xg - centre, axis=1)
     assert np.all(d >= (r_b + delta) - 4 * EPS * (np.abs(centre).max() + d))
-    back = mp.outer_inverse_points(xg, centre, r_b, k, delta=delta, clip=True)
+    back = pm.outer_inverse_points(xg, centre, r_b, k, delta=delta, clip=True)
     scale = np.abs(x).max(axis=1) + np.abs(centre).max() + r_b + delta
     # slope of the outer map >= 1 - k >= 0.1: the centre's rounding is amplified at most 10 times
     assert np.all(np.linalg.norm(back - x, axis=1) <= RTOL * scale)
@@ -714,18 +717,18 @@ def test_outer_points_keep_out_and_round_trip(
 
 def test_points_at_centre_and_inside_margin() -> None:
     c = np.array([0.2, -0.1])
-    np.testing.assert_array_equal(mp.inner_map_points(c, c, 0.1, 0.5), c)
-    np.testing.assert_array_equal(mp.inner_inverse_points(c, c, 0.1, 0.5), c)
+    np.testing.assert_array_equal(pm.inner_map_points(c, c, 0.1, 0.5), c)
+    np.testing.assert_array_equal(pm.inner_inverse_points(c, c, 0.1, 0.5), c)
     with pytest.raises(InputError) as info:
-        mp.outer_inverse_points(c + np.array([0.01, 0.0]), c, 0.05, 0.5, delta=0.01)
+        pm.outer_inverse_points(c + np.array([0.01, 0.0]), c, 0.05, 0.5, delta=0.01)
     assert info.value.field == "x_g"
     np.testing.assert_array_equal(
-        mp.outer_inverse_points(c + np.array([0.01, 0.0]), c, 0.05, 0.5, delta=0.01, clip=True), c
+        pm.outer_inverse_points(c + np.array([0.01, 0.0]), c, 0.05, 0.5, delta=0.01, clip=True), c
     )
     with pytest.raises(InputError) as info:
-        mp.inner_inverse_points(c + np.array([0.0, 0.1]), c, 0.1, 0.5)
+        pm.inner_inverse_points(c + np.array([0.0, 0.1]), c, 0.1, 0.5)
     assert info.value.field == "x_g"
-    far = mp.inner_inverse_points(c + np.array([0.0, 0.1]), c, 0.1, 0.5, clip=True)
+    far = pm.inner_inverse_points(c + np.array([0.0, 0.1]), c, 0.1, 0.5, clip=True)
     assert far[0] == c[0] and far[1] > c[1] + 30 * 0.1 / 0.5 * 0.9
 
 

@@ -37,7 +37,8 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.learning.oe_mappings import angle_map, inner_map_points, outer_map_points, wrap_angle
+from tooltransfer.planner.learning.oe_mappings import angle_map, wrap_angle
+from tooltransfer.planner.learning.oe_point_mappings import inner_map_points, outer_map_points
 from tooltransfer.planner.planning.oe.contacts import PushRefused, realise_pushes
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.metrics import plan_metrics
