@@ -29,7 +29,7 @@ from tooltransfer.planner.planning.ss import (
     recombine,
 )
 from tooltransfer.planner.planning.ss.cases import FIG11, fig11_task, random_task
-from tooltransfer.planner.planning.ss.nlp import Capsule
+from tooltransfer.planner.planning.ss.switch_rows import Capsule
 from tooltransfer.tools.library import load_tool
 
 

@@ -60,6 +60,9 @@ build). A build's time is mostly Python making the expressions; :func:`get_nlp` 
 per structure (tool, model, N, platform, body kinds, solver), and solves change only parameters,
 bounds and the initial guess. The build and solve times are in ``benchmarks/README.md``
 (``benchmarks/bench_ss.py``).
+
+The rows of one knot are built in :mod:`tooltransfer.planner.planning.ss.switch_rows`, the initial separators
+of a start path in :mod:`tooltransfer.planner.planning.ss.separator_guess`.
 """
 
 from __future__ import annotations
@@ -73,43 +76,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.planning.ss.bodies import UNIT, Body
+from tooltransfer.planner.planning.ss.bodies import Body
 from tooltransfer.planner.planning.ss.knot_rows import KnotRows, placed, triplet
+from tooltransfer.planner.planning.ss.switch_rows import (
+    Capsule,
+    InteriorKnot,
+    ToolRows,
+    body_rows,
+    reach_families,
+    reach_rows,
+)
 from tooltransfer.tools.model import Tool
-from tooltransfer.tools.omni.heading import heading_casadi
 from tooltransfer.tools.omni.platform import OmniPlatform
-from tooltransfer.tools.omni.reach import reach_sector, wedge_rows
-
-
-@dataclass(frozen=True)
-class Capsule:
-    """A capsule tool model in the tool frame: segment ``a``-``b`` (2,) [m] grown by ``radius`` [m]."""
-
-    a: NDArray[np.float64]
-    b: NDArray[np.float64]
-    radius: float
-
-    @staticmethod
-    def enclosing(tool: Tool, n_grid: int = 13) -> Capsule:
-        """The capsule of least area covering every outline vertex among those whose segment lies on the
-        tool frame's vertical line through the middle of the outline's width, with each end inset from
-        the outline's extent by a fraction of its half width (a grid of ``n_grid`` insets per end)."""
-        v = np.asarray(tool.outline.exterior.coords, dtype=np.float64)[:-1]
-        x0 = 0.5 * (v[:, 0].min() + v[:, 0].max())
-        half = 0.5 * (v[:, 0].max() - v[:, 0].min())
-        best: Capsule | None = None
-        best_area = np.inf
-        for lo in np.linspace(0.0, half, n_grid):
-            for hi in np.linspace(0.0, half, n_grid):
-                a, b = np.array([x0, v[:, 1].min() + lo]), np.array([x0, v[:, 1].max() - hi])
-                ab = b - a
-                t = np.clip(((v - a) @ ab) / max(float(ab @ ab), 1e-18), 0.0, 1.0)
-                r = float(np.max(np.hypot(*(v - a - t[:, None] * ab).T)))
-                area = 2.0 * r * float(np.hypot(*ab)) + np.pi * r * r
-                if area < best_area:
-                    best, best_area = Capsule(a, b, r), area
-        assert best is not None
-        return best
 
 
 def _ipopt(nlp: dict[str, Any], derivatives: Callable[[], dict[str, Any]], max_iter: int) -> Any:
@@ -195,14 +173,6 @@ def _tool_key(tool: Tool) -> tuple[str, bytes]:
     return (tool.name, tool.outline.wkb)
 
 
-def reach_families(reach: bool | tuple[bool, bool, bool]) -> tuple[bool, bool, bool]:
-    """``(inner circle, outer circle, waist wedge)`` reach rows to build: all for True, none for False."""
-    if isinstance(reach, bool):
-        return (reach, reach, reach)
-    inner, outer, wedge = (bool(v) for v in reach)
-    return inner, outer, wedge
-
-
 def _check_build(n_knots: int, bodies: Sequence[Body], model: str, solver: str, separators: str) -> None:
     """Reject an unknown solver, model or separator form, too few knots, or a capsule against a
     polygon (the capsule rows measure discs only), before any CasADi work."""
@@ -216,128 +186,6 @@ def _check_build(n_knots: int, bodies: Sequence[Body], model: str, solver: str, 
         raise InputError("model", "'pieces' when the object or an obstacle is a polygon", "'capsule'")
     if separators not in SEPARATORS:
         raise InputError("separators", f"one of {', '.join(SEPARATORS)}", repr(separators))
-
-
-@dataclass(frozen=True)
-class _ToolRows:
-    """How the tool enters the non-penetration rows: its model, convex ``pieces`` [mm] (tool
-    frame) or ``capsule`` [mm], and the separators: their form (``angle``, or ``distance`` for the
-    signed-distance rows of discs), the per-knot ``(piece, body, offset, has_beta)`` layout and
-    the count ``n_sep`` of separating variables per interior knot."""
-
-    model: str
-    pieces: list[NDArray[np.float64]]
-    capsule: Capsule | None
-    angle: bool
-    distance: bool
-    sep_layout: list[tuple[int, int, int, bool]]
-    n_sep: int
-
-    @classmethod
-    def of(cls, tool: Tool, bodies: Sequence[Body], model: str, separators: str) -> _ToolRows:
-        """The tool's pieces (or capsule) in millimetres and the separating variables each pair of
-        piece and body needs (none for a disc under ``"distance"``)."""
-        angle = separators == "angle"
-        pieces = [np.asarray(p.exterior.coords, dtype=np.float64)[:-1] / UNIT for p in tool.convex_pieces]
-        capsule = None
-        if model == "capsule":
-            c = Capsule.enclosing(tool)
-            capsule = Capsule(c.a / UNIT, c.b / UNIT, c.radius / UNIT)
-        sep_layout: list[tuple[int, int, int, bool]] = []
-        n_sep = 0
-        distance = separators == "distance"
-        if model == "pieces":
-            for j in range(len(pieces)):
-                for bi, b in enumerate(bodies):
-                    poly = b.kind == "poly"
-                    if distance and not poly:
-                        continue  # the signed distance row needs no separating variables
-                    sep_layout.append((j, bi, n_sep, poly))
-                    n_sep += (1 if angle else 2) + (1 if poly else 0)
-        return cls(model, pieces, capsule, angle, distance, sep_layout, n_sep)
-
-
-class _Interior:
-    """The tool at one interior knot (SX): its centre ``Xi, Yi`` [mm] and the heading's cosine and
-    sine (the heading a function of position through the Omni's waist)."""
-
-    def __init__(self, centre: Any, platform: OmniPlatform) -> None:
-        import casadi as ca
-
-        self.Xi, self.Yi = centre[0], centre[1]
-        yaw = heading_casadi(platform, self.Xi * UNIT, self.Yi * UNIT)
-        self.cos_k, self.sin_k = ca.cos(yaw), ca.sin(yaw)
-
-    def world(self, v: NDArray[np.float64]) -> tuple[Any, Any]:
-        """The tool-frame point ``v`` (2,) [mm] in the world at the knot."""
-        return self.Xi + self.cos_k * v[0] - self.sin_k * v[1], self.Yi + self.sin_k * v[0] + self.cos_k * v[1]
-
-    def tool_frame(self, cx: Any, cy: Any) -> tuple[Any, Any]:
-        """The world point ``(cx, cy)`` in the tool frame at the knot (there the tool's outline is
-        constant, so distance expressions and their Hessians stay small)."""
-        rx, ry = cx - self.Xi, cy - self.Yi
-        return self.cos_k * rx + self.sin_k * ry, self.cos_k * ry - self.sin_k * rx
-
-
-def _body_rows(knots: _Interior, tr: _ToolRows, b: Body, bi: int, p: Any, m: Any, S: Any) -> list[Any]:
-    """Non-penetration rows (SX scalars of one knot, each >= 0) of body ``b`` (number ``bi``, parameters ``p``,
-    margin row ``m`` [mm]) against the tool: the capsule's distance, the signed distance of each
-    piece to a disc, or the separating-line rows of each piece (separating variables ``S``)."""
-    import casadi as ca
-
-    per_knot: list[Any] = []
-    if tr.model == "capsule":
-        assert tr.capsule is not None
-        lx, ly = knots.tool_frame(p[0], p[1])
-        d2 = _clamped_d2(lx, ly, tr.capsule.a, tr.capsule.b - tr.capsule.a)
-        per_knot.append(ca.sqrt(d2) - (p[2] + tr.capsule.radius + m))
-    elif tr.distance and b.kind == "disc":
-        lx, ly = knots.tool_frame(p[0], p[1])
-        for verts in tr.pieces:
-            per_knot.append(_signed_distance(verts, lx, ly) - (p[2] + m))
-    else:
-        for j, verts in enumerate(tr.pieces):
-            off = next(o for (jj, bb, o, _) in tr.sep_layout if jj == j and bb == bi)
-            if tr.angle:
-                n0, n1 = ca.cos(S[off, :]), ca.sin(S[off, :])
-                beta = S[off + 1, :] if b.kind == "poly" else None
-            else:
-                n0, n1 = S[off, :], S[off + 1, :]
-                beta = S[off + 2, :] if b.kind == "poly" else None
-            for v in verts:
-                wx, wy = knots.world(v)
-                if b.kind == "disc":
-                    per_knot.append(n0 * (wx - p[0]) + n1 * (wy - p[1]) - (p[2] + m))
-                else:
-                    per_knot.append(n0 * wx + n1 * wy - beta - m)
-            if b.kind == "poly":
-                for vi in range(b.data.size // 2):
-                    per_knot.append(beta - (n0 * p[2 * vi] + n1 * p[2 * vi + 1]))
-            if not tr.angle:
-                per_knot.append(1 - n0 * n0 - n1 * n1)
-    return per_knot
-
-
-def _reach_rows(knots: _Interior, platform: OmniPlatform, reach: bool | tuple[bool, bool, bool],
-                reach_margin: float) -> list[Any]:
-    """Reach rows (SX scalars of one knot, each >= 0, scaled to millimetres): inside the
-    outer radius, outside the inner one and inside the wedge's two half-planes, each
-    ``reach_margin`` [m] inside, as far as :func:`reach_families` keeps them."""
-    sec = reach_sector(platform)
-    wr = wedge_rows(platform)
-    bx0, by0 = sec.centre / UNIT
-    r_in, r_out = (sec.r_in + reach_margin) / UNIT, (sec.r_out - reach_margin) / UNIT
-    Xi, Yi = knots.Xi, knots.Yi
-    inner, outer, wedge = reach_families(reach)
-    r2 = (Xi - bx0) ** 2 + (Yi - by0) ** 2
-    per_knot = []
-    if inner:
-        per_knot.append((r2 - r_in**2) / r_in)
-    if outer:
-        per_knot.append((r_out**2 - r2) / r_out)
-    for gi in range(2 if wedge else 0):
-        per_knot.append(wr.h[gi] / UNIT - reach_margin / UNIT - (wr.G[gi, 0] * Xi + wr.G[gi, 1] * Yi))
-    return per_knot
 
 
 def build_nlp(
@@ -359,7 +207,7 @@ def build_nlp(
     t0 = time.perf_counter()
     _check_build(n_knots, bodies, model, solver, separators)
     N, K = n_knots, n_knots - 2
-    tr = _ToolRows.of(tool, bodies, model, separators)
+    tr = ToolRows.of(tool, bodies, model, separators)
     n_vars = 2 * N + K * tr.n_sep
     sizes = [int(b.data.size) for b in bodies]
     n_params = 4 * N + sum(sizes) + 1
@@ -369,7 +217,7 @@ def build_nlp(
                                  2 * N + tr.n_sep * np.arange(K)[:, None] + np.arange(tr.n_sep)]).astype(np.intp)
     v = ca.SX.sym("v", 2 + tr.n_sep)
     m = ca.SX.sym("m")
-    knot = _Interior(v[:2], platform)
+    knot = InteriorKnot(v[:2], platform)
     S = v[2:] if tr.n_sep else None
     interior = KnotRows(var_index, n_vars)
     families: list[tuple[str, int, int]] = []
@@ -378,11 +226,11 @@ def build_nlp(
         q = ca.SX.sym(f"body{bi}", size)
         base = 2 * N if b.family == "object" else 3 * N  # m_obj or m_obs, at the interior knots
         margins = p[base + 1:base + N - 1].T
-        n = interior.add(f"body{bi}", v, q, m, _body_rows(knot, tr, b, bi, q, m, S), p[off:off + size], margins)
+        n = interior.add(f"body{bi}", v, q, m, body_rows(knot, tr, b, bi, q, m, S), p[off:off + size], margins)
         families.append((b.family, count, count + n))
         count, off = count + n, off + size
     start = count
-    per_knot = _reach_rows(knot, platform, reach, reach_margin)
+    per_knot = reach_rows(knot, platform, reach, reach_margin)
     if per_knot:
         count += interior.add("reach", v, ca.SX(0, 1), m, per_knot, ca.MX(0, 1), ca.MX(1, K))
     families.append(("reach", start, count))
@@ -458,44 +306,6 @@ def _objective_and_steps(N: int, smooth: float) -> _Whole:
                          [ca.triu(ca.hessian(lam_f * f + ca.dot(lam_s, step), x)[0])]))
 
 
-def _signed_distance(verts: NDArray[np.float64], lx: Any, ly: Any) -> Any:
-    """Signed distance [mm] from the point ``(lx, ly)`` (in the tool frame, [mm]) to the convex piece
-    with vertices ``verts`` (V, 2) [mm]: outside, the least clamped point-to-edge distance (exact,
-    continuously differentiable); inside, the largest signed distance to the edges' lines
-    (negative). In the tool frame the edges are constants, so the expression (and its Hessian) stays
-    small."""
-    import casadi as ca
-
-    v = np.asarray(verts, dtype=np.float64)
-    if _area2(v) < 0:
-        v = v[::-1]
-    d2: Any = None  # the least squared distance to an edge so far (CasADi expression)
-    line: Any = None  # the largest signed distance to an edge's line so far
-    for i in range(len(v)):
-        a, e = v[i], v[(i + 1) % len(v)] - v[i]
-        di = _clamped_d2(lx, ly, a, e)
-        li = ((lx - a[0]) * e[1] - (ly - a[1]) * e[0]) / np.sqrt(float(e @ e))  # to the edge's line, + outside
-        d2 = di if d2 is None else ca.fmin(d2, di)
-        line = li if line is None else ca.fmax(line, li)
-    return ca.if_else(line > 0, ca.sqrt(d2 + 1e-12), line)
-
-
-def _clamped_d2(lx: Any, ly: Any, a: NDArray[np.float64], e: NDArray[np.float64]) -> Any:
-    """Squared distance [mm^2] from ``(lx, ly)`` to the constant segment from ``a`` along ``e`` (2,) [mm]
-    (the clamped point-to-segment distance)."""
-    import casadi as ca
-
-    rx, ry = lx - a[0], ly - a[1]
-    t = ca.fmin(1, ca.fmax(0, (rx * e[0] + ry * e[1]) / float(e @ e)))
-    dx, dy = rx - t * e[0], ry - t * e[1]
-    return dx * dx + dy * dy
-
-
-def _area2(v: NDArray[np.float64]) -> float:
-    """Twice the signed area of the polygon ``v`` (V, 2) (positive when counter-clockwise)."""
-    return float(np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1]))
-
-
 _CACHE: dict[tuple, SwitchNLP] = {}
 
 
@@ -523,55 +333,3 @@ def get_nlp(tool: Tool, n_knots: int, platform: OmniPlatform, bodies: Sequence[B
 def clear_cache() -> None:
     """Forget every built NLP."""
     _CACHE.clear()
-
-
-def initial_separators(nlp: SwitchNLP, xy_mm: NDArray[np.float64], yaw: NDArray[np.float64],
-                       bodies: Sequence[Body]) -> NDArray[np.float64]:
-    """Initial separating variables (n_sep, N - 2) for the path ``xy_mm`` (N, 2) [mm] / ``yaw`` (N,):
-    for a disc, the unit direction from its centre to the nearest point of the piece; for a polygon,
-    the direction between the centres with ``beta`` half way between the two shapes' projections."""
-    N = nlp.n_knots
-    out = np.zeros((nlp.n_sep, N - 2))
-    if nlp.n_sep == 0:
-        return out
-    c, s = np.cos(yaw[1:-1]), np.sin(yaw[1:-1])
-    R = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (K, 2, 2)
-    for j, bi, off, poly in nlp.sep_layout:
-        w = np.einsum("kij,vj->kvi", R, nlp.pieces[j]) + xy_mm[1:-1, None, :]  # (K, V, 2)
-        b = bodies[bi]
-        if not poly:
-            cen = b.data[:2]
-            a, e = w, np.roll(w, -1, axis=1) - w
-            t = np.clip(np.einsum("kvi,kvi->kv", cen - a, e) / np.maximum(np.einsum("kvi,kvi->kv", e, e), 1e-12), 0, 1)
-            near = a + t[..., None] * e
-            d = near - cen
-            dist = np.hypot(d[..., 0], d[..., 1])
-            best = d[np.arange(d.shape[0]), dist.argmin(axis=1)]
-            # a centre inside the piece: point away from the piece's centroid
-            inside = _inside_convex(w, cen)
-            best[inside] = cen - w[inside].mean(axis=1)
-            n = best / np.maximum(np.hypot(best[:, 0], best[:, 1]), 1e-12)[:, None]
-            if nlp.angle:
-                out[off] = np.arctan2(n[:, 1], n[:, 0])
-            else:
-                out[off:off + 2] = n.T
-        else:
-            ov = b.data.reshape(-1, 2)
-            d = w.mean(axis=1) - ov.mean(axis=0)
-            n = d / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-12)[:, None]
-            lo = np.einsum("kvi,ki->kv", w, n).min(axis=1)
-            hi = (ov @ n.T).max(axis=0)
-            if nlp.angle:
-                out[off] = np.arctan2(n[:, 1], n[:, 0])
-                out[off + 1] = 0.5 * (lo + hi)
-            else:
-                out[off:off + 2] = n.T
-                out[off + 2] = 0.5 * (lo + hi)
-    return out
-
-
-def _inside_convex(w: NDArray[np.float64], p: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """Whether ``p`` (2,) lies inside each convex polygon ``w`` (K, V, 2) (either orientation)."""
-    e = np.roll(w, -1, axis=1) - w
-    cr = e[..., 0] * (p[1] - w[..., 1]) - e[..., 1] * (p[0] - w[..., 0])
-    return np.all(cr >= 0, axis=1) | np.all(cr <= 0, axis=1)

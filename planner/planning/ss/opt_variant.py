@@ -49,8 +49,9 @@ from tooltransfer.planner.planning.ss.bodies import UNIT, Body, all_bodies
 from tooltransfer.planner.planning.ss.dmp_variant import measure, recombine
 from tooltransfer.planner.planning.ss.initial import c_obstacle, round_paths
 from tooltransfer.planner.planning.ss.interrupts import keep_interrupts
-from tooltransfer.planner.planning.ss.nlp import MODELS, SEPARATORS, SOLVERS, SwitchNLP, get_nlp, initial_separators
+from tooltransfer.planner.planning.ss.nlp import MODELS, SEPARATORS, SOLVERS, SwitchNLP, get_nlp
 from tooltransfer.planner.planning.ss.result import SwitchPath
+from tooltransfer.planner.planning.ss.separator_guess import initial_separators
 from tooltransfer.planner.planning.ss.switch_task import SwitchTask
 from tooltransfer.planner.planning.ss.verify import pose_depth_and_gap, tool_geometry
 from tooltransfer.problems.task import SSOptions, schema_default
