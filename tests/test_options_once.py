@@ -13,7 +13,7 @@ import pytest
 from tooltransfer.planner.apps.cli import build_parser
 from tooltransfer.planner.planning.oe.face_frame import CONE_FRACTION
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions
-from tooltransfer.planner.planning.oe.qp_variant import TASK_FIELDS, QPOptions
+from tooltransfer.planner.planning.oe.qp_options import TASK_FIELDS, QPOptions
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.solve import mapping_options, qp_options
 from tooltransfer.planner.planning.ss.opt_variant import OptOptions

@@ -44,7 +44,7 @@ from tooltransfer.planner.execution.plant import Plant
 from tooltransfer.planner.planning.oe.correction import correction_references
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
-from tooltransfer.planner.planning.oe.qp_variant import QPOptions
+from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.replan import (
     QP_REPLAN_SIZES,
     PlanReference,

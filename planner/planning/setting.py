@@ -4,7 +4,7 @@ A :class:`Setting` holds what the task fixes about the physical system: the tool
 the object (a :class:`~tooltransfer.tools.objects.DiscObject`, which validates its radius), the push
 mechanics, the obstacles and the safety margin the plan can keep. It holds no planning option: the
 share of the friction cone a plan may use and the contact's margins are the OE variants' options
-(:class:`~tooltransfer.planner.planning.oe.qp_variant.QPOptions`,
+(:class:`~tooltransfer.planner.planning.oe.qp_options.QPOptions`,
 :class:`~tooltransfer.planner.planning.oe.mapping_variant.MappingOptions`), the switch clearance the task's
 ``ss`` section. ``solve``, the closed loop, the figures, ``simulate`` and the benchmarks build it with
 :func:`setting_from_task` and pass it down, so they plan for the same world.

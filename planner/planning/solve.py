@@ -33,7 +33,7 @@ from tooltransfer.planner.common.metric_units import UNITS
 from tooltransfer.planner.planning.assemble import SwitchFailed, assemble
 from tooltransfer.planner.planning.oe.generalize import generalize
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions
-from tooltransfer.planner.planning.oe.qp_variant import QPOptions
+from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.plan import Plan, Segment
 from tooltransfer.planner.planning.recontact import recontact_planner
 from tooltransfer.planner.planning.setting import Setting, setting_from_task, task_skills

@@ -28,7 +28,8 @@ from tooltransfer.errors import InputError, ToolTransferError
 from tooltransfer.planner.planning.assemble import SwitchPlanner
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions, condense_mapping
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
-from tooltransfer.planner.planning.oe.qp_variant import QPOptions, condense_qp
+from tooltransfer.planner.planning.oe.qp_options import QPOptions
+from tooltransfer.planner.planning.oe.qp_variant import condense_qp
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.ss import SwitchSkill, optimize, recombine
 from tooltransfer.planner.planning.switches import SkillSolver, arch_planner, dmp_planner, opt_planner, with_fallback

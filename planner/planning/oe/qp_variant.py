@@ -31,41 +31,26 @@ What it guarantees: the returned plan satisfies every constraint family on the d
 measured violations are in its metrics), and it is the cheapest of the sequences scored; it does
 not guarantee the global optimum over all sequences and switch times. ``infeasible`` means the
 pre-checks failed or no scored candidate was feasible; the reason names which and why.
+
+The options are :class:`tooltransfer.planner.planning.oe.qp_options.QPOptions`; one candidate's fit and cost are
+:class:`tooltransfer.planner.planning.oe.sequence_fit.SequenceFit`.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field
 
-from tooltransfer.dmp import DMP
-from tooltransfer.dmp.qp import (
-    FitProblem,
-    FitResult,
-    FixedEndPoint,
-    OutsideDisc,
-    OutsidePolygon,
-    Ridge,
-    TrackPath,
-    ZeroEndVelocity,
-    solve_fit,
-)
-from tooltransfer.dmp.qp.constraints.base import Constraint
 from tooltransfer.errors import InputError
-from tooltransfer.planner.planning.oe.constraints import ContactOnFace, HeadingCone, reach_constraints, reach_entry
-from tooltransfer.planner.planning.oe.contacts import PushRefused, realise_pushes, usable_range
-from tooltransfer.planner.planning.oe.face_frame import FaceFrame
-from tooltransfer.planner.planning.oe.objectives import RollingPenalty
+from tooltransfer.planner.planning.oe.contacts import PushRefused, realise_pushes
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
+from tooltransfer.planner.planning.oe.qp_options import QPOptions
+from tooltransfer.planner.planning.oe.sequence_fit import ScoredSequence, SequenceFit
 from tooltransfer.planner.planning.oe.sequence_proxy import ranked_sequences, reach_distance, segment_costs
 from tooltransfer.planner.planning.setting import Setting
-from tooltransfer.problems.task import OEOptions
-from tooltransfer.tools.objects import Disc
-from tooltransfer.tools.pushing.inverse import FaceGeometry
 from tooltransfer.validation import check_array
 
 FINAL_TRIES = 3
@@ -76,232 +61,7 @@ SCREEN_RTOL = 1e-3
 changed by the last per-mille; the final fit runs to ``QPOptions.scp_rtol``)."""
 
 
-_TASK = OEOptions.model_fields
-#: The task's ``oe`` fields the ``qp`` variant uses: their defaults, bounds and descriptions are the
-#: task schema's (:class:`tooltransfer.problems.task.OEOptions`), reused, not written again.
-TASK_FIELDS = ("n_samples", "n_basis", "segments", "max_pushes", "candidates", "switch_price", "max_contacts",
-               "friction_cone_fraction", "contact_margin", "contact_span")
-
-
-class QPOptions(BaseModel):
-    """Options of the ``qp`` variant: the task's ``oe`` fields of :data:`TASK_FIELDS` (defaults,
-    bounds and descriptions of :class:`tooltransfer.problems.task.OEOptions`) and the search's own.
-    Validated once, by pydantic, when built (:meth:`from_task` takes the task's already validated
-    values); ``model_copy(update=...)`` makes a variant of it.
-
-    Attributes:
-        screen_samples: constraint-grid samples while candidates are ranked (a coarser grid; the
-            best candidates are then solved again on the full grid, the first feasible one wins).
-        switch_price: cost of one face change [m^2], in the units of the objective (half the mean
-            squared deviation): the default weighs a face change like 0.63 mm of RMS deviation; on the
-            transfer case the push count depends on it (benchmarks/README.md).
-        ridge: weight of a ridge on the weights [m^2 per weight^2]; 0 by default (tracking on more
-            samples than basis functions is already well posed; weights are O(100), so even 1e-10
-            outweighs a millimetre of deviation).
-        tol: violation [m, m/s] the fit aims at (rows violated by more are added). 1e-6 (1 um/s,
-            10 um over a 10 s push): at 1e-7 and below the linearised cone and contact rows of a later
-            sequential round admit spurious infeasibility proofs (benchmarks/README.md);
-        accept: largest true violation [m, m/s] of a candidate still counted feasible (the heading
-            cone is exact only where it was linearised, so rounds stop a little short of ``tol``);
-        max_scp: sequential-convex rounds per candidate.
-        scp_rtol: the sequential-convex loop stops when the objective changes by less than this
-            (relative) and the path meets every linearised row (screening fits use
-            ``SCREEN_RTOL``: ranking needs no more);
-        recontact_price: cost of one re-contact [m^2] (half a face change by default: a short move
-            of the same face, no switch round the object);
-        alternatives: further screened candidates a plan may hand out (``PushPlan.next_best``) when a
-            later stage fails on it (a switch that finds no path, a check that fails).
-        friction_cone_fraction: share (0, 1] of the friction cone's half-angle ``atan(mu)`` the
-            planned object directions may use about a face's normal (a plan that survives an error in
-            ``mu``: :meth:`tooltransfer.planner.planning.oe.face_frame.FaceFrame.build`).
-        contact_margin, contact_span: where on a face the contact may be [m]
-            (:func:`tooltransfer.planner.planning.oe.contacts.usable_range`).
-    """
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    n_samples: int = _TASK["n_samples"]
-    screen_samples: int = Field(60, ge=1, strict=True)
-    n_basis: int = _TASK["n_basis"]
-    segments: int = _TASK["segments"]
-    max_pushes: int = _TASK["max_pushes"]
-    candidates: int = _TASK["candidates"]
-    switch_price: float = _TASK["switch_price"]
-    ridge: float = Field(0.0, ge=0, allow_inf_nan=False)
-    tol: float = Field(1e-6, gt=0, allow_inf_nan=False)
-    accept: float = Field(1e-6, gt=0, allow_inf_nan=False)
-    max_scp: int = Field(12, ge=1, strict=True)
-    max_contacts: int = _TASK["max_contacts"]
-    alternatives: int = Field(4, ge=0, strict=True)
-    recontact_price: float = Field(1e-7, ge=0, allow_inf_nan=False)
-    scp_rtol: float = 1e-6
-    friction_cone_fraction: float = _TASK["friction_cone_fraction"]
-    contact_margin: float = _TASK["contact_margin"]
-    contact_span: float = _TASK["contact_span"]
-
-    @classmethod
-    def from_task(cls, oe: OEOptions) -> QPOptions:
-        """The options of a task's ``oe`` section (validated by the task schema, so not again), the
-        search's own fields at their defaults."""
-        return cls.model_construct(**oe.model_dump(include=set(TASK_FIELDS)))
-
-
-@dataclass(frozen=True)
-class _Scored:
-    faces: tuple[str, ...]
-    switches: tuple[float, ...]
-    result: FitResult
-
-    accept: float
-    contacts: int = 0
-    """contacts the pushes of the fitted path need (one per push plus the re-contacts)."""
-    excess: float = 0.0
-    """contact travel [m] beyond what ``max_contacts`` contacts per push carry (screening fits)."""
-
-    @property
-    def feasible(self) -> bool:
-        r = self.result
-        return r.status == "solved" or (r.status == "inaccurate" and max(r.violations.values()) <= self.accept)
-
-
-class _FitSetup:
-    """Everything fixed while candidates are scored."""
-
-    def __init__(
-        self, t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
-        target: NDArray[np.float64], opts: QPOptions, free_start: bool = False,
-    ) -> None:
-        self.t, self.universal, self.target, self.opts, self.setting = t, universal, target, opts, setting
-        self.free_start = free_start
-        tool = self.tool = setting.tool
-        self.platform = setting.platform
-        cone = opts.friction_cone_fraction
-        self.frames = {f: FaceFrame.build(setting, f, friction_cone_fraction=cone) for f in tool.face_names}
-        self._face_rows: dict[str, tuple[FaceGeometry, tuple[float, float], list[FaceFrame]]] = {}
-        for f in tool.face_names:
-            g = FaceGeometry.of(tool, f)
-            lo, hi = usable_range(tool, f, opts)
-            ends = [FaceFrame.build(setting, f, s=s / g.length, friction_cone_fraction=cone) for s in sorted({lo, hi})]
-            self._face_rows[f] = (g, (lo, hi), ends)
-        self.dmp = DMP(2, n_basis=opts.n_basis)
-        self.fixed: list[Constraint] = [FixedEndPoint(target), ZeroEndVelocity()]
-        grow = setting.radius + setting.margin
-        for o in setting.obstacles:
-            if isinstance(o, Disc):
-                self.fixed.append(OutsideDisc(o.centre, o.radius + grow, family="obstacle"))
-            else:
-                ring = np.asarray(o.exterior.coords)[:-1]
-                self.fixed.append(OutsidePolygon(ring, grow, family="obstacle"))
-        self._const: float | None = None
-
-    def problem(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> FitProblem:
-        edges = (self.t[0], *switches, self.t[-1])
-        cons = list(self.fixed)
-        for n, (face, lo, hi) in enumerate(zip(faces, edges[:-1], edges[1:], strict=True)):
-            fr = self.frames[face]
-            g, (s_lo, s_hi), ends = self._face_rows[face]
-            cons.append(HeadingCone(fr, window=(lo, hi)))
-            ref = self.universal[(self.t >= lo - 1e-12) & (self.t <= hi + 1e-12)] - fr.base
-            ang = np.arctan2(ref[:, 1], ref[:, 0])
-            near = (float(ang.min()), float(ang.max())) if ang.size else None
-            for end in ends:  # the Omni reaches the tool wherever the contact is on the face
-                rows = reach_constraints(end, window=(lo, hi), near=near)
-                if self.free_start and n == 0:
-                    start = self._entry(rows, lo, hi)
-                    rows = rows if start == lo else reach_constraints(end, window=(start, hi), near=near)
-                cons += rows
-            if s_hi > s_lo:
-                cons.append(ContactOnFace(fr, g, self.setting.mechanics, self.setting.radius, s_lo, s_hi,
-                                          max_contacts=self.opts.max_contacts, window=(lo, hi)))
-        objectives: list = [TrackPath(self.universal)]
-        if self.opts.ridge > 0:
-            objectives.append(Ridge(self.opts.ridge))
-        if self.opts.recontact_price > 0:
-            objectives.append(RollingPenalty(
-                [(self._face_rows[f][0], self.frames[f], lo, hi, self._face_rows[f][1])
-                 for f, lo, hi in zip(faces, edges[:-1], edges[1:], strict=True)],
-                self.universal, self.setting, self.opts.recontact_price))
-        return FitProblem(self.dmp, self.t, x0=self.universal[0], g=self.target, objectives=objectives,
-                          constraints=cons)
-
-    def _entry(self, rows: list[Constraint], lo: float, hi: float) -> float:
-        """When one contact end's reach ``rows`` start to apply in a re-plan's first window
-        ``[lo, hi]`` [s]: where the reference first satisfies them. A re-plan starts where the object
-        is, possibly outside the region every contact on the face reaches it from though inside the
-        one the actual contact does (the realised tool poses are then checked against the joint
-        limits exactly, :func:`condense_sequence`); ``lo`` when the reference starts inside or never
-        enters."""
-        inside = np.flatnonzero((self.t >= lo - 1e-12) & (self.t <= hi + 1e-12))
-        k = reach_entry(rows, self.universal[inside])
-        return lo if k == 0 or k >= inside.size else float(self.t[inside[k]])
-
-    def score(self, faces: tuple[str, ...], switches: tuple[float, ...], *, contact_rows: bool = True,
-              warm: bool = False) -> _Scored:
-        """The candidate's fit: first without the contact rows (cone, reach, obstacles and the ends).
-
-        Without ``contact_rows`` (screening) the contacts that path needs and the excess contact
-        travel beyond ``max_contacts`` contacts per push are only measured, for the cost. With them
-        (the final fit), the fit is repeated with the contact rows (:class:`ContactOnFace`, first
-        linearised at that path) when a push needs more than ``max_contacts`` contacts. Every fit
-        carries the rolling penalty (:class:`tooltransfer.planner.planning.oe.objectives.RollingPenalty`), so the number
-        of contacts is priced, not only bounded. A candidate the first stage finds infeasible is so for
-        the second.
-        """
-        problem = self.problem(faces, switches)
-        kw = {"tol": self.opts.tol, "max_scp": self.opts.max_scp, "scp_rtol": self.opts.scp_rtol}
-        contact = [c for c in problem.constraints if isinstance(c, ContactOnFace)]
-        first = replace(problem, constraints=[c for c in problem.constraints if not isinstance(c, ContactOnFace)])
-        x_start = None
-        if warm:
-            td = first.t_dense
-            x_start = np.column_stack([np.interp(td, self.t, self.universal[:, j]) for j in range(2)])
-        res = solve_fit(first, x_start=x_start, **kw)
-        scored = _Scored(faces, switches, res, self.opts.accept)
-        if not contact or res.rollout is None or not scored.feasible:
-            return scored
-        roll = res.rollout
-        t = roll.t + self.t[0]
-
-        def counts(r: FitResult) -> list[int]:
-            assert r.rollout is not None
-            return [max(1, int(np.ceil(c.need(t, r.rollout.x, r.rollout.v) / (c.hi - c.lo) - 1e-9))) for c in contact]
-
-        need = counts(res)
-        excess = sum(max(0.0, c.need(t, roll.x, roll.v) - c.max_contacts * (c.hi - c.lo)) for c in contact)
-        n = sum(need) + len(faces) - len(contact)
-        if not contact_rows:
-            return replace(scored, contacts=n, excess=excess)
-        if excess > 0.0:
-            res = solve_fit(problem, x_start=roll.x, **kw)
-            scored = _Scored(faces, switches, res, self.opts.accept)
-            if res.rollout is None or not scored.feasible:
-                return scored
-            need = counts(res)
-            n = sum(need) + len(faces) - len(contact)
-            scored = replace(scored, contacts=n)
-        return scored
-
-    def cost(self, s: _Scored) -> float:
-        """Half the mean squared deviation [m^2], plus the prices of the face changes and the
-        re-contacts, plus the squared excess contact travel of a screening fit [m^2] (what the
-        contact rows would have to bend away)."""
-        if not s.feasible:
-            return np.inf
-        recontacts = max(0, s.contacts - len(s.faces))
-        return (s.result.objective + self._offset + self.opts.switch_price * (len(s.faces) - 1)
-                + self.opts.recontact_price * recontacts + s.excess**2)
-
-    @property
-    def _offset(self) -> float:
-        """Constant the tracking objective drops (so costs read as half the mean squared deviation
-        [m^2]): ``0.5 mean |x_free - ref|^2`` on the grid, the same for every candidate."""
-        if self._const is None:
-            free = self.problem((next(iter(self.frames)),), ()).affine("grid").x_free
-            self._const = 0.5 * float(np.mean(np.sum((free - self.universal) ** 2, axis=1)))
-        return self._const
-
-
-def _precheck(fit: _FitSetup, check_start: bool = True) -> str:
+def _precheck(fit: SequenceFit, check_start: bool = True) -> str:
     ends = np.vstack([fit.universal[0], fit.target])
     reach = {f: reach_distance(fr, ends) for f, fr in fit.frames.items()}
     for i, what in ((0, "start"), (1, "target")):
@@ -311,7 +71,7 @@ def _precheck(fit: _FitSetup, check_start: bool = True) -> str:
     return ""
 
 
-def _pushes(fit: _FitSetup, best: _Scored, t: NDArray[np.float64], x: NDArray[np.float64],
+def _pushes(fit: SequenceFit, best: ScoredSequence, t: NDArray[np.float64], x: NDArray[np.float64],
             s_first: float | None = None, spans_wanted: int | None = None) -> tuple[Push, ...]:
     """The pushes of the fitted path (of its first ``spans_wanted`` faces), realised by the inverse
     push model (raises PushRefused)."""
@@ -355,7 +115,7 @@ def condense_sequence(
     target = check_array(target, "target", shape=(2,))
     grid = np.linspace(t[0], t[-1], opts.n_samples)
     ref = np.column_stack([np.interp(grid, t, universal[:, j]) for j in range(2)])
-    fine = _FitSetup(grid, ref, setting, target, opts, free_start)
+    fine = SequenceFit(grid, ref, setting, target, opts, free_start)
     empty = np.zeros((0, 2))
     s = fine.score(tuple(faces), tuple(float(v) for v in switches), warm=True)
     if not s.feasible or s.result.rollout is None:
@@ -382,7 +142,7 @@ def _infeasible(ref: NDArray[np.float64], start_time: float, reason: str, n_qp: 
                     candidates=cands, metrics={"compute_time": time.perf_counter() - start_time})
 
 
-def _screened(screen: _FitSetup, grid: NDArray[np.float64], opts: QPOptions) -> list[_Scored]:
+def _screened(screen: SequenceFit, grid: NDArray[np.float64], opts: QPOptions) -> list[ScoredSequence]:
     """Every candidate scored on the screening grid: the best-ranked push sequences of the proxy
     costs (switches at segment bounds), then the best feasible one's switches moved one segment
     either way while that lowers its cost (a local search on the cuts)."""
@@ -420,10 +180,10 @@ class _Finals:
     model realises is the plan, which can hand out the next one (``PushPlan.next_best``) when a
     later stage (a switch) fails on it. ``scored`` gathers every fit, screening and final."""
 
-    screen: _FitSetup
-    fine: _FitSetup
-    scored: list[_Scored]
-    order: list[_Scored]
+    screen: SequenceFit
+    fine: SequenceFit
+    scored: list[ScoredSequence]
+    order: list[ScoredSequence]
     grid: NDArray[np.float64]
     ref: NDArray[np.float64]
     target: NDArray[np.float64]
@@ -466,8 +226,8 @@ class _Finals:
             f"(constraint families in conflict: {', '.join(fams) or 'unknown'})", n_qp, cands,
         )
 
-    def _solved(self, best: _Scored, dense_t: NDArray[np.float64], x: NDArray[np.float64], v: NDArray[np.float64],
-                pushes: tuple[Push, ...], after: int, tried: int) -> PushPlan:
+    def _solved(self, best: ScoredSequence, dense_t: NDArray[np.float64], x: NDArray[np.float64],
+                v: NDArray[np.float64], pushes: tuple[Push, ...], after: int, tried: int) -> PushPlan:
         """The solved plan of ``best`` (dense path ``x`` [m], ``v`` [m/s] at ``dense_t`` [s]) with its
         metrics; ``after``: the next candidate's index, ``tried``: final fits so far."""
         n_qp, cands = self._spent()
@@ -520,11 +280,11 @@ def condense_qp(
     grid, ref = resample(opts.n_samples)
     if not isinstance(setting, Setting):
         raise InputError("setting", "a tooltransfer.planner.planning.setting.Setting", type(setting).__name__)
-    fine = _FitSetup(grid, ref, setting, target, opts, free_start)
+    fine = SequenceFit(grid, ref, setting, target, opts, free_start)
     # ranking needs no 1e-8 accuracy: the screening fits stop at 1e-5 (the final one at ``tol``)
     screen_opts = opts.model_copy(update={"tol": max(opts.tol, 1e-5), "accept": max(opts.accept, 1e-5),
                                           "scp_rtol": max(opts.scp_rtol, SCREEN_RTOL)})
-    screen = _FitSetup(*resample(min(opts.screen_samples, opts.n_samples)), setting, target, screen_opts,
+    screen = SequenceFit(*resample(min(opts.screen_samples, opts.n_samples)), setting, target, screen_opts,
                        free_start)
 
     why = _precheck(screen, check_start=not free_start)

@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 from tooltransfer.planner.planning.oe.contacts import MIN_PIECE
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
-from tooltransfer.planner.planning.oe.qp_variant import QPOptions
+from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.tools.model import Tool
@@ -44,7 +44,7 @@ Options = TypeVar("Options", QPOptions, MappingOptions)
 REPLAN_CONE_WIDENING = 1.5
 #: The most contacts (re-contacts + 1) one push of a re-plan may use (:func:`replan_options`).
 MAX_REPLAN_CONTACTS = 30
-#: The QP variant's sizes for re-plans (:class:`~tooltransfer.planner.planning.oe.qp_variant.QPOptions`): a
+#: The QP variant's sizes for re-plans (:class:`~tooltransfer.planner.planning.oe.qp_options.QPOptions`): a
 #: closed loop re-plans from every strayed observation, on a short rest of the path.
 QP_REPLAN_SIZES = {"n_samples": 40, "screen_samples": 30, "n_basis": 15, "candidates": 2, "alternatives": 0}
 
