@@ -97,14 +97,14 @@ def test_the_lock_goes_with_a_killed_holder(tmp_path) -> None:
 
 def test_a_million_tasks_are_generated_as_the_run_goes(tmp_path) -> None:
     from tooltransfer.planner.apps.batch.generate import generate_task
-    from tooltransfer.planner.apps.batch.runner import _lazy_jobs, _warmup
+    from tooltransfer.planner.apps.batch.jobs import lazy_jobs, warmup_calls
 
     batch = _batch(tmp_path, name="huge", count=1_000_000)
     spec = load_batch(batch)
     first = generate_task(spec, 0, str(DATASET))
     start = time.perf_counter()
     with ResultStore(tmp_path / "huge.sqlite") as store:
-        jobs = _lazy_jobs(spec, batch, store, first, None, None, _warmup(spec, batch, first, None))
+        jobs = lazy_jobs(spec, batch, store, first, None, None, warmup_calls(spec, batch, first, None))
         got = [next(jobs) for _ in range(10)]
         assert time.perf_counter() - start < 5
         with sqlite3.connect(store.path) as c:

@@ -16,10 +16,11 @@ import pytest
 import yaml
 
 from tooltransfer.errors import InputError
+from tooltransfer.planner.apps.batch.jobs import batch_jobs
 from tooltransfer.planner.apps.batch.report import EXEC_TOLS, summarize, write_report
-from tooltransfer.planner.apps.batch.runner import batch_jobs, open_batch_store
 from tooltransfer.planner.apps.batch.spec import batch_from_dict, load_batch
 from tooltransfer.planner.apps.batch.store import RESULT_COLUMNS, ResultStore
+from tooltransfer.planner.apps.batch.store_settings import open_batch_store
 from tooltransfer.planner.apps.batch.worker import Job, Stage, run_job
 from tooltransfer.planner.apps.cli import main
 

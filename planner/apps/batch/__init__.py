@@ -7,6 +7,8 @@ a long-lived
   child process with a timeout (hangs, crashes and exceptions become rows);
 - :mod:`tooltransfer.planner.apps.batch.executors`: a process pool or Dask distributed, one code path;
 - :mod:`tooltransfer.planner.apps.batch.store`: the SQLite store (WAL, one row per task and variant, resumable);
+- :mod:`tooltransfer.planner.apps.batch.jobs`: the jobs of each task and variant, generated as the run goes;
+- :mod:`tooltransfer.planner.apps.batch.store_settings`: a store tied to its batch and settings;
 - :mod:`tooltransfer.planner.apps.batch.runner`: submit, store as each finishes, progress, Ctrl-C;
 - :mod:`tooltransfer.planner.apps.batch.report` and :mod:`tooltransfer.planner.apps.batch.figures`: tables, CSV,
   figures;

@@ -20,7 +20,6 @@ Dask worker), every job planning with that copy; the workers need this package, 
 
 from __future__ import annotations
 
-import json
 import signal
 import threading
 import time
@@ -47,10 +46,12 @@ from rich.text import Text
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.apps.batch.executors import Slots
-from tooltransfer.planner.apps.batch.generate import GeneratedTask, generate_tasks
+from tooltransfer.planner.apps.batch.generate import GeneratedTask
+from tooltransfer.planner.apps.batch.jobs import lazy_jobs, simulate_setting, task_jobs, warmup_calls
 from tooltransfer.planner.apps.batch.spec import BatchSpec
 from tooltransfer.planner.apps.batch.store import ResultStore
-from tooltransfer.planner.apps.batch.worker import Job, Stage, run_job
+from tooltransfer.planner.apps.batch.store_settings import open_batch_store
+from tooltransfer.planner.apps.batch.worker import Job, run_job
 
 if TYPE_CHECKING:
     from tooltransfer.planner.apps.batch.shipping import ShippedSkills
@@ -94,132 +95,6 @@ class _Rate(ProgressColumn):
     def render(self, task: Any) -> Text:
         speed = task.finished_speed or task.speed
         return Text(f"{speed:.2f}/s" if speed else "-/s", style="progress.data.speed")
-
-
-def simulate_setting(spec: BatchSpec, simulate: bool | None = None) -> bool:
-    """Whether solved plans are executed: ``simulate`` (``--simulate``/``--no-simulate``), else the
-    batch file's ``simulate.enabled``."""
-    return spec.simulate.enabled if simulate is None else bool(simulate)
-
-
-def batch_jobs(spec: BatchSpec, batch_path: str | Path, tasks: Sequence[GeneratedTask] | None = None,
-               timeout: float | None = None, simulate: bool | None = None) -> tuple[list[GeneratedTask], list[Job]]:
-    """The batch's tasks and its jobs (every task with every variant), in task order. With
-    simulation, each job executes its solved plan open loop and closed loop in two more sandbox
-    calls (:class:`tooltransfer.planner.apps.batch.worker.Stage`, ``simulate.timeout`` each), the closed loop with task
-    ``i``'s camera-noise seed (:meth:`tooltransfer.planner.apps.batch.spec.Simulation.closed_loop_seed`). (Every task
-    up front: :func:`run_batch` generates them as it runs.)"""
-    tasks = list(tasks) if tasks is not None else generate_tasks(spec, batch_path)
-    warm = _warmup(spec, batch_path, tasks[0] if tasks else None, simulate)
-    return tasks, [j for t in tasks for j in task_jobs(spec, batch_path, t, timeout, simulate, warm)]
-
-
-def _warmup(spec: BatchSpec, batch_path: str | Path, first: GeneratedTask | None,
-            simulate: bool | None) -> tuple[tuple[str, tuple], ...]:
-    """The calls a new sandbox runs first: imports, and each variant on the batch's first task (skills)."""
-    source = str(Path(batch_path).resolve())
-    warm: list[tuple[str, tuple]] = [
-        ("tooltransfer.planner.apps.batch.execute:warm_up", (simulate_setting(spec, simulate),))]
-    if first is not None:
-        warm += [("tooltransfer.planner.apps.batch.execute:execute_job", (first.data, source, oe, ss, False))
-                 for oe, ss in spec.variants.pairs()]
-    return tuple(warm)
-
-
-def task_jobs(spec: BatchSpec, batch_path: str | Path, t: GeneratedTask, timeout: float | None = None,
-              simulate: bool | None = None, warm: tuple[tuple[str, tuple], ...] = (),
-              skills: str | None = None) -> list[Job]:
-    """The jobs of one task: one per variant pair (:func:`batch_jobs`); ``skills``: the digest of the
-    shipped skills they plan with (:attr:`tooltransfer.planner.apps.batch.worker.Job.skills`)."""
-    sim = simulate_setting(spec, simulate)
-    cfg = spec.simulate
-    limit = spec.timeout if timeout is None else timeout
-    source = str(Path(batch_path).resolve())
-    stages: tuple[Stage, ...] = ()
-    if sim:
-        stages = (Stage("open_loop", "tooltransfer.planner.apps.batch.execute:open_loop", (cfg.tolerance,),
-                        cfg.timeout),
-                  Stage("closed_loop", "tooltransfer.planner.apps.batch.execute:closed_loop",
-                        (cfg.closed_loop_seed(t.index), cfg.closed_loop_tolerance, cfg.camera_noise), cfg.timeout))
-    return [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim), timeout=limit, warmup=warm,
-                stages=stages, skills=skills) for oe, ss in spec.variants.pairs()]
-
-
-#: Tasks generated (and recorded in the store) at a time while a batch runs.
-CHUNK = 64
-
-
-def _lazy_jobs(spec: BatchSpec, batch_path: str | Path, store: ResultStore, first: GeneratedTask,
-               timeout: float | None, simulate: bool | None,
-               warm: tuple[tuple[str, tuple], ...], skills: str | None = None) -> Iterator[Job]:
-    """The jobs not yet stored, task by task: tasks generated :data:`CHUNK` at a time and recorded in
-    the store's ``tasks`` table before their jobs are handed out. A task that cannot be generated
-    (its ranges leave no room) becomes an ``error`` row per variant, and the batch goes on."""
-    from tooltransfer.planner.apps.batch.generate import GenerationError, generate_task
-    from tooltransfer.planner.apps.batch.spec import dataset_folder
-
-    dataset = str(dataset_folder(spec, batch_path))
-    for lo in range(0, spec.count, CHUNK):
-        chunk: list[GeneratedTask] = []
-        failed: list[tuple[int, str]] = []
-        for i in range(lo, min(spec.count, lo + CHUNK)):
-            try:
-                chunk.append(first if i == 0 else generate_task(spec, i, dataset))
-            except GenerationError as exc:
-                failed.append((i, str(exc)))
-        store.add_tasks(task_records(chunk))
-        done = store.done_for([t.task_id for t in chunk] + [f"{spec.name}-{i:05d}" for i, _ in failed])
-        for t in chunk:
-            yield from (j for j in task_jobs(spec, batch_path, t, timeout, simulate, warm, skills)
-                        if j.key not in done)
-        for i, why in failed:
-            for oe, ss in spec.variants.pairs():
-                job = Job(f"{spec.name}-{i:05d}", f"{oe}/{ss}", entry="builtins:dict",
-                          args=({"status": "error", "reason": f"task generation: {why}"},), timeout=30)
-                if job.key not in done:
-                    yield job
-
-
-def task_records(tasks: Sequence[GeneratedTask]) -> list[dict[str, Any]]:
-    """Rows of the store's ``tasks`` table."""
-    return [{"task_id": t.task_id, "idx": t.index, "tool": t.tool, "n_obstacles": t.n_obstacles,
-             "start_reach": t.start_reach, "target_reach": t.target_reach, "reach_margin": t.reach_margin,
-             "distance": t.distance, "task_json": json.dumps(t.data)} for t in tasks]
-
-
-def _on_off(v: bool) -> str:
-    return "on" if v else "off"
-
-
-def open_batch_store(store: ResultStore, spec: BatchSpec, tasks: Sequence[GeneratedTask], resume: bool,
-                     simulate: bool | None = None) -> None:
-    """Tie ``store`` to the batch and its settings, refusing: a file of an older schema, another
-    batch's store, a filled one without ``resume``, and one filled with the other execution setting
-    (``simulate``, default the batch file's: see :func:`simulate_setting`)."""
-    from tooltransfer.planner.apps.batch.store import SCHEMA_VERSION
-
-    if store.schema != SCHEMA_VERSION:
-        raise InputError("--db", f"a results file of schema {SCHEMA_VERSION} to resume, or a new file",
-                         f"{store.path} of schema {store.schema} (written before executions were stored; "
-                         "`tooltransfer batch report` still reads it)")
-    meta = store.meta()
-    digest = spec.digest()
-    if meta.get("batch_digest") not in (None, digest):
-        raise InputError("--db", f"a results file of this batch ({spec.name}, {digest}) or a new file",
-                         f"{store.path} holds batch {meta.get('batch_name')} ({meta.get('batch_digest')})")
-    n = store.count()
-    if n and not resume:
-        raise InputError("--resume", f"--resume to carry on ({store.path} already holds {n} results) "
-                         "or a new --db", "neither")
-    sim = _on_off(simulate_setting(spec, simulate))
-    was = meta.get("simulate")
-    if n and was not in (None, sim):
-        how = {"on": "--simulate, or simulate.enabled: true in the batch file",
-               "off": "--no-simulate, or simulate.enabled: false in the batch file without --simulate"}
-        raise InputError("--simulate", f"the setting {store.path} was run with, simulate {was} ({how[was]})",
-                         f"simulate {sim}: resume with the same setting, or run into a new --db")
-    store.set_meta(batch_name=spec.name, batch_digest=digest, batch=spec.model_dump_json(), simulate=sim)
-    store.add_tasks(task_records(tasks))
 
 
 class _Queue:
@@ -416,7 +291,8 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
               resume: bool = False, retry: Sequence[str] = (), progress: bool = True,
               console: Console | None = None) -> RunSummary:
     """Run every (task, variant) of the batch not yet in the store ``db``, generating the tasks as it
-    goes (:func:`_lazy_jobs`: the first rows are stored within seconds whatever the count).
+    goes (:func:`tooltransfer.planner.apps.batch.jobs.lazy_jobs`: the first rows are stored within seconds
+    whatever the count).
 
     Before the first job: the batch's dataset is loaded and checked (a corrupt one is refused here,
     not turned into a row per job), the store is locked (:func:`tooltransfer.planner.apps.batch.store.lock_store`: a
@@ -447,7 +323,7 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
     dataset = dataset_folder(spec, batch_path)
     load_dataset(dataset)  # a corrupt dataset is refused before the run, naming the file
     first = generate_task(spec, 0, str(dataset))
-    warm = _warmup(spec, batch_path, first, simulate)
+    warm = warmup_calls(spec, batch_path, first, simulate)
     console = console or Console(stderr=True)
     # the executor first: a scheduler that does not answer, or workers that cannot run the jobs, are refused
     # in seconds, before the skills are learned
@@ -497,7 +373,7 @@ def _run_store(store: ResultStore, slots: Slots, spec: BatchSpec, batch_path: st
         oe, _, ss = job.variant.partition("/")
         return {"tool": data.get("tool", spec.tools[_index(job.task_id) % len(spec.tools)]), "oe": oe, "ss": ss}
 
-    jobs = _lazy_jobs(spec, batch_path, store, first, timeout, simulate, warm, skills)
+    jobs = lazy_jobs(spec, batch_path, store, first, timeout, simulate, warm, skills)
     if progress:
         ex = ", solved plans executed open and closed loop" if simulate_setting(spec, simulate) else ""
         console.print(f"batch {spec.name}: {spec.count} tasks x {len(pairs)} variants{ex} "

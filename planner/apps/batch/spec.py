@@ -179,7 +179,7 @@ class BatchSpec(_Model):
     def digest(self) -> str:
         """Hash of the batch's content without ``simulate.enabled`` (a store refuses to resume a different
         batch; whether plans are executed is a setting of its own, checked by name:
-        :func:`tooltransfer.planner.apps.batch.runner.open_batch_store`)."""
+        :func:`tooltransfer.planner.apps.batch.store_settings.open_batch_store`)."""
         data = self.model_dump(mode="json")
         data["simulate"].pop("enabled")
         return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]

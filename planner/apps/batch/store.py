@@ -13,7 +13,7 @@ twice.
 
 Schema 2 added the execution columns. A schema-1 file (no ``open_loop_*``/``closed_loop_*``
 columns) still opens for reading (:meth:`ResultStore.rows` gives its ``sim_final_error`` as
-``open_loop_error``); :func:`tooltransfer.planner.apps.batch.runner.open_batch_store` refuses to resume it.
+``open_loop_error``); :func:`tooltransfer.planner.apps.batch.store_settings.open_batch_store` refuses to resume it.
 """
 
 from __future__ import annotations
