@@ -58,7 +58,8 @@ Accuracy. Each forward map and each inverse is accurate to a few ulps (tested at
 60-digit references for ``theta_b >= 1e-6`` rad, ``1e-9 <= r_b <= 1e3`` m, ``k >= 1e-6``; for bounds near
 the underflow threshold intermediate values turn subnormal and lose significant bits). The Lambert-W
 closed form alone is only accurate to about ``sqrt(eps)`` near ``W_0``'s branch point (``k`` near 1, ``r_g``
-near ``R``) and cancels in ``r_g + (R/k) W``; :func:`outer_radius_inverse` therefore polishes it with Newton
+near ``R``) and cancels in ``r_g + (R/k) W``;
+:func:`~tooltransfer.planner.learning.oe_outer_mappings.outer_radius_inverse` therefore polishes it with Newton
 steps on the cancellation-free excess ``r_g - R = r_p (1 - k) + R (exp(-u) - 1 + u)``.
 
 Round-trip accuracy (universal -> condensed -> universal) is limited by the rounding of the condensed

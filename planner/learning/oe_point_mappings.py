@@ -69,7 +69,8 @@ def inner_map_points(x_p: ArrayLike, center: ArrayLike, r_b: float, k: float) ->
 def inner_inverse_points(
     x_g: ArrayLike, center: ArrayLike, r_b: float, k: float, *, clip: bool = False
 ) -> NDArray[np.float64]:
-    """Exact inverse of :func:`inner_map_points`; ``clip`` as in :func:`inner_radius_inverse`.
+    """Exact inverse of :func:`inner_map_points`; ``clip`` as in
+    :func:`~tooltransfer.planner.learning.oe_mappings.inner_radius_inverse`.
 
     Args:
         x_g: Condensed points [m], shape (..., d), strictly within ``r_b`` of their centres.

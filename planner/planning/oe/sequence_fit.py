@@ -126,8 +126,8 @@ class SequenceFit:
         ``[lo, hi]`` [s]: where the reference first satisfies them. A re-plan starts where the object
         is, possibly outside the region every contact on the face reaches it from though inside the
         one the actual contact does (the realised tool poses are then checked against the joint
-        limits exactly, :func:`condense_sequence`); ``lo`` when the reference starts inside or never
-        enters."""
+        limits exactly, :func:`~tooltransfer.planner.planning.oe.qp_variant.condense_sequence`); ``lo`` when the
+        reference starts inside or never enters."""
         inside = np.flatnonzero((self.t >= lo - 1e-12) & (self.t <= hi + 1e-12))
         k = reach_entry(rows, self.universal[inside])
         return lo if k == 0 or k >= inside.size else float(self.t[inside[k]])
