@@ -91,12 +91,16 @@ def test_ctrl_c_in_any_command_exits_130_with_one_line(tmp_path: Path, capsys, i
 
 
 def test_ctrl_c_mid_solve_leaves_the_old_plan(tmp_path: Path, monkeypatch, capsys) -> None:
+    from dataclasses import replace
+
     import tooltransfer.planner.planning.solve
+    from tooltransfer.planner.planning.variant_registry import oe_variant
 
     def stop(*args: object, **kwargs: object) -> None:
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(tooltransfer.planner.planning.solve, "condense_qp", stop)
+    monkeypatch.setattr(tooltransfer.planner.planning.solve, "oe_variant",
+                        lambda name: replace(oe_variant(name), condense=stop))
     out = tmp_path / "plan.json"
     out.write_text("old plan")
     assert main(["solve", str(TASK), "-o", str(out)]) == 130
