@@ -9,7 +9,7 @@ import argparse
 from pathlib import Path
 
 from tooltransfer.planner.apps.cli_output import file_stem, print_summary, spinner, written
-from tooltransfer.planner.common.command_line import EXIT_INFEASIBLE, EXIT_OK, check_output
+from tooltransfer.planner.common.command_line import EXIT_INFEASIBLE, EXIT_OK, VERDICT_EXIT, check_output
 
 
 def execute_plan(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str, object], dict[str, object]]:
@@ -99,13 +99,15 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if args.out:
         plan.write(args.out)
     m = plan.metrics
-    summary = {"status": plan.status, "reason": plan.reason, "variant": f"{plan.variant['oe']}/{plan.variant['ss']}",
+    summary = {"status": plan.verdict, "violated": plan.status == "violated", "reason": plan.reason,
+               "variant": f"{plan.variant['oe']}/{plan.variant['ss']}",
                "pushes": " ".join(p.faces[0] for p in plan.pushes), "plan": str(args.out) if args.out else None,
                **{k: m[k] for k in ("goal_error", "cone_violation_max", "reach_violation_max", "obstacle_clearance_min",
                                     "tool_obstacle_clearance_min", "switch_clearance_min", "switch_penetration_max",
                                     "joint_limit_violation_max", "duration") if k in m},
                # the solve's wall time; a plan that stopped early has no time_total: the stages it ran
-               "planning_time": m.get("time_total", sum(v for k, v in m.items() if k.startswith("time_")))}
+               "planning_time": m.get("time_total", sum(v for k, v in m.items() if k.startswith("time_"))),
+               "evidence": plan.evidence.get("kind")}
     executions: dict = {}
     if args.simulate and plan.status == "solved":
         outcome, executions = execute_plan(plan, closed_loop=True, quiet=args.json)
@@ -119,8 +121,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(summary, default=float))
     else:
-        print_summary(summary, f"{task.name}: {plan.status}")
-    return EXIT_OK if plan.status == "solved" else EXIT_INFEASIBLE
+        print_summary(summary, f"{task.name}: {plan.verdict}")
+    return VERDICT_EXIT[plan.verdict]
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:

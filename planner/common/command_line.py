@@ -11,6 +11,11 @@ import os
 from pathlib import Path
 
 EXIT_OK, EXIT_INFEASIBLE, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_UNKNOWN = 3
+"""``solve``: no plan and no certificate (the verdict ``unknown``; ``EXIT_INFEASIBLE`` is a certified
+``infeasible``, ``EXIT_OK`` a ``solved`` plan)."""
+VERDICT_EXIT = {"solved": EXIT_OK, "infeasible": EXIT_INFEASIBLE, "unknown": EXIT_UNKNOWN}
+"""The exit code of each verdict (:attr:`tooltransfer.planner.planning.plan.Plan.verdict`)."""
 EXIT_BROKEN_PIPE = 141
 """The reader of the output went away (``tooltransfer tasks | head``): 128 + SIGPIPE, as a shell reports a
 command the signal ended; nothing is printed."""

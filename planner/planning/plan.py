@@ -94,7 +94,7 @@ class Plan:
     ``joint_names`` names the joints' columns. The joints' velocities and accelerations, when not
     given, are derived from the joints (:func:`joint_rates`)."""
 
-    status: Literal["solved", "infeasible", "violated"]
+    status: Literal["solved", "infeasible", "unknown", "violated"]
     variant: dict[str, str]
     task: dict[str, Any]
     platform: dict[str, Any]
@@ -114,6 +114,16 @@ class Plan:
     joint_velocities: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
     joint_accelerations: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
     joint_names: tuple[str, ...] = JOINT_NAMES
+    evidence: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def verdict(self) -> Literal["solved", "infeasible", "unknown"]:
+        """The task's verdict: ``"solved"`` (every hard check holds), ``"infeasible"`` (a certificate
+        in :attr:`evidence` proves that no plan exists under the rules it states) or ``"unknown"``
+        (neither: the search found no plan, or only one that breaks a hard check, ``"violated"``)."""
+        if self.status == "violated":
+            return "unknown"
+        return self.status
 
     def __post_init__(self) -> None:
         n = len(self.t)
@@ -155,6 +165,8 @@ class Plan:
             "switches": [seg(s) for s in self.switches],
             "metrics": _clean(self.metrics),
             "metric_units": metric_units(self.metrics),
+            "verdict": self.verdict,
+            "evidence": self.evidence,
         }
 
     def write(self, path: str | Path) -> Path:
@@ -234,7 +246,7 @@ MAX_PLAN_BYTES = 64 * 2**20
 MAX_SAMPLES = 200_000
 #: Statuses a plan file may hold: ``violated`` is a whole plan that breaks a hard check
 #: (:func:`tooltransfer.planner.planning.solve.hard_check_failures`).
-STATUSES = ("solved", "infeasible", "violated")
+STATUSES = ("solved", "infeasible", "unknown", "violated")
 #: Bounds of the joints' velocities [rad/s] and accelerations [rad/s^2] read (the Omni's plans stay
 #: within a few rad/s and some tens of rad/s^2; beyond these is junk, not a plan).
 MAX_JOINT_VELOCITY, MAX_JOINT_ACCELERATION = 1e6, 1e9
@@ -391,6 +403,9 @@ def read_plan(path: str | Path) -> Plan:
     if not isinstance(reason, str):
         raise PlanFileError(where, "reason", "a string", _kind(reason))
     parts = _parts(where, doc)
+    evidence = doc.get("evidence", {})
+    if not isinstance(evidence, dict):
+        raise PlanFileError(where, "evidence", "a mapping (the verdict's evidence)", _kind(evidence))
     s = doc.get("samples")
     if not isinstance(s, dict):
         raise PlanFileError(where, "samples", "a mapping of arrays t, object_xy, tool_pose, joints, phase, face",
@@ -406,7 +421,7 @@ def read_plan(path: str | Path) -> Plan:
         status=status, variant=parts["variant"], task=parts["task"], platform=parts["platform"],
         object=parts["object"], tool=parts["tool"], obstacles=parts["obstacles"], t=t, phase=phase, face=face,
         pushes=_segments(where, doc, "pushes", "push"), switches=_segments(where, doc, "switches", "switch"),
-        metrics=_num(parts["metrics"]), reason=reason, joint_names=joint_names, **arrays,
+        metrics=_num(parts["metrics"]), reason=reason, joint_names=joint_names, evidence=evidence, **arrays,
     )
 
 

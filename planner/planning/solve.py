@@ -40,6 +40,7 @@ from tooltransfer.planner.planning.setting import Setting, setting_from_task, ta
 from tooltransfer.planner.planning.switches import with_fallback
 from tooltransfer.planner.planning.tool_clearance import tool_obstacle_clearance
 from tooltransfer.planner.planning.variant_registry import needs_ss_skill, oe_variant, switch_planner
+from tooltransfer.planner.planning.verdicts.decide import attach_verdict
 from tooltransfer.problems.task import Task, resolve, task_origin
 from tooltransfer.tools.pushing.forward import simulate
 
@@ -64,11 +65,23 @@ def mapping_options(task: Task) -> MappingOptions:
 
 
 def solve(task: Task, task_path: str | Path | None = None) -> Plan:
-    """Plan ``task``: the plan's status is ``"solved"`` only when every hard check holds.
+    """Plan ``task`` and give it a verdict (:attr:`Plan.verdict`): ``"solved"`` only when every hard
+    check holds; where the search finds no plan, ``"infeasible"`` with a certificate that no plan
+    exists under the rules it states (:mod:`tooltransfer.planner.planning.verdicts`), else
+    ``"unknown"`` with what was searched (``"violated"`` keeps a plan that breaks a hard check). The
+    plan's ``evidence`` holds the certificate or the search's account.
 
     Relative paths in the task are relative to ``task_path``'s folder, by default the folder of the file
     the task was loaded from (:func:`~tooltransfer.problems.task.load_task`; the working folder for a task
     built in code)."""
+    plan, setting = _search(task, task_path)
+    if setting is None:
+        return plan
+    return attach_verdict(plan, setting, np.array(task.start), np.array(task.target))
+
+
+def _search(task: Task, task_path: str | Path | None) -> tuple[Plan, Setting | None]:
+    """The planner's search (module docstring): the plan, or the best failure, and the world it used."""
     task_path = task_origin(task, task_path)
     stages: dict[str, float] = {}
     start = clock = time.perf_counter()
@@ -92,7 +105,7 @@ def solve(task: Task, task_path: str | Path | None = None) -> Plan:
     push_plan = oe.condense(t, x, setting, target, oe.options_from_task(task.oe))
     lap("oe")
     if push_plan.status != "solved":
-        return Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base)
+        return Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base), setting
     switch = switch_planner(task.variants.ss, setting, skills.ss, task.ss)
     recontact = with_fallback(recontact_planner(setting), switch, "switch")
     reasons: list[str] = []
@@ -112,10 +125,10 @@ def solve(task: Task, task_path: str | Path | None = None) -> Plan:
     elif plan.status != "solved" and reasons:
         more = f" (and {len(reasons)} other push sequence(s) before it: {reasons[0]})" if reasons else ""
         why = plan.reason if plan.reason else push_plan.reason
-        return Plan(status="infeasible", reason=why + more, metrics=plan.metrics or stages, **base)
+        return Plan(status="infeasible", reason=why + more, metrics=plan.metrics or stages, **base), setting
     plan.metrics["time_total"] = time.perf_counter() - start
     plan.metrics["alternatives_tried"] = float(len(reasons))
-    return plan
+    return plan, setting
 
 
 def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, recontact: Any,

@@ -44,11 +44,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from tooltransfer.planner.apps.batch.runner import run_batch
 
     retry = tuple(s for s in (args.retry or "").split(",") if s)
-    bad = [s for s in retry if s not in ("error", "timeout", "infeasible", "violated")]
+    bad = [s for s in retry if s not in ("error", "timeout", "infeasible", "unknown", "violated")]
     if bad:
         from tooltransfer.errors import InputError
 
-        raise InputError("--retry", "a comma-separated list of error, timeout, infeasible, violated", bad[0])
+        raise InputError("--retry", "a comma-separated list of error, timeout, infeasible, unknown, violated", bad[0])
     s = run_batch(args.batch, args.db, workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local,
                   timeout=args.timeout, simulate=args.simulate, resume=args.resume, retry=retry,
                   progress=not args.quiet)
@@ -115,7 +115,8 @@ def add_batch_parser(sub: argparse._SubParsersAction,
                    "refused")
     p.add_argument("--resume", action="store_true", help="carry on a store of this batch, skipping stored results")
     p.add_argument("--retry", default=None, metavar="STATUSES",
-                   help="with --resume, run these statuses again (comma-separated: error,timeout,infeasible,violated)")
+                   help="with --resume, run these statuses again (comma-separated: error,timeout,infeasible,"
+                        "unknown,violated; unknown: the tasks neither solved nor certified)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p = add(bsub, "report", "tables of a results file; with --out also CSV files and figures",
             "tooltransfer batch report out/small.sqlite --out out/small_report", _cmd_report)

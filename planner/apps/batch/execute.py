@@ -61,7 +61,12 @@ def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: 
     if finite_or_none(m.get("switch_penetration_max")) is not None:
         depth.append(float(m["switch_penetration_max"]))
     row["penetration_max"] = max(0.0, *depth) if depth else None
-    row["metrics_json"] = json.dumps({k: (v if finite_or_none(v) is not None else str(v)) for k, v in m.items()})
+    evidence = {k: v for k, v in plan.evidence.items() if k != "certificate"}
+    cert = plan.evidence.get("certificate")
+    if cert:  # the certificate's kind, reason and rules; its polygons are in the plan file (solve -o)
+        evidence["certificate"] = {k: cert[k] for k in ("kind", "reason", "rules", "start_gap") if k in cert}
+    row["metrics_json"] = json.dumps({**{k: (v if finite_or_none(v) is not None else str(v)) for k, v in m.items()},
+                                      "evidence": evidence})
     if keep_plan and plan.status == "solved":
         row["plan"] = pickle.dumps(plan, protocol=pickle.HIGHEST_PROTOCOL)
     return row

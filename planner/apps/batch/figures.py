@@ -71,7 +71,7 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
     _, per_s = display("time_total", "ms")
     data, labels = [], []
     for v in variants:
-        for status in ("solved", "violated", "infeasible"):
+        for status in ("solved", "violated", "infeasible", "unknown"):
             t = [r["time_total"] for r in by_var[v] if r["status"] == status and r.get("time_total")]
             if t:
                 data.append(np.array(t) * per_s)

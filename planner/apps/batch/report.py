@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import re
 from collections import Counter, defaultdict
 from collections.abc import Iterable, Sequence
@@ -111,6 +112,12 @@ class GroupStats:
     cl_replan_time_max: float = float("nan")
     cl_wall_median: float = float("nan")
     violated: int = 0
+    unknown: int = 0
+    infeasible_ci_low: float = float("nan")
+    infeasible_ci_high: float = float("nan")
+    unknown_ci_low: float = float("nan")
+    unknown_ci_high: float = float("nan")
+    certificates: str = ""
 
 
 def _pct(a: np.ndarray, q: float) -> float:
@@ -163,7 +170,7 @@ def group_stats(tool: str, variant: str, rows: Sequence[dict[str, Any]]) -> Grou
     c = Counter(r["status"] for r in rows)
     n = len(rows)
     lo, hi = wilson(c["solved"], n)
-    timed = _vals([r for r in rows if r["status"] in ("solved", "violated", "infeasible")], "time_total")
+    timed = _vals([r for r in rows if r["status"] in ("solved", "violated", "infeasible", "unknown")], "time_total")
     pct = np.percentile(timed, [50, 90, 99]) if timed.size else [float("nan")] * 3
     ok = [r for r in rows if r["status"] == "solved"]
     sim = [r for r in ok if r.get("sim_success") is not None]
@@ -177,7 +184,29 @@ def group_stats(tool: str, variant: str, rows: Sequence[dict[str, Any]]) -> Grou
         _agg(_vals(ok, "obstacle_clearance_min"), "min"), _agg(_vals(ok, "goal_error"), "max"),
         len(sim), k, k / len(sim) if sim else float("nan"), slo, shi,
         _agg(_vals(sim, "sim_final_error"), "median"), **execution_stats(rows), violated=c["violated"],
+        unknown=c["unknown"] + c["violated"], **_verdict_cis(c, n), certificates=_certificate_kinds(rows),
     )
+
+
+def _verdict_cis(c: Counter, n: int) -> dict[str, float]:
+    """Wilson intervals of the certified-infeasible and the unknown (violated included) rates."""
+    ilo, ihi = wilson(c["infeasible"], n)
+    ulo, uhi = wilson(c["unknown"] + c["violated"], n)
+    return {"infeasible_ci_low": ilo, "infeasible_ci_high": ihi, "unknown_ci_low": ulo, "unknown_ci_high": uhi}
+
+
+def _certificate_kinds(rows: Sequence[dict[str, Any]]) -> str:
+    """The certificates' kinds of the infeasible rows, counted (``"backward_reachable 3, ..."``)."""
+    kinds: Counter = Counter()
+    for r in rows:
+        if r["status"] != "infeasible":
+            continue
+        try:
+            kind = json.loads(r.get("metrics_json") or "{}").get("evidence", {}).get("kind", "?")
+        except (ValueError, AttributeError):
+            kind = "?"
+        kinds[kind] += 1
+    return ", ".join(f"{k} {v}" for k, v in kinds.most_common())
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> list[GroupStats]:
@@ -234,17 +263,24 @@ VIOLATION_COLUMNS = (
 def print_report(stats: Sequence[GroupStats], reasons: Sequence[dict[str, Any]], console: Console) -> None:
     """The tables: outcomes and times, violations, executed success (when plans were executed), top
     reasons. Units from :mod:`tooltransfer.planner.common.metric_units` (planning times in ms)."""
-    t = Table(title="outcomes per tool and variant (success: solved; 95% Wilson interval)")
+    t = Table(title="outcomes per tool and variant (success: solved; 95% Wilson intervals; infeasible: certified; "
+                    "unknown: neither solved nor certified, violated plans included)")
     _, ms = display("time_total", "ms")
-    for col in ("tool", "variant", "n", "solved", "rate [%]", "95% CI [%]", "valid", "violated", "infeas.", "error",
-                "timeout", *(label(p, "time_total", "ms") for p in ("t50", "t90", "t99"))):
+    for col in ("tool", "variant", "n", "solved", "rate [%]", "95% CI [%]", "valid", "violated", "infeas.",
+                "infeas. CI [%]", "unknown", "unknown CI [%]", "error", "timeout",
+                *(label(p, "time_total", "ms") for p in ("t50", "t90", "t99"))):
         t.add_column(escape(col), justify="left" if col in ("tool", "variant") else "right")
     for s in stats:
         t.add_row(s.tool, s.variant, str(s.n), str(s.solved), _fmt(s.rate, 100, 1),
                   f"{_fmt(s.ci_low, 100, 1)}-{_fmt(s.ci_high, 100, 1)}", str(s.valid), str(s.violated),
-                  str(s.infeasible), str(s.error), str(s.timeout), _fmt(s.time_p50, ms, 0), _fmt(s.time_p90, ms, 0),
+                  str(s.infeasible), f"{_fmt(s.infeasible_ci_low, 100, 1)}-{_fmt(s.infeasible_ci_high, 100, 1)}",
+                  str(s.unknown), f"{_fmt(s.unknown_ci_low, 100, 1)}-{_fmt(s.unknown_ci_high, 100, 1)}",
+                  str(s.error), str(s.timeout), _fmt(s.time_p50, ms, 0), _fmt(s.time_p90, ms, 0),
                   _fmt(s.time_p99, ms, 0), end_section=s.tool == "all" and s is stats[-1])
     console.print(t)
+    for s in stats:
+        if s.certificates:
+            console.print(f"certificates of {escape(s.tool)} {escape(s.variant)}: {escape(s.certificates)}")
     v = Table(title="solved plans: violation maxima, clearance")
     for col in ("tool", "variant", *(label(head, column) for head, _, column, _ in VIOLATION_COLUMNS)):
         v.add_column(escape(col), justify="left" if col in ("tool", "variant") else "right")

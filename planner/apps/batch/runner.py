@@ -56,7 +56,7 @@ from tooltransfer.planner.apps.batch.worker import Job, run_job
 if TYPE_CHECKING:
     from tooltransfer.planner.apps.batch.shipping import ShippedSkills
 
-STATUSES = ("solved", "violated", "infeasible", "error", "timeout")
+STATUSES = ("solved", "violated", "infeasible", "unknown", "error", "timeout")
 
 
 @dataclass

@@ -1,0 +1,284 @@
+"""The set of puck positions from which the target may be reachable, over-approximated on blocks.
+
+Cover the plane with square cells of side ``h`` and call *block* the 2 x 2 cells around a grid vertex.
+For each block ``W`` let ``K_W`` be a convex cone holding every direction the puck may move in at any
+point of ``W`` (:func:`~tooltransfer.planner.planning.verdicts.bounds.direction_arcs`). A set ``B`` is *closed*
+when, for every block, each point ``x`` of ``W`` (in the push space) with some ``y`` of ``B`` in ``W``
+and ``y - x`` in ``K_W`` is in ``B``. If ``B`` is closed and holds the target's goal disc, every start
+from which a plan reaches the target is in ``B``:
+
+    cut the puck's path into pieces shorter than ``h / 2``; each piece lies in the block of the grid
+    vertex nearest its first point (at least ``h / 2`` from that block's edges), and its
+    displacement, the integral of velocities in ``K_W`` (or zero while the puck stands), lies in
+    ``K_W``; so going backward from the last piece (which ends in the goal disc), each piece's
+    first point is in ``B``. A puck that moves only does so inside the push space (a face must hold
+    it), so ``B`` need only grow inside it.
+
+:func:`backward_set` computes the smallest such ``B`` on polygons (the shadow of ``B`` in a block is
+``(B ∩ W) ⊕ (-K_W)``, a Minkowski sum swept edge by edge), block by block from a work list, until no
+block adds area. The work stops early, without a set, once ``B`` comes within ``gap`` of the start,
+or when it has processed ``max_blocks`` blocks.
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+import shapely.errors
+
+from tooltransfer.planner.planning.verdicts.bounds import body_zone, face_headings, face_region, obstacle_zone
+from tooltransfer.planner.planning.verdicts.rules import PushRules
+
+#: Cones wider than this [rad] are taken as the whole plane (the swept triangle would be too long).
+WIDEST_CONE = 0.9 * math.pi
+#: Two polygons closer than this [m] count as touching (floating-point rounding of shapely's
+#: operations; well below the start's required gap).
+ROUNDING = 1e-9
+
+
+#: Precision grid [m] of the set operations (GEOS's snap-rounding overlay, robust where floating-point
+#: overlay may fail on nearly parallel edges).
+GRID = 1e-10
+
+
+@dataclass(frozen=True)
+class BlockGrid:
+    """The cells and blocks of :mod:`backward`.
+
+    Attributes:
+        origin: shape (2,), the lower-left corner of cell (0, 0) [m].
+        h: cell side [m].
+        shape: ``(nx, ny)`` cells.
+    """
+
+    origin: tuple[float, float]
+    h: float
+    shape: tuple[int, int]
+
+    def cell_box(self, i: int, j: int) -> tuple[float, float, float, float]:
+        """The box ``(x0, y0, x1, y1)`` [m] of cell ``(i, j)``."""
+        x0, y0 = self.origin[0] + i * self.h, self.origin[1] + j * self.h
+        return x0, y0, x0 + self.h, y0 + self.h
+
+    def block_box(self, i: int, j: int) -> tuple[float, float, float, float]:
+        """The box [m] of the block about grid vertex ``(i, j)`` (cells ``i - 1..i``, ``j - 1..j``)."""
+        x, y = self.origin[0] + i * self.h, self.origin[1] + j * self.h
+        return x - self.h, y - self.h, x + self.h, y + self.h
+
+    def blocks(self) -> list[tuple[int, int]]:
+        """Every grid vertex ``(i, j)``, ``0 <= i <= nx``, ``0 <= j <= ny``."""
+        return [(i, j) for i in range(self.shape[0] + 1) for j in range(self.shape[1] + 1)]
+
+
+def grid_over(area: shapely.Geometry, h: float) -> BlockGrid:
+    """A :class:`BlockGrid` of cell side ``h`` [m] covering ``area`` with one cell to spare each side."""
+    x0, y0, x1, y1 = area.bounds
+    ox, oy = math.floor(x0 / h) * h - h, math.floor(y0 / h) * h - h
+    return BlockGrid((ox, oy), h, (math.ceil((x1 - ox) / h) + 1, math.ceil((y1 - oy) / h) + 1))
+
+
+def block_faces(rules: PushRules, box: tuple[float, float, float, float], zone: shapely.Geometry,
+                regions: list[shapely.Geometry]) -> list[tuple[tuple[float, float] | None, shapely.Geometry]]:
+    """For each face that can push somewhere in the block ``box`` [m]: its directions there (an arc
+    ``(lo, hi)`` [rad], None for every direction) and where in the box it can hold the puck (its
+    region less the obstacles' ``zone`` and less where its tool body overlaps an obstacle)."""
+    out = []
+    rect = shapely.box(*box)
+    for rule, region in zip(rules.faces, regions, strict=True):
+        hd = face_headings(rules, rule, box)
+        if hd is False:
+            continue
+        sp = shapely.difference(shapely.intersection(region, rect), zone)
+        if hd is not None:
+            sp = shapely.difference(sp, body_zone(rules, rule, hd))
+        sp = polygonal(sp)
+        if sp.is_empty:
+            continue
+        arc = None if hd is None else (hd[0] + rule.cone[0], hd[1] + rule.cone[1])
+        out.append((None if arc is None or arc[1] - arc[0] > WIDEST_CONE else arc, sp))
+    return out
+
+
+def face_regions(rules: PushRules) -> list[shapely.Geometry]:
+    """Every face's region (:func:`~tooltransfer.planner.planning.verdicts.bounds.face_region`), in order."""
+    return [face_region(rules, f) for f in rules.faces]
+
+
+def grow(rules: PushRules, own: shapely.Geometry, faces: list, box: tuple[float, float, float, float]
+         ) -> shapely.Geometry:
+    """The points of the block ``box`` from which one push ends in ``own`` (the set's part in the
+    block): per face, the shadow of ``own`` within the face's space, kept in that space."""
+    parts = []
+    for arc, sp in faces:
+        src = polygonal(shapely.intersection(own, shapely.buffer(sp, ROUNDING)))
+        if src.is_empty:
+            continue
+        parts.append(shapely.intersection(shadow(src, arc, box), sp))
+    return polygonal(safe_union(parts)) if parts else shapely.Polygon()
+
+
+#: Outward growth [m] of a stored piece before it is simplified (bounds its vertex count).
+COARSEN = 2e-5
+
+
+def coarsen(g: shapely.Geometry) -> shapely.Geometry:
+    """A polygon holding ``g`` with fewer vertices: ``g`` grown by :data:`COARSEN` (mitred), then
+    simplified within half of that (every point of ``g`` stays inside)."""
+    return polygonal(shapely.simplify(shapely.buffer(polygonal(g), COARSEN, join_style="mitre"), 0.5 * COARSEN))
+
+
+def safe_union(geoms: list[shapely.Geometry]) -> shapely.Geometry:
+    """The union of ``geoms``; where floating-point overlay fails on nearly coincident edges, GEOS's
+    snap-rounding overlay on the :data:`GRID` (moves no point by more than that)."""
+    try:
+        return shapely.union_all(geoms)
+    except shapely.errors.GEOSException:
+        return shapely.buffer(shapely.union_all(geoms, grid_size=GRID), GRID, join_style="mitre")
+
+
+def polygonal(g: shapely.Geometry) -> shapely.Geometry:
+    """The polygons of ``g`` (made valid; lines and points that set operations leave are dropped)."""
+    parts = shapely.get_parts(shapely.get_parts(shapely.make_valid(g)))
+    polys = [p for p in parts if shapely.get_type_id(p) == 3 and p.area > 0.0]
+    return shapely.union_all(polys) if polys else shapely.Polygon()
+
+
+def shadow(piece: shapely.Geometry, cone: tuple[float, float] | None, box: tuple[float, float, float, float]
+           ) -> shapely.Geometry:
+    """``(piece ⊕ (-K)) ∩ box`` [m]: the points of ``box`` from which a displacement in the cone ``K``
+    (arc ``cone`` [rad]; None: every direction) reaches ``piece`` (in ``box``).
+
+    The sum with the cone's triangle ``T`` is ``piece`` and the sums ``e ⊕ T`` of its edges through
+    which a point of ``piece`` leaves along ``-K`` (outward normal ``n`` with ``n · t > 0`` for some
+    ``t`` of ``T``): a point ``p + t`` outside ``piece`` is reached by leaving it through such an edge."""
+    rect = shapely.box(*box)
+    piece = polygonal(piece)
+    if piece.is_empty:
+        return shapely.Polygon()
+    if cone is None:
+        return rect
+    lo, hi = cone
+    reach = math.hypot(box[2] - box[0], box[3] - box[1]) / math.cos(0.5 * (hi - lo)) * 1.01
+    t = -reach * np.array([[math.cos(lo), math.sin(lo)], [math.cos(hi), math.sin(hi)]])
+    edges = []
+    for ring in shapely.get_rings(shapely.get_parts(shapely.normalize(piece))):
+        c = shapely.get_coordinates(ring)
+        e = np.stack([c[:-1], c[1:]], axis=1)
+        d = e[:, 1] - e[:, 0]
+        # normalize() orients shells clockwise and holes counter-clockwise: the outward normal of a
+        # clockwise edge d is (-d_y, d_x), and so is that of a counter-clockwise hole's edge
+        n = np.column_stack([-d[:, 1], d[:, 0]])
+        keep = (n @ t.T > 0).any(axis=1)
+        edges.append(e[keep] if keep.any() else e[:0])
+    seg = np.concatenate(edges) if edges else np.zeros((0, 2, 2))
+    if not len(seg):
+        return polygonal(shapely.intersection(piece, rect))
+    pts = np.concatenate([seg, seg[:, [0]] + t[None], seg[:, [1]] + t[None]], axis=1)  # (m, 6, 2)
+    hulls = shapely.convex_hull(shapely.multipoints(pts.reshape(-1, 2), indices=np.repeat(np.arange(len(seg)), 6)))
+    hulls = hulls[(shapely.get_type_id(hulls) == 3) & (shapely.area(hulls) > 0.0)]
+    return polygonal(shapely.intersection(safe_union([piece, *hulls]), rect))
+
+
+@dataclass
+class BackwardResult:
+    """What :func:`backward_set` found.
+
+    Attributes:
+        region: the closed set ``B`` [m] (None when the work stopped early).
+        stopped: why the work stopped early ("" when it finished): the start reached, or the budget.
+        blocks_processed: block updates made.
+        grid: the blocks used.
+    """
+
+    region: shapely.Geometry | None
+    stopped: str
+    blocks_processed: int
+    grid: BlockGrid
+
+
+def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geometry, start: np.ndarray, *,
+                 h: float = 0.01, gap: float = 5e-4, max_blocks: int = 20000) -> BackwardResult:
+    """The smallest closed set (module docstring) holding ``goal`` [m], grown inside ``space`` (the
+    push space, :func:`~tooltransfer.planner.planning.verdicts.bounds.push_space`), on blocks of cells of side
+    ``h`` [m]; stops early once it comes within ``gap`` [m] of ``start`` (2,).
+
+    Two passes: a coarse one whose pieces are grown by :data:`COARSEN` and simplified (few vertices,
+    quick), then an exact one from the coarse set until no block adds area beyond the rounding."""
+    grid = grid_over(shapely.union(space, goal), h)
+    zone, regions = obstacle_zone(rules), face_regions(rules)
+    models: dict[tuple[int, int], list] = {}
+    cells = _split(grid, goal)
+    done = 0
+    for tol, simplify in ((2 * COARSEN, True), (ROUNDING, False)):
+        cells, stopped, done = _close(rules, grid, cells, start, gap, max_blocks, done, zone, regions, models, tol,
+                                      simplify)
+        if stopped:
+            return BackwardResult(None, stopped, done, grid)
+    return BackwardResult(safe_union(list(cells.values())), "", done, grid)
+
+
+def _split(grid: BlockGrid, g: shapely.Geometry) -> dict[tuple[int, int], shapely.Geometry]:
+    """``g`` cut into the grid's cells."""
+    out = {}
+    for i in range(grid.shape[0]):
+        for j in range(grid.shape[1]):
+            piece = polygonal(shapely.intersection(g, shapely.box(*grid.cell_box(i, j))))
+            if not piece.is_empty:
+                out[(i, j)] = piece
+    return out
+
+
+def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, gap: float, max_blocks: int,
+           done: int, zone: shapely.Geometry, regions: list, models: dict, tol: float, simplify: bool
+           ) -> tuple[dict, str, int]:
+    """Grow ``cells`` block by block until no block adds more than ``tol`` [m] beyond them; returns the
+    cells, why it stopped early ("" if it did not) and the block updates made so far."""
+    nx, ny = grid.shape
+    start_pt = shapely.Point(start)
+    sx, sy = (float(v) for v in start)
+
+    def priority(c: tuple[int, int]) -> float:
+        """Blocks nearer the start first: the set reaches it sooner when the task is feasible."""
+        x0, y0, x1, y1 = grid.block_box(*c)
+        return math.hypot(max(x0 - sx, 0.0, sx - x1), max(y0 - sy, 0.0, sy - y1))
+
+    queued = {(i + di, j + dj) for i, j in cells for di in (0, 1) for dj in (0, 1)}
+    heap = [(priority(c), c) for c in queued]
+    heapq.heapify(heap)
+    while heap:
+        if done >= max_blocks:
+            return cells, f"budget: {max_blocks} block updates", done
+        _, v = heapq.heappop(heap)
+        queued.discard(v)
+        done += 1
+        i, j = v
+        quad = ((i - 1, j - 1), (i - 1, j), (i, j - 1), (i, j))
+        own = [cells[c] for c in quad if c in cells]
+        if not own:
+            continue
+        box = grid.block_box(i, j)
+        if v not in models:
+            models[v] = block_faces(rules, box, zone, regions)
+        grown = grow(rules, safe_union(own), models[v], box)
+        for c in quad:
+            if grown.is_empty or not (0 <= c[0] < nx and 0 <= c[1] < ny):
+                continue
+            piece = polygonal(shapely.intersection(grown, shapely.box(*grid.cell_box(*c))))
+            if piece.is_empty:
+                continue
+            old = cells.get(c)
+            if old is not None and shapely.difference(piece, shapely.buffer(old, tol)).area <= 0.0:
+                continue
+            union = piece if old is None else safe_union([old, piece])
+            cells[c] = coarsen(union) if simplify else polygonal(union)
+            if shapely.distance(cells[c], start_pt) <= gap:
+                return cells, "the set came within the gap of the start", done
+            for nb in ((c[0] + di, c[1] + dj) for di in (0, 1) for dj in (0, 1)):
+                if nb not in queued:
+                    queued.add(nb)
+                    heapq.heappush(heap, (priority(nb), nb))
+    return cells, "", done

@@ -1,0 +1,159 @@
+"""Certificates that no plan exists under :class:`~tooltransfer.planner.planning.verdicts.rules.PushRules`, and
+their independent check.
+
+Kinds, cheapest first:
+
+- ``start_unpushable``: no face can hold the puck at the start (it is outside every face's region,
+  or inside an obstacle's zone), so the puck never moves, and the start is not at the target;
+- ``target_unpushable``: no face can hold the puck anywhere within ``goal_tol`` of the target, so no
+  push ends there;
+- ``backward_reachable``: a closed set holding the target's goal disc (:mod:`.backward`) leaves the
+  start out by at least ``gap``.
+
+A certificate stores its kind, the rules' parameters, the sets as polygons and the grid; anyone can
+replay it with :func:`check_certificate`, which recomputes the cones from the rules and checks the
+closure block by block on the stored set.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import shapely
+
+from tooltransfer.planner.planning.verdicts.backward import BlockGrid, backward_set, block_faces, face_regions, grow
+from tooltransfer.planner.planning.verdicts.bounds import obstacle_zone, push_space
+from tooltransfer.planner.planning.verdicts.rules import PushRules
+
+#: The start's least distance [m] from a certificate's set (far above the polygons' rounding).
+START_GAP = 5e-4
+
+
+@dataclass
+class Certificate:
+    """A proof that the start cannot reach the target under the rules.
+
+    Attributes:
+        kind: ``"start_unpushable"``, ``"target_unpushable"`` or ``"backward_reachable"``.
+        reason: one sentence for people.
+        start, target: shape (2,) [m].
+        rules: the parameters the proof is relative to (:meth:`PushRules.to_dict`).
+        region: the backward-reachable set's polygons [m] (``backward_reachable``), else None.
+        space: the push space's polygons [m] (where any face can hold the puck).
+        grid: ``{"origin", "h", "shape"}`` of the blocks (``backward_reachable``).
+        time: seconds spent.
+    """
+
+    kind: str
+    reason: str
+    start: tuple[float, float]
+    target: tuple[float, float]
+    rules: dict[str, Any]
+    space: shapely.Geometry
+    region: shapely.Geometry | None = None
+    grid: BlockGrid | None = None
+    time: float = 0.0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON data (polygons as WKT, lengths in m)."""
+        return {
+            "kind": self.kind, "reason": self.reason, "start": list(self.start), "target": list(self.target),
+            "rules": self.rules, "space_wkt": shapely.to_wkt(self.space, rounding_precision=-1),
+            "region_wkt": None if self.region is None else shapely.to_wkt(self.region, rounding_precision=-1),
+            "grid": None if self.grid is None else {"origin": list(self.grid.origin), "h": self.grid.h,
+                                                    "shape": list(self.grid.shape)},
+            "start_gap": START_GAP, "time": self.time, **self.extra,
+        }
+
+
+def _goal(rules: PushRules, target: np.ndarray) -> shapely.Geometry:
+    """A polygon holding the disc of radius ``goal_tol`` about the target (circumscribed)."""
+    n = 32
+    r = rules.goal_tol / np.cos(np.pi / n)
+    a = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    return shapely.Polygon(np.column_stack([r * np.cos(a), r * np.sin(a)]) + target)
+
+
+def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: float = 0.01,
+            max_blocks: int = 20000) -> tuple[Certificate | None, str]:
+    """A certificate that ``start`` (2,) [m] cannot reach ``target`` (2,) [m] under ``rules``, or None
+    with what was tried (an honest "not proved": the task may still be infeasible)."""
+    t0 = time.perf_counter()
+    start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
+    if np.hypot(*(start - target)) <= rules.goal_tol:
+        return None, "the start is at the target"
+    space = push_space(rules)
+    goal = _goal(rules, target)
+    common = {"start": (float(start[0]), float(start[1])), "target": (float(target[0]), float(target[1])),
+              "rules": rules.to_dict(), "space": space}
+    if shapely.distance(space, shapely.Point(start)) > START_GAP:
+        return Certificate("start_unpushable", "no face of the tool can hold the puck at the start (out of every "
+                           "face's reach, or inside an obstacle's margin), so it never moves", **common,
+                           time=time.perf_counter() - t0), ""
+    if shapely.distance(space, goal) > START_GAP:
+        return Certificate("target_unpushable", "no face of the tool can hold the puck within "
+                           f"{rules.goal_tol * 1e3:.2g} mm of the target, so no push ends there", **common,
+                           time=time.perf_counter() - t0), ""
+    back = backward_set(rules, space, goal, start, h=h, gap=START_GAP, max_blocks=max_blocks)
+    if back.region is None:
+        return None, f"backward-reachable set of the target: {back.stopped} (after {back.blocks_processed} blocks)"
+    cert = Certificate("backward_reachable", "the positions from which any push sequence could reach the target "
+                       "(over-approximated: every face's cone at every heading its reach allows, the tool body "
+                       "only where it overlaps an obstacle whatever the contact, switches free) leave the start out by "
+                       f"{shapely.distance(back.region, shapely.Point(start)) * 1e3:.1f} mm", **common,
+                       region=back.region, grid=back.grid, time=time.perf_counter() - t0,
+                       extra={"blocks_processed": back.blocks_processed})
+    problems = check_certificate(cert, rules)
+    if problems:
+        return None, "backward-reachable set of the target: its check failed: " + "; ".join(problems)
+    cert.time = time.perf_counter() - t0
+    return cert, ""
+
+
+def check_certificate(cert: Certificate, rules: PushRules) -> list[str]:
+    """What is wrong with ``cert`` under ``rules`` (empty: it holds): the rules it was made for, the
+    start's and the goal's place, and for ``backward_reachable`` the closure of its set on every block,
+    with the cones recomputed from ``rules``."""
+    problems: list[str] = []
+    if cert.rules != rules.to_dict():
+        problems.append("the certificate was made for other rules")
+    start, target = np.asarray(cert.start), np.asarray(cert.target)
+    space = push_space(rules)
+    goal = _goal(rules, target)
+    if np.hypot(*(start - target)) <= rules.goal_tol:
+        problems.append("the start is at the target")
+    if cert.kind == "start_unpushable":
+        if shapely.distance(space, shapely.Point(start)) <= START_GAP:
+            problems.append("a face can hold the puck at the start")
+    elif cert.kind == "target_unpushable":
+        if shapely.distance(space, goal) <= START_GAP:
+            problems.append("a face can hold the puck at the target")
+    elif cert.kind == "backward_reachable":
+        region, grid = cert.region, cert.grid
+        if region is None or grid is None:
+            return [*problems, "no set or grid stored"]
+        if not shapely.covers(shapely.buffer(region, 1e-9), goal):
+            problems.append("the set does not hold the target's goal disc")
+        if shapely.distance(region, shapely.Point(start)) <= START_GAP:
+            problems.append("the set does not leave the start out")
+        gx0, gy0, gx1, gy1 = grid.block_box(0, 0)[0], grid.block_box(0, 0)[1], *grid.block_box(*grid.shape)[2:]
+        if not shapely.covers(shapely.box(gx0, gy0, gx1, gy1), shapely.union(space, goal)):
+            problems.append("the grid does not cover the push space")
+        zone, regions = obstacle_zone(rules), face_regions(rules)
+        for i, j in grid.blocks():
+            box = grid.block_box(i, j)
+            own = shapely.intersection(region, shapely.box(*box))
+            if own.is_empty or own.area == 0.0:
+                continue
+            grown = grow(rules, own, block_faces(rules, box, zone, regions), box)
+            missing = shapely.difference(grown, shapely.buffer(region, 1e-8))
+            if missing.area > 1e-14:
+                problems.append(f"block {(i, j)} is not closed ({missing.area * 1e6:.3g} mm^2 outside the set)")
+                break
+    else:
+        problems.append(f"unknown kind {cert.kind!r}")
+    return problems

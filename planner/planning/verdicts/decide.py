@@ -1,0 +1,54 @@
+"""The verdict of a task the planner did not solve: ``infeasible`` with a certificate, else ``unknown``.
+
+The planner's search is bounded (a few scored push sequences, at most ``oe.max_pushes`` pushes), so
+its failure says nothing about the task. :func:`attach_verdict` looks for a certificate under the
+rules of :mod:`~tooltransfer.planner.planning.verdicts.rules` (:func:`certify`) and returns the plan
+with ``status`` ``"infeasible"`` and the certificate as its evidence when one is found, else with
+``status`` ``"unknown"`` (or ``"violated"`` for a plan that broke its hard checks) and evidence that
+says what was searched and why nothing was proved.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from tooltransfer.planner.planning.plan import Plan
+from tooltransfer.planner.planning.setting import Setting
+from tooltransfer.planner.planning.verdicts.certificate import certify
+from tooltransfer.planner.planning.verdicts.rules import push_rules
+
+#: Block updates the backward-reachable set may make before the verdict is left ``unknown``.
+CERTIFY_BLOCKS = 20000
+
+
+def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.ndarray, *,
+                   max_blocks: int = CERTIFY_BLOCKS) -> Plan:
+    """``plan`` (not ``solved``) with its verdict and evidence (module docstring); a solved plan is
+    returned as it is, with the evidence that it is one."""
+    if plan.status == "solved":
+        return replace(plan, evidence={"verdict": "solved", "kind": "plan",
+                                       "checks": "every hard check holds (metrics)"})
+    t0 = time.perf_counter()
+    rules = push_rules(setting.tool, setting.platform, list(setting.obstacles), setting.radius, setting.mechanics,
+                       setting.margin)
+    cert, why = certify(rules, np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64),
+                        max_blocks=max_blocks)
+    spent = time.perf_counter() - t0
+    metrics = {**plan.metrics, "time_certify": spent}
+    if "time_total" in metrics:
+        metrics["time_total"] += spent
+    searched = plan.reason or "no plan"
+    if cert is not None:
+        evidence: dict[str, Any] = {"verdict": "infeasible", "kind": cert.kind, "searched": searched,
+                                    "certificate": cert.to_dict()}
+        return replace(plan, status="infeasible", metrics=metrics, evidence=evidence,
+                       reason=f"certified infeasible ({cert.kind}): {cert.reason}; the planner's search: {searched}")
+    status = "violated" if plan.status == "violated" else "unknown"
+    evidence = {"verdict": "unknown", "kind": "search_exhausted" if status == "unknown" else "violated",
+                "searched": searched, "not_proved": why}
+    return replace(plan, status=status, metrics=metrics, evidence=evidence,
+                   reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)

@@ -1,0 +1,181 @@
+"""Verdicts: certificates are checked again, replayed against an independent lattice search, never
+issued where the planner finds a plan, and carried by the plan file and the command line.
+
+The lattice search here is this file's own code, not the project's: from the start it pushes the
+puck in straight steps of a few millimetres in directions sampled in each face's cone, with the face
+held where the Omni can hold it (waist, reach, contact on the face's range, computed from the
+kinematics), the puck clear of the obstacles by the margin and the tool's outline clear of them. It
+finds real push sequences (an under-approximation of what is reachable), so on a task with a
+certificate it must never come near the target.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+
+from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.planning.setting import setting_from_task, task_skills
+from tooltransfer.planner.planning.solve import solve
+from tooltransfer.planner.planning.verdicts.bounds import direction_arcs, push_space
+from tooltransfer.planner.planning.verdicts.certificate import certify, check_certificate
+from tooltransfer.planner.planning.verdicts.rules import push_rules
+from tooltransfer.problems.task import load_task
+from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.dh import D_TOOL
+from tooltransfer.tools.omni.reach import reach_sector
+
+ROOT = Path(__file__).resolve().parents[1]
+CERTIFIED = ("hard/only_face_pushes_away.yaml", "hard/target_out_of_reach.yaml")
+
+
+def _rules_of(task):
+    s = setting_from_task(task, task_skills(task, need_ss=False))
+    return s, push_rules(s.tool, s.platform, list(s.obstacles), s.radius, s.mechanics, s.margin)
+
+
+def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: list,
+           ) -> list[float]:
+    """The tool yaws [rad] at which ``face`` can push the puck at ``p`` (contact sampled along the face's
+    range): waist and reach within the limits, the outline clear of the obstacles."""
+    sec = reach_sector(platform)
+    d = p - sec.centre
+    r = math.hypot(*d)
+    yaws = []
+    for s in np.linspace(*face.contact_range, 7):
+        c = face.point(s) + radius * face.normal
+        o = D_TOOL - c[0]
+        if r <= abs(o):
+            continue
+        v = math.sqrt(r * r - o * o)
+        u = v - c[1]
+        a = math.atan2(d[1], d[0]) - math.atan2(o, v)
+        q1 = math.remainder(a - sec.base_yaw, 2 * math.pi)
+        if not (sec.u_range[0] <= u <= sec.u_range[1] and sec.q1_range[0] <= q1 <= sec.q1_range[1]):
+            continue
+        yaw = a - math.pi / 2
+        rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
+        outline = shapely.Polygon((np.asarray(tool.outline.exterior.coords) - c) @ rot.T + p)
+        if all(shapely.distance(outline, o.polygon() if isinstance(o, Disc) else o) > 0 for o in obstacles):
+            yaws.append(yaw)
+    return yaws
+
+
+def lattice_search(setting, start: np.ndarray, target: np.ndarray, *, step: float = 0.003,
+                   cell: float = 0.0015, budget: int = 4000) -> float:
+    """The closest the puck comes to ``target`` [m] by straight pushes from ``start`` (breadth first,
+    one visit per lattice cell of side ``cell``, at most ``budget`` expansions)."""
+    tool, radius = setting.tool, setting.radius
+    clear = radius + setting.margin - 1e-5
+    mu_half = math.atan(setting.mechanics.mu)
+    frontier, seen = [start], {tuple(np.floor(start / cell).astype(int))}
+    best, n = float(np.hypot(*(start - target))), 0
+    while frontier and n < budget:
+        p = frontier.pop(0)
+        n += 1
+        for face in tool.faces:
+            off = math.remainder(face.push_angle - face.normal_angle, 2 * math.pi)
+            lo, hi = max(-mu_half, off - face.theta_b), min(mu_half, off + face.theta_b)
+            if hi < lo:
+                continue
+            for yaw in _holds(tool, face, setting.platform, p, radius, list(setting.obstacles))[::3]:
+                for ang in np.linspace(lo, hi, 5):
+                    w = yaw + face.normal_angle + ang
+                    q = p + step * np.array([math.cos(w), math.sin(w)])
+                    key = tuple(np.floor(q / cell).astype(int))
+                    if key in seen:
+                        continue
+                    if any(shapely.distance(shapely.Point(q), o.polygon() if isinstance(o, Disc) else o) < clear
+                           for o in setting.obstacles):
+                        continue
+                    seen.add(key)
+                    frontier.append(q)
+                    best = min(best, float(np.hypot(*(q - target))))
+    return best
+
+
+@pytest.mark.parametrize("name", CERTIFIED)
+def test_certificate_holds_when_checked_again_and_the_lattice_search_finds_nothing(name: str) -> None:
+    task = load_task(ROOT / "problems" / name)
+    setting, rules = _rules_of(task)
+    cert, why = certify(rules, np.array(task.start), np.array(task.target))
+    assert cert is not None, why
+    assert check_certificate(cert, rules) == []
+    closest = lattice_search(setting, np.array(task.start), np.array(task.target))
+    assert closest > 0.003, f"the lattice search came {closest * 1e3:.2f} mm from the target of a certified task"
+
+
+def test_a_generated_task_with_an_obstacle_certified_and_the_lattice_search_finds_nothing() -> None:
+    """An obstacle case of the execution benchmark's batch: the tool body's zone takes part."""
+    from tooltransfer.planner.apps.batch.generate import generate_tasks
+    from tooltransfer.planner.apps.batch.spec import load_batch
+    from tooltransfer.problems.task import task_from_dict
+
+    batch = ROOT / "problems" / "batch" / "execution_60.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "exec60-00031")
+    task = task_from_dict(data, str(batch))
+    setting, rules = _rules_of(task)
+    cert, why = certify(rules, np.array(task.start), np.array(task.target))
+    assert cert is not None and cert.kind == "backward_reachable", why
+    assert check_certificate(cert, rules) == []
+    closest = lattice_search(setting, np.array(task.start), np.array(task.target))
+    assert closest > 0.003, f"the lattice search came {closest * 1e3:.2f} mm from the target of a certified task"
+
+
+def test_a_tampered_certificate_fails_its_check() -> None:
+    task = load_task(ROOT / "problems" / "hard" / "only_face_pushes_away.yaml")
+    _, rules = _rules_of(task)
+    cert, _ = certify(rules, np.array(task.start), np.array(task.target))
+    assert cert is not None and cert.kind == "backward_reachable" and cert.region is not None
+    shrunk = shapely.buffer(cert.region, -0.004)
+    cert.region = shrunk
+    problems = check_certificate(cert, rules)
+    assert problems and any("not closed" in p or "goal" in p for p in problems)
+    cert.region = shapely.box(-1, -1, 1, 1)
+    assert any("start" in p for p in check_certificate(cert, rules))
+
+
+def test_a_solved_task_gets_no_certificate_and_its_path_obeys_the_rules() -> None:
+    """The over-approximation holds the planner's own plan: every object position of a push lies in the
+    push space, and every step of it in a direction its box allows."""
+    task = load_task(ROOT / "problems" / "paper" / "transfer_tool2.yaml")
+    plan = solve(task)
+    assert plan.status == "solved" and plan.evidence["verdict"] == "solved"
+    _, rules = _rules_of(task)
+    cert, why = certify(rules, np.array(task.start), np.array(task.target))
+    assert cert is None and why
+    space = push_space(rules)
+    pushing = np.array([ph == "push" for ph in plan.phase])
+    xy = plan.object_xy
+    assert all(shapely.distance(space, shapely.Point(p)) < 1e-6 for p in xy[pushing])
+    for k in np.flatnonzero(pushing[:-1] & pushing[1:]):
+        d = xy[k + 1] - xy[k]
+        if np.hypot(*d) < 1e-6:
+            continue
+        box = (*np.minimum(xy[k], xy[k + 1]) - 1e-4, *np.maximum(xy[k], xy[k + 1]) + 1e-4)
+        arcs = direction_arcs(rules, box)
+        ang = math.atan2(d[1], d[0])
+        assert arcs is None or any(math.remainder(ang - lo, 2 * math.pi) % (2 * math.pi) <= hi - lo + 1e-3
+                                   for lo, hi in arcs), f"sample {k}: direction {ang:.3f} outside {arcs}"
+
+
+def test_solve_gives_each_verdict_its_status_exit_code_and_evidence(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "plan.json"
+    assert main(["solve", str(ROOT / "problems" / "hard" / "target_out_of_reach.yaml"), "--json", "-o", str(out)]) == 1
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["status"] == "infeasible" and summary["evidence"] == "target_unpushable"
+    doc = json.loads(out.read_text())
+    assert doc["verdict"] == "infeasible" and doc["evidence"]["certificate"]["kind"] == "target_unpushable"
+    from tooltransfer.planner.planning.plan import read_plan
+
+    assert read_plan(out).evidence["kind"] == "target_unpushable"
+    code = main(["solve", str(ROOT / "problems" / "hard" / "target_at_edge_of_reach.yaml"), "--json"])
+    summary = json.loads(capsys.readouterr().out)
+    assert (code, summary["status"], summary["evidence"]) == (3, "unknown", "search_exhausted")
+    assert "not proved infeasible" in summary["reason"]
