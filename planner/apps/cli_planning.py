@@ -118,6 +118,12 @@ def cmd_solve(args: argparse.Namespace) -> int:
         with written(figure) as tmp:
             fig12(plan, tmp, executions)
         summary["figure"] = str(figure)
+    elif args.plot and plan.verdict == "infeasible" and "certificate" in plan.evidence:
+        from tooltransfer.planner.apps.plots.certificate import certificate_figure
+
+        with written(figure) as tmp:
+            certificate_figure(plan.evidence, plan.obstacles, tmp)
+        summary["figure"] = str(figure)
     if args.json:
         print(json.dumps(summary, default=float))
     else:
