@@ -1,23 +1,26 @@
 """The set of puck positions from which the target may be reachable, over-approximated on blocks.
 
 Cover the plane with square cells of side ``h`` and call *block* the 2 x 2 cells around a grid vertex.
-For each block ``W`` let ``K_W`` be a convex cone holding every direction the puck may move in at any
-point of ``W`` (:func:`~tooltransfer.planner.planning.verdicts.bounds.direction_arcs`). A set ``B`` is *closed*
-when, for every block, each point ``x`` of ``W`` (in the push space) with some ``y`` of ``B`` in ``W``
-and ``y - x`` in ``K_W`` is in ``B``. If ``B`` is closed and holds the target's goal disc, every start
-from which a plan reaches the target is in ``B``:
+For each block ``W`` and face ``f`` let ``K_fW`` be a convex cone holding every direction ``f`` may push
+the puck in at a point of ``W`` (its cone turned by the headings there:
+:func:`~tooltransfer.planner.planning.verdicts.bounds.face_headings`) and ``S_fW`` a set holding every
+position of ``W`` where ``f`` can hold the puck (its region, less the obstacles' zone and less where
+its tool body overlaps an obstacle whatever the contact). A set ``B`` is *closed* when, for every
+block and face, each ``x`` of ``S_fW`` with some ``y`` of ``B`` in the closure of ``S_fW`` and
+``y - x`` in ``K_fW`` is in ``B``. If ``B`` is closed and holds the target's goal disc, every start from
+which a plan reaches the target is in ``B``:
 
-    cut the puck's path into pieces shorter than ``h / 2``; each piece lies in the block of the grid
-    vertex nearest its first point (at least ``h / 2`` from that block's edges), and its
-    displacement, the integral of velocities in ``K_W`` (or zero while the puck stands), lies in
-    ``K_W``; so going backward from the last piece (which ends in the goal disc), each piece's
-    first point is in ``B``. A puck that moves only does so inside the push space (a face must hold
-    it), so ``B`` need only grow inside it.
+    cut the puck's path where the pushing face changes and into pieces shorter than ``h / 2``; each
+    piece is pushed by one face ``f`` and lies in the block of the grid vertex nearest its first
+    point (at least ``h / 2`` from that block's edges), all its points in ``S_fW`` (the face holds
+    the puck there), and its displacement, the integral of velocities in ``K_fW``, lies in ``K_fW``;
+    so going backward from the last piece, which ends in the goal disc, each piece's first point is
+    in ``B``. Between pushes the puck stands still.
 
-:func:`backward_set` computes the smallest such ``B`` on polygons (the shadow of ``B`` in a block is
-``(B ∩ W) ⊕ (-K_W)``, a Minkowski sum swept edge by edge), block by block from a work list, until no
-block adds area. The work stops early, without a set, once ``B`` comes within ``gap`` of the start,
-or when it has processed ``max_blocks`` blocks.
+:func:`backward_set` computes such a ``B`` on polygons (the shadow of ``B`` in a block is
+``(B ∩ W) ⊕ (-K_fW)``, a Minkowski sum swept edge by edge, kept in ``S_fW``), block by block from a
+work list, until no block adds area. The work stops early, without a set, once ``B`` comes within
+``gap`` of the start, or when it has processed ``max_blocks`` blocks.
 """
 
 from __future__ import annotations

@@ -9,6 +9,7 @@ boundaries), obstacles with inscribed polygons, so every polygon here contains t
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import numpy as np
 import shapely
@@ -17,8 +18,6 @@ from tooltransfer.planner.planning.verdicts.rules import FaceRule, PushRules
 
 #: Polygon pieces per full turn for arcs.
 ARC_PIECES = 256
-#: Half-width [rad] beyond which a set of directions is treated as every direction.
-FULL_TURN = math.pi
 
 
 def _polar_ranges(rule: FaceRule) -> tuple[float, float, float, float]:
@@ -83,7 +82,7 @@ def _box_polar(base: np.ndarray, box: tuple[float, float, float, float]) -> tupl
 
 
 def face_headings(rules: PushRules, rule: FaceRule, box: tuple[float, float, float, float]
-                  ) -> tuple[float, float] | bool | None:
+                  ) -> tuple[float, float] | Literal[False] | None:
     """The tool's heading range ``(lo, hi)`` [rad] while face ``rule`` pushes the puck at a point of
     ``box`` ``(x0, y0, x1, y1)`` [m]; False when the face's region misses the box, None when the box
     holds the Omni's axis (any heading).
@@ -142,33 +141,3 @@ def body_zone(rules: PushRules, rule: FaceRule, headings: tuple[float, float]) -
             ov = shapely.get_coordinates(o)
             hulls.append(shapely.MultiPoint((ov[:, None, :] - w[None, :, :]).reshape(-1, 2)).convex_hull)
     return shapely.union_all(hulls) if hulls else shapely.Polygon()
-
-
-def hull_arc(arcs: list[tuple[float, float]] | None) -> tuple[float, float] | bool | None:
-    """The smallest arc ``(lo, hi)`` [rad] holding every arc of ``arcs``; None when it spans
-    :data:`FULL_TURN` or more (the convex cone of these directions is the plane or a half-plane),
-    False when ``arcs`` is empty (no motion)."""
-    if arcs is None:
-        return None
-    if not arcs:
-        return False
-    two_pi = 2 * math.pi
-    if any(hi - lo >= FULL_TURN for lo, hi in arcs):
-        return None
-    segs = sorted((lo % two_pi, lo % two_pi + (hi - lo)) for lo, hi in arcs)
-    merged: list[list[float]] = []
-    for lo, hi in segs:
-        if merged and lo <= merged[-1][1]:
-            merged[-1][1] = max(merged[-1][1], hi)
-        else:
-            merged.append([lo, hi])
-    # the gap after merged[i] runs to the start of the next (cyclically); the hull is the complement
-    # of the largest gap
-    n = len(merged)
-    gaps = [(merged[(i + 1) % n][0] + (two_pi if i == n - 1 else 0.0) - merged[i][1], i) for i in range(n)]
-    gap, i = max(gaps)
-    if gap <= 0.0:
-        return None
-    lo = merged[(i + 1) % n][0]
-    hi = lo + (two_pi - gap)
-    return None if hi - lo >= FULL_TURN else (lo, hi)

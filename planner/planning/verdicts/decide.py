@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import replace
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -47,7 +47,7 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                                     "certificate": cert.to_dict()}
         return replace(plan, status="infeasible", metrics=metrics, evidence=evidence,
                        reason=f"certified infeasible ({cert.kind}): {cert.reason}; the planner's search: {searched}")
-    status = "violated" if plan.status == "violated" else "unknown"
+    status: Literal["unknown", "violated"] = "violated" if plan.status == "violated" else "unknown"
     evidence = {"verdict": "unknown", "kind": "search_exhausted" if status == "unknown" else "violated",
                 "searched": searched, "not_proved": why}
     return replace(plan, status=status, metrics=metrics, evidence=evidence,
