@@ -62,11 +62,13 @@ def strict(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(solve_module, "HARD_CHECKS", checks)
 
 
-def test_a_violated_plan_is_written_whole_read_back_and_exits_1(strict, tmp_path: Path, capsys) -> None:
+def test_a_violated_plan_is_written_whole_read_back_and_exits_3(strict, tmp_path: Path, capsys) -> None:
+    """A plan that breaks a hard check is no verdict: ``unknown`` (exit 3), the plan kept whole."""
     out = tmp_path / "plan.json"
-    assert main(["solve", str(TRANSFER), "--variant", "qp/opt", "-o", str(out), "--json"]) == 1
+    assert main(["solve", str(TRANSFER), "--variant", "qp/opt", "-o", str(out), "--json"]) == 3
     summary = json.loads(capsys.readouterr().out)
-    assert summary["status"] == "violated" and summary["reason"].startswith("hard checks violated: cone (")
+    assert summary["status"] == "unknown" and summary["violated"] is True
+    assert summary["reason"].startswith("hard checks violated: cone (")
     plan = read_plan(out)
     assert plan.status == "violated" and "cone_violation_max" in plan.reason
     assert plan.t.size > 100 and plan.joints.shape == (plan.t.size, 3) and plan.pushes  # the whole plan
