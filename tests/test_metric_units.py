@@ -24,7 +24,7 @@ TRANSFER = Path(__file__).resolve().parents[1] / "problems" / "paper" / "transfe
 
 def test_a_solved_plans_metrics_all_have_a_unit(tmp_path: Path, capsys) -> None:
     out = tmp_path / "plan.json"
-    assert main(["solve", str(TRANSFER), "--variant", "mapping/arch", "-o", str(out), "--json"]) in (0, 1)
+    assert main(["solve", str(TRANSFER), "--variant", "mapping/arch", "-o", str(out), "--json"]) in (0, 1, 3)
     summary = json.loads(capsys.readouterr().out)
     metrics = json.loads(out.read_text())["metrics"]
     assert {k for k in metrics if not k.startswith("violation_")} <= set(UNITS)

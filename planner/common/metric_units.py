@@ -61,6 +61,7 @@ UNITS: dict[str, Unit] = {
     "time_switches_and_timing": "s",
     "time_replay": "s",
     "time_total": "s",
+    "time_certify": "s",
     # the command line's summary of a plan and of its execution (tooltransfer.planner.apps.cli)
     "planning_time": "s",
     "open_loop_final_error": "m",
