@@ -12,7 +12,8 @@ a process pool (``--workers``, default 2; :func:`bench_execution.run_jobs`); a t
 raises or runs past ``--timeout`` is an ``error`` row, counted as undecided.
 
 Report: the three counts with their shares and Wilson intervals (95 %), per task file and in all;
-the certificates' kinds (and the unknown verdicts' evidence kinds and reasons, grouped); the
+the certificates' kinds (and the unknown verdicts' evidence kinds and reasons, grouped, with the
+tasks whose certificate was built but refused by its own check); the verdicts by obstacle count; the
 planning time per verdict (median, p90, max of ``planning_time`` as ``solve --json`` prints it: the
 plan's ``time_total``, else the sum of its ``time_*`` metrics; ``time_certify`` apart); a per-tool
 table; the issue's targets (decided >= 97 %, median planning time <= 2 s, p90 <= 10 s) each marked
@@ -177,13 +178,20 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
             f"{k} {n}" for k, n in Counter(r["evidence_kind"] for r in unknown).most_common()))
         for why, n in Counter(_reason_group(r.get("not_proved") or "")[:160] for r in unknown).most_common(5):
             con.print(f"  not proved x{n}: {why}")
+        failed = [r["task_id"] for r in unknown if "check failed" in (r.get("not_proved") or "")]
+        if failed:
+            con.print("  certificates built but refused by their own check: " + ", ".join(failed))
+    by_obstacles = Counter((r["n_obstacles"], _verdict_of(r)) for r in rows)
+    con.print("by obstacles: " + "; ".join(
+        f"{k}: " + ", ".join(f"{v} {by_obstacles[k, v]}" for v in (*VERDICTS, "error") if by_obstacles[k, v])
+        for k in sorted({r["n_obstacles"] for r in rows})))
     for r in rows:
         if _verdict_of(r) == "error":
             con.print(f"  {r['task_id']}: {r['status']}")
 
+    con.print("planning time per task: planning_time of solve --json; certify: time_certify, a part of it")
     t = Table("verdict", "tasks", "median s", "p90 s", "max s", "certify median s", "certify max s",
-              title="planning time per task (planning_time of solve --json; certify: time_certify, part of it)",
-              box=box.SIMPLE_HEAD, title_justify="left")
+              box=box.SIMPLE_HEAD)
     for v in (*VERDICTS, "all"):
         vr = rows if v == "all" else [r for r in rows if _verdict_of(r) == v]
         q = _quantiles([r["planning_time"] for r in vr if r.get("planning_time") is not None])
@@ -192,7 +200,8 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
     con.print(t)
 
     t = Table("tool", "tasks", "solved", "infeasible", "unknown", "error", "decided", "median s", "p90 s", "max s",
-              title="per tool", box=box.SIMPLE_HEAD, title_justify="left")
+              box=box.SIMPLE_HEAD)
+    con.print("per tool:")
     for tool in dict.fromkeys(r["tool"] for r in rows):
         tr = [r for r in rows if r["tool"] == tool]
         c = Counter(_verdict_of(r) for r in tr)
