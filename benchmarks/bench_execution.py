@@ -454,10 +454,12 @@ def _progress_line(done: int, total: int, r: Row) -> str:
     return s
 
 
-def run_jobs(jobs: Sequence[Job], workers: int, on_row: Callable[[Row], None] | None = None) -> list[Row]:
-    """Every job's row, in the jobs' order, from a process pool of ``workers`` (1: in this process).
-    When a worker dies (the pool breaks), the jobs it took down are run again one by one, each in a
-    pool of its own; a job whose worker dies then becomes a ``crash`` row."""
+def run_jobs(jobs: Sequence[Job], workers: int, on_row: Callable[[Row], None] | None = None,
+             run: Callable[[Job], Row] = run_task) -> list[Row]:
+    """Every job's row (``run(job)``, by default :func:`run_task`; a module-level function, so that
+    the workers can unpickle it), in the jobs' order, from a process pool of ``workers`` (1: in this
+    process). When a worker dies (the pool breaks), the jobs it took down are run again one by one,
+    each in a pool of its own; a job whose worker dies then becomes a ``crash`` row."""
     skills = list({(j.data["skills"].get("dataset"), j.source): (j.data, j.source) for j in jobs}.values())
     warm_up(skills)  # learn once here, so the workers load the skills from the cache
     rows: dict[int, Row] = {}
@@ -469,7 +471,7 @@ def run_jobs(jobs: Sequence[Job], workers: int, on_row: Callable[[Row], None] | 
 
     if workers <= 1:
         for i, job in enumerate(jobs):
-            done(i, run_task(job))
+            done(i, run(job))
         return [rows[i] for i in range(len(jobs))]
     ctx = multiprocessing.get_context("spawn")
 
@@ -478,7 +480,7 @@ def run_jobs(jobs: Sequence[Job], workers: int, on_row: Callable[[Row], None] | 
 
     broken = []
     with pool(workers) as ex:
-        futures: dict[Future[Row], int] = {ex.submit(run_task, job): i for i, job in enumerate(jobs)}
+        futures: dict[Future[Row], int] = {ex.submit(run, job): i for i, job in enumerate(jobs)}
         pending = set(futures)
         while pending:
             finished, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -493,7 +495,7 @@ def run_jobs(jobs: Sequence[Job], workers: int, on_row: Callable[[Row], None] | 
     for i in sorted(broken):
         with pool(1) as ex:
             try:
-                done(i, ex.submit(run_task, jobs[i]).result())
+                done(i, ex.submit(run, jobs[i]).result())
             except BrokenProcessPool:
                 done(i, _crash_row(jobs[i], "the worker process died"))
             except Exception as exc:
