@@ -681,19 +681,21 @@ def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None
         vrows = [r for r in rows if r["variant"] == variant]
         gen = [r for r in vrows if r["kind"] == "generated"]
         solved = [r for r in gen if r["status"] == "solved"]
-        infeasible = [r for r in gen if r["status"] == "infeasible"]
+        infeasible = [r for r in gen if r["status"] in ("infeasible", "unknown", "violated")]
+        certified = sum(r["status"] == "infeasible" for r in gen)
         failed = [r for r in gen if _is_exc(r["status"])]
         con.rule(f"variant {variant}")
         if gen:
             con.print(f"generated tasks: solved {len(solved)}/{len(gen)} ({_pct(len(solved) / len(gen))}), "
-                      f"infeasible {len(infeasible)}, planner exceptions {len(failed)}")
+                      f"not solved {len(infeasible)} (certified infeasible {certified}, the rest unknown), "
+                      f"planner exceptions {len(failed)}")
             plan_t = [r["plan_wall"] for r in gen if r["plan_wall"] is not None]
             if plan_t:
                 con.print(f"planning wall time per task: median {np.median(plan_t):.2f} s, "
                           f"p90 {np.percentile(plan_t, 90):.2f} s, max {max(plan_t):.2f} s; "
                           f"CPU total {sum(r['plan_cpu'] or 0.0 for r in gen):.1f} s")
         if infeasible or failed:
-            t = Table("count", "reason (numbers as #)", title="infeasible reasons (top 8) and planner exceptions",
+            t = Table("count", "reason (numbers as #)", title="reasons of the unsolved (top 8) and planner exceptions",
                       box=box.SIMPLE_HEAD, title_justify="left")
             groups = Counter(_reason_group(r["reason"]) for r in infeasible)
             for reason, n in groups.most_common(8):
