@@ -116,7 +116,7 @@ READ_CASES: dict[str, tuple[Callable[[dict], None], str, tuple[str, ...]]] = {
     "Infinity in tool_pose": (_set("samples.tool_pose.7.0", float("inf")), "samples.tool_pose[7][0]", ("finite",)),
     "NaN in t": (_set("samples.t.3", float("nan")), "samples.t[3]", ("finite",)),
     "a row of 2 joints": (_set("samples.joints.4", [0.1, 0.2]), "samples.joints[4]", ("3 numbers",)),
-    "an unknown status": (_set("status", "great"), "status", ("solved, infeasible, violated",)),
+    "an unknown status": (_set("status", "great"), "status", ("solved, infeasible, unknown, violated",)),
     "status a number": (_set("status", 1), "status", ()),
     "no status": (lambda d: d.pop("status"), "status", ()),
     "reason a list": (_set("reason", ["a"]), "reason", ()),
