@@ -24,6 +24,7 @@ finds no path, the ``arch`` one).
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -66,7 +67,8 @@ def mapping_options(task: Task) -> MappingOptions:
 
 def solve(task: Task, task_path: str | Path | None = None) -> Plan:
     """Plan ``task`` and give it a verdict (:attr:`Plan.verdict`): ``"solved"`` only when every hard
-    check holds; where the search finds no plan, ``"infeasible"`` with a certificate that no plan
+    check holds (the variant's condensing, then its guided search where it has one and the
+    condensing's candidates fail); where no plan is found, ``"infeasible"`` with a certificate that no plan
     exists under the rules it states (:mod:`tooltransfer.planner.planning.verdicts`), else
     ``"unknown"`` with what was searched (``"violated"`` keeps a plan that breaks a hard check). The
     plan's ``evidence`` holds the certificate or the search's account.
@@ -102,12 +104,44 @@ def _search(task: Task, task_path: str | Path | None) -> tuple[Plan, Setting | N
     t, x, _ = generalize(skills.oe.dmp, np.array(task.start), np.array(task.target))
     target = np.array(task.target)
     oe = oe_variant(task.variants.oe)
-    push_plan = oe.condense(t, x, setting, target, oe.options_from_task(task.oe))
+    options = oe.options_from_task(task.oe)
+    push_plan = oe.condense(t, x, setting, target, options)
     lap("oe")
-    if push_plan.status != "solved":
-        return Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base), setting
     switch = switch_planner(task.variants.ss, setting, skills.ss, task.ss)
     recontact = with_fallback(recontact_planner(setting), switch, "switch")
+    if push_plan.status != "solved":
+        plan = Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base)
+    else:
+        plan = _candidates(task, setting, push_plan, switch, recontact, stages, base, start)
+    if plan.status != "solved" and oe.guided is not None:
+        plan = _guided(task, setting, oe.guided(t, x, setting, target, options), plan, switch, recontact, base, start)
+    return plan, setting
+
+
+def _guided(task: Task, setting: Setting, guided: Any, failed: Plan, switch: Any, recontact: Any,
+            base: dict[str, Any], start: float) -> Plan:
+    """The plan of the variant's guided search where the scored candidates left ``failed``: kept when it
+    is solved, else ``failed`` with the guided search's reason added."""
+    clock = time.perf_counter()
+    if guided.status == "solved":
+        stages = {k: v for k, v in failed.metrics.items() if k in ("time_skills", "time_oe")}
+        plan = _complete(task, setting, guided, switch, recontact, stages, base)
+        if plan.status == "solved":
+            plan.metrics["time_guided"] = time.perf_counter() - clock
+            plan.metrics["time_total"] = time.perf_counter() - start
+            plan.metrics["alternatives_tried"] = float(failed.metrics.get("alternatives_tried", 0.0)) + 1.0
+            return plan
+        why = plan.reason
+    else:
+        why = guided.reason
+    metrics = {**failed.metrics, "time_guided": time.perf_counter() - clock}
+    return replace(failed, metrics=metrics, reason=f"{failed.reason}; the guided search: {why}")
+
+
+def _candidates(task: Task, setting: Setting, push_plan: Any, switch: Any, recontact: Any,
+                stages: dict[str, float], base: dict[str, Any], start: float) -> Plan:
+    """The first candidate push plan (``push_plan``, then those it hands out) that makes a whole plan
+    passing every check; else the first that broke a hard check, or the last failure."""
     reasons: list[str] = []
     violated: Plan | None = None  # the first whole plan that breaks a hard check (kept if nothing solves)
     while True:  # the push plan, then the next candidates it hands out while a later stage fails
@@ -125,10 +159,10 @@ def _search(task: Task, task_path: str | Path | None) -> tuple[Plan, Setting | N
     elif plan.status != "solved" and reasons:
         more = f" (and {len(reasons)} other push sequence(s) before it: {reasons[0]})" if reasons else ""
         why = plan.reason if plan.reason else push_plan.reason
-        return Plan(status="infeasible", reason=why + more, metrics=plan.metrics or stages, **base), setting
+        return Plan(status="infeasible", reason=why + more, metrics=plan.metrics or stages, **base)
     plan.metrics["time_total"] = time.perf_counter() - start
     plan.metrics["alternatives_tried"] = float(len(reasons))
-    return plan, setting
+    return plan
 
 
 def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, recontact: Any,

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError, ToolTransferError
 from tooltransfer.planner.planning.assemble import SwitchPlanner
+from tooltransfer.planner.planning.oe.guided import condense_guided
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions, condense_mapping
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
@@ -63,12 +64,15 @@ class OEVariant:
         condense: the condensing function (:data:`Condense`).
         options_type: the type of its options (a frozen pydantic model).
         options_from_task: its options from the task's ``oe`` section (validated by the schema).
+        guided: a second condensing, tried when ``condense``'s plan fails (the ``qp`` variant's guided
+            search, :func:`~tooltransfer.planner.planning.oe.guided.condense_guided`), or None.
     """
 
     name: str
     condense: Condense
     options_type: type
     options_from_task: Callable[[OEOptions], Any]
+    guided: Condense | None = None
 
 
 @dataclass(frozen=True)
@@ -101,7 +105,7 @@ def _skill(name: str, skill: SwitchSkill | None) -> SwitchSkill:
 #: The OE condensing variants by name.
 OE_VARIANTS: Mapping[str, OEVariant] = MappingProxyType({
     "mapping": OEVariant("mapping", condense_mapping, MappingOptions, MappingOptions.from_task),
-    "qp": OEVariant("qp", condense_qp, QPOptions, QPOptions.from_task),
+    "qp": OEVariant("qp", condense_qp, QPOptions, QPOptions.from_task, condense_guided),
 })
 
 #: The switch-path variants by name. ``opt``'s NLP is local: where it finds no path, the geometric
