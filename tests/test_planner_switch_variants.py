@@ -46,7 +46,7 @@ def plans(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict]:
 
     folder = tmp_path_factory.mktemp("plans")
     docs = {}
-    for ss, code in (("dmp", 1), ("opt", 0)):
+    for ss, code in (("dmp", 3), ("opt", 0)):  # dmp: no plan, nothing proved (unknown)
         out = folder / f"{ss}.json"
         assert main(["solve", str(PAPER / "transfer_tool2.yaml"), "--ss", ss, "-o", str(out), "--json"]) == code
         docs[ss] = json.loads(out.read_text())
@@ -73,9 +73,10 @@ def test_opt_switches_never_penetrate_and_keep_the_clearance(plans: dict[str, di
 
 def test_dmp_switch_that_knocks_the_puck_makes_the_plan_infeasible(plans: dict[str, dict]) -> None:
     """The paper's recombined switch penetrates the puck; replayed through the push model it moves
-    the puck off the plan, so the plan is refused with the place, and the penetration is reported."""
+    the puck off the plan, so the plan is refused with the place (no plan, nothing proved: the verdict
+    unknown), and the penetration is reported."""
     doc = plans["dmp"]
-    assert doc["status"] == "infeasible"
+    assert doc["status"] == "unknown" and doc["verdict"] == "unknown"
     assert "self-consistency" in doc["reason"] and "switch" in doc["reason"]
     assert doc["metrics"]["switch_penetration_max"] > 1e-4
     assert doc["metrics"]["self_consistency_max"] > doc["task"]["oe"]["self_consistency_tol"]

@@ -144,10 +144,11 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
 
 
 def condense_guided(t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
-                    target: NDArray[np.float64], options: QPOptions) -> PushPlan:
+                    target: NDArray[np.float64] | None, options: QPOptions) -> PushPlan:
     """The ``qp`` variant's fallback when its scored candidates fail: the sequence of
     :func:`guided_path` fitted by :func:`condense_sequence` over the universal path's duration
     (``t`` (T,) [s], ``universal`` (T, 2) [m]); ``infeasible`` with the reason when either fails."""
+    target = universal[-1] if target is None else target
     found = guided_path(setting, universal[0], target, cone_fraction=options.friction_cone_fraction)
     empty = np.zeros((0, 2))
     if found is None:
