@@ -24,7 +24,7 @@ from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import solve
 from tooltransfer.planner.planning.verdicts.bounds import direction_arcs, push_space
 from tooltransfer.planner.planning.verdicts.certificate import certify, check_certificate
-from tooltransfer.planner.planning.verdicts.rules import push_rules
+from tooltransfer.planner.planning.verdicts.rules import setting_rules
 from tooltransfer.problems.task import load_task
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
@@ -37,7 +37,7 @@ CERTIFIED = ("hard/only_face_pushes_away.yaml", "hard/target_out_of_reach.yaml")
 
 def _rules_of(task):
     s = setting_from_task(task, task_skills(task, need_ss=False))
-    return s, push_rules(s.tool, s.platform, list(s.obstacles), s.radius, s.mechanics, s.margin)
+    return s, setting_rules(s)
 
 
 def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: list,

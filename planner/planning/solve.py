@@ -77,12 +77,10 @@ def solve(task: Task, task_path: str | Path | None = None) -> Plan:
     the task was loaded from (:func:`~tooltransfer.problems.task.load_task`; the working folder for a task
     built in code)."""
     plan, setting = _search(task, task_path)
-    if setting is None:
-        return plan
     return attach_verdict(plan, setting, np.array(task.start), np.array(task.target))
 
 
-def _search(task: Task, task_path: str | Path | None) -> tuple[Plan, Setting | None]:
+def _search(task: Task, task_path: str | Path | None) -> tuple[Plan, Setting]:
     """The planner's search (module docstring): the plan, or the best failure, and the world it used."""
     task_path = task_origin(task, task_path)
     stages: dict[str, float] = {}

@@ -56,7 +56,8 @@ class GuidedPath:
 
 
 def _holds(setting: Setting, cone_half: float) -> list:
-    """Per face: ``(name, [(c (2,), cone (lo, hi)) for contact places], outline (n, 2))``."""
+    """Per face that can push: ``(name, places, (lo, hi))``: the puck's centre (2,) [m] in the tool frame
+    at contact places along the face, and its admissible cone [rad] (tool frame, shrunk by 2 %)."""
     out = []
     for f in setting.tool.faces:
         lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b, cone_half)

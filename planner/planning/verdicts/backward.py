@@ -111,7 +111,7 @@ def face_regions(rules: PushRules) -> list[shapely.Geometry]:
     return [face_region(rules, f) for f in rules.faces]
 
 
-def grow(rules: PushRules, own: shapely.Geometry, faces: list, box: tuple[float, float, float, float]
+def grow(own: shapely.Geometry, faces: list, box: tuple[float, float, float, float]
          ) -> shapely.Geometry:
     """The points of the block ``box`` from which one push ends in ``own`` (the set's part in the
     block): per face, the shadow of ``own`` within the face's space, kept in that space."""
@@ -266,7 +266,7 @@ def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, ga
         box = grid.block_box(i, j)
         if v not in models:
             models[v] = block_faces(rules, box, zone, regions)
-        grown = grow(rules, safe_union(own), models[v], box)
+        grown = grow(safe_union(own), models[v], box)
         for c in quad:
             if grown.is_empty or not (0 <= c[0] < nx and 0 <= c[1] < ny):
                 continue

@@ -149,7 +149,7 @@ def check_certificate(cert: Certificate, rules: PushRules) -> list[str]:
             own = shapely.intersection(region, shapely.box(*box))
             if own.is_empty or own.area == 0.0:
                 continue
-            grown = grow(rules, own, block_faces(rules, box, zone, regions), box)
+            grown = grow(own, block_faces(rules, box, zone, regions), box)
             missing = shapely.difference(grown, shapely.buffer(region, 1e-8))
             if missing.area > 1e-14:
                 problems.append(f"block {(i, j)} is not closed ({missing.area * 1e6:.3g} mm^2 outside the set)")

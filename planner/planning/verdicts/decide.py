@@ -19,7 +19,7 @@ import numpy as np
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.verdicts.certificate import certify
-from tooltransfer.planner.planning.verdicts.rules import push_rules
+from tooltransfer.planner.planning.verdicts.rules import setting_rules
 
 #: Block updates the backward-reachable set may make before the verdict is left ``unknown``.
 CERTIFY_BLOCKS = 20000
@@ -33,8 +33,7 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
         return replace(plan, evidence={"verdict": "solved", "kind": "plan",
                                        "checks": "every hard check holds (metrics)"})
     t0 = time.perf_counter()
-    rules = push_rules(setting.tool, setting.platform, list(setting.obstacles), setting.radius, setting.mechanics,
-                       setting.margin)
+    rules = setting_rules(setting)
     cert, why = certify(rules, np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64),
                         max_blocks=max_blocks)
     spent = time.perf_counter() - t0

@@ -32,6 +32,7 @@ import shapely
 import shapely.affinity
 
 from tooltransfer.planner.planning.oe.face_frame import admissible_cone
+from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.dh import D_TOOL
@@ -144,3 +145,10 @@ def push_rules(tool: Tool, platform: OmniPlatform, obstacles: list, radius: floa
     return PushRules(tuple(faces), (float(sec.centre[0]), float(sec.centre[1])),
                      (sec.base_yaw + sec.q1_range[0], sec.base_yaw + sec.q1_range[1]), float(radius), float(margin),
                      polygons, discs, friction, goal_tol)
+
+
+def setting_rules(setting: Setting) -> PushRules:
+    """The :class:`PushRules` of a planning world (its tool, platform, obstacles, object, mechanics and
+    margin)."""
+    return push_rules(setting.tool, setting.platform, list(setting.obstacles), setting.radius, setting.mechanics,
+                      setting.margin)
