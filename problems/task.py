@@ -218,6 +218,13 @@ class OEOptions(_Model):
     friction_cone_fraction: float = Field(
         0.5, gt=0, le=1, allow_inf_nan=False, strict=True,
         description="share of the friction cone's half-angle atan(mu) the planned object directions may use")
+    friction_cone_fraction_max: float = Field(
+        0.8, gt=0, le=1, allow_inf_nan=False, strict=True,
+        description="widest share of the friction cone's half-angle the guided search may use where no plan "
+                    "keeps to friction_cone_fraction (at most friction_cone_fraction: never wider)")
+    guided_budget: int = Field(
+        4000, ge=100, le=1_000_000, strict=True,
+        description="expansions of the guided search per cone share tried (its coverage grows with it)")
     contact_margin: float = Field(
         0.0002, ge=0, le=0.05, allow_inf_nan=False, strict=True,
         description="distance the contact keeps from the ends of a face's usable range [m]")

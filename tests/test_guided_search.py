@@ -4,17 +4,23 @@ hard check and executes on the MuJoCo platform."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 import pytest
+import shapely
 
 from tooltransfer.planner.apps.batch.generate import generate_tasks
 from tooltransfer.planner.apps.batch.spec import load_batch
+from tooltransfer.planner.planning.oe.contacts import usable_range
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.guided import guided_path
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
-from tooltransfer.planner.planning.solve import hard_check_failures, solve
+from tooltransfer.planner.planning.solve import hard_check_failures, qp_options, solve
 from tooltransfer.problems.task import Task, task_from_dict
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.ik import inverse_kinematics
 
 ROOT = Path(__file__).resolve().parents[1]
 BATCH = ROOT / "problems" / "batch" / "execution_60.yaml"
@@ -28,12 +34,34 @@ def _task(task_id: str) -> Task:
 def test_the_guided_path_keeps_the_rules_it_searches_under() -> None:
     task = _task("exec60-00023")
     setting = setting_from_task(task, task_skills(task, need_ss=False))
-    found = guided_path(setting, np.array(task.start), np.array(task.target), cone_fraction=0.5)
+    found = guided_path(setting, np.array(task.start), np.array(task.target), options=qp_options(task))
     assert found is not None
     assert np.allclose(found.xy[0], task.start) and np.allclose(found.xy[-1], task.target)
     assert len(found.faces) == len(found.xy) - 1 and set(found.faces) <= set(setting.tool.face_names)
     steps = np.hypot(*np.diff(found.xy, axis=0).T)
-    assert steps.max() <= 0.004 + 1e-9
+    assert steps[:-1].max() <= 0.004 + 1e-9 and steps[-1] <= 3 * 0.004 + 1e-9  # the last: straight to the target
+    # every step keeps the rules of the qp fit it proposes for, checked with the Omni's inverse
+    # kinematics: both ends of the face's usable contact range reachable, the tool outline clear of
+    # the obstacles, the step's direction inside the face's narrowed cone at the heading the arm imposes
+    options = qp_options(task)
+    for k, name in enumerate(found.faces):
+        p, d = found.xy[k], found.xy[k + 1] - found.xy[k]
+        face = setting.tool.face(name)
+        lo, hi = usable_range(setting.tool, name, options)
+        for s in (lo, hi):
+            frame = FaceFrame.build(setting, name, s=s / face.length,
+                                    friction_cone_fraction=options.friction_cone_fraction)
+            x, y, yaw = frame.tool_pose(p[None])[0]
+            ik = inverse_kinematics(setting.platform, [x, y])
+            assert ik.reachable and ik.heading is not None
+            assert abs(math.remainder(ik.heading - yaw, 2 * math.pi)) < 1e-6
+            rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
+            body = shapely.Polygon(np.asarray(setting.tool.outline.exterior.coords) @ rot.T + [x, y])
+            assert all(shapely.distance(body, o.polygon() if isinstance(o, Disc) else o) > 0.0
+                       for o in setting.obstacles)
+        mid = FaceFrame.build(setting, name, friction_cone_fraction=options.friction_cone_fraction)
+        off = math.remainder(math.atan2(d[1], d[0]) - mid.push_direction(p[None])[0], 2 * math.pi)
+        assert abs(off) <= mid.theta_b
     t, ref, faces, switches = found.sequence(10.0)
     assert ref is found.xy
     assert t[0] == 0.0 and t[-1] == pytest.approx(10.0) and len(switches) == len(faces) - 1

@@ -24,6 +24,7 @@ finds no path, the ``arch`` one).
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
@@ -116,24 +117,28 @@ def _search(task: Task, task_path: str | Path | None) -> tuple[Plan, Setting]:
     return plan, setting
 
 
-def _guided(task: Task, setting: Setting, guided: Any, failed: Plan, switch: Any, recontact: Any,
+def _guided(task: Task, setting: Setting, attempts: Iterator[Any], failed: Plan, switch: Any, recontact: Any,
             base: dict[str, Any], start: float) -> Plan:
-    """The plan of the variant's guided search where the scored candidates left ``failed``: kept when it
-    is solved, else ``failed`` with the guided search's reason added."""
+    """The first whole plan of the variant's guided search (its push plans, one per attempt) that passes
+    every check, where the scored candidates left ``failed``; else ``failed`` with each attempt's reason
+    added."""
     clock = time.perf_counter()
-    if guided.status == "solved":
-        stages = {k: v for k, v in failed.metrics.items() if k in ("time_skills", "time_oe")}
-        plan = _complete(task, setting, guided, switch, recontact, stages, base)
-        if plan.status == "solved":
-            plan.metrics["time_guided"] = time.perf_counter() - clock
-            plan.metrics["time_total"] = time.perf_counter() - start
-            plan.metrics["alternatives_tried"] = float(failed.metrics.get("alternatives_tried", 0.0)) + 1.0
-            return plan
-        why = plan.reason
-    else:
-        why = guided.reason
+    whys: list[str] = []
+    for guided in attempts:
+        if guided.status == "solved":
+            stages = {k: v for k, v in failed.metrics.items() if k in ("time_skills", "time_oe")}
+            plan = _complete(task, setting, guided, switch, recontact, stages, base)
+            if plan.status == "solved":
+                plan.metrics["time_guided"] = time.perf_counter() - clock
+                plan.metrics["time_total"] = time.perf_counter() - start
+                tried = float(failed.metrics.get("alternatives_tried", 0.0))
+                plan.metrics["alternatives_tried"] = tried + 1.0 + len(whys)
+                return plan
+            whys.append(plan.reason)
+        else:
+            whys.append(guided.reason)
     metrics = {**failed.metrics, "time_guided": time.perf_counter() - clock}
-    return replace(failed, metrics=metrics, reason=f"{failed.reason}; the guided search: {why}")
+    return replace(failed, metrics=metrics, reason=f"{failed.reason}; the guided search: {'; then '.join(whys)}")
 
 
 def _candidates(task: Task, setting: Setting, push_plan: Any, switch: Any, recontact: Any,

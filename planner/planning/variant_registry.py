@@ -16,7 +16,7 @@ checks that the two agree.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError, ToolTransferError
 from tooltransfer.planner.planning.assemble import SwitchPlanner
-from tooltransfer.planner.planning.oe.guided import condense_guided
+from tooltransfer.planner.planning.oe.guided import guided_plans
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions, condense_mapping
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
@@ -39,6 +39,9 @@ from tooltransfer.problems.task import OEOptions, SSOptions
 #: ``condense(t (T,) [s], universal (T, 2) [m], setting, target (2,) [m] or None, options) -> PushPlan``.
 Condense = Callable[[NDArray[np.float64], NDArray[np.float64], Setting, "NDArray[np.float64] | None", Any],
                     PushPlan]
+#: ``guided(t, universal, setting, target, options) -> the push plans of a fallback search, one per attempt``.
+Guided = Callable[[NDArray[np.float64], NDArray[np.float64], Setting, "NDArray[np.float64] | None", Any],
+                  Iterator[PushPlan]]
 #: ``planner(setting, skill or None, the task's ss options) -> SwitchPlanner``.
 SwitchFactory = Callable[[Setting, "SwitchSkill | None", SSOptions], SwitchPlanner]
 
@@ -64,15 +67,16 @@ class OEVariant:
         condense: the condensing function (:data:`Condense`).
         options_type: the type of its options (a frozen pydantic model).
         options_from_task: its options from the task's ``oe`` section (validated by the schema).
-        guided: a second condensing, tried when ``condense``'s plan fails (the ``qp`` variant's guided
-            search, :func:`~tooltransfer.planner.planning.oe.guided.condense_guided`), or None.
+        guided: a fallback search, tried when ``condense``'s plans fail: its push plans, one per attempt
+            (the ``qp`` variant's guided search, :func:`~tooltransfer.planner.planning.oe.guided.guided_plans`),
+            or None.
     """
 
     name: str
     condense: Condense
     options_type: type
     options_from_task: Callable[[OEOptions], Any]
-    guided: Condense | None = None
+    guided: Guided | None = None
 
 
 @dataclass(frozen=True)
@@ -105,7 +109,7 @@ def _skill(name: str, skill: SwitchSkill | None) -> SwitchSkill:
 #: The OE condensing variants by name.
 OE_VARIANTS: Mapping[str, OEVariant] = MappingProxyType({
     "mapping": OEVariant("mapping", condense_mapping, MappingOptions, MappingOptions.from_task),
-    "qp": OEVariant("qp", condense_qp, QPOptions, QPOptions.from_task, condense_guided),
+    "qp": OEVariant("qp", condense_qp, QPOptions, QPOptions.from_task, guided_plans),
 })
 
 #: The switch-path variants by name. ``opt``'s NLP is local: where it finds no path, the geometric

@@ -16,20 +16,20 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.planner.planning.oe.face_frame import admissible_cone
+from tooltransfer.planner.planning.oe.contacts import usable_range
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.qp_variant import condense_sequence
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.tools.objects import Disc
-from tooltransfer.tools.omni.dh import D_TOOL
-from tooltransfer.tools.omni.reach import reach_sector
 
 
 @dataclass(frozen=True)
@@ -55,62 +55,100 @@ class GuidedPath:
         return t, self.xy, tuple(faces), tuple(switches)
 
 
-def _holds(setting: Setting, cone_half: float) -> list:
-    """Per face that can push: ``(name, places, (lo, hi))``: the puck's centre (2,) [m] in the tool frame
-    at contact places along the face, and its admissible cone [rad] (tool frame, shrunk by 2 %)."""
+@dataclass(frozen=True)
+class _FaceMoves:
+    """What the ``qp`` fit demands of one face (:class:`~tooltransfer.planner.planning.oe.sequence_fit.SequenceFit`):
+    the frame of its heading cone (contact at the middle of the face) and the frames at the ends of the
+    contact's usable range, from each of which the Omni must reach the object."""
+
+    name: str
+    cone: FaceFrame
+    ends: tuple[FaceFrame, ...]
+
+
+def _face_moves(setting: Setting, options: QPOptions) -> list[_FaceMoves]:
+    """One :class:`_FaceMoves` per face that can push under ``options`` (the plan's narrowed cone, its
+    contact margin and span)."""
     out = []
     for f in setting.tool.faces:
-        lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b, cone_half)
+        lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b,
+                                 options.friction_cone_fraction * setting.mechanics.friction_angle)
         if hi <= lo:
             continue
-        shrink = 0.02 * (hi - lo)
-        places = [f.point(s) + setting.radius * f.normal for s in np.linspace(*f.contact_range, 5)]
-        out.append((f.name, places, (lo + shrink, hi - shrink)))
+        cone = FaceFrame.build(setting, f.name, friction_cone_fraction=options.friction_cone_fraction)
+        a, b = usable_range(setting.tool, f.name, options)
+        ends = tuple(FaceFrame.build(setting, f.name, s=v / f.length,
+                                     friction_cone_fraction=options.friction_cone_fraction) for v in sorted({a, b}))
+        out.append(_FaceMoves(f.name, cone, ends))
     return out
 
 
+def _reaches(frame: FaceFrame, p: NDArray[np.float64]) -> bool:
+    """Whether the Omni holds ``frame``'s contact with the object at ``p`` (2,) [m], with
+    :data:`REACH_SLACK` to spare (the fit's reach rows are an inner approximation within 2e-4 m)."""
+    d = p - frame.base
+    r2 = float(d @ d)
+    if r2 <= frame.offset ** 2:
+        return False
+    u = math.sqrt(r2 - frame.offset ** 2)
+    a = math.atan2(d[1], d[0]) - math.atan2(frame.offset, u)
+    return (frame.reach[0] + REACH_SLACK <= u <= frame.reach[1] - REACH_SLACK
+            and frame.waist[0] + REACH_SLACK / u <= a <= frame.waist[1] - REACH_SLACK / u)
+
+
+#: Room [m] the search keeps inside the Omni's reach and between the tool outline and the obstacles.
+REACH_SLACK = 5e-4
+
+
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
-                cone_fraction: float, step: float = 0.004, cell: float = 0.002, switch_price: float = 0.01,
+                options: QPOptions, step: float = 0.004, cell: float = 0.002, switch_price: float = 0.01,
                 budget: int = 3000) -> GuidedPath | None:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or None within ``budget``
-    expansions. ``cone_fraction``: the share of the friction cone's half-angle the plan may use;
+    expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin and span);
     ``switch_price`` [m]: the path length a face change is worth."""
-    sec = reach_sector(setting.platform)
-    bx, by = (float(v) for v in sec.centre)
     outline = np.asarray(setting.tool.outline.exterior.coords)
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
     for o in obstacles:
         shapely.prepare(o)
     clear = setting.radius + max(setting.margin - 1e-5, 0.0) + 1e-4
-    faces = _holds(setting, cone_fraction * setting.mechanics.friction_angle)
+    faces = _face_moves(setting, options)
 
-    def moves(p: NDArray[np.float64]) -> list[tuple[str, float]]:
-        """(face, world direction) pairs the puck may take from ``p``."""
-        dx, dy = p[0] - bx, p[1] - by
-        r = math.hypot(dx, dy)
+    def body_clear(frame: FaceFrame, p: NDArray[np.float64]) -> bool:
+        """Whether the tool outline, holding ``frame``'s contact with the object at ``p``, keeps
+        :data:`REACH_SLACK` from every obstacle."""
+        yaw = float(frame.heading(p)[0])
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        body = shapely.Polygon((outline - frame.centre_in_tool) @ np.array([[cy, sy], [-sy, cy]]) + p)
+        return all(shapely.distance(o, body) > REACH_SLACK for o in obstacles)
+
+    def held(p: NDArray[np.float64]) -> list[tuple[str, float, float]]:
+        """``(face, direction, half)`` [rad] of the faces that can push the object at ``p``: the middle
+        of their admissible directions in the world and the half-width the search uses of them."""
         out = []
-        for name, places, (lo, hi) in faces:
-            for c in places:
-                o = D_TOOL - c[0]
-                if r <= abs(o) + 1e-9:
-                    continue
-                v = math.sqrt(r * r - o * o)
-                a = math.atan2(dy, dx) - math.atan2(o, v)
-                q1 = math.remainder(a - sec.base_yaw, 2 * math.pi)
-                if not (sec.u_range[0] <= v - c[1] <= sec.u_range[1] and sec.q1_range[0] <= q1 <= sec.q1_range[1]):
-                    continue
-                yaw = a - math.pi / 2
-                if obstacles:
-                    cy, sy = math.cos(yaw), math.sin(yaw)
-                    body = shapely.Polygon((outline - c) @ np.array([[cy, sy], [-sy, cy]]) + p)
-                    if any(shapely.intersects(o, body) for o in obstacles):
-                        continue
-                out += [(name, yaw + ang) for ang in (lo, 0.5 * (lo + hi), hi)]
-                break
+        for fm in faces:
+            if not all(_reaches(e, p) for e in fm.ends):
+                continue
+            if obstacles and not all(body_clear(e, p) for e in fm.ends):
+                continue
+            out.append((fm.name, float(fm.cone.push_direction(p)[0]), 0.98 * fm.cone.theta_b))
         return out
 
     def free(q: NDArray[np.float64]) -> bool:
         return all(shapely.distance(o, shapely.Point(q)) >= clear for o in obstacles)
+
+    def finish(p: NDArray[np.float64], here: list[tuple[str, float, float]]) -> str | None:
+        """A face that pushes the object from ``p`` straight to the target (within its cone at both
+        ends of the step, held at both), if the target is within ``3 step``."""
+        d = target - p
+        if float(np.hypot(*d)) > 3 * step:
+            return None
+        there = {name: (mid, half) for name, mid, half in held(target)}
+        way = math.atan2(d[1], d[0])
+        for name, mid, half in here:
+            if name in there and all(abs(math.remainder(way - m, 2 * math.pi)) <= 0.9 * h
+                                     for m, h in ((mid, half), there[name])):
+                return name
+        return None
 
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
     heap: list = [(float(np.hypot(*(target - start))), 0.0, 0, None)]
@@ -125,8 +163,10 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
             continue
         seen.add(key)
         n += 1
-        if np.hypot(*(target - p)) <= step and came is not None:
-            xy, fs = [target], [came]  # the last step, to the target, with the face that arrived
+        here = held(p)
+        last = finish(p, here)
+        if last is not None:
+            xy, fs = [target], [last]
             while k >= 0:
                 q, parent, face = nodes[k]
                 xy.append(q)
@@ -134,26 +174,40 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                     fs.append(face)
                 k = parent
             return GuidedPath(np.array(xy[::-1]), tuple(fs[::-1]))
-        for name, ang in moves(p):
-            q = p + step * np.array([math.cos(ang), math.sin(ang)])
-            if (int(q[0] // cell), int(q[1] // cell), name) in seen or not free(q):
-                continue
-            g2 = g + step + (switch_price if came is not None and name != came else 0.0)
-            nodes.append((q, k, name))
-            heapq.heappush(heap, (g2 + float(np.hypot(*(target - q))), g2, len(nodes) - 1, name))
+        for name, mid, half in here:
+            for ang in (mid - half, mid, mid + half):
+                q = p + step * np.array([math.cos(ang), math.sin(ang)])
+                if (int(q[0] // cell), int(q[1] // cell), name) in seen or not free(q):
+                    continue
+                g2 = g + step + (switch_price if came is not None and name != came else 0.0)
+                nodes.append((q, k, name))
+                heapq.heappush(heap, (g2 + float(np.hypot(*(target - q))), g2, len(nodes) - 1, name))
     return None
 
 
-def condense_guided(t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
-                    target: NDArray[np.float64] | None, options: QPOptions) -> PushPlan:
-    """The ``qp`` variant's fallback when its scored candidates fail: the sequence of
-    :func:`guided_path` fitted by :func:`condense_sequence` over the universal path's duration
-    (``t`` (T,) [s], ``universal`` (T, 2) [m]); ``infeasible`` with the reason when either fails."""
+def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
+                 target: NDArray[np.float64] | None, options: QPOptions) -> Iterator[PushPlan]:
+    """The ``qp`` variant's fallback when its scored candidates fail: for each share of the friction
+    cone in turn (``options.friction_cone_fraction``, then ``friction_cone_fraction_max`` where that is
+    wider), the sequence of :func:`guided_path` (``options.guided_budget`` expansions) fitted by
+    :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
+    [m]) under that share. Yields each attempt's push plan, ``infeasible`` with the reason when the search
+    or the fit fails; the caller stops at the first whose whole plan passes its checks. The share a plan
+    used is its metric ``friction_cone_fraction``: plans keep the task's share whenever one exists."""
     target = universal[-1] if target is None else target
-    found = guided_path(setting, universal[0], target, cone_fraction=options.friction_cone_fraction)
     empty = np.zeros((0, 2))
-    if found is None:
-        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
-                        reason="no path to the target within its expansions")
-    tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
-    return condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), options)
+    shares = [options.friction_cone_fraction]
+    if options.friction_cone_fraction_max > options.friction_cone_fraction:
+        shares.append(options.friction_cone_fraction_max)
+    for share in shares:
+        opts = options.model_copy(update={"friction_cone_fraction": share})
+        found = guided_path(setting, universal[0], target, options=opts, budget=options.guided_budget)
+        if found is None:
+            yield PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
+                           reason=f"no path to the target within {options.guided_budget} expansions at "
+                                  f"{share:g} of the friction cone")
+            continue
+        tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
+        plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
+        plan.metrics["friction_cone_fraction"] = share
+        yield plan

@@ -16,7 +16,8 @@ _TASK = OEOptions.model_fields
 #: The task's ``oe`` fields the ``qp`` variant uses: their defaults, bounds and descriptions are the
 #: task schema's (:class:`tooltransfer.problems.task.OEOptions`), reused, not written again.
 TASK_FIELDS = ("n_samples", "n_basis", "segments", "max_pushes", "candidates", "switch_price", "max_contacts",
-               "friction_cone_fraction", "contact_margin", "contact_span")
+               "friction_cone_fraction", "friction_cone_fraction_max", "guided_budget", "contact_margin",
+               "contact_span")
 
 
 class QPOptions(BaseModel):
@@ -50,6 +51,9 @@ class QPOptions(BaseModel):
         friction_cone_fraction: share (0, 1] of the friction cone's half-angle ``atan(mu)`` the
             planned object directions may use about a face's normal (a plan that survives an error in
             ``mu``: :meth:`tooltransfer.planner.planning.oe.face_frame.FaceFrame.build`).
+        friction_cone_fraction_max: the widest share the guided search may use where no plan keeps to
+            ``friction_cone_fraction`` (:func:`tooltransfer.planner.planning.oe.guided.guided_plans`).
+        guided_budget: expansions of the guided search per share tried.
         contact_margin, contact_span: where on a face the contact may be [m]
             (:func:`tooltransfer.planner.planning.oe.contacts.usable_range`).
     """
@@ -72,6 +76,8 @@ class QPOptions(BaseModel):
     recontact_price: float = Field(1e-7, ge=0, allow_inf_nan=False)
     scp_rtol: float = 1e-6
     friction_cone_fraction: float = _TASK["friction_cone_fraction"]
+    friction_cone_fraction_max: float = _TASK["friction_cone_fraction_max"]
+    guided_budget: int = _TASK["guided_budget"]
     contact_margin: float = _TASK["contact_margin"]
     contact_span: float = _TASK["contact_span"]
 
