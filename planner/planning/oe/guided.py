@@ -83,17 +83,21 @@ def _face_moves(setting: Setting, options: QPOptions) -> list[_FaceMoves]:
     return out
 
 
-def _reaches(frame: FaceFrame, p: NDArray[np.float64]) -> bool:
-    """Whether the Omni holds ``frame``'s contact with the object at ``p`` (2,) [m], with
-    :data:`REACH_SLACK` to spare (the fit's reach rows are an inner approximation within 2e-4 m)."""
-    d = p - frame.base
-    r2 = float(d @ d)
+def _heading(frame: FaceFrame, p: NDArray[np.float64]) -> float | None:
+    """The tool's yaw [rad] with ``frame``'s contact holding the object at ``p`` (2,) [m]
+    (:meth:`FaceFrame.heading` for one point), or None where the Omni holds it nowhere (outside its
+    reach or waist range, with :data:`REACH_SLACK` to spare: the fit's reach rows are an inner
+    approximation within 2e-4 m)."""
+    dx, dy = float(p[0] - frame.base[0]), float(p[1] - frame.base[1])
+    r2 = dx * dx + dy * dy
     if r2 <= frame.offset ** 2:
-        return False
+        return None
     u = math.sqrt(r2 - frame.offset ** 2)
-    a = math.atan2(d[1], d[0]) - math.atan2(frame.offset, u)
-    return (frame.reach[0] + REACH_SLACK <= u <= frame.reach[1] - REACH_SLACK
-            and frame.waist[0] + REACH_SLACK / u <= a <= frame.waist[1] - REACH_SLACK / u)
+    a = math.atan2(dy, dx) - math.atan2(frame.offset, u)
+    if not (frame.reach[0] + REACH_SLACK <= u <= frame.reach[1] - REACH_SLACK
+            and frame.waist[0] + REACH_SLACK / u <= a <= frame.waist[1] - REACH_SLACK / u):
+        return None
+    return a - math.pi / 2
 
 
 #: Room [m] the search keeps inside the Omni's reach and between the tool outline and the obstacles.
@@ -108,33 +112,50 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     ``switch_price`` [m]: the path length a face change is worth."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
-    for o in obstacles:
-        shapely.prepare(o)
-    clear = setting.radius + max(setting.margin - 1e-5, 0.0) + 1e-4
+    # where the tool outline may not come (the obstacles grown by the slack) and where the object's
+    # centre may not be (grown by its radius and the margin)
+    zones = [shapely.union_all([shapely.buffer(o, d, quad_segs=32) for o in obstacles]) if obstacles else None
+             for d in (REACH_SLACK, setting.radius + max(setting.margin - 1e-5, 0.0) + 1e-4)]
+    body_zone, centre_zone = zones
+    for z in zones:
+        if z is not None:
+            shapely.prepare(z)
     faces = _face_moves(setting, options)
+    # the farthest the outline reaches from the object's centre, per contact place: a body farther
+    # than that from the zone cannot touch it
+    span = {id(e): float(np.hypot(*(outline - e.centre_in_tool).T).max()) for fm in faces for e in fm.ends}
 
-    def body_clear(frame: FaceFrame, p: NDArray[np.float64]) -> bool:
-        """Whether the tool outline, holding ``frame``'s contact with the object at ``p``, keeps
-        :data:`REACH_SLACK` from every obstacle."""
-        yaw = float(frame.heading(p)[0])
-        cy, sy = math.cos(yaw), math.sin(yaw)
-        body = shapely.Polygon((outline - frame.centre_in_tool) @ np.array([[cy, sy], [-sy, cy]]) + p)
-        return all(shapely.distance(o, body) > REACH_SLACK for o in obstacles)
+    def touches(ends: list[tuple[FaceFrame, float]], p: NDArray[np.float64], near: float) -> bool:
+        """Whether the tool outline, at each ``(frame, yaw)`` of ``ends`` holding the object at ``p``,
+        meets the body zone (``near`` [m]: the zone's distance from ``p``)."""
+        close = [(e, y) for e, y in ends if span[id(e)] >= near]
+        if not close:
+            return False
+        rings = np.stack([(outline - e.centre_in_tool) @ np.array([[math.cos(y), math.sin(y)],
+                                                                  [-math.sin(y), math.cos(y)]]) + p
+                          for e, y in close])
+        return bool(shapely.intersects(body_zone, shapely.polygons(rings)).any())
 
     def held(p: NDArray[np.float64]) -> list[tuple[str, float, float]]:
         """``(face, direction, half)`` [rad] of the faces that can push the object at ``p``: the middle
-        of their admissible directions in the world and the half-width the search uses of them."""
+        of their admissible directions in the world and the half-width the search uses of them; each
+        held at both ends of its usable contact range with the tool outline clear of the obstacles."""
+        near = math.inf if body_zone is None else float(shapely.distance(body_zone, shapely.Point(p)))
         out = []
         for fm in faces:
-            if not all(_reaches(e, p) for e in fm.ends):
+            yaws = [_heading(e, p) for e in fm.ends]
+            if any(y is None for y in yaws):
                 continue
-            if obstacles and not all(body_clear(e, p) for e in fm.ends):
+            if touches([(e, y) for e, y in zip(fm.ends, yaws, strict=True) if y is not None], p, near):
                 continue
-            out.append((fm.name, float(fm.cone.push_direction(p)[0]), 0.98 * fm.cone.theta_b))
+            mid = _heading(fm.cone, p)
+            if mid is None:  # the middle of the range is between its ends: held wherever they are
+                mid = float(fm.cone.heading(p[None])[0])
+            out.append((fm.name, mid + fm.cone.push_angle, 0.98 * fm.cone.theta_b))
         return out
 
     def free(q: NDArray[np.float64]) -> bool:
-        return all(shapely.distance(o, shapely.Point(q)) >= clear for o in obstacles)
+        return centre_zone is None or not shapely.intersects_xy(centre_zone, float(q[0]), float(q[1]))
 
     def finish(p: NDArray[np.float64], here: list[tuple[str, float, float]]) -> str | None:
         """A face that pushes the object from ``p`` straight to the target (within its cone at both
