@@ -17,7 +17,7 @@ from tooltransfer.planner.planning.oe.contacts import usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.guided import guided_path
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
-from tooltransfer.planner.planning.solve import hard_check_failures, qp_options, solve
+from tooltransfer.planner.planning.solve import HARD_CHECKS, hard_check_failures, qp_options, solve
 from tooltransfer.problems.task import Task, task_from_dict
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.ik import inverse_kinematics
@@ -74,6 +74,7 @@ def test_a_task_the_candidates_miss_is_solved_by_the_guided_search_and_executes(
 
     plan = solve(_task("exec60-00023"))
     assert plan.verdict == "solved" and "time_guided" in plan.metrics
+    assert all(key in plan.metrics for _, key, *_ in HARD_CHECKS)  # every hard check made, none skipped
     assert hard_check_failures(plan.metrics) == []
     assert plan.metrics["self_consistency_max"] <= 1e-4
     assert simulate_plan(plan).final_error < 0.005

@@ -172,6 +172,10 @@ def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, reconta
               stages: dict[str, float], base: dict[str, Any]) -> Plan:
     """A solved push plan made a whole plan (switches, timing, joints) and checked (module docstring)."""
     clock = time.perf_counter()
+    missing = [k for k in PUSH_PLAN_MEASURES if k not in push_plan.metrics]
+    if missing:  # a hard check with nothing to check is not a check that holds
+        return Plan(status="infeasible", metrics={**push_plan.metrics, **stages}, **base,
+                    reason=f"the push plan carries no {', '.join(missing)}: its hard checks cannot be made")
     tool, platform, radius = setting.tool, setting.platform, setting.radius
     obstacles = list(setting.obstacles)
     try:
@@ -230,6 +234,11 @@ def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, reconta
                 joints=motion.joints, phase=motion.phase, face=motion.face, pushes=pushes, switches=switches,
                 metrics=metrics, **base)
 
+
+#: The measures of the object path every solved push plan carries
+#: (:func:`tooltransfer.planner.planning.oe.metrics.plan_metrics`): a plan without one is not checked, so not solved.
+PUSH_PLAN_MEASURES = ("cone_violation_max", "friction_cone_margin_min", "contact_edge_margin_min",
+                      "reach_violation_max", "goal_error", "obstacle_clearance_min")
 
 #: The hard checks of a whole plan (:func:`hard_check_failures`): family, metric, bound (in the metric's
 #: unit), sense (``"max"``: the metric may not exceed the bound; ``"min"``: it may not fall below it), unit

@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.planner.planning.oe.contacts import usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
+from tooltransfer.planner.planning.oe.metrics import plan_metrics
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.qp_variant import condense_sequence
@@ -230,5 +231,8 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
             continue
         tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
         plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
-        plan.metrics["friction_cone_fraction"] = share
+        if plan.status == "solved":  # measured like every plan of the variant, at the share it used
+            frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces
+                      if f.name in faces}
+            plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share)
         yield plan

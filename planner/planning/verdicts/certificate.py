@@ -83,7 +83,7 @@ def _goal(rules: PushRules, target: np.ndarray) -> shapely.Geometry:
 #: times the blocks.
 CELL_SIDES = (0.01, 0.005)
 #: Block updates a finer grid may make (it starts again from the goal; the first grid has the rest).
-FINE_BLOCKS = 6000
+FINE_BLOCKS = 5000
 
 
 def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple[float, ...] = CELL_SIDES,
