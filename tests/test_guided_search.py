@@ -15,7 +15,7 @@ from tooltransfer.planner.apps.batch.generate import generate_tasks
 from tooltransfer.planner.apps.batch.spec import load_batch
 from tooltransfer.planner.planning.oe.contacts import usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
-from tooltransfer.planner.planning.oe.guided import guided_path
+from tooltransfer.planner.planning.oe.guided import GuidedMiss, GuidedPath, guided_path
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import HARD_CHECKS, hard_check_failures, qp_options, solve
 from tooltransfer.problems.task import Task, task_from_dict
@@ -35,7 +35,7 @@ def test_the_guided_path_keeps_the_rules_it_searches_under() -> None:
     task = _task("exec60-00023")
     setting = setting_from_task(task, task_skills(task, need_ss=False))
     found = guided_path(setting, np.array(task.start), np.array(task.target), options=qp_options(task))
-    assert found is not None
+    assert isinstance(found, GuidedPath)
     assert np.allclose(found.xy[0], task.start) and np.allclose(found.xy[-1], task.target)
     assert len(found.faces) == len(found.xy) - 1 and set(found.faces) <= set(setting.tool.face_names)
     steps = np.hypot(*np.diff(found.xy, axis=0).T)
@@ -78,3 +78,16 @@ def test_a_task_the_candidates_miss_is_solved_by_the_guided_search_and_executes(
     assert hard_check_failures(plan.metrics) == []
     assert plan.metrics["self_consistency_max"] <= 1e-4
     assert simulate_plan(plan).final_error < 0.005
+
+
+def test_a_search_that_cannot_move_says_its_space_closed() -> None:
+    """A start no face can push from: the search's space closes at once, and it says so (not 'budget')."""
+    task = _task("exec60-00023")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    far = np.array([5.0, 5.0])  # far outside the Omni's reach: no face holds the puck there
+    miss = guided_path(setting, far, np.array(task.target), options=qp_options(task))
+    assert isinstance(miss, GuidedMiss) and miss.exhausted and miss.expansions == 1
+    assert "closed" in miss.describe()
+    spent = guided_path(setting, np.array(task.start), np.array(task.target), options=qp_options(task), budget=5)
+    assert isinstance(spent, GuidedMiss) and not spent.exhausted and spent.expansions == 5
+    assert "budget" in spent.describe()

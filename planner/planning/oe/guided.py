@@ -105,12 +105,34 @@ def _heading(frame: FaceFrame, p: NDArray[np.float64]) -> float | None:
 REACH_SLACK = 5e-4
 
 
+@dataclass(frozen=True)
+class GuidedMiss:
+    """The search found no path: after ``expansions`` expansions of ``step`` [m], with every reachable
+    lattice cell expanded (``exhausted``: no path under its rules at its resolution) or with its budget
+    spent."""
+
+    expansions: int
+    exhausted: bool
+    step: float
+
+    def describe(self) -> str:
+        """One clause: what was searched and what remains."""
+        if self.exhausted:
+            return (f"its space closed after {self.expansions} expansions (no path in {self.step * 1e3:g} mm steps "
+                    "under its rules; finer steps or other contact places may still find one)")
+        return f"no path within {self.expansions} expansions (its budget, oe.guided_budget)"
+
+
+#: Step [m] of the search's straight pushes.
+STEP = 0.004
+
+
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
-                options: QPOptions, step: float = 0.004, cell: float = 0.002, switch_price: float = 0.01,
-                budget: int = 3000) -> GuidedPath | None:
-    """A* from ``start`` to within ``step`` of ``target`` (module docstring), or None within ``budget``
-    expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin and span);
-    ``switch_price`` [m]: the path length a face change is worth."""
+                options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
+                budget: int = 3000) -> GuidedPath | GuidedMiss:
+    """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss`
+    within ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact
+    margin and span); ``switch_price`` [m]: the path length a face change is worth."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
     # where the tool outline may not come (the obstacles grown by the slack) and where the object's
@@ -204,7 +226,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
                 nodes.append((q, k, name))
                 heapq.heappush(heap, (g2 + float(np.hypot(*(target - q))), g2, len(nodes) - 1, name))
-    return None
+    return GuidedMiss(n, not heap, step)
 
 
 def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
@@ -224,10 +246,9 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     for share in shares:
         opts = options.model_copy(update={"friction_cone_fraction": share})
         found = guided_path(setting, universal[0], target, options=opts, budget=options.guided_budget)
-        if found is None:
+        if isinstance(found, GuidedMiss):
             yield PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
-                           reason=f"no path to the target within {options.guided_budget} expansions at "
-                                  f"{share:g} of the friction cone")
+                           reason=f"at {share:g} of the friction cone, {found.describe()}")
             continue
         tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
         plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)

@@ -85,10 +85,12 @@ def grid_over(area: shapely.Geometry, h: float) -> BlockGrid:
 
 
 def block_faces(rules: PushRules, box: tuple[float, float, float, float], zone: shapely.Geometry,
-                regions: list[shapely.Geometry]) -> list[tuple[tuple[float, float] | None, shapely.Geometry]]:
+                regions: list[shapely.Geometry]
+                ) -> list[tuple[tuple[float, float] | None, shapely.Geometry, shapely.Geometry]]:
     """For each face that can push somewhere in the block ``box`` [m]: its directions there (an arc
-    ``(lo, hi)`` [rad], None for every direction) and where in the box it can hold the puck (its
-    region less the obstacles' ``zone`` and less where its tool body overlaps an obstacle)."""
+    ``(lo, hi)`` [rad], None for every direction), where in the box it can hold the puck (its
+    region less the obstacles' ``zone`` and less where its tool body overlaps an obstacle), and that
+    set grown by :data:`ROUNDING` (prepared: the set's pieces it touches are taken from it)."""
     out = []
     rect = shapely.box(*box)
     for rule, region in zip(rules.faces, regions, strict=True):
@@ -102,7 +104,9 @@ def block_faces(rules: PushRules, box: tuple[float, float, float, float], zone: 
         if sp.is_empty:
             continue
         arc = None if hd is None else (hd[0] + rule.cone[0], hd[1] + rule.cone[1])
-        out.append((None if arc is None or arc[1] - arc[0] > WIDEST_CONE else arc, sp))
+        near = shapely.buffer(sp, ROUNDING)
+        shapely.prepare(near)
+        out.append((None if arc is None or arc[1] - arc[0] > WIDEST_CONE else arc, sp, near))
     return out
 
 
@@ -116,8 +120,8 @@ def grow(own: shapely.Geometry, faces: list, box: tuple[float, float, float, flo
     """The points of the block ``box`` from which one push ends in ``own`` (the set's part in the
     block): per face, the shadow of ``own`` within the face's space, kept in that space."""
     parts = []
-    for arc, sp in faces:
-        src = polygonal(shapely.intersection(own, shapely.buffer(sp, ROUNDING)))
+    for arc, sp, near in faces:
+        src = polygonal(shapely.intersection(own, near))
         if src.is_empty:
             continue
         parts.append(shapely.intersection(shadow(src, arc, box), sp))
