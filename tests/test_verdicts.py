@@ -128,6 +128,27 @@ def test_a_generated_task_with_an_obstacle_certified_and_the_lattice_search_find
     assert closest > 0.003, f"the lattice search came {closest * 1e3:.2f} mm from the target of a certified task"
 
 
+def test_a_certificate_on_the_finer_grid_and_the_lattice_search_finds_nothing() -> None:
+    """A finger task round an obstacle (from a seed no project file uses): 10 mm cells cut the corner
+    round the obstacle and reach the start; 5 mm cells leave it out, and the check holds."""
+    from tooltransfer.problems.task import task_from_dict
+
+    data = {"format": "tooltransfer.task/1", "tool": "finger",
+            "skills": {"dataset": str(ROOT / "problems" / "data" / "finger_demos")},
+            "name": "round_the_obstacle", "start": [0.088601, 0.136626], "target": [0.022829, 0.175063],
+            "obstacles": [{"kind": "polygon", "vertices": [[0.077844, 0.166433], [0.072647, 0.169323],
+                                                           [0.068293, 0.165272], [0.070799, 0.15988],
+                                                           [0.076702, 0.160598]]}]}
+    task = task_from_dict(data, "round_the_obstacle")
+    setting, rules = _rules_of(task)
+    cert, why = certify(rules, np.array(task.start), np.array(task.target))
+    assert cert is not None and cert.kind == "backward_reachable" and cert.grid is not None, why
+    assert cert.grid.h == pytest.approx(0.005)  # the finer grid, tried only where 10 mm cells reach the start
+    assert check_certificate(cert, rules) == []
+    closest = lattice_search(setting, np.array(task.start), np.array(task.target))
+    assert closest > 0.003, f"the lattice search came {closest * 1e3:.2f} mm from the target of a certified task"
+
+
 def test_a_tampered_certificate_fails_its_check() -> None:
     task = load_task(ROOT / "problems" / "hard" / "only_face_pushes_away.yaml")
     _, rules = _rules_of(task)
