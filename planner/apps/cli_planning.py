@@ -162,7 +162,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         print(json.dumps(summary, default=float))
     else:
         print_summary(summary, f"simulation of {args.plan}")
-    if args.closed_loop and summary.get("closed_loop_status") != "reached":
+    return simulate_exit_code(summary, args.closed_loop)
+
+
+def simulate_exit_code(summary: dict[str, object], closed_loop: bool) -> int:
+    """``simulate``'s exit code for its ``summary``: :data:`EXIT_NOT_REACHED` when the closed loop was
+    run and its status is not ``reached`` (the closed-loop report's own status: failed, closest,
+    rounds, or a fault), else 0."""
+    if closed_loop and summary.get("closed_loop_status") != "reached":
         return EXIT_NOT_REACHED
     return EXIT_OK
 
