@@ -16,10 +16,8 @@ Format ``tooltransfer.dataset/1`` (documented in the README so users can bring r
 * optional ``truth.yaml``: for generated data, the operator's ground truth (pushes, switches).
 
 :func:`load_dataset` checks everything and names the file, and the row and column, of any problem
-(rows count from 1 at the header, as a spreadsheet shows them). Its files are read as data
-(:mod:`tooltransfer.regular_file`): each a regular file of bounded size, and every one of them
-(``meta.yaml``, the CSVs, ``truth.yaml``, a ``tool`` path) inside the folder, links resolved; an
-error message quotes no file from outside it.
+(rows count from 1 at the header, as a spreadsheet shows them). Every file is read as data, inside the
+folder, links resolved (:mod:`tooltransfer.regular_file`): no message quotes a file from outside it.
 """
 
 from __future__ import annotations
@@ -27,7 +25,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
 from array import array
 from dataclasses import dataclass
 from functools import lru_cache
@@ -232,13 +229,11 @@ def write_dataset(folder: str | Path, meta: Meta, demos: list[Demonstration], tr
 
 
 def _open_csv(path: Path, root: Path | None = None) -> io.StringIO:
-    """The text of a CSV file: a regular file inside the dataset folder ``root`` (links resolved), bounded
-    in size (:data:`MAX_CSV_BYTES`, checked before reading: :func:`tooltransfer.regular_file.read_regular`)
-    and UTF-8 (a byte-order mark is dropped)."""
+    """The UTF-8 text of a CSV file (a byte-order mark dropped): a regular file inside the dataset folder
+    ``root``, of at most :data:`MAX_CSV_BYTES` (:func:`tooltransfer.regular_file.read_regular`)."""
     from tooltransfer.regular_file import read_regular
 
-    where = str(path)
-    raw = read_regular(path, DatasetError, "CSV file", MAX_CSV_BYTES, inside=root)
+    raw, where = read_regular(path, DatasetError, "CSV file", MAX_CSV_BYTES, inside=root), str(path)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -378,8 +373,8 @@ def load_dataset(folder: str | Path) -> Dataset:
     if meta.tool not in library_names():
         tool_path = root / meta.tool
         if not is_inside(tool_path, root):
-            raise DatasetError(meta_path, "field tool", "a library tool, or a tool YAML path inside the dataset "
-                               "folder (as its demonstrations)", "a path that leads outside it (a link, or ..)")
+            raise DatasetError(meta_path, "field tool", "a library tool, or a tool YAML path inside the dataset",
+                               "a path that leads outside it (a link, or ..)")
         if not tool_path.is_file():
             raise DatasetError(meta_path, "field tool", f"a library tool ({', '.join(library_names())}) "
                                "or a tool YAML path relative to the dataset", repr(meta.tool[:80]))
@@ -476,7 +471,7 @@ class _DemoTruth(BaseModel):
 def _read_truth(path: Path, meta: Meta) -> dict[str, Any] | None:
     """``truth.yaml`` (optional): a mapping whose demonstration entries (CSV stems) are mappings with
     ``pushes`` (face, t_start, t_end) and ``switches`` lists; errors name the file and the field."""
-    if not os.path.lexists(path):
+    if not path.exists() and not path.is_symlink():  # a FIFO or a link is read (and refused) below
         return None
     from tooltransfer.yaml_file import read_yaml
 
