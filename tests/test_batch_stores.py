@@ -276,3 +276,32 @@ def test_report_names_its_own_argument(tmp_path: Path, capsys) -> None:
     assert "db " in err and "--db" not in err and "no such file" in err
     with pytest.raises(InputError, match=r"^db "):
         write_report(tmp_path, None)
+
+
+def _open_error(path: Path, readonly: bool) -> list:
+    """``ResultStore(path)`` in a thread that must end within 10 s (a FIFO read would block it): what it raised."""
+    import threading
+
+    out: list = []
+
+    def run() -> None:
+        try:
+            ResultStore(path, readonly=readonly).close()
+        except StoreError as exc:
+            out.append(exc)
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    t.join(10)
+    assert not t.is_alive(), "blocked"
+    return out
+
+
+@pytest.mark.parametrize("make", ["fifo", "folder", "device"])
+def test_a_store_that_is_not_a_regular_file_is_refused_at_once(tmp_path: Path, make: str) -> None:
+    path = {"fifo": tmp_path / "s.sqlite", "folder": tmp_path, "device": Path("/dev/null")}[make]
+    if make == "fifo":
+        os.mkfifo(path)  # SQLite's first read of it would block for ever
+    for readonly in (False, True):
+        (err,) = _open_error(path, readonly)
+        assert "regular file" in str(err) and str(path) in str(err)

@@ -36,6 +36,7 @@ from tooltransfer.planner.apps.batch.store_file import (
     store_error,
     tables,
 )
+from tooltransfer.regular_file import file_kind
 
 SCHEMA_VERSION = "2"
 #: Schemas :class:`ResultStore` can read (only the current one is resumed).
@@ -96,6 +97,12 @@ class ResultStore:
         self.field = field
         #: rows that could not be read (a note for the reader), or ""
         self.note = ""
+        try:
+            kind = file_kind(os.stat(self.path).st_mode)
+        except OSError:
+            kind = ""  # a new file (or one SQLite will name)
+        if kind:  # a FIFO would block SQLite's first read for ever, a device is no store
+            raise StoreError(field, self.path, "an SQLite results file (a regular file) or a new path", kind)
         if readonly:
             self.db, self.note = connect_readonly(self.path, field)
             with self._guard():
