@@ -305,3 +305,26 @@ def test_a_store_that_is_not_a_regular_file_is_refused_at_once(tmp_path: Path, m
     for readonly in (False, True):
         (err,) = _open_error(path, readonly)
         assert "regular file" in str(err) and str(path) in str(err)
+
+
+def test_report_on_a_read_only_file_system(small_disk: Path, tmp_path: Path, capsys) -> None:
+    """A real read-only mount (root bypasses file modes): a closed store is reported; a store a killed
+    run left with rows in its write-ahead log and no shared-memory index is reported without them, and
+    says so."""
+    import shutil
+
+    _store(small_disk / "closed.sqlite")
+    live = tmp_path / "live.sqlite"
+    store = ResultStore(_store(live, 2))
+    store.put({"task_id": "late", "variant": "qp/arch", "status": "solved"})
+    for suffix in ("", "-wal"):  # the files a SIGKILL leaves, without SQLite's shared-memory index
+        shutil.copy(f"{live}{suffix}", small_disk / f"killed.sqlite{suffix}")
+    store.close()
+    assert subprocess.run(["mount", "-o", "remount,ro", str(small_disk)]).returncode == 0
+    before = _digests(small_disk)
+    assert main(["batch", "report", str(small_disk / "closed.sqlite")]) == 0
+    assert "6 results in" in capsys.readouterr().out
+    assert main(["batch", "report", str(small_disk / "killed.sqlite")]) == 0
+    out = capsys.readouterr().out
+    assert "killed.sqlite-wal holds rows" in out and "2 results in" in out
+    assert _digests(small_disk) == before
