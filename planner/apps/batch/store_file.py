@@ -23,6 +23,7 @@ writes to the file), and a run must not write into anything it did not create.
 from __future__ import annotations
 
 import sqlite3
+import stat
 from collections.abc import Mapping
 from pathlib import Path
 from urllib.parse import quote
@@ -73,6 +74,15 @@ def _uri(path: Path, immutable: bool) -> str:
     return f"file:{quote(str(path.absolute()))}?mode=ro" + ("&immutable=1" if immutable else "")
 
 
+def _size(path: Path) -> int:
+    """The size of the regular file ``path`` [bytes], 0 when there is none."""
+    try:
+        st = path.stat()
+    except OSError:
+        return 0
+    return st.st_size if stat.S_ISREG(st.st_mode) else 0
+
+
 def connect_readonly(path: Path, field: str) -> tuple[sqlite3.Connection, str]:
     """A connection that cannot change ``path`` (module docstring) and a note for the reader ("" or
     why rows may be missing).
@@ -80,11 +90,8 @@ def connect_readonly(path: Path, field: str) -> tuple[sqlite3.Connection, str]:
     Raises:
         StoreError: not an SQLite file, or one that cannot be opened.
     """
-    wal = path.with_name(path.name + "-wal")
-    try:
-        has_log = wal.is_file() and wal.stat().st_size > 0
-    except OSError:
-        has_log = False
+    logs = [p for p in (path.with_name(path.name + "-wal"), path.with_name(path.name + "-journal")) if _size(p) > 0]
+    has_log = bool(logs)
     note = ""
     try:
         db = sqlite3.connect(_uri(path, immutable=not has_log), uri=True, timeout=30.0)
@@ -96,7 +103,7 @@ def connect_readonly(path: Path, field: str) -> tuple[sqlite3.Connection, str]:
             db.close()
             db = sqlite3.connect(_uri(path, immutable=True), uri=True)
             tables(db)
-            note = (f"{wal.name} holds rows a run left in the write-ahead log that cannot be read here (the folder is "
+            note = (f"{logs[0].name} holds rows a run left in its journal that cannot be read here (the folder is "
                     "read-only): they are not shown (`batch run ... --resume` folds them into the file)")
     except sqlite3.Error as exc:
         raise store_error(exc, path, field) from None
