@@ -190,3 +190,20 @@ def test_a_cache_file_reads_only_for_its_source_unchanged(tmp_path: Path) -> Non
     assert read_cache(path, "a" * 64) is None  # edited
     path.write_text(json.dumps(payload))
     assert read_cache(path, "a" * 64) is None  # an older cache file without a checksum
+
+
+@pytest.mark.parametrize("command", [["simulate", "{p}"], ["export", "{p}", "--format", "csv", "-o", "{out}"]])
+def test_a_fifo_plan_file_exits_2_at_once(tmp_path: Path, capsys, command: list[str]) -> None:
+    os.mkfifo(tmp_path / "plan.json")
+    argv = [a.format(p=tmp_path / "plan.json", out=tmp_path / "traj.csv") for a in command]
+    code = _within(20, lambda: main(argv))
+    assert code == 2 and "FIFO" in capsys.readouterr().err
+
+
+def test_a_fifo_trajectory_is_refused_at_once(tmp_path: Path) -> None:
+    from tooltransfer.errors import InputError
+    from tooltransfer.planner.execution.export import read_trajectory
+
+    os.mkfifo(tmp_path / "traj.csv")
+    err = _within(10, lambda: read_trajectory(tmp_path / "traj.csv"))
+    assert isinstance(err, InputError) and "FIFO" in str(err)
