@@ -148,6 +148,11 @@ def _report_cases(tmp: Path) -> Iterator[tuple[str, Path, int, str]]:
     yield "a file without a results table", no_results, 2, "the tables other and no results table"
     foreign = _foreign(tmp / "foreign.sqlite", HOSTILE["a foreign table"])
     yield "a store with a foreign table", foreign, 0, "6 results in"
+    other = tmp / "other.sqlite"
+    with closing(sqlite3.connect(other)) as c, c:
+        c.execute("CREATE TABLE results (x TEXT)")
+        c.execute("INSERT INTO results VALUES ('secret')")
+    yield "another program's results table", other, 2, "a results table without the column task_id"
     text = tmp / "text.sqlite"
     text.write_text("not a database\n" * 100)
     yield "a text file", text, 2, "a file that is not an SQLite database"

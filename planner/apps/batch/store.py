@@ -32,6 +32,7 @@ from tooltransfer.planner.apps.batch.store_file import (
     StoreError,
     check_rows,
     check_schema,
+    columns,
     connect_readonly,
     store_error,
     tables,
@@ -111,6 +112,13 @@ class ResultStore:
                 self.db.close()
                 raise StoreError(field, self.path, "a results file written by `tooltransfer batch run`",
                                  f"an SQLite file with the tables {', '.join(sorted(found))} and no results table")
+            with self._guard():
+                have = {c[0] for c in columns(self.db, "results")} if found else set()
+            missing = [c for c in ("task_id", "variant", "status") if found and c not in have]
+            if missing:
+                self.db.close()
+                raise StoreError(field, self.path, "a results file written by `tooltransfer batch run`",
+                                 f"a results table without the column {missing[0]}")
             #: opened read-only, the file holds no tables at all (nothing to report)
             self.empty = not found
         else:

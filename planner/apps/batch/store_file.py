@@ -30,7 +30,7 @@ from urllib.parse import quote
 
 from tooltransfer.errors import InputError
 
-__all__ = ["StoreError", "check_rows", "check_schema", "connect_readonly", "store_error", "tables"]
+__all__ = ["StoreError", "check_rows", "check_schema", "columns", "connect_readonly", "store_error", "tables"]
 
 #: Storage classes (``typeof``) allowed per declared SQL type.
 _CLASSES = {"TEXT": ("text", "null"), "REAL": ("real", "integer", "null"), "INTEGER": ("integer", "null")}
@@ -116,7 +116,7 @@ def tables(db: sqlite3.Connection) -> dict[str, str]:
             if not name.startswith("sqlite_")}
 
 
-def _columns(db: sqlite3.Connection, table: str) -> list[tuple[str, str, bool, bool]]:
+def columns(db: sqlite3.Connection, table: str) -> list[tuple[str, str, bool, bool]]:
     """``(name, declared type, NOT NULL, in the primary key)`` of ``table``'s columns, in order."""
     return [(name, str(kind).upper(), bool(notnull), bool(pk))
             for _, name, kind, notnull, _, pk in db.execute(f"PRAGMA table_info({table})")]
@@ -153,7 +153,7 @@ def check_schema(db: sqlite3.Connection, path: Path, field: str,
         want = [(name, *_declared(spec)) for name, spec in cols.items()]
         key = keys.get(table, ())
         want = [(n, t, nn, pk or n in key) for n, t, nn, pk in want]
-        got = _columns(db, table)
+        got = columns(db, table)
         if got != want:
             diff = next(((w, g) for w, g in zip(want, got, strict=False) if w != g), None)
             what = (f"column {diff[1][0]!r} ({diff[1][1]}) where {diff[0][0]!r} ({diff[0][1]}) belongs" if diff
@@ -161,18 +161,18 @@ def check_schema(db: sqlite3.Connection, path: Path, field: str,
             raise refuse(f"a {table!r} table of other columns: {what}")
 
 
-def check_rows(db: sqlite3.Connection, path: Path, field: str, table: str, columns: Mapping[str, str],
+def check_rows(db: sqlite3.Connection, path: Path, field: str, table: str, declared: Mapping[str, str],
                allowed: Mapping[str, tuple[str, ...]] | None = None) -> None:
-    """Refuse a ``table`` holding a value whose storage class its column's declared type does not
+    """Refuse a ``table`` holding a value whose storage class its column's type in ``declared`` does not
     allow (text where a number belongs, a number for a name), or, for the columns in ``allowed``, a
     value outside their set. One pass over the table.
 
     Raises:
         StoreError: naming the file, the row's key and the column (not the value: the file is data).
     """
-    present = {name for name, *_ in _columns(db, table)}
+    present = {name for name, *_ in columns(db, table)}
     cases = []
-    for name, spec in columns.items():
+    for name, spec in declared.items():
         if name not in present:
             continue
         classes = _CLASSES.get(_declared(spec)[0])
@@ -194,7 +194,7 @@ def check_rows(db: sqlite3.Connection, path: Path, field: str, table: str, colum
         return
     *ids, bad = row
     column, _, kind = bad.partition(":")
-    spec = _declared(columns[column])[0]
+    spec = _declared(declared[column])[0]
     want = ("a number" if spec in ("REAL", "INTEGER") else "text") if kind != "value" else \
         f"one of {', '.join((allowed or {})[column])}"
     where = ", ".join(f"{n} {str(v)[:60]!r}" for n, v in zip(key.split(", "), ids, strict=True))
