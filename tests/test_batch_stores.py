@@ -313,9 +313,9 @@ def test_a_store_that_is_not_a_regular_file_is_refused_at_once(tmp_path: Path, m
 
 
 def test_report_on_a_read_only_file_system(small_disk: Path, tmp_path: Path, capsys) -> None:
-    """A real read-only mount (root bypasses file modes): a closed store is reported; a store a killed
-    run left with rows in its write-ahead log and no shared-memory index is reported without them, and
-    says so."""
+    """A real read-only mount (root bypasses file modes): a closed store is reported, and so is a store
+    a killed run left with rows in its write-ahead log and no shared-memory index (read in a private
+    copy: SQLite cannot make the index there)."""
     import shutil
 
     _store(small_disk / "closed.sqlite")
@@ -331,5 +331,45 @@ def test_report_on_a_read_only_file_system(small_disk: Path, tmp_path: Path, cap
     assert "6 results in" in capsys.readouterr().out
     assert main(["batch", "report", str(small_disk / "killed.sqlite")]) == 0
     out = capsys.readouterr().out
-    assert "killed.sqlite-wal holds rows a run left in its journal" in out and "2 results in" in out
+    assert "3 results in" in out and "note:" not in out
     assert _digests(small_disk) == before
+
+
+def test_report_of_a_killed_runs_store_changes_no_file(tmp_path: Path, capsys) -> None:
+    """The files a SIGKILL leaves (the store, its write-ahead log with the last rows, SQLite's
+    shared-memory index): the report shows every row, and no file beside the store changes."""
+    import shutil
+
+    live = tmp_path / "live" / "s.sqlite"
+    live.parent.mkdir()
+    store = ResultStore(_store(live, 2))
+    store.put({"task_id": "late", "variant": "qp/arch", "status": "solved"})
+    killed = tmp_path / "killed"
+    killed.mkdir()
+    for suffix in ("", "-wal", "-shm"):
+        shutil.copy(f"{live}{suffix}", killed / f"s.sqlite{suffix}")
+    store.close()
+    before = _digests(killed)
+    assert main(["batch", "report", str(killed / "s.sqlite")]) == 0
+    assert "3 results in" in capsys.readouterr().out
+    assert _digests(killed) == before
+
+
+def test_report_beside_a_live_run_reads_its_latest_rows(tmp_path: Path, capsys) -> None:
+    """A store a live run is writing (it holds the store's lock): read through SQLite's reader protocol,
+    its latest rows included, the store and its log unchanged."""
+    from tooltransfer.planner.apps.batch.store import lock_store
+
+    db = _store(tmp_path / "s.sqlite", 2)
+    with lock_store(db), ResultStore(db) as store:
+        store.put({"task_id": "late", "variant": "qp/arch", "status": "solved"})
+        wal = db.with_name(db.name + "-wal")
+        before = {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (db, wal)}
+        assert main(["batch", "report", str(db)]) == 0
+        assert "3 results in" in capsys.readouterr().out
+        assert {p: hashlib.sha256(p.read_bytes()).hexdigest() for p in (db, wal)} == before
+        from tooltransfer.planner.apps.batch.store_file import connect_readonly
+
+        reader, note, copy = connect_readonly(db, "db")
+        reader.close()
+        assert copy is None and note == ""  # read in place, beside the writer, not from a copy

@@ -22,6 +22,7 @@ import json
 import os
 import socket
 import sqlite3
+import tempfile
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -98,6 +99,7 @@ class ResultStore:
         self.field = field
         #: rows that could not be read (a note for the reader), or ""
         self.note = ""
+        self._copy: tempfile.TemporaryDirectory | None = None  # a private copy read instead (readonly)
         try:
             kind = file_kind(os.stat(self.path).st_mode)
         except OSError:
@@ -105,18 +107,18 @@ class ResultStore:
         if kind:  # a FIFO would block SQLite's first read for ever, a device is no store
             raise StoreError(field, self.path, "an SQLite results file (a regular file) or a new path", kind)
         if readonly:
-            self.db, self.note = connect_readonly(self.path, field)
+            self.db, self.note, self._copy = connect_readonly(self.path, field)
             with self._guard():
                 found = tables(self.db)
             if found and found.get("results") not in ("table", "view"):
-                self.db.close()
+                self.close()
                 raise StoreError(field, self.path, "a results file written by `tooltransfer batch run`",
                                  f"an SQLite file with the tables {', '.join(sorted(found))} and no results table")
             with self._guard():
                 have = {c[0] for c in columns(self.db, "results")} if found else set()
             missing = [c for c in ("task_id", "variant", "status") if found and c not in have]
             if missing:
-                self.db.close()
+                self.close()
                 raise StoreError(field, self.path, "a results file written by `tooltransfer batch run`",
                                  f"a results table without the column {missing[0]}")
             #: opened read-only, the file holds no tables at all (nothing to report)
@@ -130,7 +132,7 @@ class ResultStore:
             self.set_meta(schema=SCHEMA_VERSION)
             version = SCHEMA_VERSION
         elif version is not None and version not in READABLE_SCHEMAS:
-            self.db.close()
+            self.close()
             raise InputError(field, f"a results file of schema {' or '.join(READABLE_SCHEMAS)}", f"schema {version}")
         #: the file's schema (see the module docstring)
         self.schema = version or SCHEMA_VERSION
@@ -159,7 +161,7 @@ class ResultStore:
                 with self._guard():
                     check_schema(self.db, self.path, self.field, schema, {"results": ("task_id", "variant")})
             except StoreError:
-                self.db.close()
+                self.close()
                 raise
         with self._guard():
             self.db.execute("PRAGMA journal_mode=WAL")
@@ -199,6 +201,9 @@ class ResultStore:
 
     def close(self) -> None:
         self.db.close()
+        if self._copy is not None:
+            self._copy.cleanup()
+            self._copy = None
 
     def __enter__(self) -> ResultStore:
         return self

@@ -8,11 +8,13 @@ insert). A report must not change it (a connection that creates the tables or sw
 writes to the file), and a run must not write into anything it did not create.
 
 - :func:`connect_readonly`: ``file:PATH?mode=ro`` (SQLite refuses any write), and ``immutable=1``
-  where there is no write-ahead log to fold in (nothing is locked, and no ``-wal``/``-shm`` file is
-  created beside it: a read-only file or folder reads as well). A store a killed run left with rows
-  in its ``-wal`` is read through SQLite's reader protocol (the file and the log stay byte-identical;
-  SQLite's shared-memory index ``-shm`` is its own scratch); where that cannot be opened (a read-only
-  folder without the index), the file is read without the log and the caller is told.
+  where there is no journal to fold in (nothing is locked, and no ``-wal``/``-shm`` file is created
+  beside it: a read-only file or folder reads as well). A store a killed run left with rows in its
+  ``-wal`` (or a hot ``-journal``) is copied with it into a temporary folder and read there, so no
+  file beside it changes; a store a live ``batch run`` is writing (it holds the store's lock) is read
+  through SQLite's reader protocol, beside that run (whose shared-memory index ``-shm`` changes as
+  it writes). Where neither works (no room for a copy, and a read-only folder without the index), the
+  file is read without its journal and the caller is told.
 - :func:`check_schema`: the tables, their columns (name, declared type, NOT NULL, primary key), no
   trigger, no view and no index this program does not make; :func:`check_rows`: every value of
   the right storage class (numbers where numbers belong).
@@ -22,8 +24,11 @@ writes to the file), and a run must not write into anything it did not create.
 
 from __future__ import annotations
 
+import os
+import shutil
 import sqlite3
 import stat
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 from urllib.parse import quote
@@ -83,22 +88,60 @@ def _size(path: Path) -> int:
     return st.st_size if stat.S_ISREG(st.st_mode) else 0
 
 
-def connect_readonly(path: Path, field: str) -> tuple[sqlite3.Connection, str]:
-    """A connection that cannot change ``path`` (module docstring) and a note for the reader ("" or
-    why rows may be missing).
+def _writer_alive(path: Path) -> bool:
+    """Whether a ``batch run`` holds the store's lock (:func:`~tooltransfer.planner.apps.batch.store.lock_store`):
+    asked without waiting, the lock file opened for reading only."""
+    try:
+        import fcntl
+
+        fd = os.open(path.with_name(path.name + ".lock"), os.O_RDONLY | os.O_NONBLOCK)
+    except (ImportError, OSError):
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except OSError:
+        return True
+    finally:
+        os.close(fd)  # releases a lock taken
+    return False
+
+
+def _private_copy(path: Path, logs: list[Path]) -> tempfile.TemporaryDirectory:
+    """A temporary folder holding copies of ``path`` and its journals ``logs`` (SQLite folds them in there)."""
+    folder = tempfile.TemporaryDirectory(prefix="tooltransfer-report-")
+    copy = Path(folder.name) / path.name
+    try:
+        shutil.copyfile(path, copy)
+        for log in logs:
+            shutil.copyfile(log, copy.with_name(copy.name + log.name[len(path.name):]))
+    except BaseException:
+        folder.cleanup()
+        raise
+    return folder
+
+
+def connect_readonly(path: Path, field: str) -> tuple[sqlite3.Connection, str, tempfile.TemporaryDirectory | None]:
+    """A connection that cannot change ``path`` (module docstring), a note for the reader ("" or why
+    rows may be missing), and the temporary folder of a private copy it reads, if any (remove it
+    with ``cleanup()`` after closing the connection).
 
     Raises:
         StoreError: not an SQLite file, or one that cannot be opened.
     """
     logs = [p for p in (path.with_name(path.name + "-wal"), path.with_name(path.name + "-journal")) if _size(p) > 0]
-    has_log = bool(logs)
-    note = ""
+    note, copy = "", None
     try:
-        db = sqlite3.connect(_uri(path, immutable=not has_log), uri=True, timeout=30.0)
+        if logs and not _writer_alive(path):  # a killed run's journal: folded in a private copy
+            try:
+                copy = _private_copy(path, logs)
+            except OSError:
+                copy = None  # no room for a copy: read through the journal in place
+        target = Path(copy.name) / path.name if copy is not None else path
+        db = sqlite3.connect(_uri(target, immutable=not logs), uri=True, timeout=30.0)
         try:
             tables(db)
         except sqlite3.OperationalError:
-            if not has_log:
+            if not logs or copy is not None:
                 raise
             db.close()
             db = sqlite3.connect(_uri(path, immutable=True), uri=True)
@@ -106,8 +149,10 @@ def connect_readonly(path: Path, field: str) -> tuple[sqlite3.Connection, str]:
             note = (f"{logs[0].name} holds rows a run left in its journal that cannot be read here (the folder is "
                     "read-only): they are not shown (`batch run ... --resume` folds them into the file)")
     except sqlite3.Error as exc:
+        if copy is not None:
+            copy.cleanup()
         raise store_error(exc, path, field) from None
-    return db, note
+    return db, note, copy
 
 
 def tables(db: sqlite3.Connection) -> dict[str, str]:
