@@ -175,3 +175,33 @@ def test_the_exit_code_says_whether_error_rows_were_stored(counts: dict, interru
 def test_simulate_closed_loop_exits_non_zero_unless_reached(status: str | None, closed_loop: bool, code: int) -> None:
     summary = {} if status is None else {"closed_loop_status": status}
     assert simulate_exit_code(summary, closed_loop) == code
+
+
+@pytest.mark.parametrize("delay", [0.1, 0.5])
+def test_a_ctrl_c_while_the_pool_workers_boot_leaves_no_traceback(tmp_path: Path, delay: float) -> None:
+    """A Ctrl-C (to the whole process group) while the spawned pool workers are still importing: they
+    were killed by it mid-import, each printing a KeyboardInterrupt traceback; they are started with
+    SIGINT held now, and the run stops cleanly."""
+    script = textwrap.dedent(f"""
+        from tooltransfer.planner.apps.batch.executors import open_executor
+        from tooltransfer.planner.apps.batch.runner import run_jobs
+        from tooltransfer.planner.apps.batch.store import ResultStore
+        from tooltransfer.planner.apps.batch.worker import Job
+
+        jobs = [Job(f"s{{i}}", "v", entry="builtins:dict", args=({{"status": "solved"}},), timeout=10)
+                for i in range(50)]
+        with ResultStore({str(tmp_path / 's.sqlite')!r}) as store, open_executor(workers=2) as slots:
+            print("start", flush=True)
+            s = run_jobs(jobs, store, slots, progress=False)
+        print("interrupted", s.interrupted, flush=True)
+    """)
+    proc = _spawn(["-c", script])
+    assert proc.stdout is not None
+    for line in proc.stdout:
+        if "start" in line:
+            break
+    time.sleep(delay)
+    took = _interrupt(proc)
+    out, err = proc.communicate()
+    assert "interrupted True" in out and "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert took < 10 + STOP_GRACE + 3.0

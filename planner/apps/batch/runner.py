@@ -30,6 +30,7 @@ from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, CancelledError, Future, wait
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -158,7 +159,8 @@ class _Dispatch:
                 break
             job = self.queue.pop()
             try:
-                self.inflight[self.slots.executor.submit(run_job, job)] = (job, self.slots.executor)
+                with _sigint_held():  # a pool worker started here ignores Ctrl-C from its first instruction
+                    self.inflight[self.slots.executor.submit(run_job, job)] = (job, self.slots.executor)
             except BrokenProcessPool:
                 self.queue.append(job)
                 self.slots.renew()
@@ -197,6 +199,21 @@ class _Dispatch:
             if self.stop.is_set():
                 return None, False  # not stored: run again on resume
             return {"status": "error", "reason": f"{type(exc).__name__}: {exc}", "finished_at": time.time()}, False
+
+
+@contextmanager
+def _sigint_held() -> Iterator[None]:
+    """Hold SIGINT (blocked, delivered when the block ends) around a submit that may start pool workers:
+    a process started meanwhile inherits the block, so a Ctrl-C while it boots (before its initializer
+    ignores SIGINT) cannot kill it with a traceback; the runner's own Ctrl-C is only delayed."""
+    held = hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread()
+    if held:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        if held:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def _extra_fields(info: dict[tuple[str, str], dict] | Callable[[Job], dict] | None) -> Callable[[Job], dict]:
