@@ -15,6 +15,7 @@ A versioned document is a JSON object whose ``"format"`` field names its format 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +38,8 @@ def check_format(doc: Any, name: str, version: int, source: str = "<dict>") -> d
         raise SkillFileError(source, f"not a tooltransfer skill file: expected format {tag!r}, got {got}")
     fmt = str(doc["format"])
     got_name, _, got_version = fmt.partition("/")
+    if not re.fullmatch(r"[A-Za-z0-9_.-]{1,60}/[0-9]{1,6}", fmt):  # not a format tag: the file's text is not echoed
+        raise SkillFileError(source, f"expected format {tag!r}, got a 'format' field that is no format tag")
     if got_name != name:
         raise SkillFileError(source, f"expected format {tag!r}, got {fmt!r}")
     if got_version != str(version):

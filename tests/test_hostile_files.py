@@ -207,3 +207,13 @@ def test_a_fifo_trajectory_is_refused_at_once(tmp_path: Path) -> None:
     os.mkfifo(tmp_path / "traj.csv")
     err = _within(10, lambda: read_trajectory(tmp_path / "traj.csv"))
     assert isinstance(err, InputError) and "FIFO" in str(err)
+
+
+def test_a_skills_file_that_is_another_json_is_not_echoed(tmp_path: Path) -> None:
+    from tooltransfer.errors import SkillFileError
+    from tooltransfer.planner.learning.skills import load_skills_file
+
+    (tmp_path / "token.json").write_text(json.dumps({"format": SECRET, "token": SECRET}))
+    with pytest.raises(SkillFileError) as err:
+        load_skills_file(tmp_path / "token.json")
+    assert SECRET not in str(err.value) and "token.json" in str(err.value)
