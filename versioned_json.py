@@ -15,6 +15,7 @@ A versioned document is a JSON object whose ``"format"`` field names its format 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +38,8 @@ def check_format(doc: Any, name: str, version: int, source: str = "<dict>") -> d
         raise SkillFileError(source, f"not a tooltransfer skill file: expected format {tag!r}, got {got}")
     fmt = str(doc["format"])
     got_name, _, got_version = fmt.partition("/")
+    if not re.fullmatch(r"[A-Za-z0-9_.-]{1,60}/[0-9]{1,6}", fmt):  # not a format tag: the file's text is not echoed
+        raise SkillFileError(source, f"expected format {tag!r}, got a 'format' field that is no format tag")
     if got_name != name:
         raise SkillFileError(source, f"expected format {tag!r}, got {fmt!r}")
     if got_version != str(version):
@@ -46,15 +49,30 @@ def check_format(doc: Any, name: str, version: int, source: str = "<dict>") -> d
     return doc
 
 
+#: Largest skill or cache file read [bytes] (a skills file is about 200 kB).
+MAX_JSON_BYTES = 64 * 2**20
+
+
 def read_json(path: str | Path) -> Any:
-    """Parsed JSON of a file; a missing file or invalid JSON raises :class:`SkillFileError`."""
+    """Parsed JSON of a file (a regular file of at most :data:`MAX_JSON_BYTES`, read without blocking:
+    :func:`tooltransfer.regular_file.read_regular`); a missing, special, oversized or unreadable file,
+    or invalid JSON, raises :class:`SkillFileError` naming the file (quoting none of it)."""
+    from tooltransfer.regular_file import read_regular
+
     p = Path(path)
+
+    def refuse(source: str, where: str, expected: str, got: object) -> SkillFileError:
+        if got == "No such file or directory":
+            return SkillFileError(source, "file not found")
+        return SkillFileError(source, f"expected {expected}, got {got}")
+
+    data = read_regular(p, refuse, "JSON file", MAX_JSON_BYTES)
     try:
-        return json.loads(p.read_text())
-    except FileNotFoundError as exc:
-        raise SkillFileError(str(p), "file not found") from exc
+        return json.loads(data.decode("utf-8"))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise SkillFileError(str(p), f"not valid JSON ({exc})") from exc
+        why = f"line {exc.lineno}, column {exc.colno}: {exc.msg}" if isinstance(exc, json.JSONDecodeError) else \
+            f"a byte that is not UTF-8 at offset {exc.start}"
+        raise SkillFileError(str(p), f"not valid JSON ({why})") from None
 
 
 def read_versioned(path: str | Path, name: str, version: int) -> dict[str, Any]:

@@ -2,6 +2,8 @@
 ``truth.yaml``, batch files), with errors that name the file and, where it applies, the line and
 column; hostile input is refused the same way, never with a traceback:
 
+* the file: a regular file (a FIFO, a device or a folder is refused by its kind, and nothing blocks:
+  :mod:`tooltransfer.regular_file`);
 * the bytes: at most :data:`MAX_BYTES`, UTF-8 text (a UTF-8 byte-order mark is skipped; UTF-16 or
   UTF-32, Latin-1 and binary files are named as such);
 * the structure: at most :data:`MAX_DEPTH` nested collections (``[[[[...`` would exhaust Python's
@@ -161,17 +163,15 @@ def _decode(data: bytes) -> tuple[str | None, str]:
                       "file? save it as UTF-8)")
 
 
-def read_text(path: str | Path, error: Error, what: str, max_bytes: int = MAX_BYTES) -> str:
-    """The UTF-8 text of ``path`` (at most ``max_bytes``); anything else raises ``error(path, "<file>",
-    expected, got)`` naming the file and what it holds instead."""
+def read_text(path: str | Path, error: Error, what: str, max_bytes: int = MAX_BYTES, *,
+              inside: str | Path | None = None) -> str:
+    """The UTF-8 text of ``path`` (at most ``max_bytes``; a regular file, never blocking, inside the
+    folder ``inside`` when given: :func:`tooltransfer.regular_file.read_regular`); anything else raises
+    ``error(path, "<file>", expected, got)`` naming the file and what it holds instead."""
+    from tooltransfer.regular_file import read_regular
+
     p = Path(path)
-    try:
-        with p.open("rb") as fh:
-            data = fh.read(max_bytes + 1)
-    except OSError as exc:
-        raise error(str(p), "<file>", f"a readable {what}", exc.strerror or str(exc)) from None
-    if len(data) > max_bytes:
-        raise error(str(p), "<file>", f"a {what} of at most {max_bytes / 2**20:g} MB", "a larger file")
+    data = read_regular(p, error, what, max_bytes, inside=inside)
     text, why = _decode(data)
     if text is None:
         raise error(str(p), "<file>", f"a {what} in UTF-8 text", why)
@@ -218,12 +218,13 @@ def parse_yaml(text: str, source: str, error: Error) -> Any:
         loader.dispose()
 
 
-def read_yaml(path: str | Path, error: Error, what: str, max_bytes: int = MAX_BYTES) -> Any:
-    """The parsed contents of ``path`` (module docstring); an unreadable, oversized or non-UTF-8
-    file, invalid YAML or refused YAML raises ``error(path, where, expected, got)`` (``where`` is
-    ``<file>`` or ``line L, column C``); ``what`` names the file kind in the message (e.g.
-    ``"task file"``)."""
-    return parse_yaml(read_text(path, error, what, max_bytes), str(path), error)
+def read_yaml(path: str | Path, error: Error, what: str, max_bytes: int = MAX_BYTES, *,
+              inside: str | Path | None = None) -> Any:
+    """The parsed contents of ``path`` (module docstring); an unreadable, oversized, non-regular or
+    non-UTF-8 file, one outside the folder ``inside`` (when given), invalid YAML or refused YAML raises
+    ``error(path, where, expected, got)`` (``where`` is ``<file>`` or ``line L, column C``); ``what``
+    names the file kind in the message (e.g. ``"task file"``)."""
+    return parse_yaml(read_text(path, error, what, max_bytes, inside=inside), str(path), error)
 
 
 __all__ = ["ECHO_CHARS", "MAX_ALIAS_EXPANSION", "MAX_BYTES", "MAX_DEPTH", "clip", "parse_yaml", "read_text",

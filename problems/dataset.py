@@ -16,7 +16,8 @@ Format ``tooltransfer.dataset/1`` (documented in the README so users can bring r
 * optional ``truth.yaml``: for generated data, the operator's ground truth (pushes, switches).
 
 :func:`load_dataset` checks everything and names the file, and the row and column, of any problem
-(rows count from 1 at the header, as a spreadsheet shows them).
+(rows count from 1 at the header, as a spreadsheet shows them). Every file is read as data, inside the
+folder, links resolved (:mod:`tooltransfer.regular_file`): no message quotes a file from outside it.
 """
 
 from __future__ import annotations
@@ -227,18 +228,12 @@ def write_dataset(folder: str | Path, meta: Meta, demos: list[Demonstration], tr
     return root
 
 
-def _open_csv(path: Path) -> io.StringIO:
-    """The text of a CSV file, bounded in size (:data:`MAX_CSV_BYTES`) and UTF-8 (a byte-order mark is
-    dropped)."""
-    where = str(path)
-    try:
-        size = path.stat().st_size
-        if size > MAX_CSV_BYTES:
-            raise DatasetError(where, "<file>", f"a CSV file of at most {MAX_CSV_BYTES // 2**20} MB",
-                               f"{size / 2**20:.0f} MB (split long recordings into several demonstrations)")
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise DatasetError(where, "<file>", "a readable CSV file", exc.strerror) from None
+def _open_csv(path: Path, root: Path | None = None) -> io.StringIO:
+    """The UTF-8 text of a CSV file (a byte-order mark dropped): a regular file inside the dataset folder
+    ``root``, of at most :data:`MAX_CSV_BYTES` (:func:`tooltransfer.regular_file.read_regular`)."""
+    from tooltransfer.regular_file import read_regular
+
+    raw, where = read_regular(path, DatasetError, "CSV file", MAX_CSV_BYTES, inside=root), str(path)
     try:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -252,11 +247,11 @@ def _open_csv(path: Path) -> io.StringIO:
     return io.StringIO(text, newline="")
 
 
-def _read_csv(path: Path) -> tuple[Demonstration, NDArray[np.int64], NDArray[np.int64]]:
-    """One demonstration CSV, streamed row by row into compact arrays (at most :data:`MAX_ROWS` rows),
-    and the CSV row of each object and tool sample."""
+def _read_csv(path: Path, root: Path | None = None) -> tuple[Demonstration, NDArray[np.int64], NDArray[np.int64]]:
+    """One demonstration CSV (inside the dataset folder ``root``), streamed row by row into compact
+    arrays (at most :data:`MAX_ROWS` rows), and the CSV row of each object and tool sample."""
     where = str(path)
-    fh = _open_csv(path)
+    fh = _open_csv(path, root)
     reader = csv.reader(fh)
     try:
         header = next(reader, None)
@@ -341,7 +336,7 @@ def load_meta(folder: str | Path) -> Meta:
     from tooltransfer.yaml_file import read_yaml
 
     meta_path = Path(folder) / "meta.yaml"
-    raw = read_yaml(meta_path, DatasetError, "meta.yaml")
+    raw = read_yaml(meta_path, DatasetError, "meta.yaml", inside=folder)
     try:
         return Meta.model_validate(raw)
     except ValidationError as exc:
@@ -371,16 +366,20 @@ def load_dataset(folder: str | Path) -> Dataset:
     root = Path(folder)
     meta = load_meta(root)
     meta_path = str(root / "meta.yaml")
+    from tooltransfer.regular_file import is_inside
     from tooltransfer.tools.errors import ToolSpecError
     from tooltransfer.tools.library import library_names, read_tool_file
 
     if meta.tool not in library_names():
         tool_path = root / meta.tool
+        if not is_inside(tool_path, root):
+            raise DatasetError(meta_path, "field tool", "a library tool, or a tool YAML path inside the dataset",
+                               "a path that leads outside it (a link, or ..)")
         if not tool_path.is_file():
             raise DatasetError(meta_path, "field tool", f"a library tool ({', '.join(library_names())}) "
                                "or a tool YAML path relative to the dataset", repr(meta.tool[:80]))
         try:
-            read_tool_file(tool_path)
+            read_tool_file(tool_path)  # a regular file of bounded size (tooltransfer.yaml_file.read_text)
         except ToolSpecError as exc:
             raise DatasetError(str(tool_path), "<file>", "a valid tool file", str(exc)) from None
     ds = Dataset(root, meta, ())
@@ -391,7 +390,7 @@ def load_dataset(folder: str | Path) -> Dataset:
                            f"{meta.tool!r}, whose a_t is {tool.a_t:g} m")
     demos = []
     for name in meta.demonstrations:
-        demo, rows_o, rows_t = _read_csv(root / name)
+        demo, rows_o, rows_t = _read_csv(root / name, root)
         origin = Origin(str(root / name), meta_path, meta.tool, meta.platform, float(meta.object_radius), rows_o,
                         rows_t)
         demo = Demonstration(demo.name, demo.t_object, demo.object_xy, demo.t_tool, demo.tool_pose, demo.joints,
@@ -472,11 +471,11 @@ class _DemoTruth(BaseModel):
 def _read_truth(path: Path, meta: Meta) -> dict[str, Any] | None:
     """``truth.yaml`` (optional): a mapping whose demonstration entries (CSV stems) are mappings with
     ``pushes`` (face, t_start, t_end) and ``switches`` lists; errors name the file and the field."""
-    if not path.is_file():
+    if not path.exists() and not path.is_symlink():  # a FIFO or a link is read (and refused) below
         return None
     from tooltransfer.yaml_file import read_yaml
 
-    truth = read_yaml(path, DatasetError, "truth.yaml")
+    truth = read_yaml(path, DatasetError, "truth.yaml", inside=path.parent)
     if truth is None:
         return None
     if not isinstance(truth, dict):

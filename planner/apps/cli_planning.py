@@ -9,7 +9,13 @@ import argparse
 from pathlib import Path
 
 from tooltransfer.planner.apps.cli_output import file_stem, print_summary, spinner, written
-from tooltransfer.planner.common.command_line import EXIT_INFEASIBLE, EXIT_OK, VERDICT_EXIT, check_output
+from tooltransfer.planner.common.command_line import (
+    EXIT_INFEASIBLE,
+    EXIT_NOT_REACHED,
+    EXIT_OK,
+    VERDICT_EXIT,
+    check_output,
+)
 
 
 def execute_plan(plan: object, *, closed_loop: bool, quiet: bool) -> tuple[dict[str, object], dict[str, object]]:
@@ -156,6 +162,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         print(json.dumps(summary, default=float))
     else:
         print_summary(summary, f"simulation of {args.plan}")
+    return simulate_exit_code(summary, args.closed_loop)
+
+
+def simulate_exit_code(summary: dict[str, object], closed_loop: bool) -> int:
+    """``simulate``'s exit code for its ``summary``: :data:`EXIT_NOT_REACHED` when the closed loop was
+    run and its status is not ``reached`` (the closed-loop report's own status: failed, closest,
+    rounds, or a fault), else 0."""
+    if closed_loop and summary.get("closed_loop_status") != "reached":
+        return EXIT_NOT_REACHED
     return EXIT_OK
 
 

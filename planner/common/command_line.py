@@ -14,6 +14,9 @@ EXIT_OK, EXIT_INFEASIBLE, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 EXIT_UNKNOWN = 3
 """``solve``: no plan and no certificate (the verdict ``unknown``; ``EXIT_INFEASIBLE`` is a certified
 ``infeasible``, ``EXIT_OK`` a ``solved`` plan)."""
+EXIT_NOT_REACHED = 4
+"""``simulate --closed-loop``: the closed loop ended without reaching the target (its status is not
+``reached``: the summary says which and why)."""
 VERDICT_EXIT = {"solved": EXIT_OK, "infeasible": EXIT_INFEASIBLE, "unknown": EXIT_UNKNOWN}
 """The exit code of each verdict (:attr:`tooltransfer.planner.planning.plan.Plan.verdict`)."""
 EXIT_BROKEN_PIPE = 141

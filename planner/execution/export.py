@@ -133,6 +133,10 @@ def export_plan(plan: Plan, out: str | Path, fmt: str, joint_names: tuple[str, .
     return Path(out)
 
 
+#: Largest text trajectory read back [bytes] (a regular file, its size checked before it is read).
+MAX_READ_BYTES = 256 * 2**20
+
+
 def _fail(path: Path, field: str, expected: str, got: object | None = None) -> InputError:
     return InputError(f"{path}: {field}", expected, got)
 
@@ -151,6 +155,8 @@ def read_trajectory(path: str | Path, fmt: str | None = None) -> Trajectory:
     Raises:
         InputError: naming the file and the field (or the row) that is missing or malformed.
     """
+    from tooltransfer.regular_file import read_regular
+
     p = Path(path)
     fmt = fmt or _format_of(p)
     if fmt not in FORMATS:
@@ -165,7 +171,9 @@ def read_trajectory(path: str | Path, fmt: str | None = None) -> Trajectory:
                 phase = [str(x) for x in z["phase"]] if "phase" in z else []
                 return _checked(p, z["t"], z["positions"], z["velocities"], z["accelerations"],
                                 [str(n) for n in z["joint_names"]], phase)
-        text = p.read_text(encoding="utf-8")
+        text = read_regular(p, lambda _p, w, e, g: _fail(p, w, e, g), f"{fmt} file", MAX_READ_BYTES).decode("utf-8")
+    except InputError:  # the file refused by name (read_regular)
+        raise
     except OSError as exc:
         raise _fail(p, "<file>", "a readable file", exc.strerror) from None
     except (ValueError, UnicodeDecodeError) as exc:

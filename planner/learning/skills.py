@@ -2,7 +2,8 @@
 mechanics identified from the recordings.
 
 They come from a demonstration dataset (learned once, then cached by the dataset's content hash in
-memory and as skill files in :func:`cache_dir`) or from a saved skills file written by
+memory and as files in :func:`cache_dir` that carry a checksum of their content and of the dataset:
+:mod:`tooltransfer.planner.learning.cache_file`; an edited one is learned again) or from a saved skills file written by
 ``tooltransfer learn`` (format ``tooltransfer.skills/1``)::
 
     {"format": "tooltransfer.skills/1",
@@ -20,6 +21,7 @@ None.
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 from collections import Counter
 from dataclasses import dataclass
@@ -112,19 +114,38 @@ class Skills:
                    str(doc["dataset"]), str(doc["dataset_sha256"]), mechanics, ident)
 
 
+def dataset_files(folder: Path) -> list[Path]:
+    """The files a dataset's skills are learned from: ``meta.yaml``, its demonstrations, ``truth.yaml``
+    and a tool file (when ``tool`` is a path), those that exist, in that order."""
+    from tooltransfer.problems.dataset import load_meta
+    from tooltransfer.tools.library import library_names
+
+    meta = load_meta(folder)  # a regular file of bounded size inside the folder
+    names = ["meta.yaml", *meta.demonstrations, "truth.yaml"]
+    if meta.tool not in library_names():
+        names.append(meta.tool)
+    return [folder / n for n in names if (folder / n).exists()]
+
+
 def dataset_hash(folder: Path) -> str:
-    """Content hash (SHA-256 hex) of a dataset folder: every file's name and bytes. Kept in memory for
-    the process while no file's name, size, modification time or inode changes (one planning run asks
-    for it once per skill it reads)."""
+    """Content hash (SHA-256 hex) of a dataset: the name and bytes of each of its files
+    (:func:`dataset_files`), each read as data (:func:`tooltransfer.regular_file.read_regular`: a
+    regular file inside the folder, its size bounded before it is read), so a FIFO, a device, a link
+    out of the folder or a sparse giant is refused by name at once. Kept in memory for the process while
+    no file's name, size, modification time or inode changes (one planning run asks for it once per
+    skill it reads)."""
+    from tooltransfer.problems.dataset import MAX_CSV_BYTES, DatasetError
+    from tooltransfer.regular_file import read_regular
+
     folder = Path(folder)
-    files = sorted(p for p in folder.iterdir() if p.is_file())
-    signature = tuple((p.name, (st := p.stat()).st_size, st.st_mtime_ns, st.st_ino) for p in files)
+    files = dataset_files(folder)
+    signature = tuple((p.name, (st := os.stat(p)).st_size, st.st_mtime_ns, st.st_ino) for p in files)
     key = (str(folder.resolve()), signature)
     if key not in _HASHES:
         h = hashlib.sha256()
         for p in files:
-            h.update(p.name.encode())
-            h.update(p.read_bytes())
+            h.update(str(p.relative_to(folder)).encode())
+            h.update(read_regular(p, DatasetError, "dataset file", MAX_CSV_BYTES, inside=folder))
         _HASHES[key] = h.hexdigest()
     return _HASHES[key]
 
@@ -141,23 +162,29 @@ def _check_dataset(folder: Path) -> Path:
     return folder
 
 
-def _cached(name: str, load: Any, save: Any, learn: Any) -> Any:
-    """The object cached under ``name``: from memory, else the cache file (a damaged file is
-    relearned), else learned and written (a read-only cache is skipped)."""
+def _cached(name: str, source: str, from_dict: Any, to_dict: Any, learn: Any) -> Any:
+    """The object cached under ``name``, learned from the dataset of content hash ``source``: from
+    memory, else the cache file if its checksum matches (:mod:`tooltransfer.planner.learning.cache_file`:
+    a damaged, edited or foreign file is learned again and replaced), else learned and written (a
+    read-only cache is skipped). ``from_dict(payload, source_name)`` and ``to_dict(obj)`` convert."""
+    from tooltransfer.planner.learning.cache_file import read_cache, write_cache
+
     if name in _MEMORY:
         return _MEMORY[name]
     path = cache_dir() / name
     if path.is_file():
-        try:
-            _MEMORY[name] = load(path)
-            return _MEMORY[name]
-        except SkillFileError:
-            path.unlink(missing_ok=True)
+        payload = read_cache(path, source)
+        if payload is not None:
+            try:
+                _MEMORY[name] = from_dict(payload, str(path))
+                return _MEMORY[name]
+            except SkillFileError:
+                pass
     _MEMORY[name] = learn()
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        save(_MEMORY[name], path)
-    except OSError:
+        write_cache(path, to_dict(_MEMORY[name]), source)
+    except (OSError, ValueError):
         pass
     return _MEMORY[name]
 
@@ -198,25 +225,26 @@ def learn_ss_from_dataset(folder: Path, virtual: str = VIRTUAL_MOTION) -> Switch
 def oe_skill_from_dataset(folder: Path, k: float) -> OESkill:
     """The OE skill of a dataset, cached by the dataset's content hash and ``k``."""
     folder = _check_dataset(folder)
-    return _cached(f"oe-{dataset_hash(folder)}-k{k}.json", OESkill.load, lambda s, p: s.save(p),
-                   lambda: learn_oe_from_dataset(folder, k))
+    h = dataset_hash(folder)
+    return _cached(f"oe-{h}-k{k}.json", h, OESkill.from_dict, OESkill.to_dict, lambda: learn_oe_from_dataset(folder, k))
 
 
 def ss_skill_from_dataset(folder: Path, virtual: str = VIRTUAL_MOTION) -> SwitchSkill:
     """The SS skill of a dataset, cached by the dataset's content hash and the virtual motion."""
     folder = _check_dataset(folder)
-    return _cached(f"ss-{dataset_hash(folder)}-{virtual}.json", SwitchSkill.load, lambda s, p: s.save(p),
+    h = dataset_hash(folder)
+    return _cached(f"ss-{h}-{virtual}.json", h, SwitchSkill.from_dict, SwitchSkill.to_dict,
                    lambda: learn_ss_from_dataset(folder, virtual))
 
 
-def _load_identification(path: Path) -> Identification:
+def _identification_from_dict(doc: Any, source: str) -> Identification:
     from tooltransfer.tools.pushing.identify import Identification
 
-    doc = check_format(read_json(path), MECHANICS_NAME, MECHANICS_VERSION, str(path))
+    doc = check_format(doc, MECHANICS_NAME, MECHANICS_VERSION, source)
     try:
-        return Identification.from_dict(doc.get("identification"), f"{path}:identification")
+        return Identification.from_dict(doc.get("identification"), f"{source}:identification")
     except InputError as exc:
-        raise SkillFileError(str(path), str(exc)) from None
+        raise SkillFileError(source, str(exc)) from None
 
 
 IDENTIFICATION_VERSION = 2
@@ -224,8 +252,10 @@ IDENTIFICATION_VERSION = 2
 (the cache is keyed by the dataset's content)."""
 
 
-def _save_identification(ident: Identification, path: Path) -> None:
-    write_versioned(path, {"format": MECHANICS_FORMAT, "identification": ident.to_dict()}, allow_nan=False)
+def _identification_to_dict(ident: Identification) -> dict[str, Any]:
+    doc = {"format": MECHANICS_FORMAT, "identification": ident.to_dict()}
+    json.dumps(doc, allow_nan=False)  # finite values only (a ValueError skips writing the cache)
+    return doc
 
 
 def identification_from_dataset(folder: str | Path) -> Identification:
@@ -233,8 +263,9 @@ def identification_from_dataset(folder: str | Path) -> Identification:
     recording), cached by the dataset's content hash
     (:func:`tooltransfer.planner.learning.identify.identify_dataset`)."""
     folder = _check_dataset(Path(folder))
-    return _cached(f"mech{IDENTIFICATION_VERSION}-{dataset_hash(folder)}.json", _load_identification,
-                   _save_identification, lambda: _identify(folder))
+    h = dataset_hash(folder)
+    return _cached(f"mech{IDENTIFICATION_VERSION}-{h}.json", h, _identification_from_dict, _identification_to_dict,
+                   lambda: _identify(folder))
 
 
 def _identify(folder: Path) -> Identification:

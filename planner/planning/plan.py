@@ -253,14 +253,17 @@ MAX_JOINT_VELOCITY, MAX_JOINT_ACCELERATION = 1e6, 1e9
 
 
 def _document(where: str, p: Path) -> dict[str, Any]:
-    """The plan file ``p`` read (at most ``MAX_PLAN_BYTES``, UTF-8), parsed as JSON and of this
-    ``FORMAT``; the first problem raised as a :class:`PlanFileError` naming the file."""
+    """The plan file ``p`` read (a regular file of at most ``MAX_PLAN_BYTES``, UTF-8), parsed as JSON
+    and of this ``FORMAT``; the first problem raised as a :class:`PlanFileError` naming the file."""
+    from tooltransfer.regular_file import read_regular
+
     try:
         size = p.stat().st_size
         if size > MAX_PLAN_BYTES:
             raise PlanFileError(where, "<file>", f"a plan file of at most {MAX_PLAN_BYTES // 2**20} MB",
                                 f"{size / 2**20:.0f} MB")
-        text = p.read_bytes().decode("utf-8-sig")
+        text = read_regular(p, lambda _p, w, e, g: PlanFileError(where, w, e, g), "plan file",
+                            MAX_PLAN_BYTES).decode("utf-8-sig")  # a regular file, read without blocking
     except OSError as exc:
         raise PlanFileError(where, "<file>", "a readable plan file", exc.strerror) from None
     except UnicodeDecodeError as exc:

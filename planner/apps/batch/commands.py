@@ -1,9 +1,11 @@
 """``tooltransfer batch generate|run|report``: batch feasibility studies from the command line.
 
 Exit codes: 0 done, 1 every job this run ran failed (``error`` or ``timeout``: e.g. Dask workers that
-cannot run them), 2 bad input (a message naming the field: a corrupt dataset, a store another run is
-writing, workers without the package), 130 stopped by Ctrl-C (the store can be resumed with
-``--resume``). ``batch generate`` writes at most :data:`MAX_TASK_FILES` task files (``--first N``
+cannot run them), 4 some of the rows this run stored are ``error`` rows (a job raised or its sandbox
+died: ``batch report`` gives the reasons, ``--resume --retry error`` runs them again), 2 bad input
+(a message naming the field: a corrupt dataset, a store another run is writing or another program's
+file, a full disk or a damaged store, workers without the package), 130 stopped by Ctrl-C (the store
+can be resumed with ``--resume``). ``batch generate`` writes at most :data:`MAX_TASK_FILES` task files (``--first N``
 writes the first N of a larger batch).
 """
 
@@ -13,9 +15,14 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from tooltransfer.planner.apps.batch.runner import RunSummary
 
 EXIT_INTERRUPTED = 130
 EXIT_ALL_FAILED = 1
+EXIT_ERRORS = 4
 #: Most task files ``batch generate`` writes in one go (a batch may hold a million tasks: ``batch run``
 #: generates them as it runs; ``--first N`` writes the first N).
 MAX_TASK_FILES = 100_000
@@ -56,13 +63,27 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(f"{s.stored} results stored ({counts}), {s.skipped} already done, of {s.total}; "
           f"{s.wall:.1f} s on {s.slots} {s.kind} slots: {s.throughput:.3f} results (task-variant pairs) per second "
           "per slot")
-    if s.interrupted:
+    code = run_exit_code(s)
+    if code == EXIT_INTERRUPTED:
         print(f"stopped before the end: carry on with `tooltransfer batch run {args.batch} --db {args.db} --resume`")
-        return EXIT_INTERRUPTED
-    if s.stored and set(s.counts) <= {"error", "timeout"}:
+    elif code == EXIT_ALL_FAILED:
         print(f"tooltransfer: error: every job of this run failed ({counts}): see `tooltransfer batch report "
               f"{args.db}` for the reasons", file=sys.stderr)
+    elif code == EXIT_ERRORS:
+        print(f"tooltransfer: error: {s.counts['error']} jobs of this run ended in error: see `tooltransfer batch "
+              f"report {args.db}` for the reasons, `--resume --retry error` runs them again", file=sys.stderr)
+    return code
+
+
+def run_exit_code(s: RunSummary) -> int:
+    """The exit code of a ``batch run`` that did what ``s`` says (module docstring): 130 stopped by
+    Ctrl-C, 1 every row it stored ``error`` or ``timeout``, 4 some ``error`` rows, else 0."""
+    if s.interrupted:
+        return EXIT_INTERRUPTED
+    if s.stored and set(s.counts) <= {"error", "timeout"}:
         return EXIT_ALL_FAILED
+    if s.counts.get("error"):
+        return EXIT_ERRORS
     return 0
 
 

@@ -349,26 +349,38 @@ def write_csv(path: Path, rows: Sequence[dict[str, Any]], columns: Sequence[str]
 
 def write_report(db: str | Path, out: str | Path | None, console: Console | None = None) -> list[Path]:
     """Print the report of the store ``db``; with ``out``, write ``results.csv``, ``summary.csv``,
-    ``reasons.csv`` and the figures there. Returns the written paths."""
+    ``reasons.csv`` and the figures there. Returns the written paths.
+
+    The store is opened read-only and never changed (a read-only file or folder is fine); messages
+    name the file as the command's ``db`` argument. An empty file, or a store without rows, has
+    nothing to report (said so, no error); a file that is not a store, or one holding values of the
+    wrong kind, raises :class:`~tooltransfer.errors.InputError` naming it."""
     from tooltransfer.errors import InputError
     from tooltransfer.planner.apps.batch.store import ResultStore
 
     p = Path(db)
     if not p.is_file():
-        raise InputError("db", "an existing results file (written by tooltransfer batch run)", str(p))
+        raise InputError(f"db {p}", "an existing results file (written by tooltransfer batch run)",
+                         "no such file" if not p.exists() else "not a regular file")
     if console is None:
         console = Console()
         if not console.is_terminal:
             console.width = 180  # files and pipes: whole tables
-    with ResultStore(p) as store:
+    if p.stat().st_size == 0:
+        console.print(f"{escape(str(p))}: an empty file, no results to report")
+        return []
+    with ResultStore(p, readonly=True, field="db") as store:  # the file is never changed
+        if store.note:
+            console.print(f"note: {escape(store.note)}")
+        store.check_rows()  # numbers where numbers belong
         rows = store.rows()
         meta = store.meta()
     if not rows:
-        console.print(f"{p}: no results yet")
+        console.print(f"{escape(str(p))}: no results yet" + (" (an SQLite file without tables)" if store.empty else ""))
         return []
     stats = summarize(rows)
     reasons = top_reasons(rows)
-    console.print(f"batch {meta.get('batch_name', '?')}: {len(rows)} results in {p}")
+    console.print(f"batch {escape(str(meta.get('batch_name', '?')))}: {len(rows)} results in {escape(str(p))}")
     print_report(stats, reasons, console)
     if out is None:
         return []

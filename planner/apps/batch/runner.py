@@ -4,7 +4,10 @@ One code path for the process pool and Dask (:mod:`tooltransfer.planner.apps.bat
 slot are in flight; each finished future's row is committed at once. ``resume`` skips the
 (task, variant) pairs already stored; without it a store that already holds rows is refused. The
 first Ctrl-C (SIGINT) stops submitting, cancels what has not started, waits for the running jobs
-(each is bounded by its timeout) and stores them; a second Ctrl-C abandons them. Either way the
+at most their timeout plus :data:`STOP_GRACE` and stores them, then abandons what is left; a second
+Ctrl-C abandons them at once. A store that cannot take a row (a full disk, a damaged page) stops the
+run at once with :class:`~tooltransfer.planner.apps.batch.store_file.StoreError` (the rows stored
+before are kept). Either way the
 store holds only whole rows and ``--resume`` carries on. A broken process pool (a worker killed
 from outside) is replaced and its running jobs are run again once, each alone (so that the job
 that breaks it again is the culprit, and the others are not charged for it); a job that breaks the
@@ -27,6 +30,7 @@ from collections import Counter
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, CancelledError, Future, wait
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -49,15 +53,18 @@ from tooltransfer.planner.apps.batch.executors import Slots
 from tooltransfer.planner.apps.batch.generate import GeneratedTask
 from tooltransfer.planner.apps.batch.jobs import lazy_jobs, simulate_setting, task_jobs, warmup_calls
 from tooltransfer.planner.apps.batch.spec import BatchSpec
-from tooltransfer.planner.apps.batch.store import ResultStore
+from tooltransfer.planner.apps.batch.store import STATUSES, ResultStore
+from tooltransfer.planner.apps.batch.store_file import StoreError
 from tooltransfer.planner.apps.batch.store_settings import open_batch_store
 from tooltransfer.planner.apps.batch.worker import Job, run_job
 
 if TYPE_CHECKING:
     from tooltransfer.planner.apps.batch.shipping import ShippedSkills
 
-STATUSES = ("solved", "violated", "infeasible", "unknown", "error", "timeout")
-
+STOP_GRACE = 5.0
+"""After the first Ctrl-C, the running jobs get their timeout plus this long [s] to finish and be stored;
+those still running then (a job queued on a worker behind another, a job in an execution stage) are
+abandoned and run again on ``--resume``."""
 
 @dataclass
 class RunSummary:
@@ -152,7 +159,8 @@ class _Dispatch:
                 break
             job = self.queue.pop()
             try:
-                self.inflight[self.slots.executor.submit(run_job, job)] = (job, self.slots.executor)
+                with _sigint_held():  # a pool worker started here ignores Ctrl-C from its first instruction
+                    self.inflight[self.slots.executor.submit(run_job, job)] = (job, self.slots.executor)
             except BrokenProcessPool:
                 self.queue.append(job)
                 self.slots.renew()
@@ -193,6 +201,21 @@ class _Dispatch:
             return {"status": "error", "reason": f"{type(exc).__name__}: {exc}", "finished_at": time.time()}, False
 
 
+@contextmanager
+def _sigint_held() -> Iterator[None]:
+    """Hold SIGINT (blocked, delivered when the block ends) around a submit that may start pool workers:
+    a process started meanwhile inherits the block, so a Ctrl-C while it boots (before its initializer
+    ignores SIGINT) cannot kill it with a traceback; the runner's own Ctrl-C is only delayed."""
+    held = hasattr(signal, "pthread_sigmask") and threading.current_thread() is threading.main_thread()
+    if held:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        if held:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def _extra_fields(info: dict[tuple[str, str], dict] | Callable[[Job], dict] | None) -> Callable[[Job], dict]:
     """The extra fields of a job's row: ``info`` itself when a function, else its entry for the job's key."""
     if callable(info):
@@ -231,6 +254,7 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
     summary = RunSummary(total=total, skipped=skipped, slots=slots.slots, kind=slots.kind)
     stop = stop or threading.Event()
     aborted = False
+    stop_by: float | None = None  # once stopping: when the jobs still running are abandoned
     previous = None
 
     def on_sigint(signum: int, frame: object) -> None:
@@ -260,8 +284,18 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
                 window = 2 * max(1, slots.current())
                 summary.slots = slots.slots
                 d.fill(window)
-                if stop.is_set() and d.wind_down(console, progress):
-                    break
+                if stop.is_set():
+                    if stop_by is None:
+                        stop_by = time.monotonic() + STOP_GRACE + max(
+                            (j.timeout for j, _ in d.inflight.values()), default=0.0)
+                    if d.wind_down(console, progress):
+                        break
+                    if time.monotonic() > stop_by:  # a job queued behind a running one, a stage: not waited for
+                        if progress:
+                            console.print(f"stopping: abandoning {len(d.inflight)} jobs still running after the "
+                                          "per-job timeout (they run again on --resume)")
+                        slots.abandon()
+                        break
                 finished, _ = wait(list(d.inflight), timeout=0.25, return_when=FIRST_COMPLETED)
                 broken = False
                 for f in finished:
@@ -278,6 +312,9 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
     except KeyboardInterrupt:
         aborted = True
         slots.abandon()
+    except StoreError:  # the store cannot take more rows (a full disk, a damaged page): stop now
+        slots.abandon()
+        raise
     finally:
         if previous is not None:
             signal.signal(signal.SIGINT, previous)

@@ -40,6 +40,8 @@ class Outcome:
             text; ``detail`` holds the traceback's last 12 frames), ``timeout`` or ``crash`` (the child
             died: ``message`` names the signal or exit code, ``detail`` the tail of its stderr).
         wall: wall time of the call [s] (the timeout for a timeout).
+        signal: for a crash, the signal that ended the child (0: it exited); ``SIGKILL`` is how the
+            kernel's OOM killer and an operator's ``kill -9`` end a process.
     """
 
     kind: Literal["ok", "exception", "timeout", "crash"]
@@ -47,6 +49,7 @@ class Outcome:
     message: str = ""
     detail: str = ""
     wall: float = 0.0
+    signal: int = 0
 
 
 def _resolve(entry: str) -> Any:
@@ -125,7 +128,7 @@ class Sandbox:
             detail = self._tail()
             self.close()
             return Outcome("crash", message=f"the sandbox process {why}", detail=detail,
-                           wall=time.perf_counter() - start)
+                           wall=time.perf_counter() - start, signal=-code if code < 0 else 0)
         kind, value, message, detail = reply
         return Outcome(kind, value, message, detail, time.perf_counter() - start)
 

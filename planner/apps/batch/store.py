@@ -22,12 +22,23 @@ import json
 import os
 import socket
 import sqlite3
+import tempfile
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
 from tooltransfer.errors import InputError
+from tooltransfer.planner.apps.batch.store_file import (
+    StoreError,
+    check_rows,
+    check_schema,
+    columns,
+    connect_readonly,
+    store_error,
+    tables,
+)
+from tooltransfer.regular_file import file_kind
 
 SCHEMA_VERSION = "2"
 #: Schemas :class:`ResultStore` can read (only the current one is resumed).
@@ -58,40 +69,141 @@ TASK_COLUMNS: dict[str, str] = {
     "start_reach": "REAL", "target_reach": "REAL", "reach_margin": "REAL", "distance": "REAL", "task_json": "TEXT",
 }
 
+#: Every status a result row may have.
+STATUSES = ("solved", "violated", "infeasible", "unknown", "error", "timeout")
+
+_META_COLUMNS = {"key": "TEXT PRIMARY KEY", "value": "TEXT"}
+#: The tables of a store, exactly (:func:`~tooltransfer.planner.apps.batch.store_file.check_schema`).
+_SCHEMA = {"meta": _META_COLUMNS, "tasks": TASK_COLUMNS, "results": RESULT_COLUMNS}
+
 
 class ResultStore:
     """A batch's SQLite file (created if missing).
 
+    Opened for writing (the default), a new or empty file gets the tables; an existing one must be a
+    store of this program exactly (:func:`~tooltransfer.planner.apps.batch.store_file.check_schema`:
+    its tables and columns, no trigger or view) or an older schema's (read, never resumed), else it
+    is refused before anything is written. Opened ``readonly``, nothing in the file changes
+    (:func:`~tooltransfer.planner.apps.batch.store_file.connect_readonly`), and a file without a
+    results table raises. SQLite's failures (a full disk, a damaged page, a read-only file) raise
+    :class:`~tooltransfer.planner.apps.batch.store_file.StoreError` naming the file and the remedy.
+
     Args:
         path: the database file.
+        readonly: open it for reading only.
+        field: the option or argument that named the file, for messages (``--db``; ``db`` for a report).
     """
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, *, readonly: bool = False, field: str = "--db") -> None:
         self.path = Path(path)
+        self.field = field
+        #: rows that could not be read (a note for the reader), or ""
+        self.note = ""
+        self._copy: tempfile.TemporaryDirectory | None = None  # a private copy read instead (readonly)
         try:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.db = sqlite3.connect(self.path, timeout=30.0)
-            self.db.execute("PRAGMA journal_mode=WAL")
-            self.db.execute("PRAGMA synchronous=NORMAL")  # WAL + NORMAL: durable against a killed process
-            cols = ", ".join(f"{k} {v}" for k, v in RESULT_COLUMNS.items())
-            tcols = ", ".join(f"{k} {v}" for k, v in TASK_COLUMNS.items())
-            with self.db:
-                self.db.execute("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT)")
-                self.db.execute(f"CREATE TABLE IF NOT EXISTS tasks ({tcols})")
-                self.db.execute(f"CREATE TABLE IF NOT EXISTS results ({cols}, PRIMARY KEY (task_id, variant))")
-        except sqlite3.DatabaseError as exc:
-            raise InputError("--db", "an SQLite results file (or a new path)", f"{self.path}: {exc}") from None
-        version = self.meta().get("schema")
-        if version is None:
+            kind = file_kind(os.stat(self.path).st_mode)
+        except OSError:
+            kind = ""  # a new file (or one SQLite will name)
+        if kind:  # a FIFO would block SQLite's first read for ever, a device is no store
+            raise StoreError(field, self.path, "an SQLite results file (a regular file) or a new path", kind)
+        if readonly:
+            self.db, self.note, self._copy = connect_readonly(self.path, field)
+            with self._guard():
+                found = tables(self.db)
+            if found and found.get("results") not in ("table", "view"):
+                self.close()
+                raise StoreError(field, self.path, "a results file written by `tooltransfer batch run`",
+                                 f"an SQLite file with the tables {', '.join(sorted(found))} and no results table")
+            with self._guard():
+                have = {c[0] for c in columns(self.db, "results")} if found else set()
+            missing = [c for c in ("task_id", "variant", "status") if found and c not in have]
+            if missing:
+                self.close()
+                raise StoreError(field, self.path, "a results file written by `tooltransfer batch run`",
+                                 f"a results table without the column {missing[0]}")
+            #: opened read-only, the file holds no tables at all (nothing to report)
+            self.empty = not found
+        else:
+            self.empty = False
+            self._open_for_writing()
+        with self._guard():
+            version = self.meta().get("schema") if "meta" in tables(self.db) else None
+        if version is None and not readonly:
             self.set_meta(schema=SCHEMA_VERSION)
             version = SCHEMA_VERSION
-        elif version not in READABLE_SCHEMAS:
-            raise InputError("--db", f"a results file of schema {' or '.join(READABLE_SCHEMAS)}", f"schema {version}")
+        elif version is not None and version not in READABLE_SCHEMAS:
+            self.close()
+            raise InputError(field, f"a results file of schema {' or '.join(READABLE_SCHEMAS)}", f"schema {version}")
         #: the file's schema (see the module docstring)
-        self.schema = version
+        self.schema = version or SCHEMA_VERSION
+
+    def _open_for_writing(self) -> None:
+        """Connect, check an existing file's schema exactly, and make the tables of a new one."""
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise StoreError(self.field, self.path, "a results file in a folder that can be made",
+                             exc.strerror or str(exc)) from None
+        with self._guard():
+            self.db = sqlite3.connect(self.path, timeout=30.0)
+            found = tables(self.db)
+        if found:  # an existing store: exactly this program's, of this schema or the one before
+            with self._guard():
+                version = dict(self.db.execute("SELECT key, value FROM meta").fetchall()).get("schema") \
+                    if found.get("meta") == "table" else None
+            schema: dict[str, dict[str, str]] = dict(_SCHEMA)
+            if version == "1":  # read (and refused on resume by open_batch_store), never written
+                schema["results"] = {k: v for k, v in RESULT_COLUMNS.items()
+                                     if not k.startswith(("open_loop", "closed_loop"))}
+                if "tasks" not in found:
+                    del schema["tasks"]
+            try:
+                with self._guard():
+                    check_schema(self.db, self.path, self.field, schema, {"results": ("task_id", "variant")})
+            except StoreError:
+                self.close()
+                raise
+        with self._guard():
+            self.db.execute("PRAGMA journal_mode=WAL")
+            self.db.execute("PRAGMA synchronous=NORMAL")  # WAL + NORMAL: durable against a killed process
+            if not found:
+                cols = ", ".join(f"{k} {v}" for k, v in RESULT_COLUMNS.items())
+                tcols = ", ".join(f"{k} {v}" for k, v in TASK_COLUMNS.items())
+                with self.db:
+                    self.db.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT)")
+                    self.db.execute(f"CREATE TABLE tasks ({tcols})")
+                    self.db.execute(f"CREATE TABLE results ({cols}, PRIMARY KEY (task_id, variant))")
+
+    @contextmanager
+    def _guard(self) -> Iterator[None]:
+        """SQLite's failures as :class:`StoreError` naming the file (nothing stored is lost: each write is
+        one transaction, rolled back whole)."""
+        try:
+            yield
+        except sqlite3.IntegrityError:
+            raise
+        except sqlite3.Error as exc:
+            raise store_error(exc, self.path, self.field) from None
+
+    def check_rows(self) -> None:
+        """Refuse a store holding a value of the wrong kind (text where a number belongs, an unknown
+        status): before a run writes into it, and before a report computes with it.
+
+        Raises:
+            StoreError: naming the file, the row and the column.
+        """
+        found = tables(self.db)
+        check_rows(self.db, self.path, self.field, "results", RESULT_COLUMNS, {"status": STATUSES})
+        if found.get("tasks") == "table":
+            check_rows(self.db, self.path, self.field, "tasks", TASK_COLUMNS)
+        if found.get("meta") == "table":
+            check_rows(self.db, self.path, self.field, "meta", {"key": "TEXT", "value": "TEXT"})
 
     def close(self) -> None:
         self.db.close()
+        if self._copy is not None:
+            self._copy.cleanup()
+            self._copy = None
 
     def __enter__(self) -> ResultStore:
         return self
@@ -100,53 +212,67 @@ class ResultStore:
         self.close()
 
     def meta(self) -> dict[str, str]:
-        return dict(self.db.execute("SELECT key, value FROM meta").fetchall())
+        """The ``meta`` table's keys and values (none in an empty file opened read-only)."""
+        if self.empty:
+            return {}
+        with self._guard():
+            return dict(self.db.execute("SELECT key, value FROM meta").fetchall())
 
     def set_meta(self, **values: str) -> None:
-        with self.db:
+        with self._guard(), self.db:
             self.db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", values.items())
 
     def add_tasks(self, tasks: Iterable[dict[str, Any]]) -> None:
         """Record tasks (already recorded ids are kept as they are)."""
         keys = list(TASK_COLUMNS)
         sql = f"INSERT OR IGNORE INTO tasks ({', '.join(keys)}) VALUES ({', '.join('?' * len(keys))})"
-        with self.db:
+        with self._guard(), self.db:
             self.db.executemany(sql, ([t.get(k) for k in keys] for t in tasks))
 
     def done(self) -> set[tuple[str, str]]:
         """The (task id, variant) pairs already stored."""
-        return set(self.db.execute("SELECT task_id, variant FROM results").fetchall())
+        with self._guard():
+            return set(self.db.execute("SELECT task_id, variant FROM results").fetchall())
 
     def done_for(self, task_ids: Sequence[str]) -> set[tuple[str, str]]:
         """The (task id, variant) pairs already stored for these tasks."""
         out: set[tuple[str, str]] = set()
-        for i in range(0, len(task_ids), 500):
-            part = list(task_ids[i : i + 500])
-            sql = f"SELECT task_id, variant FROM results WHERE task_id IN ({', '.join('?' * len(part))})"
-            out.update(self.db.execute(sql, part).fetchall())
+        with self._guard():
+            for i in range(0, len(task_ids), 500):
+                part = list(task_ids[i : i + 500])
+                sql = f"SELECT task_id, variant FROM results WHERE task_id IN ({', '.join('?' * len(part))})"
+                out.update(self.db.execute(sql, part).fetchall())
         return out
 
     def put(self, row: dict[str, Any]) -> None:
-        """Store one result row and commit it (raises ``sqlite3.IntegrityError`` for a stored key)."""
+        """Store one result row and commit it (raises ``sqlite3.IntegrityError`` for a stored key, and
+        :class:`~tooltransfer.planner.apps.batch.store_file.StoreError` when it cannot be written: the
+        rows stored before are kept)."""
         keys = [k for k in RESULT_COLUMNS if k in row]
         vals = [json.dumps(row[k]) if isinstance(row[k], dict | list) else row[k] for k in keys]
-        with self.db:
+        with self._guard(), self.db:
             self.db.execute(f"INSERT INTO results ({', '.join(keys)}) VALUES ({', '.join('?' * len(keys))})", vals)
 
     def forget(self, statuses: Sequence[str]) -> int:
         """Delete the rows of these statuses (to run them again); how many were deleted."""
-        with self.db:
+        with self._guard(), self.db:
             cur = self.db.execute(f"DELETE FROM results WHERE status IN ({', '.join('?' * len(statuses))})",
                                   list(statuses))
         return cur.rowcount
 
     def rows(self) -> list[dict[str, Any]]:
         """Every result joined with its task's difficulty measures, in task and variant order."""
-        cur = self.db.execute(
-            "SELECT r.*, t.n_obstacles, t.start_reach, t.target_reach, t.reach_margin, t.distance, t.idx "
-            "FROM results r LEFT JOIN tasks t USING (task_id) ORDER BY t.idx, r.task_id, r.variant")
-        names = [d[0] for d in cur.description]
-        rows = [dict(zip(names, r, strict=True)) for r in cur.fetchall()]
+        if self.empty:
+            return []
+        with self._guard():
+            if tables(self.db).get("tasks") == "table":
+                cur = self.db.execute(
+                    "SELECT r.*, t.n_obstacles, t.start_reach, t.target_reach, t.reach_margin, t.distance, t.idx "
+                    "FROM results r LEFT JOIN tasks t USING (task_id) ORDER BY t.idx, r.task_id, r.variant")
+            else:  # a schema-1 file without tasks
+                cur = self.db.execute("SELECT * FROM results ORDER BY task_id, variant")
+            names = [d[0] for d in cur.description]
+            rows = [dict(zip(names, r, strict=True)) for r in cur.fetchall()]
         if "open_loop_error" not in names:  # schema 1: its simulation was open loop
             for r in rows:
                 if r.get("sim_final_error") is not None:
@@ -155,7 +281,10 @@ class ResultStore:
         return rows
 
     def count(self) -> int:
-        return int(self.db.execute("SELECT COUNT(*) FROM results").fetchone()[0])
+        if self.empty:
+            return 0
+        with self._guard():
+            return int(self.db.execute("SELECT COUNT(*) FROM results").fetchone()[0])
 
 
 @contextmanager

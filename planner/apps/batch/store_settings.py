@@ -24,8 +24,10 @@ def _on_off(v: bool) -> str:
 def open_batch_store(store: ResultStore, spec: BatchSpec, tasks: Sequence[GeneratedTask], resume: bool,
                      simulate: bool | None = None) -> None:
     """Tie ``store`` to the batch and its settings, refusing: a file of an older schema, another
-    batch's store, a filled one without ``resume``, and one filled with the other execution setting
-    (``simulate``, default the batch file's: see :func:`tooltransfer.planner.apps.batch.jobs.simulate_setting`)."""
+    batch's store, a filled one without ``resume``, one holding values of the wrong kind
+    (:meth:`~tooltransfer.planner.apps.batch.store.ResultStore.check_rows`), and one filled with the
+    other execution setting (``simulate``, default the batch file's: see
+    :func:`tooltransfer.planner.apps.batch.jobs.simulate_setting`)."""
     from tooltransfer.planner.apps.batch.store import SCHEMA_VERSION
 
     if store.schema != SCHEMA_VERSION:
@@ -41,6 +43,8 @@ def open_batch_store(store: ResultStore, spec: BatchSpec, tasks: Sequence[Genera
     if n and not resume:
         raise InputError("--resume", f"--resume to carry on ({store.path} already holds {n} results) "
                          "or a new --db", "neither")
+    if n:
+        store.check_rows()  # numbers where numbers belong, before anything is added to them
     sim = _on_off(simulate_setting(spec, simulate))
     was = meta.get("simulate")
     if n and was not in (None, sim):

@@ -3,7 +3,9 @@
 The same function runs in a process-pool worker and in a Dask worker thread; each slot (thread)
 keeps its own :class:`~tooltransfer.planner.apps.batch.sandbox.Sandbox`, so skills are loaded once per slot and a
 hang or crash costs only that job. Every way a job can end becomes a row: the job's own measures,
-an ``error`` (exception or crash, with the message), or a ``timeout``.
+an ``error`` (exception or crash, with the message), or a ``timeout``. A call whose sandbox was
+killed from outside (SIGKILL: the kernel's OOM killer, an operator) is made once more in a new
+sandbox before its crash counts (:func:`call_surviving_kill`).
 
 A job may have stages (:class:`Stage`, e.g. executing the plan open and closed loop) run after a
 ``solved`` call, each a sandbox call of its own with its own timeout, given what the job returned
@@ -22,11 +24,11 @@ import signal
 import socket
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from tooltransfer.planner.apps.batch import shipping
-from tooltransfer.planner.apps.batch.sandbox import Sandbox
+from tooltransfer.planner.apps.batch.sandbox import Outcome, Sandbox
 
 _LOCAL = threading.local()
 
@@ -98,7 +100,7 @@ def run_job(job: Job) -> dict[str, Any]:
         args = shipping.localize(args, path)
         warmup = tuple((entry, shipping.localize(a, path)) for entry, a in warmup)
     box = _sandbox(warmup)
-    out = box.call(job.entry, args, job.timeout)
+    out = call_surviving_kill(box, job.entry, args, job.timeout)
     row: dict[str, Any] = {"task_id": job.task_id, "variant": job.variant, "started_at": started,
                            "worker": worker, "wall_time": out.wall}
     if out.kind == "ok" and isinstance(out.value, dict) and "status" in out.value:
@@ -123,10 +125,23 @@ def run_job(job: Job) -> dict[str, Any]:
     return row
 
 
+def call_surviving_kill(box: Sandbox, entry: str, args: tuple, timeout: float) -> Outcome:
+    """``box.call(entry, args, timeout)``, made once more in a new sandbox when the sandbox was killed
+    by SIGKILL from outside (the kernel's OOM killer, an operator): such a death says nothing about
+    the job. A second one is the job's outcome, its message saying it happened twice."""
+    out = box.call(entry, args, timeout)
+    if out.kind != "crash" or out.signal != signal.SIGKILL:
+        return out
+    again = box.call(entry, args, timeout)
+    if again.kind == "crash" and again.signal == signal.SIGKILL:
+        return replace(again, message=f"{again.message} twice (from outside: the kernel's OOM killer, or an operator?)")
+    return again
+
+
 def run_stage(box: Sandbox, stage: Stage, plan: Any) -> dict[str, Any]:
     """One stage in ``box``: its columns, or ``<name>_status`` ``error``/``timeout`` with the reason
     (and the traceback or the crashed child's stderr under ``detail``)."""
-    out = box.call(stage.entry, (plan, *stage.args), stage.timeout)
+    out = call_surviving_kill(box, stage.entry, (plan, *stage.args), stage.timeout)
     cols: dict[str, Any] = {f"{stage.name}_wall_time": out.wall}
     if out.kind == "ok" and isinstance(out.value, dict):
         cols.update(out.value)

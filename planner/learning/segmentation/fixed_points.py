@@ -40,12 +40,15 @@ def load_fixed_points(path: str | Path, names: Sequence[str] = (), option: str =
     entry."""
     import json
 
+    from tooltransfer.regular_file import read_regular
+
     where = f"{option} {path}".strip()
     try:
         p = Path(path)
         if p.stat().st_size > 16 * 2**20:
             raise InputError(f"{where}", "a fixed-points file of at most 16 MB", f"{p.stat().st_size} bytes")
-        data = json.loads(p.read_bytes().decode("utf-8-sig"))
+        raw = read_regular(p, lambda _p, _w, e, g: InputError(where, e, g), "fixed-points file", 16 * 2**20)
+        data = json.loads(raw.decode("utf-8-sig"))
     except OSError as exc:
         raise InputError(f"{where}", "a readable JSON file {demo name: [[x, y], ...]} [m]", exc.strerror) from None
     except (UnicodeDecodeError, ValueError, RecursionError) as exc:
