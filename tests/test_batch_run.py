@@ -238,3 +238,27 @@ def test_retry_forgets_only_the_asked_statuses(tmp_path, capsys) -> None:
     batch = _batch(tmp_path)
     assert main(["batch", "run", str(batch), "--db", str(tmp_path / "x.sqlite"), "--resume", "--retry", "solved"]) == 2
     assert "--retry" in capsys.readouterr().err
+
+
+def test_retry_unknown_with_a_larger_budget_runs_those_rows_again(tmp_path) -> None:
+    """``--resume --retry unknown --budget K``: only the unknown rows run again, with the search's and the
+    certificate's budgets multiplied by K (recorded in each row's evidence)."""
+    import json
+
+    batch = _batch(tmp_path, count=2)
+    db = tmp_path / "r.sqlite"
+    assert main(["batch", "run", str(batch), "--db", str(db), "-q", "--workers", "1"]) == 0
+    with sqlite3.connect(db) as c:
+        first = {t: (f, st) for t, f, st in c.execute("SELECT task_id, finished_at, status FROM results")}
+        c.execute("UPDATE results SET status = 'unknown' WHERE task_id = 't-00000'")
+    again = {t for t, (_, st) in first.items() if st == "unknown"} | {"t-00000"}
+    assert main(["batch", "run", str(batch), "--db", str(db), "-q", "--workers", "1", "--resume",
+                 "--retry", "unknown", "--budget", "3"]) == 0
+    with sqlite3.connect(db) as c:
+        sql = "SELECT task_id, finished_at, metrics_json FROM results"
+        rows = {t: (f, json.loads(m)) for t, f, m in c.execute(sql)}
+    assert rows.keys() == first.keys()
+    for t, (finished, metrics) in rows.items():
+        assert (finished != first[t][0]) == (t in again), t
+        assert metrics["evidence"]["budget"] == (3.0 if t in again else 1.0), t
+    assert main(["batch", "run", str(batch), "--db", str(db), "-q", "--resume", "--budget", "0.5"]) == 2

@@ -23,6 +23,7 @@ finds no path, the ``arch`` one).
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterator
 from dataclasses import replace
@@ -31,6 +32,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from tooltransfer.errors import InputError
 from tooltransfer.planner.common.metric_units import UNITS
 from tooltransfer.planner.planning.assemble import SwitchFailed, assemble
 from tooltransfer.planner.planning.oe.generalize import generalize
@@ -66,7 +68,7 @@ def mapping_options(task: Task) -> MappingOptions:
     return MappingOptions.from_task(task.oe)
 
 
-def solve(task: Task, task_path: str | Path | None = None) -> Plan:
+def solve(task: Task, task_path: str | Path | None = None, *, budget: float = 1.0) -> Plan:
     """Plan ``task`` and give it a verdict (:attr:`Plan.verdict`): ``"solved"`` only when every hard
     check holds (the variant's condensing, then its guided search where it has one and the
     condensing's candidates fail); where no plan is found, ``"infeasible"`` with a certificate that no plan
@@ -76,12 +78,17 @@ def solve(task: Task, task_path: str | Path | None = None) -> Plan:
 
     Relative paths in the task are relative to ``task_path``'s folder, by default the folder of the file
     the task was loaded from (:func:`~tooltransfer.problems.task.load_task`; the working folder for a task
-    built in code)."""
-    plan, setting = _search(task, task_path)
-    return attach_verdict(plan, setting, np.array(task.start), np.array(task.target))
+    built in code). ``budget`` (>= 1) scales what the search and the certificate may spend (the guided
+    search's expansions, ``oe.guided_budget``, and the certificate's block updates): ``batch run --retry
+    unknown --budget K`` gives the undecided tasks more."""
+    if not (isinstance(budget, int | float) and math.isfinite(budget) and budget >= 1.0):
+        raise InputError("budget", "a number >= 1 (the search's and the certificate's budgets are multiplied by it)",
+                         repr(budget))
+    plan, setting = _search(task, task_path, budget)
+    return attach_verdict(plan, setting, np.array(task.start), np.array(task.target), budget=budget)
 
 
-def _search(task: Task, task_path: str | Path | None) -> tuple[Plan, Setting]:
+def _search(task: Task, task_path: str | Path | None, budget: float = 1.0) -> tuple[Plan, Setting]:
     """The planner's search (module docstring): the plan, or the best failure, and the world it used."""
     task_path = task_origin(task, task_path)
     stages: dict[str, float] = {}
@@ -104,6 +111,8 @@ def _search(task: Task, task_path: str | Path | None) -> tuple[Plan, Setting]:
     target = np.array(task.target)
     oe = oe_variant(task.variants.oe)
     options = oe.options_from_task(task.oe)
+    if budget != 1.0 and "guided_budget" in type(options).model_fields:
+        options = options.model_copy(update={"guided_budget": round(options.guided_budget * budget)})
     push_plan = oe.condense(t, x, setting, target, options)
     lap("oe")
     switch = switch_planner(task.variants.ss, setting, skills.ss, task.ss)

@@ -58,7 +58,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         raise InputError("--retry", "a comma-separated list of error, timeout, infeasible, unknown, violated", bad[0])
     s = run_batch(args.batch, args.db, workers=args.workers, scheduler=args.scheduler, dask_local=args.dask_local,
                   timeout=args.timeout, simulate=args.simulate, resume=args.resume, retry=retry,
-                  progress=not args.quiet)
+                  progress=not args.quiet, budget=args.budget)
     counts = ", ".join(f"{k} {v}" for k, v in sorted(s.counts.items())) or "nothing to do"
     print(f"{s.stored} results stored ({counts}), {s.skipped} already done, of {s.total}; "
           f"{s.wall:.1f} s on {s.slots} {s.kind} slots: {s.throughput:.3f} results (task-variant pairs) per second "
@@ -138,6 +138,10 @@ def add_batch_parser(sub: argparse._SubParsersAction,
     p.add_argument("--retry", default=None, metavar="STATUSES",
                    help="with --resume, run these statuses again (comma-separated: error,timeout,infeasible,"
                         "unknown,violated; unknown: the tasks neither solved nor certified)")
+    p.add_argument("--budget", type=float, default=1.0, metavar="K",
+                   help="multiply the search's and the certificate's budgets by K >= 1 (oe.guided_budget and the "
+                        "certificate's block updates; e.g. --resume --retry unknown --budget 4 gives the undecided "
+                        "tasks four times more)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p = add(bsub, "report", "tables of a results file; with --out also CSV files and figures",
             "tooltransfer batch report out/small.sqlite --out out/small_report", _cmd_report)

@@ -35,19 +35,21 @@ def finite_or_none(v: Any) -> float | None:
     return f if math.isfinite(f) else None
 
 
-def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: bool = False) -> dict[str, Any]:
+def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: bool = False,
+                budget: float = 1.0) -> dict[str, Any]:
     """Plan ``task`` (task-file fields; relative paths are relative to ``source``'s folder) with the
     variants ``oe`` and ``ss``. Returns the row's measures: status, reason, times [s], the plan's
     metrics (SI units; infinities stored as NULL and kept in ``metrics_json``), switch count and
     penetration; with ``keep_plan`` a solved plan also comes back pickled under ``"plan"`` (for the
-    execution stages; not a column)."""
+    execution stages; not a column). ``budget``: :func:`~tooltransfer.planner.planning.solve.solve`'s (the
+    search's and the certificate's budgets multiplied)."""
     from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import Variants, task_from_dict
 
     t = task_from_dict(task, source)
     t = t.model_copy(update={"variants": Variants(oe=oe, ss=ss)})
     wall, cpu = time.perf_counter(), time.process_time()
-    plan = solve(t, source)
+    plan = solve(t, source, budget=budget)
     row: dict[str, Any] = {"status": plan.status, "reason": plan.reason,
                            "time_total": time.perf_counter() - wall, "cpu_time": time.process_time() - cpu}
     m = plan.metrics

@@ -53,9 +53,10 @@ def warmup_calls(spec: BatchSpec, batch_path: str | Path, first: GeneratedTask |
 
 def task_jobs(spec: BatchSpec, batch_path: str | Path, t: GeneratedTask, timeout: float | None = None,
               simulate: bool | None = None, warm: tuple[tuple[str, tuple], ...] = (),
-              skills: str | None = None) -> list[Job]:
+              skills: str | None = None, budget: float = 1.0) -> list[Job]:
     """The jobs of one task: one per variant pair (:func:`batch_jobs`); ``skills``: the digest of the
-    shipped skills they plan with (:attr:`tooltransfer.planner.apps.batch.worker.Job.skills`)."""
+    shipped skills they plan with (:attr:`tooltransfer.planner.apps.batch.worker.Job.skills`); ``budget``:
+    the search's and the certificate's budgets multiplied (``batch run --budget``)."""
     sim = simulate_setting(spec, simulate)
     cfg = spec.simulate
     limit = spec.timeout if timeout is None else timeout
@@ -66,7 +67,7 @@ def task_jobs(spec: BatchSpec, batch_path: str | Path, t: GeneratedTask, timeout
                         cfg.timeout),
                   Stage("closed_loop", "tooltransfer.planner.apps.batch.execute:closed_loop",
                         (cfg.closed_loop_seed(t.index), cfg.closed_loop_tolerance, cfg.camera_noise), cfg.timeout))
-    return [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim), timeout=limit, warmup=warm,
+    return [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim, budget), timeout=limit, warmup=warm,
                 stages=stages, skills=skills) for oe, ss in spec.variants.pairs()]
 
 
@@ -76,7 +77,7 @@ CHUNK = 64
 
 def lazy_jobs(spec: BatchSpec, batch_path: str | Path, store: ResultStore, first: GeneratedTask,
                timeout: float | None, simulate: bool | None,
-               warm: tuple[tuple[str, tuple], ...], skills: str | None = None) -> Iterator[Job]:
+               warm: tuple[tuple[str, tuple], ...], skills: str | None = None, budget: float = 1.0) -> Iterator[Job]:
     """The jobs not yet stored, task by task: tasks generated :data:`CHUNK` at a time and recorded in
     the store's ``tasks`` table before their jobs are handed out. A task that cannot be generated
     (its ranges leave no room) becomes an ``error`` row per variant, and the batch goes on."""
@@ -95,7 +96,7 @@ def lazy_jobs(spec: BatchSpec, batch_path: str | Path, store: ResultStore, first
         store.add_tasks(task_records(chunk))
         done = store.done_for([t.task_id for t in chunk] + [f"{spec.name}-{i:05d}" for i, _ in failed])
         for t in chunk:
-            yield from (j for j in task_jobs(spec, batch_path, t, timeout, simulate, warm, skills)
+            yield from (j for j in task_jobs(spec, batch_path, t, timeout, simulate, warm, skills, budget)
                         if j.key not in done)
         for i, why in failed:
             for oe, ss in spec.variants.pairs():

@@ -23,6 +23,7 @@ Dask worker), every job planning with that copy; the workers need this package, 
 
 from __future__ import annotations
 
+import math
 import signal
 import threading
 import time
@@ -326,7 +327,7 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
 def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = None, scheduler: str | None = None,
               dask_local: int | None = None, timeout: float | None = None, simulate: bool | None = None,
               resume: bool = False, retry: Sequence[str] = (), progress: bool = True,
-              console: Console | None = None) -> RunSummary:
+              console: Console | None = None, budget: float = 1.0) -> RunSummary:
     """Run every (task, variant) of the batch not yet in the store ``db``, generating the tasks as it
     goes (:func:`tooltransfer.planner.apps.batch.jobs.lazy_jobs`: the first rows are stored within seconds
     whatever the count).
@@ -347,6 +348,8 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
             with the other setting is refused).
         resume: carry on a store that already holds rows of this batch.
         retry: statuses to run again on resume (e.g. ``("error", "timeout")``).
+        budget: the search's and the certificate's budgets multiplied (>= 1; with ``retry=("unknown",)``
+            the undecided tasks get more: :func:`~tooltransfer.planner.planning.solve.solve`).
     """
     from tooltransfer.planner.apps.batch.executors import open_executor
     from tooltransfer.planner.apps.batch.generate import generate_task
@@ -356,6 +359,9 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
 
     if timeout is not None and not timeout > 0:
         raise InputError("--timeout", "a positive number of seconds", timeout)
+    if not (math.isfinite(budget) and budget >= 1.0):
+        raise InputError("--budget", "a number >= 1 (the search's and the certificate's budgets are multiplied "
+                         "by it)", budget)
     spec = load_batch(batch_path)
     dataset = dataset_folder(spec, batch_path)
     load_dataset(dataset)  # a corrupt dataset is refused before the run, naming the file
@@ -376,7 +382,7 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
             if retry:
                 store.forget(retry)
             return _run_store(store, slots, spec, batch_path, first, warm, warmed, timeout, simulate, progress,
-                              console, shipped.digest if shipped is not None else None)
+                              console, shipped.digest if shipped is not None else None, budget)
 
 
 def _ship_skills(slots: Slots, spec: BatchSpec, batch_path: str | Path, first: GeneratedTask, dataset: str,
@@ -397,7 +403,7 @@ def _ship_skills(slots: Slots, spec: BatchSpec, batch_path: str | Path, first: G
 
 def _run_store(store: ResultStore, slots: Slots, spec: BatchSpec, batch_path: str | Path, first: GeneratedTask,
                warm: tuple[tuple[str, tuple], ...], warmed: bool, timeout: float | None, simulate: bool | None,
-               progress: bool, console: Console, skills: str | None = None) -> RunSummary:
+               progress: bool, console: Console, skills: str | None = None, budget: float = 1.0) -> RunSummary:
     """:func:`run_batch` on the opened, locked and checked store and executor: the jobs not stored yet."""
     pairs = spec.variants.pairs()
     total = spec.count * len(pairs)
@@ -410,7 +416,7 @@ def _run_store(store: ResultStore, slots: Slots, spec: BatchSpec, batch_path: st
         oe, _, ss = job.variant.partition("/")
         return {"tool": data.get("tool", spec.tools[_index(job.task_id) % len(spec.tools)]), "oe": oe, "ss": ss}
 
-    jobs = lazy_jobs(spec, batch_path, store, first, timeout, simulate, warm, skills)
+    jobs = lazy_jobs(spec, batch_path, store, first, timeout, simulate, warm, skills, budget)
     if progress:
         ex = ", solved plans executed open and closed loop" if simulate_setting(spec, simulate) else ""
         console.print(f"batch {spec.name}: {spec.count} tasks x {len(pairs)} variants{ex} "

@@ -87,11 +87,11 @@ FINE_BLOCKS = 5000
 
 
 def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple[float, ...] = CELL_SIDES,
-            max_blocks: int = 20000) -> tuple[Certificate | None, str]:
+            max_blocks: int = 20000, fine_blocks: int = FINE_BLOCKS) -> tuple[Certificate | None, str]:
     """A certificate that ``start`` (2,) [m] cannot reach ``target`` (2,) [m] under ``rules``, or None
     with what was tried (an honest "not proved": the task may still be infeasible). The
     backward-reachable set is built on cells of side ``h[0]`` [m], then of the next side while it comes
-    within the gap of the start; ``max_blocks`` block updates in all, at most :data:`FINE_BLOCKS` on a
+    within the gap of the start; ``max_blocks`` block updates in all, at most ``fine_blocks`` on a
     finer grid."""
     t0 = time.perf_counter()
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
@@ -111,7 +111,7 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
                            time=time.perf_counter() - t0), ""
     tried, left = [], max_blocks
     for side in h:
-        budget = left if side == h[0] else min(left, FINE_BLOCKS)
+        budget = left if side == h[0] else min(left, fine_blocks)
         back = backward_set(rules, space, goal, start, h=side, gap=START_GAP, max_blocks=budget)
         tried.append(f"cells of {side * 1e3:g} mm: {back.stopped} (after {back.blocks_processed} blocks)")
         left -= back.blocks_processed

@@ -18,7 +18,7 @@ import numpy as np
 
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import Setting
-from tooltransfer.planner.planning.verdicts.certificate import certify
+from tooltransfer.planner.planning.verdicts.certificate import FINE_BLOCKS, certify
 from tooltransfer.planner.planning.verdicts.rules import setting_rules
 
 #: Block updates the backward-reachable set may make before the verdict is left ``unknown``.
@@ -26,16 +26,17 @@ CERTIFY_BLOCKS = 20000
 
 
 def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.ndarray, *,
-                   max_blocks: int = CERTIFY_BLOCKS) -> Plan:
+                   max_blocks: int = CERTIFY_BLOCKS, budget: float = 1.0) -> Plan:
     """``plan`` (not ``solved``) with its verdict and evidence (module docstring); a solved plan is
-    returned as it is, with the evidence that it is one."""
+    returned as it is, with the evidence that it is one. ``budget`` scales the certificate's block
+    updates (``max_blocks`` and :data:`FINE_BLOCKS`)."""
     if plan.status == "solved":
         return replace(plan, evidence={"verdict": "solved", "kind": "plan",
-                                       "checks": "every hard check holds (metrics)"})
+                                       "checks": "every hard check holds (metrics)", "budget": budget})
     t0 = time.perf_counter()
     rules = setting_rules(setting)
     cert, why = certify(rules, np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64),
-                        max_blocks=max_blocks)
+                        max_blocks=round(max_blocks * budget), fine_blocks=round(FINE_BLOCKS * budget))
     spent = time.perf_counter() - t0
     metrics = {**plan.metrics, "time_certify": spent}
     if "time_total" in metrics:
@@ -43,11 +44,11 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
     searched = plan.reason or "no plan"
     if cert is not None:
         evidence: dict[str, Any] = {"verdict": "infeasible", "kind": cert.kind, "searched": searched,
-                                    "certificate": cert.to_dict()}
+                                    "certificate": cert.to_dict(), "budget": budget}
         return replace(plan, status="infeasible", metrics=metrics, evidence=evidence,
                        reason=f"certified infeasible ({cert.kind}): {cert.reason}; the planner's search: {searched}")
     status: Literal["unknown", "violated"] = "violated" if plan.status == "violated" else "unknown"
     evidence = {"verdict": "unknown", "kind": "search_exhausted" if status == "unknown" else "violated",
-                "searched": searched, "not_proved": why}
+                "searched": searched, "not_proved": why, "budget": budget}
     return replace(plan, status=status, metrics=metrics, evidence=evidence,
                    reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)
