@@ -149,6 +149,8 @@ def safe_union(geoms: list[shapely.Geometry]) -> shapely.Geometry:
 
 def polygonal(g: shapely.Geometry) -> shapely.Geometry:
     """The polygons of ``g`` (made valid; lines and points that set operations leave are dropped)."""
+    if shapely.get_type_id(g) in (3, 6) and shapely.is_valid(g):  # already polygons: as they are
+        return g if g.area > 0.0 else shapely.Polygon()
     parts = shapely.get_parts(shapely.get_parts(shapely.make_valid(g)))
     polys = [p for p in parts if shapely.get_type_id(p) == 3 and p.area > 0.0]
     return shapely.union_all(polys) if polys else shapely.Polygon()
