@@ -227,7 +227,24 @@ def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geomet
                                       simplify)
         if stopped:
             return BackwardResult(None, stopped, done, grid)
+        if simplify:  # the coarse pieces back inside their cells, so that a block grows from all of the set in it
+            cells = _clipped(grid, cells)
     return BackwardResult(safe_union(list(cells.values())), "", done, grid)
+
+
+Cells = dict[tuple[int, int], shapely.Geometry]
+
+
+def _clipped(grid: BlockGrid, cells: Cells) -> Cells:
+    """Each cell's piece cut to the cell (a coarsened piece may reach :data:`COARSEN` over its edges, into
+    blocks that do not grow from it); empty pieces dropped. Only over-approximation is cut: the exact pass
+    then closes the set again."""
+    out = {}
+    for c, g in cells.items():
+        piece = polygonal(shapely.intersection(g, shapely.box(*grid.cell_box(*c))))
+        if not piece.is_empty:
+            out[c] = piece
+    return out
 
 
 def _split(grid: BlockGrid, g: shapely.Geometry) -> dict[tuple[int, int], shapely.Geometry]:
