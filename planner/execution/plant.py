@@ -102,6 +102,20 @@ class SimPlant:
         tt, pose = _check_path(t, tool_pose)
         self.parts.append(self.sim.execute_tool_path(tt, pose[:, :2]))
 
+    def displace_object(self, displacement: ArrayLike) -> None:
+        """Move the puck by ``displacement`` (2,) [m] and bring it to rest (something else than the
+        tool knocked it: :class:`tooltransfer.planner.execution.fault_plants.Bump`)."""
+        import mujoco
+
+        from tooltransfer.tools.sim.mjcf import PUCK
+
+        d = check_array(displacement, "displacement", shape=(2,))
+        m, data = self.sim.model, self.sim.data
+        j = m.joint(PUCK)
+        data.qpos[j.qposadr[0]: j.qposadr[0] + 2] += d
+        data.qvel[j.dofadr[0]: j.dofadr[0] + 6] = 0.0
+        mujoco.mj_forward(m, data)
+
     @property
     def execution(self) -> object:
         """Everything recorded so far (:class:`tooltransfer.tools.sim.Execution`; None before the first move)."""
@@ -164,4 +178,10 @@ class ModelPlant:
         path = np.vstack([self.pose, pose])
         trace = simulate(self.tool, path, self.obj, self.radius, self.mechanics)
         self.obj, self.pose = trace.final.copy(), pose[-1].copy()
+        self.history.append(self.obj.copy())
+
+    def displace_object(self, displacement: ArrayLike) -> None:
+        """Move the object by ``displacement`` (2,) [m] (something else than the tool knocked it:
+        :class:`tooltransfer.planner.execution.fault_plants.Bump`)."""
+        self.obj = self.obj + check_array(displacement, "displacement", shape=(2,))
         self.history.append(self.obj.copy())
