@@ -31,7 +31,7 @@ from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.omni.platform import OmniPlatform
 
 #: Least distance [m] between the tool's outline and any obstacle along a command.
-ENVELOPE_MARGIN = 0.001
+ENVELOPE_MARGIN = 0.00025
 #: Largest spacing [m] of the samples the envelope checks along a command.
 ENVELOPE_STEP = 5e-4
 #: The table's bounds ``(x_min, x_max, y_min, y_max)`` [m] in the world frame: the simulated

@@ -29,7 +29,7 @@ from tooltransfer.tools.objects import Disc, Obstacle
 #: A bump's size [m] (:func:`bump_toward`).
 BUMP = 0.014
 #: The longest bump [m] toward an obstacle (:func:`bump_toward`).
-BUMP_TOWARD_MAX = 0.03
+BUMP_TOWARD_MAX = 0.05
 
 
 class FaultPlant:

@@ -20,9 +20,10 @@ larger) from the frames' median are outliers, left out of the mean; without any 
   (:attr:`Health.bias`) is commanded against by the loop, and the envelope checks both the command
   and the path the tool takes with that offset;
 * the object was **displaced by something else** when it moved more than :data:`DISTURB_GATE` off
-  the push model's prediction since the last look (the innovation); where that leaves it within
-  the plan's safety margin of an obstacle the run ends ``disturbed``, elsewhere the loop re-plans
-  from where it is seen (the re-plan threshold of the loop does that).
+  the push model's prediction since the last look (the innovation) into the plan's safety margin
+  of an obstacle, where the model put it outside: the run ends ``disturbed``; elsewhere, beyond
+  :data:`DISTURB_GATE` and :data:`DISTURB_SHARE` of the predicted travel, it is noted and the loop
+  re-plans from where the object is seen (its re-plan threshold does that).
 """
 
 from __future__ import annotations
@@ -55,8 +56,12 @@ TRACK_BOUND = 0.005
 BIAS_MOVES = 3
 #: A tracking offset [m] below this is left alone (a tracking loop's own error).
 BIAS_MIN = 0.0005
-#: The object's displacement off the push model's prediction [m] past which something else moved it.
-DISTURB_GATE = 0.008
+#: The object's displacement off the push model's prediction [m] past which something else moved it
+#: (plus :data:`DISTURB_SHARE` of the predicted travel).
+DISTURB_GATE = 0.004
+#: The share of a push's predicted travel added to :data:`DISTURB_GATE` (a push model mispredicts in
+#: proportion to the travel).
+DISTURB_SHARE = 0.5
 #: Smallest standard deviation [m] the outlier gate assumes (a camera declared noise-free).
 MIN_SIGMA = 1e-4
 
@@ -141,6 +146,7 @@ class Health:
         self.predicted = np.zeros(2)
         self.notes: list[str] = []
         self.deviations: list[NDArray[np.float64]] = []
+        self.innovations: list[tuple[float, float]] = []
 
     @property
     def bias(self) -> NDArray[np.float64] | None:
@@ -183,10 +189,13 @@ class Health:
             raise SensorFault(f"the camera's frames did not change while the push model predicts "
                               f"{1e3 * travel:.1f} mm of travel (a frozen camera)")
         innovation = float(np.hypot(*(o - last.mean - predicted)))
-        if innovation > DISTURB_GATE:
-            gap = obstacle_gap(self.obstacles, o, self.radius)
-            where = f"{np.round(o, 4).tolist()} m, {1e3 * innovation:.1f} mm off the push model's prediction"
-            if gap < self.margin:
-                raise Disturbed(f"the object was displaced to {where}, {1e3 * gap:.1f} mm from an obstacle "
-                                f"(margin {1e3 * self.margin:.1f} mm)")
+        self.innovations.append((travel, innovation))
+        if innovation <= DISTURB_GATE:
+            return
+        where = f"{np.round(o, 4).tolist()} m, {1e3 * innovation:.1f} mm off the push model's prediction"
+        gap = obstacle_gap(self.obstacles, o, self.radius)
+        if gap < self.margin <= obstacle_gap(self.obstacles, last.mean + predicted, self.radius):
+            raise Disturbed(f"the object was displaced to {where}, {1e3 * gap:.1f} mm from an obstacle "
+                            f"(margin {1e3 * self.margin:.1f} mm)")
+        if innovation > DISTURB_GATE + DISTURB_SHARE * travel:
             self.notes.append(f"the object was displaced to {where}: re-planning from there")

@@ -96,6 +96,7 @@ class LoopRun:
         self.errors: list[float] = []
         self.log: list[str] = []
         self.last_seen: NDArray[np.float64] | None = None
+        self.refusals = 0
 
     # ---------------------------------------------------------------- sensing and moving
     def observe(self) -> NDArray[np.float64]:
@@ -116,11 +117,12 @@ class LoopRun:
         o = self.plant.true_object()
         return float(np.hypot(*(self.target - (self.observe() if o is None else o))))
 
-    def move(self, xy: NDArray[np.float64], record: bool = False) -> None:
+    def move(self, xy: NDArray[np.float64], record: bool = False, judge: bool = True) -> None:
         """Track the tool path ``xy`` (K, 2) [m] (heading from the Omni) with a minimum-jerk profile
         (``record``: keep the commanded poses and times, a push for the adaptation). An arm that
         tracks its commands a steady offset off (:attr:`tooltransfer.planner.execution.health.Health.bias`)
-        is commanded that offset the other way."""
+        is commanded that offset the other way; ``judge``: check the tracking after the move (not
+        while backing off after a fault)."""
         length = float(np.sum(np.linalg.norm(np.diff(xy, axis=0), axis=1)))
         if length < 1e-6:
             return
@@ -134,7 +136,8 @@ class LoopRun:
             sent = np.column_stack([path - bias, joint_path(self.platform, path - bias).heading])
         self.plant.bias = np.zeros(2) if bias is None else bias
         self.plant.move_tool(t, sent)  # refused by the envelope (not sent) when unsafe
-        self.health.moved(sent[-1], self.plant.tool_pose())
+        if judge:
+            self.health.moved(sent[-1], self.plant.tool_pose())
         if record:
             self.pending = (t, poses)
 
@@ -286,7 +289,7 @@ class LoopRun:
         normal = rotation(float(pose[2])) @ self.tool.face(self.face).normal
         for d in RETREAT:
             try:
-                self.move(np.vstack([pose[:2], pose[:2] - d * normal]))
+                self.move(np.vstack([pose[:2], pose[:2] - d * normal]), judge=False)
             except LoopStop as exc:
                 self.log.append(f"retreat of {1e3 * d:.0f} mm not made: {exc.reason}")
                 continue

@@ -14,12 +14,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from tooltransfer.planner.execution.loop_run import LoopRun
+from tooltransfer.planner.execution.loop_stop import UnsafeCommand
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
 from tooltransfer.planner.planning.oe.replan import PlanReference
 
 #: Once the model has mispredicted two chunks, the last this many metres are pushed along the faces'
 #: normals (:meth:`tooltransfer.planner.execution.loop_run.LoopRun.correction`).
 STAGE = 0.025
+#: Commands the envelope may refuse in one run, each followed by a correction from where the object is
+#: seen, before the run ends ``"unsafe"``.
+MAX_REFUSALS = 3
 
 
 @dataclass(frozen=True)
@@ -132,8 +136,28 @@ def next_chunk(loop: LoopRun, ref: PlanReference, f: InForce, pace: Pace) -> boo
             return False
     length = pace.chunk if left > 2 * pace.chunk else max(pace.approach * left, 2e-4)
     lead = ref.lead_ins[f.i] if f.plan is ref.plan and f.k == 0 else None
-    f.k = loop.push(p, f.plan, o, f.k, length, lead)
+    try:
+        f.k = loop.push(p, f.plan, o, f.k, length, lead)
+    except UnsafeCommand as refused:
+        return _instead(loop, f, refused, ref.end)
     loop.errors.append(loop.true_error())
     if f.k >= len(p.samples) - 1:
         f.i, f.k = f.i + 1, 0
     return False
+
+
+def _instead(loop: LoopRun, f: InForce, refused: UnsafeCommand, base: float) -> bool:
+    """The envelope refused a command of the next chunk (nothing was sent): a correction from the
+    object seen now is put in force from push-time ``base`` [s] (its contacts and route differ),
+    at most :data:`MAX_REFUSALS` times a run; else the refusal ends the run."""
+    loop.refusals += 1
+    if loop.refusals > MAX_REFUSALS:
+        raise refused
+    o = loop.observe()
+    pp = loop.correction(o)
+    if pp.status != "solved":
+        raise refused
+    loop.log.append(f"{refused.reason}; corrected from {np.round(o, 4).tolist()} m instead: {' -> '.join(pp.faces)}")
+    f.switch_to(pp, base)
+    return False
+
