@@ -6,8 +6,9 @@ outliers, an arm that tracks off its command or lags, a driver that raises, or a
 something else. Faults are seeded (``seed``, ``numpy.random.default_rng``) and start after a count
 of the plant's calls, so a run is repeatable. Every wrapper forwards ``true_object()`` and
 ``execution`` when the wrapped plant has them, counts the commands sent (``moves``) and the plant
-time they took (``plant_time`` [s], the sum of each command's duration), and records the plant time
-its fault started at (``fault_time``, None before).
+time they took (``plant_time`` [s], the sum of each command's duration), records the plant time
+its fault started at (``fault_time``, None before), and passes any other method on to the wrapped
+plant (a driver's ``stop()``).
 
 :data:`FAULTS` names one setting of each for the benchmark and the tests
 (:func:`fault_plant`); the recoverable ones (:data:`RECOVERABLE`) are faults a closed loop should
@@ -64,13 +65,15 @@ class FaultPlant:
         """Send the command to the wrapped plant (as the arm executes it)."""
         self.plant.move_tool(t, tool_pose)
 
-    def true_object(self) -> NDArray[np.float64]:
-        """The wrapped plant's true object centre (2,) [m]."""
-        return self.plant.true_object()  # type: ignore[attr-defined, no-any-return]
-
     @property
     def execution(self) -> object:
         return getattr(self.plant, "execution", None)
+
+    def __getattr__(self, name: str) -> Any:
+        """The wrapped plant's other methods (a driver's ``stop()``, ``displace_object``)."""
+        if name.startswith("_") or name == "plant":
+            raise AttributeError(name)
+        return getattr(self.plant, name)
 
 
 class FrozenCamera(FaultPlant):
@@ -217,7 +220,7 @@ class Bump(FaultPlant):
         if self.moves - 1 == self.at:
             self._fault()
             d = self.displacement
-            d = d(self.true_object()) if callable(d) else d
+            d = d(self.plant.true_object()) if callable(d) else d  # type: ignore[attr-defined]
             self.plant.displace_object(np.asarray(d, dtype=float))  # type: ignore[attr-defined]
 
 

@@ -81,11 +81,12 @@ class GuardedPlant:
         return _vector("observe_object", self._call("observe_object"), 2)
 
     def tool_pose(self) -> NDArray[np.float64]:
-        """The reported tool pose (3,); up to :data:`POSE_TRIES` readings until one is usable."""
+        """The reported tool pose (3,); up to :data:`POSE_TRIES` readings (one that raises or is
+        unusable is taken again) until one is usable, else the last one's fault."""
         for attempt in range(POSE_TRIES):
             try:
                 return _vector("tool_pose", self._call("tool_pose"), 3)
-            except BadValue:
+            except (BadValue, PlantCallError):
                 if attempt == POSE_TRIES - 1:
                     raise
         raise AssertionError("unreachable")  # pragma: no cover
