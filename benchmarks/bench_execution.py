@@ -784,7 +784,7 @@ def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None
                     if _is_exc(r[f"{stage}_status"]):
                         con.print(f"  {stage.replace('_', ' ')} of {r['task_id']}: {r[f'{stage}_status']}")
             _mismatch_table(con, solved)
-            fault_table(con, solved)
+            fault_table(con, [r for r in vrows if r["status"] == "solved"])  # the paper tasks too
         if gen:
             t = Table("tool", "tasks", "solved", "open median mm", "open <= 5 mm", "model pred. median mm",
                       "closed median mm", "closed <= 2 mm", title="per tool (shares of the tool's solved plans)",

@@ -121,7 +121,7 @@ def run_faults(plan: Any, mech: Any, names: Sequence[str], base: str, seed: int,
                 inner = ModelPlant(setting.tool, setting.radius, mech, task.start, plan.tool_pose[0],
                                    platform=setting.platform, camera_noise=0.0015, seed=seed)
             fp = fault_plant(name, inner, seed=seed, obstacles=setting.obstacles, radius=setting.radius,
-                             margin=setting.margin)
+                             margin=setting.margin, target=task.target)
             rec = Recorder(fp)
             with deadline(f"closed loop on fault {name}"):
                 rep = execute_closed_loop(plan, rec, seed=seed)
@@ -141,7 +141,8 @@ def run_faults(plan: Any, mech: Any, names: Sequence[str], base: str, seed: int,
 
 
 def fault_table(con: Any, solved: Sequence[Row]) -> None:
-    """The fault plants' table over the solved plans' ``faults`` results, and the targets."""
+    """The fault plants' table over the solved plans' ``faults`` results (generated and paper tasks),
+    and the targets."""
     from rich import box
     from rich.table import Table
 

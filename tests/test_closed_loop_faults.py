@@ -128,7 +128,7 @@ def test_no_command_leaves_the_envelope_on_any_code_path(plan: Plan, setting: Se
     logs, statuses = [], []
     for rec, fault in runs:
         plant = rec if fault is None else fault_plant(fault, rec, obstacles=setting.obstacles, radius=setting.radius,
-                                                       margin=setting.margin)
+                                                       margin=setting.margin, target=plan.object["goal"])
         rep = execute_closed_loop(plan, plant)
         logs.append(" ".join(rep.log))
         statuses.append(rep.status)
@@ -160,7 +160,8 @@ def test_recoverable_faults_still_reach_the_target(plan: Plan, setting: Setting,
     for seed in (0, 1):
         rec = _model(plan, setting, seed=seed)
         rep = execute_closed_loop(plan, fault_plant(fault, rec, seed=seed, obstacles=setting.obstacles,
-                                                    radius=setting.radius, margin=setting.margin))
+                                                    radius=setting.radius, margin=setting.margin,
+                                                    target=plan.object["goal"]))
         assert rep.final_error <= 0.003, (fault, seed, rep.status, rep.reason)
 
 
@@ -177,6 +178,7 @@ def test_a_tool_that_does_not_follow_ends_with_a_tracking_fault(plan: Plan, sett
     ("tool_pose", {"value": np.array([np.nan, 0.0, 0.0]), "times": 10**9, "at": 4}, "sensor_fault", "nan"),
     ("tool_pose", {"error": ValueError("encoder"), "times": 10**9, "at": 4}, "failed", "tool_pose raised ValueError"),
     ("move_tool", {"error": TimeoutError("late"), "at": 2}, "failed", "move_tool raised TimeoutError: late"),
+    ("move_tool", {"error": SystemExit(3), "at": 2}, "failed", "move_tool raised SystemExit: 3"),
 ])
 def test_no_exception_escapes_and_the_reason_names_the_method(plan: Plan, setting: Setting, method: str,
                                                               kwargs: dict, status: str, words: str) -> None:

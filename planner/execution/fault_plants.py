@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.errors import InputError
+from tooltransfer.planner.execution.health import obstacle_gap
 from tooltransfer.planner.execution.plant import Plant
 from tooltransfer.tools.objects import Disc, Obstacle
 
@@ -135,18 +136,22 @@ class NoisyCamera(FaultPlant):
 
 
 class TrackingOffset(FaultPlant):
-    """The arm tracks every command ``offset`` (2,) [m] off (a bent tool, a calibration error); the
-    encoders report where the tool is."""
+    """The arm tracks every command ``offset`` (2,) [m] off (a bent tool, a calibration error; the
+    offset grows in along the first command, as a tool slips in its grip); the encoders report where
+    the tool is."""
 
     def __init__(self, plant: Plant, offset: ArrayLike = (0.003, 0.0), seed: int = 0) -> None:
         super().__init__(plant, seed)
         self.offset = np.asarray(offset, dtype=float)
+        self.applied = np.zeros(2)
 
     def command(self, t: NDArray[np.float64], tool_pose: NDArray[np.float64]) -> None:
         self._fault()
+        u = (t / t[-1])[:, None]
         shifted = tool_pose.copy()
-        shifted[:, :2] += self.offset
+        shifted[:, :2] += (1.0 - u) * self.applied + u * self.offset
         self.plant.move_tool(t, shifted)
+        self.applied = self.offset
 
 
 class TrackingLag(FaultPlant):
@@ -224,23 +229,41 @@ class Bump(FaultPlant):
             self.plant.displace_object(np.asarray(d, dtype=float))  # type: ignore[attr-defined]
 
 
-def bump_toward(obstacles: Sequence[Obstacle], radius: float, margin: float, toward: bool,
-                size: float = BUMP) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:
-    """A :class:`Bump`'s displacement for an object of ``radius`` [m]: ``size`` [m] away from the
-    nearest obstacle, or toward it (``toward``) to half the ``margin`` [m] from it, at most
-    :data:`BUMP_TOWARD_MAX` (``size`` along +y without obstacles)."""
+def bump_away(obstacles: Sequence[Obstacle], radius: float, target: ArrayLike,
+              size: float = BUMP) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:
+    """A :class:`Bump`'s displacement for an object of ``radius`` [m]: ``size`` [m] (at most half the
+    way left) on along its way, toward the task's ``target`` (2,) [m] (not back into the tool that
+    pushes it), turned by up to 60 degrees to land farthest from the obstacles."""
+    goal = np.asarray(target, dtype=float)
 
     def displacement(xy: NDArray[np.float64]) -> NDArray[np.float64]:
-        from tooltransfer.planner.execution.health import obstacle_gap
+        ahead = goal - xy
+        a0 = float(np.arctan2(ahead[1], ahead[0]))
+        n = min(size, 0.5 * float(np.hypot(*ahead)))
+        best, best_gap = np.zeros(2), -np.inf
+        for da in np.radians([0.0, 30.0, -30.0, 60.0, -60.0]):
+            d = n * np.array([np.cos(a0 + da), np.sin(a0 + da)])
+            gap = min(obstacle_gap(obstacles, xy + d, radius), 1.0)
+            if gap > best_gap + 1e-9:
+                best, best_gap = d, gap
+        return best
 
+    return displacement
+
+
+def bump_toward(obstacles: Sequence[Obstacle], radius: float, margin: float,
+                size: float = BUMP) -> Callable[[NDArray[np.float64]], NDArray[np.float64]]:
+    """A :class:`Bump`'s displacement for an object of ``radius`` [m] toward the nearest obstacle, to
+    half the ``margin`` [m] from it, at most :data:`BUMP_TOWARD_MAX` [m] (``size`` [m] along +y
+    without obstacles)."""
+
+    def displacement(xy: NDArray[np.float64]) -> NDArray[np.float64]:
         if not obstacles:
             return np.array([0.0, size])
         centres = [ob.centre if isinstance(ob, Disc) else np.array(ob.centroid.coords[0]) for ob in obstacles]
         gaps = [obstacle_gap((ob,), xy, radius) for ob in obstacles]
         j = int(np.argmin(gaps))
         u = (centres[j] - xy) / max(float(np.hypot(*(centres[j] - xy))), 1e-9)
-        if not toward:
-            return -size * u
         return min(BUMP_TOWARD_MAX, max(0.0, gaps[j] - 0.5 * margin)) * u
 
     return displacement
@@ -270,13 +293,14 @@ RECOVERABLE = ("dropped frame", "outliers 5%", "noise 10 mm", "tracking offset 3
 
 
 def fault_plant(name: str, plant: Plant, seed: int = 0, obstacles: Sequence[Obstacle] = (), radius: float = 0.0,
-                margin: float = 0.0) -> FaultPlant:
-    """``plant`` wrapped in the fault ``name`` of :data:`FAULTS` (seed ``seed``); the bumps go away
-    from or toward the nearest of ``obstacles`` (:func:`bump_toward`, the object's ``radius`` and
-    the plan's ``margin`` [m])."""
+                margin: float = 0.0, target: ArrayLike = (0.0, 0.0)) -> FaultPlant:
+    """``plant`` wrapped in the fault ``name`` of :data:`FAULTS` (seed ``seed``); the bumps go on
+    toward the task's ``target`` (2,) [m] away from ``obstacles`` (:func:`bump_away`), or toward the
+    nearest obstacle (:func:`bump_toward`, the object's ``radius`` and the plan's ``margin`` [m])."""
     if name not in FAULTS:
         raise InputError("fault", f"one of {sorted(FAULTS)}", name)
     cls, kwargs = FAULTS[name]
     if cls is Bump:
-        kwargs = {**kwargs, "displacement": bump_toward(obstacles, radius, margin, toward="toward" in name)}
+        bump = bump_toward(obstacles, radius, margin) if "toward" in name else bump_away(obstacles, radius, target)
+        kwargs = {**kwargs, "displacement": bump}
     return cls(plant, seed=seed, **kwargs)

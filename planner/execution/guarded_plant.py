@@ -73,7 +73,7 @@ class GuardedPlant:
         fn: Callable[..., Any] = getattr(self._plant, method)
         try:
             return fn(*args)
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:  # a driver's sys.exit() ends the run, not the program
             raise PlantCallError(method, exc) from exc
 
     def observe_object(self) -> NDArray[np.float64]:

@@ -75,7 +75,8 @@ class LoopRun:
         self.plant = GuardedPlant(plant, SafetyEnvelope.of(self.setting))
         self.frames, self.tolerance, self.noise = frames, tolerance, camera_noise / np.sqrt(frames)
         self.camera_noise = camera_noise
-        self.health = Health(self.tool, self.setting.radius, self.setting.obstacles, self.setting.margin)
+        self.health = Health(self.tool, self.setting.radius, self.setting.obstacles, self.setting.margin,
+                             camera_noise)
         self.switch = switch_planner(ss, self.setting, skills.ss, task.ss)
         self.recontact = with_fallback(recontact_planner(self.setting), self.switch, "switch")
         self.target = np.array(task.target)
