@@ -89,7 +89,7 @@ class ClosedLoopReport:
             ``"sensor_fault"``, ``"tracking_fault"`` or ``"disturbed"`` (module docstring).
         reason: why it did not reach the target (empty when it did).
         final_error: object centre to target at the end [m] (the true one when the plant tells it,
-            else the measured one).
+            else the measured one; the last look's when neither can be had now, NaN without any).
         n_pushes: chunks pushed; n_switches: changes of face; n_recontacts: re-contacts of a face.
         n_replans: re-plans solved; replan_times: their wall times [s].
         errors: object-to-target distance [m] after each chunk.
@@ -192,7 +192,10 @@ def execute_closed_loop(
     except LoopStop as stop:
         status, reason = stop.status, stop.reason
         if loop is not None and stop.retreat:
-            loop.retreat()
+            try:
+                loop.retreat()
+            except Exception as exc:  # the run is ending with its fault: the failed retreat is noted
+                loop.log.append(f"no retreat: {type(exc).__name__}: {exc}")
     except Exception as exc:  # no exception escapes: anything else ends the run with its reason
         status, reason = "failed", f"{type(exc).__name__}: {exc}"
     return _report(status, reason, loop, plant, tolerance, start)

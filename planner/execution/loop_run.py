@@ -30,6 +30,7 @@ from tooltransfer.planner.planning.oe.replan import QP_REPLAN_SIZES, refuse_tool
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.ss.arch_variant import swept_clearance
+from tooltransfer.planner.planning.tool_clearance import tool_obstacle_clearance
 from tooltransfer.planner.planning.variant_registry import needs_ss_skill, oe_variant, switch_planner
 from tooltransfer.problems.task import Task
 from tooltransfer.timing import min_jerk_along, min_jerk_duration
@@ -185,8 +186,6 @@ class LoopRun:
         pp = refuse_tool_overlap(self.tool, self.setting.obstacles, pp)
         if pp.status != "solved" or not pp.pushes or not self.setting.obstacles:
             return pp
-        from tooltransfer.planner.planning.tool_clearance import tool_obstacle_clearance
-
         poses = np.vstack([pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
         near = tool_obstacle_clearance(self.tool, poses, self.setting.obstacles)
         margin = self.plant.envelope.margin
