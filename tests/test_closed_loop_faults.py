@@ -144,6 +144,17 @@ def test_no_command_leaves_the_envelope_on_any_code_path(plan: Plan, setting: Se
     assert statuses[-1] == "sensor_fault"
 
 
+def test_a_wider_envelope_refuses_commands_and_none_reaches_the_arm(plan: Plan, setting: Setting) -> None:
+    """The tool passes about 5 mm from the obstacle on this plan: with a 5.5 mm envelope the loop
+    meets commands it may not send; it corrects from where the puck is instead or ends ``unsafe``,
+    and nothing closer than 5.5 mm reached the arm's driver."""
+    rec = _model(plan, setting, seed=1)
+    rep = execute_closed_loop(plan, rec, envelope_margin=0.0055)
+    assert rep.status == "unsafe" or "instead" in " ".join(rep.log), (rep.status, rep.log)
+    assert rep.status in ("reached", "closest", "rounds", "failed", "unsafe")
+    assert all(_outline_gap(setting, path) >= 0.0055 - 1e-6 for path in rec.received)
+
+
 def test_a_frozen_camera_is_detected_within_2_s_and_the_tool_backs_off(plan: Plan, setting: Setting) -> None:
     for after in (1, 3, 8):
         rec = _model(plan, setting)

@@ -58,6 +58,7 @@ from typing import TYPE_CHECKING, TypeVar
 import numpy as np
 
 from tooltransfer.errors import InputError
+from tooltransfer.planner.execution.envelope import ENVELOPE_MARGIN
 from tooltransfer.planner.execution.loop_run import LoopRun as _Loop
 from tooltransfer.planner.execution.loop_steps import InForce as _InForce
 from tooltransfer.planner.execution.loop_steps import Pace as _Pace
@@ -149,7 +150,7 @@ def execute_closed_loop(
     plan: Plan, plant: Plant | None = None, *, tolerance: float = 0.001, chunk: float = 0.015,
     approach: float = 0.6, max_rounds: int = 4, max_chunks: int = 120, frames: int = 10,
     replan_threshold: float = 0.001, adapt: bool = True, camera_noise: float = 0.0015, seed: int = 0,
-    config: SimConfig | None = None,
+    config: SimConfig | None = None, envelope_margin: float = ENVELOPE_MARGIN,
 ) -> ClosedLoopReport:
     """Execute a solved plan closed loop (module docstring).
 
@@ -174,6 +175,8 @@ def execute_closed_loop(
         camera_noise: the camera's noise per frame [m]: the default plant's, and the noise the re-plan
             threshold and the adaptation's prior (:mod:`tooltransfer.tools.pushing.adaptation`) assume
             for any plant.
+        envelope_margin: the least distance [m] between the tool's outline and the obstacles along
+            every command (:class:`tooltransfer.planner.execution.envelope.SafetyEnvelope`).
     """
     if not isinstance(plan, Plan) or plan.status != "solved":
         raise InputError("plan", "a solved plan", getattr(plan, "status", type(plan).__name__))
@@ -182,7 +185,7 @@ def execute_closed_loop(
     status, reason = "rounds", ""
     loop: _Loop | None = None
     try:
-        loop = _Loop(plan, task, plant, frames, tolerance, adapt, camera_noise, seed, config)
+        loop = _Loop(plan, task, plant, frames, tolerance, adapt, camera_noise, seed, config, envelope_margin)
         status, reason = _run(loop, plan, _Pace(tolerance, max(replan_threshold, 3.0 * camera_noise / np.sqrt(frames)),
                                                 chunk, approach, max_rounds), max_chunks)
     except KeyboardInterrupt:

@@ -13,8 +13,8 @@ larger) from the frames' median are outliers, left out of the mean; without any 
 
 * the camera is **frozen** when a look repeats the previous one exactly (a camera's noise never
   does) while the push model predicted at least :data:`FROZEN_TRAVEL` of travel in between, or
-  two looks repeat one frame exactly although the camera is declared noisy (a plant whose camera
-  has no noise is run with ``camera_noise=0``), or
+  when a look repeats one frame exactly from a camera declared noisy that showed its noise in an
+  earlier look (a noise-free simulated camera never does), or
   when the reported tool outline reaches more than :data:`PENETRATION` into the object where the
   camera sees it (the camera sees the object where the tool is): ``sensor_fault``;
 * the tool does **not follow** its command when the reported pose ends farther than
@@ -147,6 +147,7 @@ class Health:
                  noise: float = 0.0) -> None:
         self.tool, self.radius, self.obstacles, self.margin = tool, radius, tuple(obstacles), margin
         self.noise = noise
+        self.noisy = False  # a look has shown the camera's noise
         self.last: Look | None = None
         self.predicted = np.zeros(2)
         self.notes: list[str] = []
@@ -184,18 +185,20 @@ class Health:
         if deep > PENETRATION:
             raise SensorFault(f"the camera sees the object at {np.round(o, 4).tolist()} m, {1e3 * deep:.1f} mm "
                               f"inside the tool's outline (frozen or displaced frames)")
+        still = len(look.frames) >= 3 and np.ptp(look.frames, axis=0).max() == 0.0
+        if still and self.noisy and self.noise > 0.0:
+            raise SensorFault(f"the camera repeats one frame exactly over a look of {len(look.frames)} frames "
+                              f"although it showed its noise ({1e3 * self.noise:.1f} mm) before (a frozen camera)")
+        self.noisy = self.noisy or not still
         last, predicted = self.last, self.predicted
         self.last, self.predicted = look, np.zeros(2)
         if last is None:
             return
         travel = float(np.hypot(*predicted))
-        same = np.array_equal(look.frames[:1], last.frames[:1]) and np.ptp(look.frames, axis=0).max() == 0.0
+        same = np.array_equal(look.frames[:1], last.frames[:1]) and still
         if same and travel >= FROZEN_TRAVEL:
             raise SensorFault(f"the camera's frames did not change while the push model predicts "
                               f"{1e3 * travel:.1f} mm of travel (a frozen camera)")
-        if same and self.noise > 0.0 and np.ptp(last.frames, axis=0).max() == 0.0:
-            raise SensorFault(f"the camera repeats one frame exactly over two looks of {len(look.frames)} frames "
-                              f"although its noise is {1e3 * self.noise:.1f} mm (a frozen camera)")
         innovation = float(np.hypot(*(o - last.mean - predicted)))
         self.innovations.append((travel, innovation))
         if innovation <= DISTURB_GATE:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from tooltransfer.planner.execution.envelope import SafetyEnvelope
+from tooltransfer.planner.execution.envelope import ENVELOPE_MARGIN, SafetyEnvelope
 from tooltransfer.planner.execution.guarded_plant import GuardedPlant
 from tooltransfer.planner.execution.health import Health, take_look
 from tooltransfer.planner.execution.loop_stop import LoopStop
@@ -54,12 +54,13 @@ class LoopRun:
     """One closed-loop run (see :func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`).
 
     The plant it is given is wrapped in a :class:`GuardedPlant` on the run's
-    :class:`SafetyEnvelope` (``plant``, the only one it holds); ``camera_noise`` [m] per frame is the
-    noise the looks and the adaptation assume."""
+    :class:`SafetyEnvelope` (``plant``, the only one it holds; the tool kept ``envelope_margin`` [m]
+    from the obstacles); ``camera_noise`` [m] per frame is the noise the looks and the adaptation
+    assume."""
 
     def __init__(self, plan: Plan, task: Task, plant: Plant | None, frames: int, tolerance: float,
                  adapt: bool = True, camera_noise: float = 0.0015, seed: int = 0,
-                 config: SimConfig | None = None) -> None:
+                 config: SimConfig | None = None, envelope_margin: float = ENVELOPE_MARGIN) -> None:
         from tooltransfer.planner.planning.recontact import recontact_planner
         from tooltransfer.planner.planning.switches import with_fallback
 
@@ -73,7 +74,7 @@ class LoopRun:
 
             plant = sim_plant(self.setting, config or task_sim_config(task), task.start, plan.joints[0], camera_noise,
                               seed)
-        self.plant = GuardedPlant(plant, SafetyEnvelope.of(self.setting))
+        self.plant = GuardedPlant(plant, SafetyEnvelope.of(self.setting, envelope_margin))
         self.frames, self.tolerance, self.noise = frames, tolerance, camera_noise / np.sqrt(frames)
         self.camera_noise = camera_noise
         self.health = Health(self.tool, self.setting.radius, self.setting.obstacles, self.setting.margin,
