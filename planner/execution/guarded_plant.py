@@ -37,7 +37,10 @@ class BadValue(SensorFault):
 
     def __init__(self, method: str, value: object, expected: str) -> None:
         self.method, self.value = method, value
-        text = " ".join(repr(value).split())
+        try:
+            text = " ".join(repr(value).split())
+        except Exception:  # a value whose repr fails is named by its type
+            text = f"a {type(value).__name__}"
         super().__init__(f"plant.{method} returned {text[:120]} (expected {expected})")
 
 
@@ -45,7 +48,7 @@ def _vector(method: str, value: object, n: int) -> NDArray[np.float64]:
     expected = f"{n} finite numbers"
     try:
         v = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
+    except Exception as exc:  # not array-like at all
         raise BadValue(method, value, expected) from exc
     if v.shape != (n,) or not np.all(np.isfinite(v)):
         raise BadValue(method, value, expected)

@@ -2,7 +2,7 @@
 camera, arm or world from a mispredicting push model.
 
 A **look** (:func:`take_look`) asks the camera for ``frames`` frames. Unusable frames (dropped:
-not finite, the wrong shape, or the call raised) are taken again, at most as many as were asked
+not finite, the wrong shape, or the call raised) are taken again, at most as many as the look asks
 for before the run ends with ``sensor_fault``. A look whose frames spread more than
 :data:`NOISY_FACTOR` times the camera's declared noise takes more frames, so that its mean is as
 precise as the declared camera's (at most :data:`MAX_LOOK_FACTOR` times ``frames``). Frames farther
@@ -88,8 +88,8 @@ def _spread(frames: NDArray[np.float64]) -> float:
 
 def take_look(frame: Callable[[], NDArray[np.float64]], frames: int, noise: float) -> Look:
     """A look of ``frames`` frames from ``frame()`` (module docstring); ``noise``: the camera's
-    declared standard deviation per frame [m]. Raises :class:`SensorFault` when more than ``frames``
-    frames are unusable (the last one's reason)."""
+    declared standard deviation per frame [m]. Raises :class:`SensorFault` when more frames are
+    unusable than the look asks for (the last one's reason)."""
     got: list[NDArray[np.float64]] = []
     dropped = 0
 
@@ -100,7 +100,7 @@ def take_look(frame: Callable[[], NDArray[np.float64]], frames: int, noise: floa
                 got.append(frame())
             except LoopStop as bad:
                 dropped += 1
-                if dropped > frames:
+                if dropped > n:
                     raise SensorFault(f"{dropped} unusable camera frames in one look, the last: {bad.reason}",
                                       status="failed" if bad.status == "failed" else None) from bad
 
