@@ -59,10 +59,12 @@ class GuardedPlant:
     """``plant`` behind the checks of the module docstring; ``envelope``: where the tool may go.
 
     Attributes:
-        envelope: the safety envelope; sent: the commands sent (``(t, tool_pose)``, as sent);
-        refused: the reasons of the commands refused; bias: the arm's known tracking offset (2,)
-        [m] (the tool goes ``bias`` off its command): a command is checked from the reported pose less
-        ``bias`` and, with a bias, also as the tool tracks it.
+        envelope: the safety envelope.
+        sent: the commands sent (``(t, tool_pose)``, as sent).
+        refused: the reasons of the commands refused.
+        bias: the arm's known tracking offset (2,) [m] (the tool goes ``bias`` off its command): a
+            command is checked from the reported pose less ``bias`` and, with a bias, also as the
+            tool tracks it.
     """
 
     def __init__(self, plant: Plant, envelope: SafetyEnvelope) -> None:
