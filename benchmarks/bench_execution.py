@@ -16,7 +16,13 @@ Run with `python benchmarks/bench_execution.py` (or `make bench-exec`). For ever
 4. unless ``--no-mismatch``, the plan on mismatched plants (:data:`MISMATCH_PLANTS`), open and closed
    loop: MuJoCo with tool friction 0.5 and table friction 0.2, and the quasi-static
    :class:`tooltransfer.planner.execution.plant.ModelPlant` with mu and c 0.6 and 1.4 times the plan's (camera noise
-   1.5 mm; open loop there is the push model run on the plan's tool poses).
+   1.5 mm; open loop there is the push model run on the plan's tool poses);
+5. with ``--faults NAMES`` (comma-separated, or ``all``), the closed loop on the fault plants of
+   :data:`tooltransfer.planner.execution.fault_plants.FAULTS` (a frozen camera, dropped, outlier and
+   noisy frames, a tracking offset and lag, driver faults, bumps) over the MuJoCo platform
+   (``--fault-base sim``, default) or the push model (``model``): statuses, final errors, the
+   commands overlapping an obstacle or leaving the reach, exceptions, the time a frozen camera took
+   to end the run and whether the tool ended clear of the object (:mod:`fault_runs`).
 
 Tasks: the generated batch ``problems/batch/execution_60.yaml`` (60 tasks, five library tools in
 turn, up to one obstacle) and the paper's tasks ``problems/paper/transfer_tool2.yaml`` and
@@ -37,6 +43,7 @@ per-task row (and the run's settings) for comparing runs.
     python benchmarks/bench_execution.py                                  # 60 + 2 tasks, qp/opt
     python benchmarks/bench_execution.py --count 10 --no-closed-loop --no-mismatch  # a quick look
     python benchmarks/bench_execution.py --variants qp/opt,mapping/opt --json out/exec.json
+    python benchmarks/bench_execution.py --count 6 --no-mismatch --faults all   # the fault plants
 
 Single-threaded BLAS (``OPENBLAS_NUM_THREADS=1``); planning times vary by some percent on a shared
 machine. Learned skills are cached in ``$TOOLTRANSFER_CACHE`` (default ``~/.cache/tooltransfer``),
@@ -71,6 +78,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from fault_runs import FAULT_BASES, fault_table, parse_faults, run_faults
 
 from tooltransfer.planner.apps.batch.execute import finite_or_none
 from tooltransfer.planner.planning import variant_registry
@@ -103,6 +111,8 @@ class Job:
         mismatch: also execute on the mismatched plants (:data:`MISMATCH_PLANTS`).
         seed: camera-noise seed of the closed loop.
         timeout: [s] per stage (planning, open loop, closed loop); 0 for none.
+        faults: names of the fault plants to run the closed loop on (:mod:`fault_runs`);
+        fault_base: ``"sim"`` or ``"model"``, the plant they wrap.
     """
 
     task_id: str
@@ -118,6 +128,8 @@ class Job:
     mismatch: bool = True
     seed: int = 0
     timeout: float = 0.0
+    faults: tuple[str, ...] = ()
+    fault_base: str = "sim"
 
     @property
     def variant(self) -> str:
@@ -369,6 +381,11 @@ def run_task(job: Job) -> Row:
             else:
                 row["mismatch"] = run_mismatch(plan, job, mech)
             row["mismatch_wall"] = time.perf_counter() - t0
+        if job.faults and mech is not None:
+            t0 = time.perf_counter()
+            row["faults"] = run_faults(plan, mech, job.faults, job.fault_base, job.seed,
+                                       lambda what: _deadline(job.timeout, what))
+            row["faults_wall"] = time.perf_counter() - t0
     row["task_wall"] = time.perf_counter() - started
     return row
 
@@ -405,7 +422,8 @@ def parse_variants(text: str) -> list[tuple[str, str]]:
 
 
 def make_jobs(batch: Path, count: int | None, variants: Sequence[tuple[str, str]], paper: bool,
-              closed_loop: bool, seed: int, timeout: float, mismatch: bool = True) -> list[Job]:
+              closed_loop: bool, seed: int, timeout: float, mismatch: bool = True, faults: tuple[str, ...] = (),
+              fault_base: str = "sim") -> list[Job]:
     """The jobs: the paper tasks first (their closed loops are the longest), then the generated
     tasks in order, each with every variant."""
     import yaml
@@ -421,7 +439,7 @@ def make_jobs(batch: Path, count: int | None, variants: Sequence[tuple[str, str]
     jobs = []
     for oe, ss in variants:
         common = {"oe": oe, "ss": ss, "closed_loop": closed_loop, "mismatch": mismatch, "seed": seed,
-                  "timeout": timeout}
+                  "timeout": timeout, "faults": faults, "fault_base": fault_base}
         for p in PAPER if paper else ():
             task = load_task(p)
             tool = task.tool if isinstance(task.tool, str) else task.tool.name
@@ -450,6 +468,8 @@ def _progress_line(done: int, total: int, r: Row) -> str:
             s += f" | {name} open {mm(res.get('open_loop_error'))}"
             if cl is not None:
                 s += f" closed {cl if _is_exc(cl) else cl + ' ' + mm(res.get('closed_loop_error'))}"
+        for name, res in (r.get("faults") or {}).items():
+            s += f" | {name} {res.get('status') or 'exception'} {mm(res.get('error'))}"
     s += f" | {r.get('task_wall') or 0.0:.1f} s"
     return s
 
@@ -764,6 +784,7 @@ def report(rows: Sequence[Row], wall: float, console: Any | None = None) -> None
                     if _is_exc(r[f"{stage}_status"]):
                         con.print(f"  {stage.replace('_', ' ')} of {r['task_id']}: {r[f'{stage}_status']}")
             _mismatch_table(con, solved)
+            fault_table(con, [r for r in vrows if r["status"] == "solved"])  # the paper tasks too
         if gen:
             t = Table("tool", "tasks", "solved", "open median mm", "open <= 5 mm", "model pred. median mm",
                       "closed median mm", "closed <= 2 mm", title="per tool (shares of the tool's solved plans)",
@@ -850,6 +871,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--no-closed-loop", dest="closed_loop", action="store_false", help="skip the closed loop")
     ap.add_argument("--no-mismatch", dest="mismatch", action="store_false",
                     help="skip the mismatched plants (MuJoCo with other frictions, the push model with mu, c off)")
+    ap.add_argument("--faults", type=parse_faults, default=(),
+                    help="closed loop on these fault plants too: comma-separated names or 'all' "
+                         "(tooltransfer.planner.execution.fault_plants.FAULTS)")
+    ap.add_argument("--fault-base", choices=FAULT_BASES, default="sim",
+                    help="the plant the faults wrap: the MuJoCo platform (sim) or the push model (model)")
     ap.add_argument("--no-paper", dest="paper", action="store_false", help="skip the two paper tasks")
     ap.add_argument("--seed", type=int, default=0, help="camera-noise seed of the closed loop")
     ap.add_argument("--timeout", type=float, default=600.0,
@@ -863,13 +889,14 @@ def main(argv: Sequence[str] | None = None) -> None:
     con = Console(width=None if sys.stdout.isatty() else 150, markup=False, highlight=False)
     t0 = time.perf_counter()
     jobs = make_jobs(args.batch, args.count, args.variants, args.paper, args.closed_loop, args.seed, args.timeout,
-                     args.mismatch)
+                     args.mismatch, args.faults, args.fault_base)
     variants = ",".join(f"{o}/{s}" for o, s in args.variants)
     commit = _commit()
     con.print(f"execution benchmark: {len(jobs)} task runs ({args.batch.name}"
               f"{'' if args.count is None else f', first {args.count}'}{' + paper tasks' if args.paper else ''}; "
               f"variants {variants}; closed loop {'on, seed ' + str(args.seed) if args.closed_loop else 'off'}; "
-              f"mismatched plants {'on' if args.mismatch else 'off'}); "
+              f"mismatched plants {'on' if args.mismatch else 'off'}; "
+              f"fault plants {', '.join(args.faults) + ' on ' + args.fault_base if args.faults else 'off'}); "
               f"{args.workers} workers")
     from tooltransfer.planner.learning.skills import cache_dir
 
@@ -888,6 +915,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     if args.json is not None:
         meta = {"commit": commit, "batch": str(args.batch), "count": args.count, "variants": variants,
                 "closed_loop": args.closed_loop, "mismatch": args.mismatch, "seed": args.seed,
+                "faults": list(args.faults), "fault_base": args.fault_base,
                 "workers": args.workers, "timeout": args.timeout,
                 "wall": wall, "python": sys.version.split()[0], "argv": sys.argv[1:],
                 "finished": time.strftime("%Y-%m-%d %H:%M:%S")}

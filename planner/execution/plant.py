@@ -20,8 +20,13 @@ a camera, ``observe_object`` returns the latest camera estimate of the puck's ce
 into the world frame of docs/design.md section 2 (origin under joint 1, metres), ``tool_pose`` the forward
 kinematics of the encoder angles (:func:`tooltransfer.tools.omni.ik.table_pose`), and ``move_tool`` turns the
 path into joints with :func:`tooltransfer.tools.sim.reference.tool_path_joints` (which checks the joint limits)
-and streams them to the device's PD loop at its rate, blocking until the last sample. Any
-:class:`~tooltransfer.errors.ToolTransferError` it raises ends the closed loop with that reason.
+and streams them to the device's PD loop at its rate, blocking until the last sample. An exception
+it raises ends the closed loop with the method and the exception in the reason (a lost camera frame
+or tool pose reading is taken again first); a ``stop()`` method, when the driver has one, is what the
+loop calls to stop the tool on ``KeyboardInterrupt``. The closed loop sends no command outside its
+safety envelope (:mod:`tooltransfer.planner.execution.guarded_plant`), and
+:mod:`tooltransfer.planner.execution.fault_plants` injects a device's faults into any plant to test
+a driver and the loop against them.
 """
 
 from __future__ import annotations
@@ -59,6 +64,10 @@ class Plant(Protocol):
     def move_tool(self, t: NDArray[np.float64], tool_pose: NDArray[np.float64]) -> None:
         """Track ``tool_pose`` (K, 3) at times ``t`` (K,) [s] from 0, starting at the current pose."""
         ...
+
+
+#: Time [s] the simulated platform runs with the arm held still after the puck is displaced.
+SETTLE = 0.2
 
 
 def _check_path(t: ArrayLike, tool_pose: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -101,6 +110,22 @@ class SimPlant:
     def move_tool(self, t: NDArray[np.float64], tool_pose: NDArray[np.float64]) -> None:
         tt, pose = _check_path(t, tool_pose)
         self.parts.append(self.sim.execute_tool_path(tt, pose[:, :2]))
+
+    def displace_object(self, displacement: ArrayLike) -> None:
+        """Move the puck by ``displacement`` (2,) [m] and bring it to rest (something else than the
+        tool knocked it: :class:`tooltransfer.planner.execution.fault_plants.Bump`)."""
+        import mujoco
+
+        from tooltransfer.tools.sim.mjcf import PUCK
+
+        d = check_array(displacement, "displacement", shape=(2,))
+        m, data = self.sim.model, self.sim.data
+        j = m.joint(PUCK)
+        data.qpos[j.qposadr[0]: j.qposadr[0] + 2] += d
+        data.qvel[j.dofadr[0]: j.dofadr[0] + 6] = 0.0
+        mujoco.mj_forward(m, data)
+        here = self.tool_pose()[:2]  # the arm holds still while the contacts settle
+        self.parts.append(self.sim.execute_tool_path(np.array([0.0, SETTLE]), np.vstack([here, here])))
 
     @property
     def execution(self) -> object:
@@ -164,4 +189,10 @@ class ModelPlant:
         path = np.vstack([self.pose, pose])
         trace = simulate(self.tool, path, self.obj, self.radius, self.mechanics)
         self.obj, self.pose = trace.final.copy(), pose[-1].copy()
+        self.history.append(self.obj.copy())
+
+    def displace_object(self, displacement: ArrayLike) -> None:
+        """Move the object by ``displacement`` (2,) [m] (something else than the tool knocked it:
+        :class:`tooltransfer.planner.execution.fault_plants.Bump`)."""
+        self.obj = self.obj + check_array(displacement, "displacement", shape=(2,))
         self.history.append(self.obj.copy())
