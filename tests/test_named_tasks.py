@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from tooltransfer.planner.apps.cli import main
-from tooltransfer.problems.named import bundled_tasks, task_file
+from tooltransfer.problems.named import bundled_tasks, stated_outcome, task_file
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -28,6 +28,8 @@ def test_tasks_lists_them_with_what_they_are(capsys) -> None:
     lines = capsys.readouterr().out.splitlines()
     assert [ln.split()[0] for ln in lines] == list(bundled_tasks())
     assert all(len(ln.split()) > 1 for ln in lines)  # each with a description
+    for line, path in zip(lines, bundled_tasks().values(), strict=True):  # and the outcome its file states
+        assert line.endswith(f" (expected: {stated_outcome(path)})") and stated_outcome(path) is not None
     assert main(["tasks", "--paths"]) == 0
     assert all(Path(ln.split()[1]).is_file() for ln in capsys.readouterr().out.splitlines())
 
