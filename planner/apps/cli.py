@@ -142,8 +142,8 @@ def build_parser() -> argparse.ArgumentParser:
              "tooltransfer paper --out out", cli_planning.cmd_paper)
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     p = _add(sub, "compare", "solve a task with every variant pair (oe mapping|qp x ss dmp|opt): a metrics table "
-             "and one figure", "tooltransfer compare problems/paper/transfer_tool2.yaml --out out",
-             cli_planning.cmd_compare)
+             "and one figure; exits 0 when the default pair (qp/opt) is solved, whatever the others give, else 1",
+             "tooltransfer compare paper/transfer_tool2 --out out", cli_planning.cmd_compare)
     p.add_argument("task", type=cli_planning.task_file,
                    help="task file (YAML) or a bundled task's name (tooltransfer tasks)")
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")

@@ -67,7 +67,16 @@ def cmd_compare(args: argparse.Namespace) -> int:
     else:
         Console().print(table)
         print(f"wrote the plans (plan_*.json) and the figure compare_*.png to {args.out}/")
-    return EXIT_OK if all(p.status == "solved" for p in plans.values()) else EXIT_INFEASIBLE
+    return EXIT_OK if plans[default_pair()].status == "solved" else EXIT_INFEASIBLE
+
+
+def default_pair() -> str:
+    """The variant pair a task file gets by default, ``"qp/opt"``: ``compare``'s exit code follows it (0 when
+    it is solved, 1 otherwise), whatever the paper's pairs give."""
+    from tooltransfer.problems.task import Variants
+
+    default = Variants()
+    return f"{default.oe}/{default.ss}"
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
