@@ -9,7 +9,7 @@ What a user needs first is here::
 
     import tooltransfer as tt
 
-    task = tt.load_task("problems/paper/transfer_tool2.yaml")
+    task = tt.load_task("paper/transfer_tool2")  # a bundled task by name, or a task file's path
     plan = tt.solve(task)  # a tt.Plan; plan.status is "solved" only when every hard check holds
     plan.write("plan.json")
     same = tt.read_plan("plan.json")

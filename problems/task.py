@@ -398,9 +398,17 @@ def _check_search(task: Task, n_faces: int, source: str) -> None:
 
 
 def load_task(path: str | Path) -> Task:
-    """Read and validate a task file (YAML or JSON)."""
+    """Read and validate a task file (YAML or JSON): ``path`` is a file (relative to the working folder)
+    or, where no such file exists, the name of a bundled task (``"paper/transfer_tool2"``, with or
+    without ``.yaml``; :mod:`tooltransfer.problems.named`), as the CLI takes them."""
+    from tooltransfer.problems.named import bundled_tasks, task_file
     from tooltransfer.yaml_file import read_yaml
 
+    path = task_file(path)
+    if not path.exists():
+        names = ", ".join(bundled_tasks())
+        raise TaskFileError(str(path), "<file>", f"a readable task file or a bundled task name ({names})",
+                            "no such file and no bundled task of that name")
     task = task_from_dict(read_yaml(path, TaskFileError, "task file"), str(path))
     task._source = str(Path(path).resolve())
     return task

@@ -35,6 +35,14 @@ def test_every_task_file_is_listed() -> None:
     assert found == set(EXPECTED)
 
 
+def test_every_task_file_states_the_outcome_its_test_expects() -> None:
+    """The ``# ... Expected: <verdict>`` comment (which ``tooltransfer tasks`` shows) is what
+    :func:`test_task_file_outcome` checks ``solve`` against."""
+    from tooltransfer.problems.named import stated_outcome
+
+    assert {name: stated_outcome(ROOT / name) for name in EXPECTED} == EXPECTED
+
+
 @pytest.mark.parametrize("name", sorted(EXPECTED))
 def test_task_file_outcome(name: str) -> None:
     path = ROOT / name

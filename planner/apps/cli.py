@@ -5,7 +5,8 @@ field, or the option and the path, never a traceback: ``-v`` adds it for a bug r
 stopped by Ctrl-C (one line), 141 when the output's reader has gone (``| head``: silently). Output
 paths are checked before any work (a folder where a file is expected, a missing folder, a place
 that cannot be written: exit 2 naming the option), and every file is written atomically
-(:mod:`tooltransfer.atomic`). Every command has ``--help`` with an example.
+(:mod:`tooltransfer.atomic`). Every command has ``--help`` with an example. The console command runs
+BLAS on one thread unless the user chose a number (:mod:`tooltransfer.planner.common.blas_threads`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from typing import Any
 
 # nothing heavy is imported before main() runs: a Ctrl-C while numpy and the rest load is caught too
 from tooltransfer.planner.apps import cli_learning, cli_planning
+from tooltransfer.planner.common.blas_threads import pin_blas_threads
 from tooltransfer.planner.common.command_line import (
     EXIT_BAD_INPUT,
     EXIT_BROKEN_PIPE,
@@ -142,8 +144,8 @@ def build_parser() -> argparse.ArgumentParser:
              "tooltransfer paper --out out", cli_planning.cmd_paper)
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
     p = _add(sub, "compare", "solve a task with every variant pair (oe mapping|qp x ss dmp|opt): a metrics table "
-             "and one figure", "tooltransfer compare problems/paper/transfer_tool2.yaml --out out",
-             cli_planning.cmd_compare)
+             "and one figure; exits 0 when the default pair (qp/opt) is solved, whatever the others give, else 1",
+             "tooltransfer compare paper/transfer_tool2 --out out", cli_planning.cmd_compare)
     p.add_argument("task", type=cli_planning.task_file,
                    help="task file (YAML) or a bundled task's name (tooltransfer tasks)")
     p.add_argument("--out", type=Path, default=Path("out"), help="output folder")
@@ -257,6 +259,8 @@ def main(argv: list[str] | None = None) -> int:
     import signal
     import traceback
 
+    if argv is None:  # the console command: one BLAS thread unless the user chose (before NumPy loads)
+        pin_blas_threads()
     words = sys.argv[1:] if argv is None else list(argv)
     verbose = "-v" in words or "--verbose" in words  # until the arguments are parsed
     try:

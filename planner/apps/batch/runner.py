@@ -332,7 +332,8 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
     goes (:func:`tooltransfer.planner.apps.batch.jobs.lazy_jobs`: the first rows are stored within seconds
     whatever the count).
 
-    Before the first job: the batch's dataset is loaded and checked (a corrupt one is refused here,
+    Before the first job: a store another run writes, or one with results without ``resume``, is refused
+    at once (:func:`refuse_taken_store`); the batch's dataset is loaded and checked (a corrupt one is refused here,
     not turned into a row per job), the store is locked (:func:`tooltransfer.planner.apps.batch.store.lock_store`: a
     second ``batch run`` on it is refused), Dask workers are probed
     (:func:`tooltransfer.planner.apps.batch.dask_plugin.check_workers`), and the skills are learned and shipped to the
@@ -363,6 +364,7 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
         raise InputError("--budget", "a number >= 1 (the search's and the certificate's budgets are multiplied "
                          "by it)", budget)
     spec = load_batch(batch_path)
+    refuse_taken_store(db, resume)  # at once: before the dataset is read and the skills are learned
     dataset = dataset_folder(spec, batch_path)
     load_dataset(dataset)  # a corrupt dataset is refused before the run, naming the file
     first = generate_task(spec, 0, str(dataset))
@@ -451,3 +453,36 @@ def _warm_parent(jobs: Sequence[Job], console: Console, progress: bool) -> None:
                 raise
         except Exception:  # the same job will run (and report) in the batch
             pass
+
+
+def refuse_taken_store(db: str | Path, resume: bool) -> None:
+    """Refuse at once, before the dataset is read and the skills are learned (about 10 s where they are not
+    cached), the store ``db`` when another ``batch run`` writes it (its lock,
+    :func:`tooltransfer.planner.apps.batch.store.lock_store`, is taken and let go; the run takes it again
+    before it opens the store) or, without ``resume``, when it already holds results: the refusal
+    :func:`tooltransfer.planner.apps.batch.store_settings.open_batch_store` makes, read here without writing
+    to the file. All else about the store (another batch's, another schema, not a store at all) is left to
+    ``open_batch_store``.
+
+    Raises:
+        InputError: naming ``--db`` (in use, and by whom) or ``--resume`` (how many results it holds).
+    """
+    import sqlite3
+    from contextlib import closing
+
+    from tooltransfer.planner.apps.batch.store import lock_store
+
+    path = Path(db)
+    if path.with_name(path.name + ".lock").is_file():  # a run holding it has made it
+        with lock_store(path):
+            pass
+    if resume or not path.is_file():
+        return
+    try:
+        with closing(sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True)) as con:
+            (n,) = con.execute("SELECT COUNT(*) FROM results").fetchone()
+    except sqlite3.Error:  # not a store, or unreadable: open_batch_store says what it is
+        return
+    if n:
+        raise InputError("--resume", f"--resume to carry on ({path} already holds {n} results) or a new --db",
+                         "neither")
