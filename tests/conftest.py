@@ -1,8 +1,16 @@
-"""Test-wide settings: learned skills are cached in a temporary folder, not in the user's home."""
+"""Test-wide settings: learned skills are cached in a temporary folder, not in the user's home; a
+factory of small batch files."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
 import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -11,3 +19,20 @@ def _skill_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     mp.setenv("TOOLTRANSFER_CACHE", str(tmp_path_factory.mktemp("skill_cache")))
     yield
     mp.undo()
+
+
+@pytest.fixture
+def small_batch(tmp_path: Path) -> Callable[..., Path]:
+    """``make(name="t", count=3, oe=("mapping",), ss=("arch",), **fields)``: a batch file in ``tmp_path``,
+    problems/batch/small.yaml on the committed finger dataset with these fields."""
+
+    def make(name: str = "t", count: int = 3, oe: tuple[str, ...] = ("mapping",), ss: tuple[str, ...] = ("arch",),
+             **fields: Any) -> Path:
+        data = yaml.safe_load((ROOT / "problems" / "batch" / "small.yaml").read_text())
+        data.update(name=name, count=count, dataset=str(ROOT / "problems" / "data" / "finger_demos"),
+                    variants={"oe": list(oe), "ss": list(ss)}, **fields)
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(yaml.safe_dump(data))
+        return path
+
+    return make

@@ -10,24 +10,12 @@ import sys
 from pathlib import Path
 
 import pytest
-import yaml
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.apps.batch.runner import refuse_taken_store
 from tooltransfer.planner.apps.batch.spec import load_batch
 from tooltransfer.planner.apps.batch.store import ResultStore, lock_store
 from tooltransfer.planner.apps.batch.store_settings import open_batch_store
-
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _batch(tmp_path: Path) -> Path:
-    data = yaml.safe_load((ROOT / "problems" / "batch" / "small.yaml").read_text())
-    data.update(name="t", count=1, dataset=str(ROOT / "problems" / "data" / "finger_demos"),
-                variants={"oe": ["mapping"], "ss": ["arch"]})
-    p = tmp_path / "t.yaml"
-    p.write_text(yaml.safe_dump(data))
-    return p
 
 
 def _filled(tmp_path: Path, batch: Path) -> Path:
@@ -49,8 +37,8 @@ def _run(tmp_path: Path, batch: Path, db: Path) -> tuple[subprocess.CompletedPro
     return run, cache
 
 
-def test_a_store_with_results_is_refused_before_the_skills_are_learned(tmp_path: Path) -> None:
-    batch = _batch(tmp_path)
+def test_a_store_with_results_is_refused_before_the_skills_are_learned(tmp_path: Path, small_batch) -> None:
+    batch = small_batch(count=1)
     db = _filled(tmp_path, batch)
     run, cache = _run(tmp_path, batch, db)
     assert run.returncode == 2, run.stderr
@@ -59,8 +47,8 @@ def test_a_store_with_results_is_refused_before_the_skills_are_learned(tmp_path:
     assert not cache.exists() or not any(cache.iterdir())  # nothing learned
 
 
-def test_an_occupied_store_is_refused_before_the_skills_are_learned(tmp_path: Path) -> None:
-    batch = _batch(tmp_path)
+def test_an_occupied_store_is_refused_before_the_skills_are_learned(tmp_path: Path, small_batch) -> None:
+    batch = small_batch(count=1)
     db = tmp_path / "busy.sqlite"
     with lock_store(db):
         run, cache = _run(tmp_path, batch, db)
@@ -69,8 +57,8 @@ def test_an_occupied_store_is_refused_before_the_skills_are_learned(tmp_path: Pa
     assert not cache.exists() or not any(cache.iterdir())
 
 
-def test_the_early_check_leaves_the_rest_to_opening_the_store(tmp_path: Path) -> None:
-    batch = _batch(tmp_path)
+def test_the_early_check_leaves_the_rest_to_opening_the_store(tmp_path: Path, small_batch) -> None:
+    batch = small_batch(count=1)
     db = _filled(tmp_path, batch)
     refuse_taken_store(db, resume=True)  # carried on
     with pytest.raises(InputError, match="already holds 1 results"):

@@ -25,20 +25,6 @@ from tooltransfer.planner.apps.batch.store_file import StoreError
 from tooltransfer.planner.apps.batch.worker import Job
 from tooltransfer.planner.apps.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _batch(tmp_path: Path) -> Path:
-    """A batch of 3 tasks on the committed finger dataset (as tests/test_batch_run.py makes them)."""
-    import yaml
-
-    data = yaml.safe_load((ROOT / "problems" / "batch" / "small.yaml").read_text())
-    data.update(name="t", count=3, dataset=str(ROOT / "problems" / "data" / "finger_demos"),
-                variants={"oe": ["mapping"], "ss": ["arch"]})
-    p = tmp_path / "t.yaml"
-    p.write_text(yaml.safe_dump(data))
-    return p
-
 
 def _store(path: Path, n: int = 6) -> Path:
     """A real store of ``n`` rows, closed (its write-ahead log folded in)."""
@@ -87,11 +73,11 @@ def test_a_foreign_store_is_refused_before_anything_is_written(tmp_path: Path, c
     assert _digests(tmp_path) == before and _keys(db) == rows
 
 
-def test_a_trigger_store_loses_no_row_on_resume(tmp_path: Path, capsys) -> None:
+def test_a_trigger_store_loses_no_row_on_resume(tmp_path: Path, capsys, small_batch) -> None:
     """The issue's case: `--resume` into a store whose trigger deletes every row on insert."""
     db = _foreign(tmp_path / "s.sqlite", HOSTILE["a trigger that deletes rows"])
     rows = _keys(db)
-    code = main(["batch", "run", str(_batch(tmp_path)), "--db", str(db), "--resume", "-q", "--workers", "1"])
+    code = main(["batch", "run", str(small_batch()), "--db", str(db), "--resume", "-q", "--workers", "1"])
     err = capsys.readouterr().err
     assert code == 2 and "trigger 'wipe'" in err and str(db) in err and "internal error" not in err
     assert _keys(db) == rows
@@ -117,11 +103,11 @@ def test_values_of_the_wrong_kind_are_refused_naming_row_and_column(tmp_path: Pa
     assert _digests(tmp_path) == before
 
 
-def test_resume_checks_the_rows_before_writing(tmp_path: Path) -> None:
+def test_resume_checks_the_rows_before_writing(tmp_path: Path, small_batch) -> None:
     from tooltransfer.planner.apps.batch.spec import load_batch
     from tooltransfer.planner.apps.batch.store_settings import open_batch_store
 
-    spec = load_batch(_batch(tmp_path))
+    spec = load_batch(small_batch())
     db = tmp_path / "s.sqlite"
     with ResultStore(db) as store:
         open_batch_store(store, spec, [], resume=False)
