@@ -200,3 +200,14 @@ def test_solve_gives_each_verdict_its_status_exit_code_and_evidence(tmp_path: Pa
     summary = json.loads(capsys.readouterr().out)
     assert (code, summary["status"], summary["evidence"]) == (3, "unknown", "search_exhausted")
     assert "not proved infeasible" in summary["reason"]
+
+
+def test_solve_budget_is_recorded_and_checked(tmp_path: Path, capsys) -> None:
+    """``solve --budget K`` plans with K times the search's and the certificate's budgets and records K in
+    the verdict's evidence; a budget below 1 is bad input (exit 2, naming the option)."""
+    out = tmp_path / "plan.json"
+    assert main(["solve", "paper/transfer_tool2", "--budget", "2", "-o", str(out)]) == 0
+    assert json.loads(out.read_text())["evidence"]["budget"] == 2.0
+    capsys.readouterr()
+    assert main(["solve", "paper/transfer_tool2", "--budget", "0.5"]) == 2
+    assert "--budget" in capsys.readouterr().err

@@ -194,6 +194,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--simulate", action="store_true",
                    help="execute the plan on the simulated platform, open loop and closed loop")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
+    p.add_argument("--budget", type=float, default=1.0, metavar="K",
+                   help="multiply the guided search's expansions and the certificate's block updates by K >= 1 "
+                        "(for a task left unknown)")
     p = _add(sub, "simulate", "execute a plan file on the simulated platform (open loop, and closed loop on request)",
              "tooltransfer simulate out/plan.json --closed-loop --figure out/fig12.png --gif out/run.gif",
              cli_planning.cmd_simulate)

@@ -6,6 +6,7 @@ code; :mod:`tooltransfer.planner.apps.cli` parses and dispatches. Heavy imports 
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from tooltransfer.planner.apps.cli_output import file_stem, print_summary, spinner, written
@@ -109,8 +110,11 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if any(chosen.values()):
         variants = task.variants.model_copy(update={k: v for k, v in chosen.items() if v})
         task = task.model_copy(update={"variants": variants})
+    if not (math.isfinite(args.budget) and args.budget >= 1.0):
+        raise InputError("--budget", "a number >= 1 (the search's and the certificate's budgets are multiplied by it)",
+                         args.budget)
     with spinner(f"planning {args.task}", quiet=args.json):
-        plan = solve(task, args.task)
+        plan = solve(task, args.task, budget=args.budget)
     if args.out:
         plan.write(args.out)
     m = plan.metrics
