@@ -62,6 +62,11 @@ def run(pids, seconds):
 '''
 
 
+#: Seconds a stopping run may take past the per-job timeout and :data:`STOP_GRACE` (abandoning the pool
+#: and its sandboxes: 4.2 s measured on 2 cores with a 10 s timeout).
+SLACK = 6.0
+
+
 def _pids(path: Path) -> list[int]:
     return [int(x) for x in path.read_text().split()] if path.is_file() else []
 
@@ -93,7 +98,7 @@ def test_a_first_ctrl_c_ends_within_the_job_timeout_plus_a_few_seconds(tmp_path:
     took = _interrupt(proc)
     out, err = proc.communicate()
     assert "interrupted True" in out, err
-    assert took < timeout + STOP_GRACE + 3.0, took
+    assert took < timeout + STOP_GRACE + SLACK, took
 
 
 def test_ctrl_c_of_batch_run_on_a_large_batch(tmp_path: Path) -> None:
@@ -119,7 +124,7 @@ def test_ctrl_c_of_batch_run_on_a_large_batch(tmp_path: Path) -> None:
     took = _interrupt(proc)
     out = proc.stdout.read() if proc.stdout else ""
     assert proc.returncode == 130 and "--resume" in out, out
-    assert took < timeout + STOP_GRACE + 3.0, took
+    assert took < timeout + STOP_GRACE + SLACK, took
 
 
 def test_a_sandbox_killed_from_outside_runs_its_job_once_more(tmp_path: Path, monkeypatch) -> None:
@@ -188,11 +193,11 @@ def test_a_ctrl_c_while_the_pool_workers_boot_leaves_no_traceback(tmp_path: Path
         from tooltransfer.planner.apps.batch.store import ResultStore
         from tooltransfer.planner.apps.batch.worker import Job
 
-        jobs = [Job(f"s{{i}}", "v", entry="builtins:dict", args=({{"status": "solved"}},), timeout=10)
-                for i in range(50)]
+        jobs = (Job(f"s{{i}}", "v", entry="builtins:dict", args=({{"status": "solved"}},), timeout=10)
+                for i in range(10**5))  # more than any machine runs before the Ctrl-C
         with ResultStore({str(tmp_path / 's.sqlite')!r}) as store, open_executor(workers=2) as slots:
             print("start", flush=True)
-            s = run_jobs(jobs, store, slots, progress=False)
+            s = run_jobs(jobs, store, slots, progress=False, total=10**5)
         print("interrupted", s.interrupted, flush=True)
     """)
     proc = _spawn(["-c", script])
