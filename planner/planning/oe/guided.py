@@ -2,12 +2,13 @@
 
 Where the scored candidates of :func:`~tooltransfer.planner.planning.oe.qp_variant.condense_qp` hold no
 feasible sequence, the search here looks for one directly: from the start, straight steps of
-``step`` [m] in directions of each face's admissible cone (the plan's narrowed friction cone
-intersected with the tool file's cone, turned by the heading the Omni imposes with the contact at a
-few places along the face), with the face held where the Omni reaches it and its tool outline clear
-of the obstacles, the puck the safety margin from them; A* on the path length plus a price per face
-change, to within ``step`` of the target. Its faces and the times of their changes (in proportion to
-the path's length, over the universal path's duration) are then fitted by
+``step`` [m] along the edges and the middle of each face's heading cone (the plan's narrowed friction
+cone intersected with the tool file's cone, turned by the heading the Omni imposes), the face held
+under the fit's own rows (the Omni reaching the contact at both ends of its usable range, the tool
+outline there clear of the obstacles), the puck the safety margin from them; A* on the path length
+plus a price per face change, ending with a straight step to the target inside a cone. Its faces
+and the times of their changes (in proportion to the path's length, over the universal path's
+duration) are then fitted by
 :func:`~tooltransfer.planner.planning.oe.qp_variant.condense_sequence` with the path as reference,
 which imposes every constraint of the ``qp`` variant; the search only proposes.
 """
@@ -60,11 +61,14 @@ class GuidedPath:
 class _FaceMoves:
     """What the ``qp`` fit demands of one face (:class:`~tooltransfer.planner.planning.oe.sequence_fit.SequenceFit`):
     the frame of its heading cone (contact at the middle of the face) and the frames at the ends of the
-    contact's usable range, from each of which the Omni must reach the object."""
+    contact's usable range, from each of which the Omni must reach the object, with the farthest the
+    tool outline reaches [m] from the object's centre there (a body farther from an obstacle cannot
+    touch it)."""
 
     name: str
     cone: FaceFrame
     ends: tuple[FaceFrame, ...]
+    spans: tuple[float, ...]
 
 
 def _face_moves(setting: Setting, options: QPOptions) -> list[_FaceMoves]:
@@ -80,7 +84,9 @@ def _face_moves(setting: Setting, options: QPOptions) -> list[_FaceMoves]:
         a, b = usable_range(setting.tool, f.name, options)
         ends = tuple(FaceFrame.build(setting, f.name, s=v / f.length,
                                      friction_cone_fraction=options.friction_cone_fraction) for v in sorted({a, b}))
-        out.append(_FaceMoves(f.name, cone, ends))
+        outline = np.asarray(setting.tool.outline.exterior.coords)
+        spans = tuple(float(np.hypot(*(outline - e.centre_in_tool).T).max()) for e in ends)
+        out.append(_FaceMoves(f.name, cone, ends, spans))
     return out
 
 
@@ -144,14 +150,11 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         if z is not None:
             shapely.prepare(z)
     faces = _face_moves(setting, options)
-    # the farthest the outline reaches from the object's centre, per contact place: a body farther
-    # than that from the zone cannot touch it
-    span = {id(e): float(np.hypot(*(outline - e.centre_in_tool).T).max()) for fm in faces for e in fm.ends}
 
-    def touches(ends: list[tuple[FaceFrame, float]], p: NDArray[np.float64], near: float) -> bool:
-        """Whether the tool outline, at each ``(frame, yaw)`` of ``ends`` holding the object at ``p``,
-        meets the body zone (``near`` [m]: the zone's distance from ``p``)."""
-        close = [(e, y) for e, y in ends if span[id(e)] >= near]
+    def touches(fm: _FaceMoves, yaws: list[float], p: NDArray[np.float64], near: float) -> bool:
+        """Whether the tool outline, holding ``fm``'s contact at each end at the yaws [rad] with the
+        object at ``p``, meets the body zone (``near`` [m]: the zone's distance from ``p``)."""
+        close = [(e, y) for e, y, reach in zip(fm.ends, yaws, fm.spans, strict=True) if reach >= near]
         if not close:
             return False
         rings = np.stack([(outline - e.centre_in_tool) @ np.array([[math.cos(y), math.sin(y)],
@@ -169,7 +172,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
             yaws = [_heading(e, p) for e in fm.ends]
             if any(y is None for y in yaws):
                 continue
-            if touches([(e, y) for e, y in zip(fm.ends, yaws, strict=True) if y is not None], p, near):
+            if touches(fm, [y for y in yaws if y is not None], p, near):
                 continue
             mid = _heading(fm.cone, p)
             if mid is None:  # the middle of the range is between its ends: held wherever they are
