@@ -6,7 +6,6 @@ code; :mod:`tooltransfer.planner.apps.cli` parses and dispatches. Heavy imports 
 from __future__ import annotations
 
 import argparse
-import math
 from pathlib import Path
 
 from tooltransfer.planner.apps.cli_output import file_stem, print_summary, spinner, written
@@ -90,7 +89,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     import json
 
     from tooltransfer.errors import InputError
-    from tooltransfer.planner.planning.solve import solve
+    from tooltransfer.planner.planning.solve import check_budget, solve
     from tooltransfer.problems.task import load_task
     from tooltransfer.problems.variants import OEVariant, SSVariant, choices
 
@@ -110,9 +109,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if any(chosen.values()):
         variants = task.variants.model_copy(update={k: v for k, v in chosen.items() if v})
         task = task.model_copy(update={"variants": variants})
-    if not (math.isfinite(args.budget) and args.budget >= 1.0):
-        raise InputError("--budget", "a number >= 1 (the search's and the certificate's budgets are multiplied by it)",
-                         args.budget)
+    check_budget(args.budget, "--budget")
     with spinner(f"planning {args.task}", quiet=args.json):
         plan = solve(task, args.task, budget=args.budget)
     if args.out:

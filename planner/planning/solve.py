@@ -81,11 +81,18 @@ def solve(task: Task, task_path: str | Path | None = None, *, budget: float = 1.
     built in code). ``budget`` (>= 1) scales what the search and the certificate may spend (the guided
     search's expansions, ``oe.guided_budget``, and the certificate's block updates): ``batch run --retry
     unknown --budget K`` gives the undecided tasks more."""
-    if not (isinstance(budget, int | float) and math.isfinite(budget) and budget >= 1.0):
-        raise InputError("budget", "a number >= 1 (the search's and the certificate's budgets are multiplied by it)",
-                         repr(budget))
+    check_budget(budget)
     plan, setting = _search(task, task_path, budget)
     return attach_verdict(plan, setting, np.array(task.start), np.array(task.target), budget=budget)
+
+
+def check_budget(budget: object, field: str = "budget") -> float:
+    """``budget`` as a float when it is a number >= 1 (:func:`solve`'s), else :class:`InputError` naming
+    ``field`` (``--budget`` on the command line)."""
+    if not (isinstance(budget, int | float) and math.isfinite(budget) and budget >= 1.0):
+        raise InputError(field, "a number >= 1 (the search's and the certificate's budgets are multiplied by it)",
+                         repr(budget))
+    return float(budget)
 
 
 def _search(task: Task, task_path: str | Path | None, budget: float = 1.0) -> tuple[Plan, Setting]:

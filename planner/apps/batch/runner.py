@@ -23,7 +23,6 @@ Dask worker), every job planning with that copy; the workers need this package, 
 
 from __future__ import annotations
 
-import math
 import signal
 import threading
 import time
@@ -356,13 +355,12 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
     from tooltransfer.planner.apps.batch.generate import generate_task
     from tooltransfer.planner.apps.batch.spec import dataset_folder, load_batch
     from tooltransfer.planner.apps.batch.store import lock_store
+    from tooltransfer.planner.planning.solve import check_budget
     from tooltransfer.problems.dataset import load_dataset
 
     if timeout is not None and not timeout > 0:
         raise InputError("--timeout", "a positive number of seconds", timeout)
-    if not (math.isfinite(budget) and budget >= 1.0):
-        raise InputError("--budget", "a number >= 1 (the search's and the certificate's budgets are multiplied "
-                         "by it)", budget)
+    check_budget(budget, "--budget")
     spec = load_batch(batch_path)
     refuse_taken_store(db, resume)  # at once: before the dataset is read and the skills are learned
     dataset = dataset_folder(spec, batch_path)

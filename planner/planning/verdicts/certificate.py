@@ -111,8 +111,8 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
                            time=time.perf_counter() - t0), ""
     tried, left = [], max_blocks
     for side in h:
-        budget = left if side == h[0] else min(left, fine_blocks)
-        back = backward_set(rules, space, goal, start, h=side, gap=START_GAP, max_blocks=budget)
+        allowed = left if side == h[0] else min(left, fine_blocks)
+        back = backward_set(rules, space, goal, start, h=side, gap=START_GAP, max_blocks=allowed)
         tried.append(f"cells of {side * 1e3:g} mm: {back.stopped} (after {back.blocks_processed} blocks)")
         left -= back.blocks_processed
         if back.region is not None or left <= 0:
