@@ -69,11 +69,17 @@ def _refused(ds: Path, *words: str) -> str:
     return text
 
 
+def _link_out(ds: Path, name: str, target: str) -> None:
+    """Replace the dataset's ``name`` by a link to ``target`` outside it (``token``: the secret beside the
+    dataset) and check that loading refuses it by name, quoting nothing of the target."""
+    (ds / name).unlink()
+    (ds / name).symlink_to(ds.parent / target if target == "token" else target)
+    _refused(ds, name, "leads outside")
+
+
 @pytest.mark.parametrize("target", ["token", "/etc/passwd"])
 def test_a_meta_yaml_linking_out_of_the_dataset_is_refused_unquoted(ds: Path, target: str) -> None:
-    (ds / "meta.yaml").unlink()
-    (ds / "meta.yaml").symlink_to(ds.parent / target if target == "token" else target)
-    _refused(ds, "meta.yaml", "leads outside")
+    _link_out(ds, "meta.yaml", target)
 
 
 @pytest.mark.parametrize("tool", ["/etc/passwd", "../../../../etc/passwd", "../token"])
@@ -90,9 +96,7 @@ def test_a_tool_file_linked_out_of_the_dataset_is_refused(ds: Path) -> None:
 
 @pytest.mark.parametrize("target", ["token", "/dev/zero", "/proc/kmsg", "/proc/self/environ"])
 def test_a_demonstration_linking_out_of_the_dataset_is_refused(ds: Path, target: str) -> None:
-    (ds / "demo_03.csv").unlink()
-    (ds / "demo_03.csv").symlink_to(ds.parent / target if target == "token" else target)
-    _refused(ds, "demo_03.csv", "leads outside")
+    _link_out(ds, "demo_03.csv", target)
 
 
 @pytest.mark.parametrize("name", ["meta.yaml", "demo_02.csv", "truth.yaml"])
