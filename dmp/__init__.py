@@ -6,6 +6,7 @@ functions ``psi_i(s)`` per dimension, weights ``W`` of shape (N, n), flattened r
 """
 
 from tooltransfer.dmp.affine import AffineRollout
+from tooltransfer.dmp.online import DMPState
 from tooltransfer.dmp.primitive import DMP
 from tooltransfer.dmp.trajectory import Rollout
 from tooltransfer.errors import (
@@ -20,6 +21,7 @@ from tooltransfer.errors import (
 __all__ = [
     "DMP",
     "AffineRollout",
+    "DMPState",
     "InfeasibleError",
     "InputError",
     "Rollout",

@@ -27,6 +27,7 @@ from tooltransfer.dmp.affine import AffineRollout
 from tooltransfer.dmp.basis import DEFAULT_GAMMA, basis, centres_and_widths, phase
 from tooltransfer.dmp.exact import RESPONSE_CACHE, SystemParams, free_response
 from tooltransfer.dmp.integrate import rk4_rollout
+from tooltransfer.dmp.online import DMPState, exact_step
 from tooltransfer.dmp.scaling import SCALING_MODES, ScalingMode, scaling_matrix
 from tooltransfer.dmp.trajectory import Rollout
 from tooltransfer.errors import InputError, SkillFileError
@@ -299,6 +300,50 @@ class DMP:
             raise InputError("method", "'exact' or 'rk4'", repr(method))
         a = (self.alpha_z * (self.beta_z * (ga - x) - taua * v) + f) / taua**2
         return Rollout(t=tt, x=x, v=v, a=a)
+
+    # ------------------------------------------------------------------ online
+    def start(
+        self,
+        *,
+        x0: ArrayLike | None = None,
+        g: ArrayLike | None = None,
+        v0: ArrayLike | None = None,
+        tau: float | None = None,
+    ) -> DMPState:
+        """The state at the start of a stepwise run (:meth:`step`); defaults as in :meth:`rollout`."""
+        x0a, ga, v0a, taua = self._resolve(x0, g, v0, tau)
+        return DMPState(t=0.0, x=x0a.copy(), v=v0a, x0=x0a, g=ga, tau=taua)
+
+    def step(
+        self,
+        state: DMPState,
+        dt: float,
+        *,
+        goal: ArrayLike | None = None,
+        coupling: ArrayLike | None = None,
+    ) -> DMPState:
+        r"""Advance a run by one control period: stepwise execution (:mod:`tooltransfer.dmp.online`).
+
+        Integrates :math:`\tau^2 \ddot x = \alpha_z(\beta_z(g - x) - \tau \dot x) + f(s) + C` exactly
+        over ``dt`` with the goal and the coupling term held; with no coupling and a fixed goal the
+        states agree with :meth:`rollout` on the same times to round-off, however the steps are cut.
+
+        Args:
+            state: the run's state, from :meth:`start` or a previous step.
+            dt: the step [s], > 0.
+            goal: a new goal (n,) [m] from this step on (a moving goal); default: the one in force.
+            coupling: the coupling term ``C`` (n,) [m] for this step (obstacle avoidance, for
+                instance :func:`tooltransfer.dmp.coupling.obstacle_coupling`); default zero.
+        Returns:
+            The state at ``state.t + dt``, carrying the goal in force.
+        """
+        dta = check_positive(dt, "dt")
+        n = (self.n_dims,)
+        if goal is not None:
+            state = dataclasses.replace(state, g=check_array(goal, "goal", shape=n))
+        c = np.zeros(self.n_dims) if coupling is None else check_array(coupling, "coupling", shape=n)
+        return exact_step(self.params(state.tau), self.centres, self.widths, self.weights, self.scaling,
+                          state, dta, c)
 
     def _check_weights(self, weights: ArrayLike) -> NDArray[np.float64]:
         w = check_array(weights, "weights")
