@@ -30,7 +30,7 @@ TYPED := -p tooltransfer.dmp -m tooltransfer -m tooltransfer.errors -m tooltrans
 	-m tooltransfer.problems.task -m tooltransfer.problems.named -m tooltransfer.planner.planning.solve \
 	-m tooltransfer.planner.planning.plan -m tooltransfer.planner.execution.closed_loop -m tooltransfer.planner.execution.plant \
 	-m tooltransfer.planner.execution.fault_plants -m tooltransfer.planner.execution.guarded_plant \
-	-m tooltransfer.planner.execution.export -m tooltransfer.planner.planning.ss.nlp -m tooltransfer.planner.planning.ss.knot_rows \
+	-m tooltransfer.planner.execution.export -m tooltransfer.planner.execution.scene -m tooltransfer.planner.planning.ss.nlp -m tooltransfer.planner.planning.ss.knot_rows \
 	-m tooltransfer.planner.planning.setting -m tooltransfer.planner.planning.variant_registry \
 	-p tooltransfer.planner.planning.verdicts
 typecheck: $(PY)

@@ -1,5 +1,5 @@
 """The command line's planning and running commands: ``paper``, ``compare``, ``tasks``, ``solve``,
-``simulate``, ``export``, ``schema`` and ``tools``. Each takes the parsed arguments and returns the exit
+``simulate``, ``export``, ``mjcf``, ``schema`` and ``tools``. Each takes the parsed arguments and returns the exit
 code; :mod:`tooltransfer.planner.apps.cli` parses and dispatches. Heavy imports happen inside the commands.
 """
 
@@ -152,6 +152,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
     from tooltransfer.planner.execution.simulate import plan_to_use
 
+    if args.viewer:  # before any work: no display, no run
+        from tooltransfer.planner.execution.scene import check_viewer
+
+        check_viewer()
     plan = plan_to_use(args.plan, args.force, "runs", "running")
     if plan is None:
         return EXIT_INFEASIBLE
@@ -172,6 +176,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         print(json.dumps(summary, default=float))
     else:
         print_summary(summary, f"simulation of {args.plan}")
+    if args.viewer:
+        from tooltransfer.planner.execution.scene import replay_in_viewer
+
+        print("replaying the plan open loop in MuJoCo's viewer (close the window to end)")
+        replay_in_viewer(plan)
     return simulate_exit_code(summary, args.closed_loop)
 
 
@@ -231,4 +240,23 @@ def cmd_tasks(args: argparse.Namespace) -> int:
         outcome = stated_outcome(path)
         text += f" (expected: {outcome})" if outcome else ""
         print(f"{name:34s} {text}" if not args.paths else f"{name:34s} {path}")
+    return EXIT_OK
+
+
+def cmd_mjcf(args: argparse.Namespace) -> int:
+    from tooltransfer.atomic import write_text
+    from tooltransfer.planner.execution.scene import scene_mjcf
+    from tooltransfer.problems.task import load_task
+
+    source = str(args.source)
+    if source.endswith(".json"):  # a plan file: its task, the arm at the plan's first joints
+        from tooltransfer.planner.planning.plan import read_plan
+        from tooltransfer.problems.task import task_from_dict
+
+        plan = read_plan(source)
+        xml = scene_mjcf(task_from_dict(plan.task, f"{source}: task"), plan.joints[0] if len(plan.joints) else None)
+    else:
+        xml = scene_mjcf(load_task(task_file(source)))
+    write_text(args.out, xml)
+    print(f"wrote {args.out}")
     return EXIT_OK
