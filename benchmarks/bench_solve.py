@@ -34,11 +34,12 @@ TASK = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
 NOT_PACKAGE = re.compile(r"[/\\](\.venv[^/\\]*|\.git|build|tests|benchmarks|docs|examples)([/\\]|$)")
 
 
-def run_child(cmd: list[str]) -> tuple[float, float]:
-    """(wall, CPU) seconds of one run of ``cmd`` (CPU: the child's user + system time)."""
+def run_child(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float, float]:
+    """(wall, CPU) seconds of one run of ``cmd`` (CPU: the child's user + system time), in ``env``
+    (default: this process's)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    subprocess.run(cmd, check=True, capture_output=True)
+    subprocess.run(cmd, check=True, capture_output=True, env=env)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
