@@ -121,3 +121,57 @@ def test_make_figures_writes_small_palette_images(tmp_path: Path) -> None:
         assert p.stat().st_size < 300_000
         with Image.open(p) as im:
             assert im.mode == "P" and im.size[0] >= 1000
+
+
+def test_fig12_says_what_it_draws_and_keeps_its_labels(tmp_path: Path, drawn: list, plans: dict) -> None:
+    """Issue 29: the x label inside the saved image, the four phases in four colours, the scene in the
+    legend, each face's name clear of the outline it names."""
+    import shapely
+    from PIL import Image
+
+    from tooltransfer.planner.apps.plots.execution import plot_plan
+
+    out = plot_plan(plans["qp/opt"], tmp_path / "fig12.png", dpi=100)
+    fig = drawn[0]
+    ax = fig.axes[0]
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert {"obstacle", "safety margin", "puck (start)", "target", "tool (approach)", "tool (retreat)"} <= set(legend)
+    colours = {line.get_label(): line.get_color() for line in ax.get_lines()}
+    phases = [colours[f"tool ({p})"] for p in ("approach", "push", "switch", "retreat")]
+    assert len(set(phases)) == 4, phases
+    # the saved area is the drawn content: its size is the tight box's, and the x labels lie inside it
+    renderer = fig.canvas.get_renderer()
+    box = fig.get_tightbbox(renderer).padded(0.05)
+    with Image.open(out) as im:
+        assert abs(im.size[0] - box.width * 100) <= 2 and abs(im.size[1] - box.height * 100) <= 2
+    for a in fig.axes:
+        label = a.xaxis.label.get_window_extent(renderer).transformed(fig.dpi_scale_trans.inverted())
+        assert box.x0 <= label.x0 and label.x1 <= box.x1 and box.y0 <= label.y0 and label.y1 <= box.y1
+    # each push's outline (blue, closed) is followed by its face's name: the text's box misses the outline
+    outlines = [line for line in ax.get_lines() if line.get_color() == "tab:blue" and len(line.get_xdata()) > 3]
+    names = [t for t in ax.texts if t.get_text()]
+    assert len(outlines) == len(names) == len(plans["qp/opt"].pushes) > 0
+    to_data = ax.transData.inverted()
+    for line, text in zip(outlines, names, strict=True):
+        corners = to_data.transform(text.get_window_extent(renderer).get_points())
+        label_box = shapely.box(*corners[0], *corners[1])
+        outline = shapely.Polygon(np.column_stack([line.get_xdata(), line.get_ydata()]))
+        assert not label_box.intersects(outline), text.get_text()
+
+
+def test_the_batch_box_plot_draws_every_run_once(tmp_path: Path, drawn: list) -> None:
+    """Issue 29: a small batch's runs are dots beside quartile boxes with 1.5 IQR whiskers (no run
+    drawn as an outlier as well), and the title says so."""
+    from tooltransfer.planner.apps.batch.figures import plot_batch
+
+    times = [0.41, 0.52, 0.47, 2.9, 0.5]
+    rows = [{"variant": "qp/opt", "status": "solved", "time_total": t, "n_obstacles": 1, "reach_margin": 0.01 * i}
+            for i, t in enumerate(times)]
+    plot_batch(rows, tmp_path)
+    fig = next(f for f in drawn if "planning time" in f.axes[0].get_title())
+    ax = fig.axes[0]
+    assert "1.5 IQR" in ax.get_title() and "percentile" not in ax.get_title()
+    dots = [line for line in ax.get_lines() if line.get_marker() == "." and len(line.get_ydata())]
+    assert len(dots) == 1 and sorted(dots[0].get_ydata()) == sorted(1e3 * np.array(times))
+    fliers = [line for line in ax.get_lines() if line.get_marker() not in ("None", "", ".") and len(line.get_ydata())]
+    assert not fliers

@@ -77,11 +77,15 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
                 data.append(np.array(t) * per_s)
                 labels.append(f"{v}\n{status} ({len(t)})")
     if data:
-        ax.boxplot(data, whis=(1, 99), showfliers=True, flierprops={"markersize": 2})
+        ax.boxplot(data, whis=1.5, showfliers=False, medianprops={"color": "k"})
+        rng = np.random.default_rng(0)  # the dots' sideways spread: the same figure for the same rows
+        for i, d in enumerate(data, start=1):
+            ax.plot(i + rng.uniform(-0.18, 0.18, d.size), d, ".", ms=3, color="tab:blue",
+                    alpha=max(0.15, min(0.8, 30 / d.size)))
         ax.set_xticks(range(1, len(labels) + 1), labels, fontsize=8)
         ax.set_yscale("log")
     ax.set(ylabel=unit_label("planning time", "time_total", "ms") + " (log)",
-           title="planning time per variant (whiskers: 1st-99th percentile)")
+           title="planning time per variant (boxes: quartiles; whiskers: 1.5 IQR; dots: every run)")
     ax.grid(alpha=0.3, axis="y")
     written.append(save_figure(fig, out / "time_distributions.png"))
     if any(r.get("open_loop_status") is not None or r.get("closed_loop_status") is not None for r in rows):

@@ -16,7 +16,8 @@ from tooltransfer.planner.apps.plots.save import save_figure
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.tools.sim.execution import Execution
 
-PHASE_COLOURS = {"approach": "0.6", "push": "tab:blue", "switch": "tab:orange", "retreat": "0.6"}
+#: The tool reference point's colour in each phase of a plan (four phases, four colours).
+PHASE_COLOURS = {"approach": "0.55", "push": "tab:blue", "switch": "tab:orange", "retreat": "tab:purple"}
 
 
 def _outline(plan: Plan) -> NDArray[np.float64]:
@@ -29,23 +30,47 @@ def _placed(outline: NDArray[np.float64], pose: NDArray[np.float64]) -> NDArray[
 
 
 def _scene(ax, plan: Plan) -> None:  # type: ignore[no-untyped-def]
+    """The table's content on ``ax`` [mm], each kind once in the legend: obstacles (filled) with
+    their safety margin (dotted), the puck at its start, the target (the puck's square at the goal)."""
     import matplotlib.pyplot as plt
 
     margin = float(plan.task.get("safety_margin", 0.0))
-    for o in plan.obstacles:
+    for i, o in enumerate(plan.obstacles):
+        first = {"label": "obstacle"} if i == 0 else {}
         if o["kind"] == "disc":
             c = 1e3 * np.asarray(o["centre"])
-            ax.add_patch(plt.Circle(tuple(c), 1e3 * o["radius"], color="tab:red", alpha=0.5))
-            ax.add_patch(plt.Circle(tuple(c), 1e3 * (o["radius"] + margin), color="tab:red", fill=False, ls=":"))
+            ax.add_patch(plt.Circle(tuple(c), 1e3 * o["radius"], color="tab:red", alpha=0.5, **first))
+            more = {"label": "safety margin"} if i == 0 and margin > 0 else {}
+            ax.add_patch(plt.Circle(tuple(c), 1e3 * (o["radius"] + margin), color="tab:red", fill=False, ls=":",
+                                    **more))
         else:
-            ax.add_patch(plt.Polygon(1e3 * np.asarray(o["vertices"]), color="tab:red", alpha=0.5))
+            ax.add_patch(plt.Polygon(1e3 * np.asarray(o["vertices"]), color="tab:red", alpha=0.5, **first))
     r = 1e3 * plan.object["radius"]
-    ax.add_patch(plt.Circle(tuple(1e3 * np.asarray(plan.object["start"])), r, fill=False, color="k", lw=0.8))
+    ax.add_patch(plt.Circle(tuple(1e3 * np.asarray(plan.object["start"])), r, fill=False, color="k", lw=0.8,
+                            label="puck (start)"))
     ax.add_patch(plt.Rectangle(tuple(1e3 * np.asarray(plan.object["goal"]) - r), 2 * r, 2 * r, fill=False,
-                               color="tab:green", lw=1.2))
+                               color="tab:green", lw=1.2, label="target"))
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
+
+
+def _face_label(ax, name: str, outline: NDArray[np.float64], puck: NDArray[np.float64]) -> None:  # type: ignore[no-untyped-def]
+    """Write a face's name beside the placed tool ``outline`` (V, 2) [mm]: just outside its vertex
+    farthest from the ``puck`` (2,) [mm] (the tool's free end, clear of the contact and of the
+    outline), on a white ground so the other outlines under it stay apart from the text."""
+    centre = outline[:-1].mean(axis=0)
+    tip = outline[int(np.argmax(np.linalg.norm(outline[:-1] - puck, axis=1)))]
+    out = tip - centre
+    out = out / np.linalg.norm(out) if np.linalg.norm(out) > 1e-9 else np.array([1.0, 0.0])
+    ax.annotate(name, tuple(tip + 1.5 * out), fontsize=7, color="tab:blue", ha="left" if out[0] >= 0 else "right",
+                va="bottom" if out[1] >= 0 else "top",
+                bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.85})
+
+
+def _legend_below(ax) -> None:  # type: ignore[no-untyped-def]
+    """The panel's legend under its x label, in three columns: never over the paths."""
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=3, frameon=False, markerscale=4)
 
 
 def draw_plan(ax, plan: Plan, title: str) -> None:  # type: ignore[no-untyped-def]
@@ -72,13 +97,14 @@ def draw_plan(ax, plan: Plan, title: str) -> None:  # type: ignore[no-untyped-de
     ax.plot(*(1e3 * plan.object_xy).T, "k-", lw=1.6, label="object")
     for p in plan.pushes:
         k = int(np.searchsorted(plan.t, p.t_start))
-        ax.plot(*(1e3 * _placed(outline, plan.tool_pose[k])).T, color="tab:blue", lw=1)
-        ax.annotate(p.faces[0], 1e3 * plan.tool_pose[k, :2], fontsize=7, color="tab:blue")
+        placed = 1e3 * _placed(outline, plan.tool_pose[k])
+        ax.plot(*placed.T, color="tab:blue", lw=1)
+        _face_label(ax, p.faces[0], placed, 1e3 * plan.object_xy[k])
     for s in plan.switches:
         for k in np.linspace(np.searchsorted(plan.t, s.t_start), np.searchsorted(plan.t, s.t_end) - 1, 4).astype(int):
             ax.plot(*(1e3 * _placed(outline, plan.tool_pose[k])).T, color="tab:orange", lw=0.6, alpha=0.8)
     ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7, loc="best")
+    _legend_below(ax)
 
 
 def plot_plans(plans: Mapping[str, Plan], out: str | Path, dpi: int = 120) -> Path:
@@ -132,7 +158,7 @@ def plot_plan(plan: Plan, out: str | Path, executions: Mapping[str, Execution] |
         ax.plot(*(1e3 * ex.tool_pose[:, :2]).T, "-", color="tab:blue", lw=0.8, label="tool, executed")
         err = float(np.linalg.norm(ex.object_xy[-1] - goal))
         ax.set_title(f"({chr(98 + i)}) {name}: final object error {1e3 * err:.1f} mm", fontsize=9)
-        ax.legend(fontsize=7, loc="best")
+        _legend_below(ax)
     for ax in axes[0]:
         ax.label_outer()  # the panels share their axes [mm]
     return save_figure(fig, out, dpi)

@@ -10,14 +10,17 @@ from tooltransfer.atomic import atomic_path
 
 
 def save_figure(fig: Any, out: str | Path, dpi: int = 120) -> Path:
-    """Save the matplotlib figure ``fig`` to ``out`` (format from the suffix), close it, return the path."""
+    """Save the matplotlib figure ``fig`` to ``out`` (format from the suffix), close it, return the path.
+
+    The saved area is the figure's drawn content with a small pad (``bbox_inches="tight"``): the axes'
+    labels are never cut off, whatever the panels' aspect ratios left of the figure's size."""
     import matplotlib.pyplot as plt
 
     fig.tight_layout()
     path = Path(out)
     try:
         with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=dpi)
+            fig.savefig(tmp, dpi=dpi, bbox_inches="tight", pad_inches=0.05)
     finally:
         plt.close(fig)
     return path
