@@ -20,8 +20,10 @@ class AffineRollout:
 
     Attributes:
         t: absolute sample times, shape (T,) [s].
-        x_free, v_free: unforced positions [m] and velocities [m/s], shape (T, n).
-        Gx, Gv: basis responses, shape (T, N) (see :mod:`tooltransfer.dmp.exact`).
+        x_free: unforced positions [m], shape (T, n).
+        v_free: unforced velocities [m/s], shape (T, n).
+        Gx: position responses to each basis function, shape (T, N) (see :mod:`tooltransfer.dmp.exact`).
+        Gv: velocity responses to each basis function, shape (T, N).
         M: forcing-term scaling matrix, shape (n, n).
         psi: basis values at the samples, shape (T, N).
     """
@@ -49,15 +51,15 @@ class AffineRollout:
         return base + resp @ wmat @ self.M.T
 
     def positions(self, w: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Positions (T, n) [m] for flat weights ``w`` (N*n,)."""
+        """Positions (T, n) [m] for flat weights ``w``, shape ``(N*n,)``."""
         return self._apply(self.x_free, self.Gx, w)
 
     def velocities(self, w: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Velocities (T, n) [m/s] for flat weights ``w`` (N*n,)."""
+        """Velocities (T, n) [m/s] for flat weights ``w``, shape ``(N*n,)``."""
         return self._apply(self.v_free, self.Gv, w)
 
     def position_matrix(self) -> NDArray[np.float64]:
-        """``D`` of shape (T*n, N*n) with ``positions(w).ravel() = x_free.ravel() + D @ w``."""
+        """``D`` of shape ``(T*n, N*n)`` with ``positions(w).ravel() = x_free.ravel() + D @ w``."""
         return np.asarray(np.kron(self.Gx, self.M), dtype=np.float64)
 
     def rows(
@@ -72,7 +74,7 @@ class AffineRollout:
             k: sample indices, shape (m,).
             a_pos, a_vel: coefficient vectors, shape (m, n), or None for zero.
         Returns:
-            ``R`` of shape (m, N*n) and ``r0`` of shape (m,).
+            ``R`` of shape ``(m, N*n)`` and ``r0`` of shape (m,).
         """
         m = k.size
         n_b = self.Gx.shape[1]

@@ -1,11 +1,12 @@
-r"""Coupling terms for stepwise DMP execution (:meth:`DMP.step <tooltransfer.dmp.primitive.DMP.step>`).
+r"""Coupling terms for stepwise DMP execution (:meth:`~tooltransfer.dmp.primitive.DMP.step`).
 
 Obstacle coupling after Hoffmann et al. (ICRA 2009), "Biologically-inspired dynamical systems for
 movement generation: automatic real-time goal adaptation and obstacle avoidance": the velocity is
 steered away from a point obstacle ``o`` by a term perpendicular to it,
 
-.. math::
-    C = k\,R\,(\tau \dot x)\,\varphi\,e^{-\beta \varphi},
+$$
+C = k\,R\,(\tau \dot x)\,\varphi\,e^{-\beta \varphi},
+$$
 
 where ``phi`` is the angle [rad] between the velocity and the direction ``o - x`` to the obstacle,
 ``R`` the rotation by +90 degrees about ``(o - x) x dx/dt`` (it turns the velocity away from the

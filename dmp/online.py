@@ -5,20 +5,22 @@ it pursues between periods: a goal that moves (a puck that is seen again), or a 
 pushes the motion away from an obstacle. With ``z = [x - g, tau * dx/dt]`` per dimension, the
 transformation system with a coupling term ``C`` is
 
-.. math::
-    \tau^2 \ddot x = \alpha_z(\beta_z(g - x) - \tau \dot x) + f(s) + C, \qquad
-    \dot z = A z + b\,(f(s(t)) + C),
+$$
+\tau^2 \ddot x = \alpha_z(\beta_z(g - x) - \tau \dot x) + f(s) + C, \qquad
+\dot z = A z + b\,(f(s(t)) + C),
+$$
 
 with ``A = [[0, 1], [-alpha_z*beta_z, -alpha_z]] / tau`` and ``b = [0, 1] / tau``
 (:mod:`tooltransfer.dmp.exact`). Over one step of ``dt`` from time ``t`` the goal ``g`` and the
 coupling ``C`` are held (zero-order hold, as a controller applies them), so the step is exact:
 
-.. math::
-    z(t + dt) = e^{A\,dt} z(t) + \int_0^{dt} e^{A(dt - \sigma)} b\,(f(s(t + \sigma)) + C)\,d\sigma,
+$$
+z(t + dt) = e^{A\,dt} z(t) + \int_0^{dt} e^{A(dt - \sigma)} b\,(f(s(t + \sigma)) + C)\,d\sigma,
+$$
 
 the integral by the same Gauss-Legendre rule on the same sub-intervals as the exact rollout
 (:func:`tooltransfer.dmp.exact.compute_responses`), so an uncoupled run with a fixed goal reproduces
-:meth:`DMP.rollout <tooltransfer.dmp.primitive.DMP.rollout>` on the same times to round-off, however
+:meth:`~tooltransfer.dmp.primitive.DMP.rollout` on the same times to round-off, however
 the steps are cut. The forcing term ``f = M(x0, g) @ W.T @ psi(s)`` uses the goal of the step, so a
 scaled DMP (``scaling`` other than ``"none"``) rescales its shape as the goal moves.
 

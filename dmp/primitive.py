@@ -70,9 +70,10 @@ class DMP:
 
     Transformation system per dimension (eqs. 1-2) and canonical system (eq. 2):
 
-    .. math::
-        \tau \dot v = \alpha_z(\beta_z(g - x) - v) + f(s), \quad \tau \dot x = v, \quad
-        \tau \dot s = -\gamma s,
+    $$
+    \tau \dot v = \alpha_z(\beta_z(g - x) - v) + f(s), \quad \tau \dot x = v, \quad
+    \tau \dot s = -\gamma s,
+    $$
 
     forcing term (eq. 3) ``f(s) = M(x0, g) @ W.T @ psi(s)`` with ``psi`` from :mod:`tooltransfer.dmp.basis`
     and ``M`` the scaling matrix of the chosen mode (:mod:`tooltransfer.dmp.scaling`; the paper prints
@@ -275,7 +276,7 @@ class DMP:
             tau: duration [s]; default: the fitted mean duration.
             method: ``"exact"`` (affine map, cached per grid) or ``"rk4"`` (reference).
             rk4_step: largest RK4 step [s].
-            weights: override the fitted weights, shape (N, n) or (N*n,).
+            weights: override the fitted weights, shape (N, n) or ``(N*n,)``.
         Returns:
             :class:`~tooltransfer.dmp.trajectory.Rollout` with ``t``, ``x``, ``v``, ``a``, each (T, n) but ``t``.
         """
@@ -324,7 +325,7 @@ class DMP:
     ) -> DMPState:
         r"""Advance a run by one control period: stepwise execution (:mod:`tooltransfer.dmp.online`).
 
-        Integrates :math:`\tau^2 \ddot x = \alpha_z(\beta_z(g - x) - \tau \dot x) + f(s) + C` exactly
+        Integrates $\tau^2 \ddot x = \alpha_z(\beta_z(g - x) - \tau \dot x) + f(s) + C$ exactly
         over ``dt`` with the goal and the coupling term held; with no coupling and a fixed goal the
         states agree with :meth:`rollout` on the same times to round-off, however the steps are cut.
 

@@ -18,7 +18,7 @@ from tooltransfer.validation import check_array, check_positive
 
 
 class Quadratic(NamedTuple):
-    """``0.5 w^T P w + q^T w``; P (N*n, N*n), q (N*n,)."""
+    """``0.5 w^T P w + q^T w``; ``P`` of shape ``(N*n, N*n)``, ``q`` of shape ``(N*n,)``."""
 
     P: NDArray[np.float64]
     q: NDArray[np.float64]

@@ -27,7 +27,7 @@ class Rows(NamedTuple):
     """Linear rows on the flat weights: ``G @ w <= h`` (or ``==`` for equality constraints).
 
     Attributes:
-        G: shape (m, N*n).
+        G: shape ``(m, N*n)``.
         h: shape (m,).
     """
 
