@@ -82,6 +82,11 @@ def test_the_api_reference_documents_the_entry_points(site: Path) -> None:
         "tooltransfer.planner.planning.plan": ["tooltransfer.planner.planning.plan.read_plan",
                                                "tooltransfer.planner.planning.plan.Plan"],
         "tooltransfer.planner.planning.setting": ["tooltransfer.planner.planning.setting.Setting"],
+        "tooltransfer.planner.planning.oe": ["tooltransfer.planner.planning.oe.condense_qp",
+                                             "tooltransfer.planner.planning.oe.QPOptions"],
+        "tooltransfer.planner.apps.batch": ["tooltransfer.planner.apps.batch.runner.run_batch",
+                                            "tooltransfer.planner.apps.batch.spec.BatchSpec",
+                                            "tooltransfer.planner.apps.batch.report.write_report"],
     }
     for module, ids in anchors.items():
         html = _text(site / "api" / module / "index.html")
@@ -113,6 +118,24 @@ def test_no_sphinx_role_markup_and_no_remote_assets(site: Path) -> None:
         html = _text(page)
         assert not re.search(r":(?:func|mod|class|meth|data|attr|exc):<code>", html), page
         assert not remote.search(html), page
+
+
+@needs_mkdocs
+def test_the_maths_is_mathml_and_the_api_tables_read_right(site: Path) -> None:
+    """Issue 29: equations are MathML written while building (no TeX left, no script), one attribute
+    a row (``x_free`` and ``v_free`` apart), shapes with ``*`` not in italics."""
+    design = _text(site / "design" / "index.html")
+    assert design.count('<math xmlns="http://www.w3.org/1998/Math/MathML" display="block">') >= 6
+    assert design.count('<math xmlns="http://www.w3.org/1998/Math/MathML" display="inline">') >= 20
+    dmp = _text(site / "api" / "tooltransfer.dmp" / "index.html")
+    assert dmp.count("<math ") >= 4 and "tooltransfer.dmp.coupling.obstacle_coupling" in dmp
+    for page in site.rglob("*.html"):
+        html = _text(page)
+        assert 'class="arithmatex"' not in html and "\\(" not in html and "$$" not in html, page
+        assert not re.search(r"<em>[a-z], [A-Z]</em>", html), page  # (T*n, N*n) read as italics
+    assert 'title="tooltransfer.dmp.AffineRollout.x_free,"' not in dmp
+    for name in ("x_free", "v_free"):
+        assert f'title="tooltransfer.dmp.AffineRollout.{name}"' in dmp, name
 
 
 def test_docs_pages_in_the_nav_exist() -> None:
