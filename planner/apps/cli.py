@@ -209,14 +209,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.add_argument("--force", action="store_true", help="run a plan that fails its checks against itself and its "
                    "task (or a violated plan) anyway, with a warning")
-    p.add_argument("--viewer", action="store_true", help="then replay the plan in MuJoCo's viewer, in real time "
-                   "(needs a display; on macOS run under mjpython)")
-    p = _add(sub, "mjcf", "write the MuJoCo scene (MJCF) of a task or a plan: the Omni with the tool, the puck, the "
-             "obstacles, the target, and a keyframe 'start'", "tooltransfer mjcf paper/transfer_tool2 -o scene.xml\n"
-             "  tooltransfer mjcf out/plan.json -o scene.xml\n  python -m mujoco.viewer --mjcf=scene.xml",
-             cli_planning.cmd_mjcf)
-    p.add_argument("source", help="task file (YAML), a bundled task's name, or a plan file (.json)")
-    p.add_argument("-o", "--out", type=Path, required=True, help="MJCF file to write")
+    _add_mujoco_tools(sub, p)
     p = _add(sub, "export", "write a plan's joint trajectory (positions, velocities, accelerations) for a real arm: "
              "CSV, NumPy .npz or a ROS JointTrajectory as JSON",
              "tooltransfer export out/plan.json --format joint-trajectory -o out/plan.trajectory.json",
@@ -239,6 +232,18 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_batch_parser(sub, _add)
     return parser
+
+
+def _add_mujoco_tools(sub: argparse._SubParsersAction, simulate: argparse.ArgumentParser) -> None:
+    """``simulate --viewer`` and the ``mjcf`` command: MuJoCo's own tools on the simulated scene."""
+    simulate.add_argument("--viewer", action="store_true", help="then replay the plan in MuJoCo's viewer, in real "
+                          "time (needs a display; on macOS run under mjpython)")
+    p = _add(sub, "mjcf", "write the MuJoCo scene (MJCF) of a task or a plan: the Omni with the tool, the puck, the "
+             "obstacles, the target, and a keyframe 'start'", "tooltransfer mjcf paper/transfer_tool2 -o scene.xml\n"
+             "  tooltransfer mjcf out/plan.json -o scene.xml\n  python -m mujoco.viewer --mjcf=scene.xml",
+             cli_planning.cmd_mjcf)
+    p.add_argument("source", help="task file (YAML), a bundled task's name, or a plan file (.json)")
+    p.add_argument("-o", "--out", type=Path, required=True, help="MJCF file to write")
 
 
 def _handled_interrupt() -> None:
