@@ -140,7 +140,9 @@ def test_fig12_says_what_it_draws_and_keeps_its_labels(tmp_path: Path, drawn: li
     phases = [colours[f"tool ({p})"] for p in ("approach", "push", "switch", "retreat")]
     assert len(set(phases)) == 4, phases
     # the saved area is the drawn content: its size is the tight box's, and the x labels lie inside it
-    renderer = fig.canvas.get_renderer()
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    renderer = FigureCanvasAgg(fig).get_renderer()  # the saved figure was closed: a canvas to measure on
     box = fig.get_tightbbox(renderer).padded(0.05)
     with Image.open(out) as im:
         assert abs(im.size[0] - box.width * 100) <= 2 and abs(im.size[1] - box.height * 100) <= 2
@@ -148,7 +150,8 @@ def test_fig12_says_what_it_draws_and_keeps_its_labels(tmp_path: Path, drawn: li
         label = a.xaxis.label.get_window_extent(renderer).transformed(fig.dpi_scale_trans.inverted())
         assert box.x0 <= label.x0 and label.x1 <= box.x1 and box.y0 <= label.y0 and label.y1 <= box.y1
     # each push's outline (blue, closed) is followed by its face's name: the text's box misses the outline
-    outlines = [line for line in ax.get_lines() if line.get_color() == "tab:blue" and len(line.get_xdata()) > 3]
+    outlines = [line for line in ax.get_lines()
+                if line.get_color() == "tab:blue" and line.get_marker() == "None" and len(line.get_xdata()) > 3]
     names = [t for t in ax.texts if t.get_text()]
     assert len(outlines) == len(names) == len(plans["qp/opt"].pushes) > 0
     to_data = ax.transData.inverted()
