@@ -86,3 +86,19 @@ def test_viewer_without_a_display_stops_before_any_work(
     captured = capsys.readouterr()
     assert "--viewer" in captured.err and "DISPLAY" in captured.err and "Traceback" not in captured.err
     assert "final_error" not in captured.out  # refused before simulating
+
+
+def test_the_viewer_runs_the_simulation_the_report_gives(plan_path: Path) -> None:
+    """What `simulate --viewer` steps (the written scene from its keyframe, the plan's controls) ends
+    with the puck where the open-loop simulation puts it: the window shows the run that was reported."""
+    from tooltransfer.planner.execution.scene import viewer_run
+    from tooltransfer.planner.execution.simulate import simulate_plan
+    from tooltransfer.planner.planning.plan import read_plan
+
+    plan = read_plan(plan_path)
+    model, data, controls = viewer_run(plan)
+    for ctrl in controls:
+        data.ctrl[:] = ctrl
+        mujoco.mj_step(model, data)
+    report = simulate_plan(plan)
+    np.testing.assert_allclose(data.body("puck").xpos[:2], report.execution.object_xy[-1], rtol=0, atol=1e-6)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -91,15 +91,13 @@ def check_viewer(option: str = "--viewer") -> None:
                          "(--figure or --gif draw the execution without one)", problem)
 
 
-def replay_in_viewer(plan: Plan) -> None:
-    """Open ``plan``'s scene in ``mujoco.viewer`` and track its joints there in real time (the
-    simulation's PD references); returns when the window is closed."""
-    import time
-
+def viewer_run(plan: Plan) -> tuple[Any, Any, NDArray[np.float64]]:
+    """What the viewer runs: the compiled scene of ``plan`` (``mujoco.MjModel``), its data at the
+    ``start`` keyframe (``mujoco.MjData``) and the actuators' controls of every physics step (n, 6)
+    (the plan's joints and velocities as the simulation resamples them)."""
     import mujoco
-    import mujoco.viewer
 
-    from tooltransfer.planner.planning.setting import setting_from_task
+    from tooltransfer.planner.planning.setting import setting_from_task, task_mechanics
     from tooltransfer.problems.task import task_from_dict
     from tooltransfer.tools.sim.reference import joint_reference
 
@@ -107,9 +105,20 @@ def replay_in_viewer(plan: Plan) -> None:
     model = mujoco.MjModel.from_xml_string(scene_mjcf(task, plan.joints[0]))
     data = mujoco.MjData(model)
     mujoco.mj_resetDataKeyframe(model, data, model.key(START_KEY).id)
-    platform = setting_from_task(task).platform
+    platform = setting_from_task(task, mechanics=task_mechanics(task)).platform
     ref = joint_reference(plan.t, plan.joints, plan.joint_velocities, model.opt.timestep, platform)
-    controls = np.hstack([ref.q, ref.qd])
+    return model, data, np.hstack([ref.q, ref.qd])
+
+
+def replay_in_viewer(plan: Plan) -> None:
+    """Open ``plan``'s scene in ``mujoco.viewer`` and track its joints there in real time
+    (:func:`viewer_run`); returns when the window is closed."""
+    import time
+
+    import mujoco
+    import mujoco.viewer
+
+    model, data, controls = viewer_run(plan)
     with mujoco.viewer.launch_passive(model, data) as viewer:
         start = time.perf_counter()
         for k, ctrl in enumerate(controls):
