@@ -62,6 +62,15 @@ figures: $(PY)
 	$(PY) -m pip install -q -e ".[all]"
 	$(PY) -m tooltransfer.planner.apps.plots.paper_figures docs/images
 
+# A release from files into dist/: the sdist, the wheel built from it, both checked by twine
+# (tests/test_packaging_wheel.py does the same on a copy and installs the wheel into a fresh venv).
+.PHONY: release
+release: $(PY)
+	$(PY) -m pip install -q -e ".[test]"
+	rm -rf dist
+	$(PY) -m build --no-isolation -o dist .
+	$(PY) -m twine check --strict dist/*
+
 # The Dockerfile built without a Docker engine, then a batch on its workers (docs/cluster.md; root,
 # network and debootstrap; tests/image/dockerfile_without_engine.py)
 .PHONY: image-check
