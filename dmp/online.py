@@ -43,7 +43,7 @@ from tooltransfer.dmp.exact import _GL_NODES, _GL_WEIGHTS, SystemParams, system_
 from tooltransfer.dmp.scaling import ScalingMode, scaling_matrix
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # array fields: no element-wise __eq__
 class DMPState:
     """The state of a DMP run between steps.
 
