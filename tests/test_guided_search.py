@@ -43,6 +43,7 @@ def test_the_guided_path_keeps_the_rules_it_searches_under() -> None:
     # every step keeps the rules of the qp fit it proposes for, checked with the Omni's inverse
     # kinematics: both ends of the face's usable contact range reachable, the tool outline clear of
     # the obstacles, the step's direction inside the face's narrowed cone at the heading the arm imposes
+    # at both of its ends
     options = qp_options(task)
     for k, name in enumerate(found.faces):
         p, d = found.xy[k], found.xy[k + 1] - found.xy[k]
@@ -60,8 +61,9 @@ def test_the_guided_path_keeps_the_rules_it_searches_under() -> None:
             assert all(shapely.distance(body, o.polygon() if isinstance(o, Disc) else o) > 0.0
                        for o in setting.obstacles)
         mid = FaceFrame.build(setting, name, friction_cone_fraction=options.friction_cone_fraction)
-        off = math.remainder(math.atan2(d[1], d[0]) - mid.push_direction(p[None])[0], 2 * math.pi)
-        assert abs(off) <= mid.theta_b
+        for end in (p, found.xy[k + 1]):  # the cone turns with the heading: inside it at both ends of the step
+            off = math.remainder(math.atan2(d[1], d[0]) - mid.push_direction(end[None])[0], 2 * math.pi)
+            assert abs(off) <= mid.theta_b
     t, ref, faces, switches = found.sequence(10.0)
     assert ref is found.xy
     assert t[0] == 0.0 and t[-1] == pytest.approx(10.0) and len(switches) == len(faces) - 1

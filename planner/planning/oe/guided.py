@@ -3,14 +3,17 @@
 Where the scored candidates of :func:`~tooltransfer.planner.planning.oe.qp_variant.condense_qp` hold no
 feasible sequence, the search here looks for one directly: from the start, straight steps of
 ``step`` [m] along the edges and the middle of each face's heading cone (the plan's narrowed friction
-cone intersected with the tool file's cone, turned by the heading the Omni imposes), the face held
+cone intersected with the tool file's cone, turned by the heading the Omni imposes; inside it at both
+ends of the step, since it turns as the object moves), the face held
 under the fit's own rows (the Omni reaching the contact at both ends of its usable range, the tool
 outline there clear of the obstacles), the puck the safety margin from them; A* on the path length
 plus a price per face change, ending with a straight step to the target inside a cone. Its faces
 and the times of their changes (in proportion to the path's length, over the universal path's
 duration) are then fitted by
 :func:`~tooltransfer.planner.planning.oe.qp_variant.condense_sequence` with the path as reference,
-which imposes every constraint of the ``qp`` variant; the search only proposes.
+which imposes every constraint of the ``qp`` variant, or, where that one fit fails, run by run
+(:func:`~tooltransfer.planner.planning.oe.piecewise.fit_runs`, the object at rest at each change of
+face); the search only proposes.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
@@ -27,6 +30,7 @@ from numpy.typing import NDArray
 from tooltransfer.planner.planning.oe.contacts import usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
 from tooltransfer.planner.planning.oe.metrics import plan_metrics
+from tooltransfer.planner.planning.oe.piecewise import fit_runs
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.qp_variant import condense_sequence
@@ -129,6 +133,9 @@ class GuidedMiss:
         return f"no path within {self.expansions} expansions (its budget, oe.guided_budget)"
 
 
+#: Share of a face's narrowed cone the search's steps use (the fit's cone rows are linearised).
+CONE = 0.98
+
 #: Step [m] of the search's straight pushes.
 STEP = 0.004
 
@@ -150,6 +157,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         if z is not None:
             shapely.prepare(z)
     faces = _face_moves(setting, options)
+    by_name = {fm.name: fm for fm in faces}
 
     def touches(fm: _FaceMoves, yaws: list[float], p: NDArray[np.float64], near: float) -> bool:
         """Whether the tool outline, holding ``fm``'s contact at each end at the yaws [rad] with the
@@ -174,11 +182,28 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 continue
             if touches(fm, [y for y in yaws if y is not None], p, near):
                 continue
-            mid = _heading(fm.cone, p)
-            if mid is None:  # the middle of the range is between its ends: held wherever they are
-                mid = float(fm.cone.heading(p[None])[0])
-            out.append((fm.name, mid + fm.cone.push_angle, 0.98 * fm.cone.theta_b))
+            out.append((fm.name, pointing(fm, p), CONE * fm.cone.theta_b))
         return out
+
+    def pointing(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
+        """The middle [rad] of ``fm``'s admissible directions in the world with the object at ``p``."""
+        yaw = _heading(fm.cone, p)
+        if yaw is None:  # the middle of the range is between its ends: held wherever they are
+            yaw = float(fm.cone.heading(p[None])[0])
+        return yaw + fm.cone.push_angle
+
+    def stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float) -> NDArray[np.float64] | None:
+        """Where a step of ``fm`` in direction ``ang`` [rad] from ``p`` ends, its direction kept inside
+        the face's cone at both ends of the step (the cone turns with the heading the Omni imposes, so a
+        step along its edge at ``p`` may leave it at the step's end: it is turned back inside), or None
+        where no direction near ``ang`` is inside both."""
+        for _ in range(2):
+            q = p + step * np.array([math.cos(ang), math.sin(ang)])
+            off = math.remainder(ang - pointing(fm, q), 2 * math.pi)
+            if abs(off) <= half:
+                return q
+            ang -= off - math.copysign(half, off)
+        return None
 
     def free(q: NDArray[np.float64]) -> bool:
         return centre_zone is None or not shapely.intersects_xy(centre_zone, float(q[0]), float(q[1]))
@@ -223,8 +248,8 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
             return GuidedPath(np.array(xy[::-1]), tuple(fs[::-1]))
         for name, mid, half in here:
             for ang in (mid - half, mid, mid + half):
-                q = p + step * np.array([math.cos(ang), math.sin(ang)])
-                if (int(q[0] // cell), int(q[1] // cell), name) in seen or not free(q):
+                q = stepped(by_name[name], p, ang, half)
+                if q is None or (int(q[0] // cell), int(q[1] // cell), name) in seen or not free(q):
                     continue
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
                 nodes.append((q, k, name))
@@ -255,6 +280,9 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
             continue
         tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
         plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
+        if plan.status != "solved":  # one fit per run of a face, the object at rest between them
+            runs = fit_runs(found.xy, found.faces, float(t[0]), float(t[-1] - t[0]), setting, opts)
+            plan = runs if runs.status == "solved" else replace(plan, reason=f"{plan.reason}; {runs.reason}")
         if plan.status == "solved":  # measured like every plan of the variant, at the share it used
             frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces
                       if f.name in faces}
