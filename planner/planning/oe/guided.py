@@ -20,8 +20,9 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Iterator
+from collections.abc import Generator, Sequence
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 import shapely
@@ -133,19 +134,42 @@ class GuidedMiss:
         return f"no path within {self.expansions} expansions (its budget, oe.guided_budget)"
 
 
+@dataclass(frozen=True)
+class Refusal:
+    """A change of face a later stage refused: from ``face_a`` to ``face_b`` with the object at
+    ``where`` (2,) [m] (a switch with no admissible tool path round the object there)."""
+
+    face_a: str
+    face_b: str
+    where: NDArray[np.float64]
+
+    def near(self, came: str | None, face: str, p: NDArray[np.float64]) -> bool:
+        """Whether changing from ``came`` to ``face`` at ``p`` (2,) [m] is this change, within
+        :data:`REFUSED_RADIUS`."""
+        return (came == self.face_a and face == self.face_b
+                and math.hypot(float(p[0] - self.where[0]), float(p[1] - self.where[1])) < REFUSED_RADIUS)
+
+
 #: Share of a face's narrowed cone the search's steps use (the fit's cone rows are linearised).
 CONE = 0.98
 
 #: Step [m] of the search's straight pushes.
 STEP = 0.004
 
+#: How near [m] a refused change of face (:class:`Refusal`) the search no longer makes it.
+REFUSED_RADIUS = 2 * STEP
+
+#: Searches again per share of the friction cone, each without the changes of face refused so far.
+REFUSALS = 2
+
 
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
-                budget: int = 3000) -> GuidedPath | GuidedMiss:
+                budget: int = 3000, refused: Sequence[Refusal] = ()) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss`
     within ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact
-    margin and span); ``switch_price`` [m]: the path length a face change is worth."""
+    margin and span); ``switch_price`` [m]: the path length a face change is worth; ``refused``: changes
+    of face it does not make (:class:`Refusal`)."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
     # where the tool outline may not come (the obstacles grown by the slack) and where the object's
@@ -208,7 +232,10 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     def free(q: NDArray[np.float64]) -> bool:
         return centre_zone is None or not shapely.intersects_xy(centre_zone, float(q[0]), float(q[1]))
 
-    def finish(p: NDArray[np.float64], here: list[tuple[str, float, float]]) -> str | None:
+    def allowed(came: str | None, face: str, p: NDArray[np.float64]) -> bool:
+        return came is None or came == face or not any(r.near(came, face, p) for r in refused)
+
+    def finish(p: NDArray[np.float64], came: str | None, here: list[tuple[str, float, float]]) -> str | None:
         """A face that pushes the object from ``p`` straight to the target (within its cone at both
         ends of the step, held at both), if the target is within ``3 step``."""
         d = target - p
@@ -217,7 +244,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         there = {name: (mid, half) for name, mid, half in held(target)}
         way = math.atan2(d[1], d[0])
         for name, mid, half in here:
-            if name in there and all(abs(math.remainder(way - m, 2 * math.pi)) <= 0.9 * h
+            if name in there and allowed(came, name, p) and all(abs(math.remainder(way - m, 2 * math.pi)) <= 0.9 * h
                                      for m, h in ((mid, half), there[name])):
                 return name
         return None
@@ -236,7 +263,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         seen.add(key)
         n += 1
         here = held(p)
-        last = finish(p, here)
+        last = finish(p, came, here)
         if last is not None:
             xy, fs = [target], [last]
             while k >= 0:
@@ -247,6 +274,8 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 k = parent
             return GuidedPath(np.array(xy[::-1]), tuple(fs[::-1]))
         for name, mid, half in here:
+            if not allowed(came, name, p):
+                continue
             for ang in (mid - half, mid, mid + half):
                 q = stepped(by_name[name], p, ang, half)
                 if q is None or (int(q[0] // cell), int(q[1] // cell), name) in seen or not free(q):
@@ -258,33 +287,52 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
 
 
 def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
-                 target: NDArray[np.float64] | None, options: QPOptions) -> Iterator[PushPlan]:
+                 target: NDArray[np.float64] | None, options: QPOptions) -> Generator[PushPlan, Any, None]:
     """The ``qp`` variant's fallback when its scored candidates fail: for each share of the friction
     cone in turn (``options.friction_cone_fraction``, then ``friction_cone_fraction_max`` where that is
     wider), the sequence of :func:`guided_path` (``options.guided_budget`` expansions) fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
     [m]) under that share. Yields each attempt's push plan, ``infeasible`` with the reason when the search
     or the fit fails; the caller stops at the first whose whole plan passes its checks. The share a plan
-    used is its metric ``friction_cone_fraction``: plans keep the task's share whenever one exists."""
+    used is its metric ``friction_cone_fraction``: plans keep the task's share whenever one exists.
+
+    The caller may send back why a solved push plan failed later: a
+    :class:`~tooltransfer.planner.planning.assemble.SwitchFailed` with the object's position (a switch
+    with no tool path there) makes the search run again without that change of face near there (at
+    most :data:`REFUSALS` times per share); anything else, the next share."""
     target = universal[-1] if target is None else target
-    empty = np.zeros((0, 2))
     shares = [options.friction_cone_fraction]
     if options.friction_cone_fraction_max > options.friction_cone_fraction:
         shares.append(options.friction_cone_fraction_max)
     for share in shares:
         opts = options.model_copy(update={"friction_cone_fraction": share})
-        found = guided_path(setting, universal[0], target, options=opts, budget=options.guided_budget)
-        if isinstance(found, GuidedMiss):
-            yield PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
-                           reason=f"at {share:g} of the friction cone, {found.describe()}")
-            continue
-        tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
-        plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
-        if plan.status != "solved":  # one fit per run of a face, the object at rest between them
-            runs = fit_runs(found.xy, found.faces, float(t[0]), float(t[-1] - t[0]), setting, opts)
-            plan = runs if runs.status == "solved" else replace(plan, reason=f"{plan.reason}; {runs.reason}")
-        if plan.status == "solved":  # measured like every plan of the variant, at the share it used
-            frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces
-                      if f.name in faces}
-            plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share)
-        yield plan
+        refused: list[Refusal] = []
+        for _ in range(1 + REFUSALS):
+            plan = _attempt(t, setting, target, opts, universal, refused)
+            failed = yield plan
+            where = getattr(failed, "where", None)
+            if plan.status != "solved" or where is None:
+                break
+            refused.append(Refusal(failed.face_a, failed.face_b, where))
+
+
+def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
+             universal: NDArray[np.float64], refused: list[Refusal]) -> PushPlan:
+    """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes."""
+    share = opts.friction_cone_fraction
+    found = guided_path(setting, universal[0], target, options=opts, budget=opts.guided_budget, refused=refused)
+    if isinstance(found, GuidedMiss):
+        empty = np.zeros((0, 2))
+        but = f" without the {len(refused)} change(s) of face refused," if refused else ""
+        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
+                        reason=f"at {share:g} of the friction cone,{but} {found.describe()}")
+    tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
+    plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
+    if plan.status != "solved":  # one fit per run of a face, the object at rest between them
+        runs = fit_runs(found.xy, found.faces, float(t[0]), float(t[-1] - t[0]), setting, opts)
+        plan = runs if runs.status == "solved" else replace(plan, reason=f"{plan.reason}; {runs.reason}")
+    if plan.status == "solved":  # measured like every plan of the variant, at the share it used
+        frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces
+                  if f.name in faces}
+        plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share)
+    return plan

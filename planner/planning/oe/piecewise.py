@@ -98,8 +98,8 @@ def fit_runs(xy: NDArray[np.float64], step_faces: tuple[str, ...], t0: float, du
     for face, a, b in _runs(step_faces):
         got = _fit_run(xy[a:b + 1], times[a:b + 1], face, setting, options)
         if isinstance(got, str):
-            empty = np.zeros((0, 2))
+            empty, at = np.zeros((0, 2)), np.round(xy[a], 4).tolist()
             return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, xy,
-                            reason=f"fitted run by run, the run of {face!r} from {np.round(xy[a], 4).tolist()} m: {got}")
+                            reason=f"fitted run by run, the run of {face!r} from {at} m: {got}")
         pieces += got
     return _join(pieces)
