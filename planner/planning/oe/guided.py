@@ -290,7 +290,9 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
                  target: NDArray[np.float64] | None, options: QPOptions) -> Generator[PushPlan, Any, None]:
     """The ``qp`` variant's fallback when its scored candidates fail: for each share of the friction
     cone in turn (``options.friction_cone_fraction``, then ``friction_cone_fraction_max`` where that is
-    wider), the sequence of :func:`guided_path` (``options.guided_budget`` expansions) fitted by
+    wider, then that share with the contact kept on ``guided_contact_span`` of each face where that is
+    narrower than ``contact_span``), the sequence of :func:`guided_path` (``options.guided_budget``
+    expansions) fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
     [m]) under that share. Yields each attempt's push plan, ``infeasible`` with the reason when the search
     or the fit fails; the caller stops at the first whose whole plan passes its checks. The share a plan
@@ -299,13 +301,16 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     The caller may send back why a solved push plan failed later: a
     :class:`~tooltransfer.planner.planning.assemble.SwitchFailed` with the object's position (a switch
     with no tool path there) makes the search run again without that change of face near there (at
-    most :data:`REFUSALS` times per share); anything else, the next share."""
+    most :data:`REFUSALS` times per attempt); anything else, the next attempt."""
     target = universal[-1] if target is None else target
-    shares = [options.friction_cone_fraction]
-    if options.friction_cone_fraction_max > options.friction_cone_fraction:
-        shares.append(options.friction_cone_fraction_max)
-    for share in shares:
-        opts = options.model_copy(update={"friction_cone_fraction": share})
+    wide, span = options.friction_cone_fraction_max, options.guided_contact_span
+    tries = [{"friction_cone_fraction": options.friction_cone_fraction}]
+    if wide > options.friction_cone_fraction:
+        tries.append({"friction_cone_fraction": wide})
+    if span < options.contact_span:
+        tries.append({"friction_cone_fraction": max(wide, options.friction_cone_fraction), "contact_span": span})
+    for change in tries:
+        opts = options.model_copy(update=change)
         refused: list[Refusal] = []
         for _ in range(1 + REFUSALS):
             plan = _attempt(t, setting, target, opts, universal, refused)
@@ -324,8 +329,9 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
         but = f" without the {len(refused)} change(s) of face refused," if refused else ""
+        on = f" (the contact on {opts.contact_span * 1e3:g} mm of each face)"
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
-                        reason=f"at {share:g} of the friction cone,{but} {found.describe()}")
+                        reason=f"at {share:g} of the friction cone{on},{but} {found.describe()}")
     tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
     plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
     if plan.status != "solved":  # one fit per run of a face, the object at rest between them
