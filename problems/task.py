@@ -223,8 +223,9 @@ class OEOptions(_Model):
         description="widest share of the friction cone's half-angle the guided search may use where no plan "
                     "keeps to friction_cone_fraction (at most friction_cone_fraction: never wider)")
     guided_budget: int = Field(
-        4000, ge=100, le=1_000_000, strict=True,
-        description="expansions of the guided search per cone share tried (its coverage grows with it)")
+        20000, ge=100, le=1_000_000, strict=True,
+        description="expansions of the guided search per attempt (cone share and contact span) "
+                    "(its coverage grows with it)")
     contact_margin: float = Field(
         0.0002, ge=0, le=0.05, allow_inf_nan=False, strict=True,
         description="distance the contact keeps from the ends of a face's usable range [m]")

@@ -16,6 +16,8 @@ from tooltransfer.planner.apps.batch.spec import load_batch
 from tooltransfer.planner.planning.oe.contacts import usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.guided import GuidedMiss, GuidedPath, guided_path
+from tooltransfer.planner.planning.oe.metrics import plan_metrics
+from tooltransfer.planner.planning.oe.piecewise import fit_runs
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import HARD_CHECKS, hard_check_failures, qp_options, solve
 from tooltransfer.problems.task import Task, task_from_dict
@@ -43,6 +45,7 @@ def test_the_guided_path_keeps_the_rules_it_searches_under() -> None:
     # every step keeps the rules of the qp fit it proposes for, checked with the Omni's inverse
     # kinematics: both ends of the face's usable contact range reachable, the tool outline clear of
     # the obstacles, the step's direction inside the face's narrowed cone at the heading the arm imposes
+    # at both of its ends
     options = qp_options(task)
     for k, name in enumerate(found.faces):
         p, d = found.xy[k], found.xy[k + 1] - found.xy[k]
@@ -60,8 +63,9 @@ def test_the_guided_path_keeps_the_rules_it_searches_under() -> None:
             assert all(shapely.distance(body, o.polygon() if isinstance(o, Disc) else o) > 0.0
                        for o in setting.obstacles)
         mid = FaceFrame.build(setting, name, friction_cone_fraction=options.friction_cone_fraction)
-        off = math.remainder(math.atan2(d[1], d[0]) - mid.push_direction(p[None])[0], 2 * math.pi)
-        assert abs(off) <= mid.theta_b
+        for end in (p, found.xy[k + 1]):  # the cone turns with the heading: inside it at both ends of the step
+            off = math.remainder(math.atan2(d[1], d[0]) - mid.push_direction(end[None])[0], 2 * math.pi)
+            assert abs(off) <= mid.theta_b
     t, ref, faces, switches = found.sequence(10.0)
     assert ref is found.xy
     assert t[0] == 0.0 and t[-1] == pytest.approx(10.0) and len(switches) == len(faces) - 1
@@ -91,3 +95,31 @@ def test_a_search_that_cannot_move_says_its_space_closed() -> None:
     spent = guided_path(setting, np.array(task.start), np.array(task.target), options=qp_options(task), budget=5)
     assert isinstance(spent, GuidedMiss) and not spent.exhausted and spent.expansions == 5
     assert "budget" in spent.describe()
+
+
+def test_a_guided_path_fitted_run_by_run_is_continuous_at_rest_between_runs_and_keeps_the_rules() -> None:
+    """The fallback fit of a guided path (one fit per run of a face): one continuous path on one time
+    axis from the start to the target, the object at rest wherever the face changes, every push's
+    samples its own, and the object-path checks of a solved plan hold on the joined path."""
+    task = _task("exec60-00023")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task)
+    found = guided_path(setting, np.array(task.start), np.array(task.target), options=options)
+    assert isinstance(found, GuidedPath)
+    plan = fit_runs(found.xy, found.faces, 2.0, 10.0, setting, options)
+    assert plan.status == "solved", plan.reason
+    runs = 1 + sum(a != b for a, b in zip(found.faces, found.faces[1:], strict=False))
+    assert plan.metrics["piecewise_fits"] >= runs
+    assert plan.t[0] == pytest.approx(2.0) and plan.t[-1] == pytest.approx(12.0) and np.all(np.diff(plan.t) > 0)
+    assert np.allclose(plan.object_xy[0], task.start, atol=1e-9)
+    assert np.linalg.norm(plan.object_xy[-1] - task.target) <= 1e-4
+    assert np.hypot(*np.diff(plan.object_xy, axis=0).T).max() < 1e-3  # no jump where the fits meet
+    seen = np.concatenate([p.samples for p in plan.pushes])
+    assert np.all(np.diff(seen) >= 0) and seen[0] == 0 and seen[-1] == plan.t.size - 1
+    for before, after in zip(plan.pushes, plan.pushes[1:], strict=False):
+        if after.face != before.face:  # a switch: the object stands still while the tool goes round it
+            assert np.linalg.norm(plan.object_v[after.samples[0]]) < 1e-6
+    frames = {f: FaceFrame.build(setting, f, friction_cone_fraction=options.friction_cone_fraction)
+              for f in setting.tool.face_names}
+    measured = plan_metrics(plan, frames, np.array(task.target), setting)
+    assert hard_check_failures(measured) == []

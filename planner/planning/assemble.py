@@ -141,7 +141,7 @@ def assemble(
             planner = recontact if nxt.recontact else switch
             sw = planner(obj, p.face, poses[i][-1], nxt.face, poses[i + 1][0])
             if sw.status != "solved":
-                raise SwitchFailed(p.face, nxt.face, sw.reason)
+                raise SwitchFailed(p.face, nxt.face, sw.reason, where=obj)
             length = float(np.sum(np.linalg.norm(np.diff(sw.xy, axis=0), axis=1)))
             dur = min_jerk_duration(length, v_max, a_max)
             n = max(2, int(np.ceil(dur / dt)) + 1)
@@ -162,10 +162,12 @@ def assemble(
 
 
 class SwitchFailed(ToolTransferError):
-    """A switch between two pushes has no admissible tool path."""
+    """A switch between two pushes has no admissible tool path; ``where``: the object's centre (2,) [m]
+    while it should be made, where known."""
 
-    def __init__(self, face_a: str, face_b: str, reason: str) -> None:
+    def __init__(self, face_a: str, face_b: str, reason: str, where: NDArray[np.float64] | None = None) -> None:
         self.face_a, self.face_b, self.reason = face_a, face_b, reason
+        self.where = None if where is None else np.array(where, dtype=np.float64)
         super().__init__(f"switch {face_a} -> {face_b}: {reason}")
 
 

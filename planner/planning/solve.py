@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Iterator
+from collections.abc import Generator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
@@ -133,17 +133,25 @@ def _search(task: Task, task_path: str | Path | None, budget: float = 1.0) -> tu
     return plan, setting
 
 
-def _guided(task: Task, setting: Setting, attempts: Iterator[Any], failed: Plan, switch: Any, recontact: Any,
-            base: dict[str, Any], start: float) -> Plan:
+def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], failed: Plan, switch: Any,
+            recontact: Any, base: dict[str, Any], start: float) -> Plan:
     """The first whole plan of the variant's guided search (its push plans, one per attempt) that passes
     every check, where the scored candidates left ``failed``; else ``failed`` with each attempt's reason
-    added."""
+    added. A switch that found no tool path is sent back to the search (it may avoid it)."""
     clock = time.perf_counter()
     whys: list[str] = []
-    for guided in attempts:
+    refused: SwitchFailed | None = None  # sent back: the search may avoid that change of face there
+    while True:
+        try:
+            guided = attempts.send(refused)
+        except StopIteration:
+            break
+        refused = None
         if guided.status == "solved":
             stages = {k: v for k, v in failed.metrics.items() if k in ("time_skills", "time_oe")}
-            plan = _complete(task, setting, guided, switch, recontact, stages, base)
+            switches: list[SwitchFailed] = []
+            plan = _complete(task, setting, guided, switch, recontact, stages, base, switches)
+            refused = switches[0] if switches else None
             if plan.status == "solved":
                 plan.metrics["time_guided"] = time.perf_counter() - clock
                 plan.metrics["time_total"] = time.perf_counter() - start
@@ -185,8 +193,10 @@ def _candidates(task: Task, setting: Setting, push_plan: Any, switch: Any, recon
 
 
 def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, recontact: Any,
-              stages: dict[str, float], base: dict[str, Any]) -> Plan:
-    """A solved push plan made a whole plan (switches, timing, joints) and checked (module docstring)."""
+              stages: dict[str, float], base: dict[str, Any],
+              failed_switches: list[SwitchFailed] | None = None) -> Plan:
+    """A solved push plan made a whole plan (switches, timing, joints) and checked (module docstring);
+    a switch that finds no tool path is added to ``failed_switches`` where given."""
     clock = time.perf_counter()
     missing = [k for k in PUSH_PLAN_MEASURES if k not in push_plan.metrics]
     if missing:  # a hard check with nothing to check is not a check that holds
@@ -198,6 +208,8 @@ def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, reconta
         motion = assemble(push_plan, tool, platform, switch, recontact, v_max=task.timing.max_tool_speed,
                           a_max=task.timing.max_tool_accel, approach_distance=task.timing.approach_distance)
     except SwitchFailed as exc:
+        if failed_switches is not None:
+            failed_switches.append(exc)
         return Plan(status="infeasible", reason=str(exc), metrics={**push_plan.metrics, **stages}, **base)
     stages = {**stages, "time_switches_and_timing": time.perf_counter() - clock}
     metrics = {**push_plan.metrics, **stages, "safety_margin_used": setting.margin,

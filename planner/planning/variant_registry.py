@@ -16,7 +16,7 @@ checks that the two agree.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Generator, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
@@ -39,9 +39,10 @@ from tooltransfer.problems.task import OEOptions, SSOptions
 #: ``condense(t (T,) [s], universal (T, 2) [m], setting, target (2,) [m] or None, options) -> PushPlan``.
 Condense = Callable[[NDArray[np.float64], NDArray[np.float64], Setting, "NDArray[np.float64] | None", Any],
                     PushPlan]
-#: ``guided(t, universal, setting, target, options) -> the push plans of a fallback search, one per attempt``.
+#: ``guided(t, universal, setting, target, options) -> the push plans of a fallback search, one per attempt``;
+#: the caller sends back why a solved one failed later (a switch with no tool path), or None.
 Guided = Callable[[NDArray[np.float64], NDArray[np.float64], Setting, "NDArray[np.float64] | None", Any],
-                  Iterator[PushPlan]]
+                  Generator[PushPlan, Any, None]]
 #: ``planner(setting, skill or None, the task's ss options) -> SwitchPlanner``.
 SwitchFactory = Callable[[Setting, "SwitchSkill | None", SSOptions], SwitchPlanner]
 

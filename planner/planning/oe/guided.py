@@ -3,22 +3,26 @@
 Where the scored candidates of :func:`~tooltransfer.planner.planning.oe.qp_variant.condense_qp` hold no
 feasible sequence, the search here looks for one directly: from the start, straight steps of
 ``step`` [m] along the edges and the middle of each face's heading cone (the plan's narrowed friction
-cone intersected with the tool file's cone, turned by the heading the Omni imposes), the face held
+cone intersected with the tool file's cone, turned by the heading the Omni imposes; inside it at both
+ends of the step, since it turns as the object moves), the face held
 under the fit's own rows (the Omni reaching the contact at both ends of its usable range, the tool
 outline there clear of the obstacles), the puck the safety margin from them; A* on the path length
 plus a price per face change, ending with a straight step to the target inside a cone. Its faces
 and the times of their changes (in proportion to the path's length, over the universal path's
 duration) are then fitted by
 :func:`~tooltransfer.planner.planning.oe.qp_variant.condense_sequence` with the path as reference,
-which imposes every constraint of the ``qp`` variant; the search only proposes.
+which imposes every constraint of the ``qp`` variant, or, where that one fit fails, run by run
+(:func:`~tooltransfer.planner.planning.oe.piecewise.fit_runs`, the object at rest at each change of
+face); the search only proposes.
 """
 
 from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Generator, Sequence
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 import shapely
@@ -27,6 +31,7 @@ from numpy.typing import NDArray
 from tooltransfer.planner.planning.oe.contacts import usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
 from tooltransfer.planner.planning.oe.metrics import plan_metrics
+from tooltransfer.planner.planning.oe.piecewise import fit_runs
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.qp_variant import condense_sequence
@@ -129,16 +134,42 @@ class GuidedMiss:
         return f"no path within {self.expansions} expansions (its budget, oe.guided_budget)"
 
 
+@dataclass(frozen=True)
+class Refusal:
+    """A change of face a later stage refused: from ``face_a`` to ``face_b`` with the object at
+    ``where`` (2,) [m] (a switch with no admissible tool path round the object there)."""
+
+    face_a: str
+    face_b: str
+    where: NDArray[np.float64]
+
+    def near(self, came: str | None, face: str, p: NDArray[np.float64]) -> bool:
+        """Whether changing from ``came`` to ``face`` at ``p`` (2,) [m] is this change, within
+        :data:`REFUSED_RADIUS`."""
+        return (came == self.face_a and face == self.face_b
+                and math.hypot(float(p[0] - self.where[0]), float(p[1] - self.where[1])) < REFUSED_RADIUS)
+
+
+#: Share of a face's narrowed cone the search's steps use (the fit's cone rows are linearised).
+CONE = 0.98
+
 #: Step [m] of the search's straight pushes.
 STEP = 0.004
+
+#: How near [m] a refused change of face (:class:`Refusal`) the search no longer makes it.
+REFUSED_RADIUS = 2 * STEP
+
+#: Searches again per share of the friction cone, each without the changes of face refused so far.
+REFUSALS = 2
 
 
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
-                budget: int = 3000) -> GuidedPath | GuidedMiss:
+                budget: int = 3000, refused: Sequence[Refusal] = ()) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss`
     within ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact
-    margin and span); ``switch_price`` [m]: the path length a face change is worth."""
+    margin and span); ``switch_price`` [m]: the path length a face change is worth; ``refused``: changes
+    of face it does not make (:class:`Refusal`)."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
     # where the tool outline may not come (the obstacles grown by the slack) and where the object's
@@ -150,6 +181,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         if z is not None:
             shapely.prepare(z)
     faces = _face_moves(setting, options)
+    by_name = {fm.name: fm for fm in faces}
 
     def touches(fm: _FaceMoves, yaws: list[float], p: NDArray[np.float64], near: float) -> bool:
         """Whether the tool outline, holding ``fm``'s contact at each end at the yaws [rad] with the
@@ -174,16 +206,36 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 continue
             if touches(fm, [y for y in yaws if y is not None], p, near):
                 continue
-            mid = _heading(fm.cone, p)
-            if mid is None:  # the middle of the range is between its ends: held wherever they are
-                mid = float(fm.cone.heading(p[None])[0])
-            out.append((fm.name, mid + fm.cone.push_angle, 0.98 * fm.cone.theta_b))
+            out.append((fm.name, pointing(fm, p), CONE * fm.cone.theta_b))
         return out
+
+    def pointing(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
+        """The middle [rad] of ``fm``'s admissible directions in the world with the object at ``p``."""
+        yaw = _heading(fm.cone, p)
+        if yaw is None:  # the middle of the range is between its ends: held wherever they are
+            yaw = float(fm.cone.heading(p[None])[0])
+        return yaw + fm.cone.push_angle
+
+    def stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float) -> NDArray[np.float64] | None:
+        """Where a step of ``fm`` in direction ``ang`` [rad] from ``p`` ends, its direction kept inside
+        the face's cone at both ends of the step (the cone turns with the heading the Omni imposes, so a
+        step along its edge at ``p`` may leave it at the step's end: it is turned back inside), or None
+        where no direction near ``ang`` is inside both."""
+        for _ in range(2):
+            q = p + step * np.array([math.cos(ang), math.sin(ang)])
+            off = math.remainder(ang - pointing(fm, q), 2 * math.pi)
+            if abs(off) <= half:
+                return q
+            ang -= off - math.copysign(half, off)
+        return None
 
     def free(q: NDArray[np.float64]) -> bool:
         return centre_zone is None or not shapely.intersects_xy(centre_zone, float(q[0]), float(q[1]))
 
-    def finish(p: NDArray[np.float64], here: list[tuple[str, float, float]]) -> str | None:
+    def allowed(came: str | None, face: str, p: NDArray[np.float64]) -> bool:
+        return came is None or came == face or not any(r.near(came, face, p) for r in refused)
+
+    def finish(p: NDArray[np.float64], came: str | None, here: list[tuple[str, float, float]]) -> str | None:
         """A face that pushes the object from ``p`` straight to the target (within its cone at both
         ends of the step, held at both), if the target is within ``3 step``."""
         d = target - p
@@ -192,7 +244,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         there = {name: (mid, half) for name, mid, half in held(target)}
         way = math.atan2(d[1], d[0])
         for name, mid, half in here:
-            if name in there and all(abs(math.remainder(way - m, 2 * math.pi)) <= 0.9 * h
+            if name in there and allowed(came, name, p) and all(abs(math.remainder(way - m, 2 * math.pi)) <= 0.9 * h
                                      for m, h in ((mid, half), there[name])):
                 return name
         return None
@@ -211,7 +263,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         seen.add(key)
         n += 1
         here = held(p)
-        last = finish(p, here)
+        last = finish(p, came, here)
         if last is not None:
             xy, fs = [target], [last]
             while k >= 0:
@@ -222,9 +274,11 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 k = parent
             return GuidedPath(np.array(xy[::-1]), tuple(fs[::-1]))
         for name, mid, half in here:
+            if not allowed(came, name, p):
+                continue
             for ang in (mid - half, mid, mid + half):
-                q = p + step * np.array([math.cos(ang), math.sin(ang)])
-                if (int(q[0] // cell), int(q[1] // cell), name) in seen or not free(q):
+                q = stepped(by_name[name], p, ang, half)
+                if q is None or (int(q[0] // cell), int(q[1] // cell), name) in seen or not free(q):
                     continue
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
                 nodes.append((q, k, name))
@@ -233,30 +287,58 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
 
 
 def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
-                 target: NDArray[np.float64] | None, options: QPOptions) -> Iterator[PushPlan]:
+                 target: NDArray[np.float64] | None, options: QPOptions) -> Generator[PushPlan, Any, None]:
     """The ``qp`` variant's fallback when its scored candidates fail: for each share of the friction
     cone in turn (``options.friction_cone_fraction``, then ``friction_cone_fraction_max`` where that is
-    wider), the sequence of :func:`guided_path` (``options.guided_budget`` expansions) fitted by
+    wider, then that share with the contact kept on ``guided_contact_span`` of each face where that is
+    narrower than ``contact_span``), the sequence of :func:`guided_path` (``options.guided_budget``
+    expansions) fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
     [m]) under that share. Yields each attempt's push plan, ``infeasible`` with the reason when the search
     or the fit fails; the caller stops at the first whose whole plan passes its checks. The share a plan
-    used is its metric ``friction_cone_fraction``: plans keep the task's share whenever one exists."""
+    used is its metric ``friction_cone_fraction``: plans keep the task's share whenever one exists.
+
+    The caller may send back why a solved push plan failed later: a
+    :class:`~tooltransfer.planner.planning.assemble.SwitchFailed` with the object's position (a switch
+    with no tool path there) makes the search run again without that change of face near there (at
+    most :data:`REFUSALS` times per attempt); anything else, the next attempt."""
     target = universal[-1] if target is None else target
-    empty = np.zeros((0, 2))
-    shares = [options.friction_cone_fraction]
-    if options.friction_cone_fraction_max > options.friction_cone_fraction:
-        shares.append(options.friction_cone_fraction_max)
-    for share in shares:
-        opts = options.model_copy(update={"friction_cone_fraction": share})
-        found = guided_path(setting, universal[0], target, options=opts, budget=options.guided_budget)
-        if isinstance(found, GuidedMiss):
-            yield PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
-                           reason=f"at {share:g} of the friction cone, {found.describe()}")
-            continue
-        tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
-        plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
-        if plan.status == "solved":  # measured like every plan of the variant, at the share it used
-            frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces
-                      if f.name in faces}
-            plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share)
-        yield plan
+    wide, span = options.friction_cone_fraction_max, options.guided_contact_span
+    tries = [{"friction_cone_fraction": options.friction_cone_fraction}]
+    if wide > options.friction_cone_fraction:
+        tries.append({"friction_cone_fraction": wide})
+    if span < options.contact_span:
+        tries.append({"friction_cone_fraction": max(wide, options.friction_cone_fraction), "contact_span": span})
+    for change in tries:
+        opts = options.model_copy(update=change)
+        refused: list[Refusal] = []
+        for _ in range(1 + REFUSALS):
+            plan = _attempt(t, setting, target, opts, universal, refused)
+            failed = yield plan
+            where = getattr(failed, "where", None)
+            if plan.status != "solved" or where is None:
+                break
+            refused.append(Refusal(failed.face_a, failed.face_b, where))
+
+
+def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
+             universal: NDArray[np.float64], refused: list[Refusal]) -> PushPlan:
+    """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes."""
+    share = opts.friction_cone_fraction
+    found = guided_path(setting, universal[0], target, options=opts, budget=opts.guided_budget, refused=refused)
+    if isinstance(found, GuidedMiss):
+        empty = np.zeros((0, 2))
+        but = f" without the {len(refused)} change(s) of face refused," if refused else ""
+        on = f" (the contact on {opts.contact_span * 1e3:g} mm of each face)"
+        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
+                        reason=f"at {share:g} of the friction cone{on},{but} {found.describe()}")
+    tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
+    plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
+    if plan.status != "solved":  # one fit per run of a face, the object at rest between them
+        runs = fit_runs(found.xy, found.faces, float(t[0]), float(t[-1] - t[0]), setting, opts)
+        plan = runs if runs.status == "solved" else replace(plan, reason=f"{plan.reason}; {runs.reason}")
+    if plan.status == "solved":  # measured like every plan of the variant, at the share it used
+        frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces
+                  if f.name in faces}
+        plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share)
+    return plan

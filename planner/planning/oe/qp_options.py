@@ -53,7 +53,10 @@ class QPOptions(BaseModel):
             ``mu``: :meth:`tooltransfer.planner.planning.oe.face_frame.FaceFrame.build`).
         friction_cone_fraction_max: the widest share the guided search may use where no plan keeps to
             ``friction_cone_fraction`` (:func:`tooltransfer.planner.planning.oe.guided.guided_plans`).
-        guided_budget: expansions of the guided search per share tried.
+        guided_budget: expansions of the guided search per attempt.
+        guided_contact_span: the narrower stretch of a face [m] the guided search's last attempt
+            keeps the contact on (where the Omni cannot hold the tool at both ends of
+            ``contact_span``; the contact then re-touches more often).
         contact_margin, contact_span: where on a face the contact may be [m]
             (:func:`tooltransfer.planner.planning.oe.contacts.usable_range`).
     """
@@ -78,6 +81,7 @@ class QPOptions(BaseModel):
     friction_cone_fraction: float = _TASK["friction_cone_fraction"]
     friction_cone_fraction_max: float = _TASK["friction_cone_fraction_max"]
     guided_budget: int = _TASK["guided_budget"]
+    guided_contact_span: float = Field(0.004, gt=0, allow_inf_nan=False)
     contact_margin: float = _TASK["contact_margin"]
     contact_span: float = _TASK["contact_span"]
 

@@ -124,7 +124,7 @@ def condense_sequence(
                         reason=f"the sequence {' -> '.join(faces)} is infeasible from here ({fams or 'unknown'})",
                         metrics={"compute_time": time.perf_counter() - start_time})
     roll = s.result.rollout
-    dense_t, x, v = roll.t + grid[0], roll.x, roll.v
+    dense_t, x, v = roll.t, roll.x, roll.v  # the rollout keeps the grid's own times
     try:
         pushes = _pushes(fine, s, dense_t, x, s_first, 1 if first_face_only else None)
     except PushRefused as exc:
@@ -208,7 +208,7 @@ class _Finals:
             if not final.feasible or final.result.rollout is None:
                 continue
             roll = final.result.rollout
-            dense_t, x, v = roll.t + self.grid[0], roll.x, roll.v
+            dense_t, x, v = roll.t, roll.x, roll.v
             try:
                 pushes = _pushes(self.fine, final, dense_t, x)
             except PushRefused as exc:

@@ -157,7 +157,7 @@ class SequenceFit:
         if not contact or res.rollout is None or not scored.feasible:
             return scored
         roll = res.rollout
-        t = roll.t + self.t[0]
+        t = roll.t  # on the grid's own times, as the windows are
 
         def counts(r: FitResult) -> list[int]:
             assert r.rollout is not None
