@@ -1,0 +1,1 @@
+"""Contact faces derived from a tool's outline (docs/design.md section 12)."""
