@@ -7,8 +7,9 @@ at ``p = a + s t`` (``0 <= s <= L``) when its centre is ``c(s) = p + R n``; the 
 when that disc does not overlap the rest of the outline, i.e. ``dist(c(s), outline) >= R``. The
 usable centres are the part of the centre line ``a + R n .. b + R n`` outside the outline grown by
 ``R`` (shapely's buffer with :data:`QUAD_SEGS` segments per quarter circle: its round joins lie
-within ``R (1 - cos(pi / (4 QUAD_SEGS)))``, 1.3 um for ``R`` = 17.5 mm, of the true offset), and the
-result is checked with shapely's exact distance at the usable part's ends and middle.
+within ``R (1 - cos(pi / (4 QUAD_SEGS)))``, 1.3 um for ``R`` = 17.5 mm, of the true offset), and its
+ends are then moved by bisection on shapely's exact distance until the disc there clears the outline
+(penetration below 1e-14 m).
 
 * An **edge contact** is the longest usable interval of an edge: its outward normal, its friction
   cone ``|phi| <= atan(mu)`` about the normal (section 10: the object's centre moves inside it
@@ -29,6 +30,7 @@ must lie beyond the arm's axis: :class:`tooltransfer.planner.planning.oe.face_fr
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,8 +44,9 @@ QUAD_SEGS = 64
 #: Relative shrink of the growth radius, so that the centre line of the touching edge itself
 #: (at exactly ``R``) is not counted as overlapping.
 GROW_SHRINK = 1e-6
-#: Tolerance [m] of the exact distance check of a usable interval.
+#: Tolerance [m] of the sampled vertex-contact check; EXACT_TOL: of the usable intervals' ends (rounding only).
 CHECK_TOL = 5e-6
+EXACT_TOL = 1e-14
 
 
 @dataclass(frozen=True)
@@ -155,14 +158,31 @@ def edge_contacts(outline: shapely.Polygon, radius: float, friction: float, c: f
         if not spans:
             continue
         s0, s1 = max(spans, key=lambda r: r[1] - r[0])
-        for s in (s0, 0.5 * (s0 + s1), s1):
-            centre = shapely.Point(a + s * e + radius * n)
-            if outline.distance(centre) < radius - CHECK_TOL:  # pragma: no cover - a shapely fault
-                raise InputError("outline", f"edge {i}'s usable part to clear the outline by the radius",
-                                 f"distance {outline.distance(centre):.6g} m at fraction {s:.4g}")
+        def clear(s: float, a: NDArray[np.float64] = a, e: NDArray[np.float64] = e,
+                  n: NDArray[np.float64] = n) -> bool:
+            return bool(outline.distance(shapely.Point(a + s * e + radius * n)) >= radius - EXACT_TOL)
+
+        mid = 0.5 * (s0 + s1)
+        if not clear(mid):  # pragma: no cover - a shapely fault
+            raise InputError("outline", f"edge {i}'s usable part to clear the outline by the radius",
+                             f"an overlap at fraction {mid:.4g}")
+        s0, s1 = _refined(clear, s0, mid), _refined(clear, s1, mid)
         out.append(EdgeContact(i, a.copy(), b.copy(), (float(s0), float(s1)), n, half,
                                float((s1 - s0) * length * c * c)))
     return out
+
+
+def _refined(clear: Callable[[float], bool], end: float, inner: float, steps: int = 60) -> float:
+    """``end`` if the disc there clears the outline, else the clear fraction nearest to it found by
+    bisection towards ``inner`` (clear): the grown outline's chords let the interval overshoot by
+    up to a few micrometres, which the exact distance removes."""
+    if clear(end):
+        return end
+    bad, good = end, inner
+    for _ in range(steps):
+        m = 0.5 * (bad + good)
+        bad, good = (bad, m) if clear(m) else (m, good)
+    return good
 
 
 def _normal_angle(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
