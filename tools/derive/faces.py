@@ -130,5 +130,6 @@ def derive_faces(
         raise InputError("outline", f"an edge of at least {min_length * 1e3:g} mm the object of radius "
                          f"{radius * 1e3:g} mm can touch (and the Omni can push with)", "none")
     keep = sorted(sorted(usable, key=lambda e: -e.usable_length)[:max_faces], key=lambda e: e.edge)
-    faces = tuple(Face(e.name, e.start, e.end, e.normal_angle, e.friction_half, e.contact_range) for e in keep)
+    faces = tuple(Face(e.name, e.start, e.end, e.normal_angle, e.friction_half, e.contact_range, e.normal)
+                  for e in keep)
     return Derivation(ccw, radius, mu, c, tuple(edges), tuple(vertex_contacts(ccw, radius, mu)), faces)
