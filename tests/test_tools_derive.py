@@ -26,6 +26,7 @@ from tooltransfer.problems.task import (
 )
 from tooltransfer.tools import OBJECT_RADIUS, DiscObject, load_library, load_tool, tool_to_dict
 from tooltransfer.tools.derive import (
+    CONTACT_WINDOW,
     MATCH_ANGLE,
     MAX_DERIVED_FACES,
     derive_faces,
@@ -59,11 +60,15 @@ def test_every_hand_face_is_a_derived_face(name: str) -> None:
     for f in tool.faces:
         g = next(x for x in d.faces if x.name == match[f.name])
         assert abs(wrap_angle(g.normal_angle - f.normal_angle)) <= MATCH_ANGLE
-        # the hand face's contact part lies inside the derived usable part (same edge, either direction)
-        e = g.end - g.start
+        # the hand face's contact part lies inside the edge's usable part (same edge, either direction)
+        u = d.edge(g.name)
+        e = u.end - u.start
         for p in f.contact_segment():
-            s = float((p - g.start) @ e) / float(e @ e)
-            assert g.contact_range[0] - 1e-3 <= s <= g.contact_range[1] + 1e-3, (f.name, s, g.contact_range)
+            s = float((p - u.start) @ e) / float(e @ e)
+            assert u.contact_range[0] - 1e-3 <= s <= u.contact_range[1] + 1e-3, (f.name, s, u.contact_range)
+        # the face's own range is the usable part, or its 12 mm nearest the tool centre point
+        assert g.contact_range[0] >= u.contact_range[0] and g.contact_range[1] <= u.contact_range[1]
+        assert (g.contact_range[1] - g.contact_range[0]) * g.length <= max(u.usable_length, CONTACT_WINDOW) + 1e-12
 
 
 @pytest.mark.parametrize("name", sorted(LIBRARY))

@@ -1,4 +1,4 @@
-"""Contact faces derived from a tool's outline (docs/design.md section 12).
+"""Contact faces derived from a tool's outline (docs/design.md section 13).
 
 * :func:`derive_faces` (:mod:`.faces`): every usable edge and vertex contact of an outline for a disc of
   a given radius and friction, and the planner faces (``edge_<i>``) they give.
@@ -10,6 +10,7 @@
 
 from tooltransfer.tools.derive.contacts import EdgeContact, VertexContact
 from tooltransfer.tools.derive.faces import (
+    CONTACT_WINDOW,
     DEFAULT_C,
     DEFAULT_FRICTION,
     MAX_DERIVED_FACES,
@@ -22,6 +23,7 @@ from tooltransfer.tools.derive.tool import MATCH_ANGLE, derived_tool, match_face
 
 __all__ = [
     "ARC_TOLERANCE",
+    "CONTACT_WINDOW",
     "DEFAULT_C",
     "DEFAULT_FRICTION",
     "MATCH_ANGLE",

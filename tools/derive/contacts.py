@@ -1,4 +1,4 @@
-"""Contacts a round object can make with a tool outline (docs/design.md section 12).
+"""Contacts a round object can make with a tool outline (docs/design.md section 13).
 
 Tool frame and units as in :mod:`tooltransfer.tools.model` (metres, radians from +x, counter-clockwise).
 For the outline's counter-clockwise ring, edge ``i`` runs from vertex ``i`` to vertex ``i + 1`` with

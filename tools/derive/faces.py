@@ -1,9 +1,15 @@
-"""Planner faces derived from a tool outline: :func:`derive_faces` (docs/design.md section 12).
+"""Planner faces derived from a tool outline: :func:`derive_faces` (docs/design.md section 13).
 
 Every edge contact of :mod:`tooltransfer.tools.derive.contacts` that the Omni can push with becomes a
 :class:`~tooltransfer.tools.model.Face` named ``edge_<i>`` (``i`` the edge's index in the outline's
 counter-clockwise ring): its segment is the whole edge, its ``contact_range`` the usable part, its
 ``push_angle`` the outward normal and its ``theta_b`` the friction cone's half-angle ``atan(mu)``.
+A usable part longer than :data:`CONTACT_WINDOW` gives the face the window of that length nearest
+the tool centre point (the edge contact keeps the whole part): the planner lets a contact use
+``oe.contact_span`` (12 mm by default) about the middle of a face's range and plans the reach there,
+and of a long edge the derivation offers the stretch nearest the tool centre point, next to where
+the Omni holds the tool (as the paper places tool 1's left face, just below its head).
+
 The planner intersects a face's ``push_angle +- theta_b`` with the friction cone of the task's
 mechanics (:func:`tooltransfer.planner.planning.oe.face_frame.admissible_cone`), so a derived face
 allows every direction the mechanics allow; an operator's narrower preference stays what a tool
@@ -39,6 +45,8 @@ DEFAULT_C = 0.59
 MIN_LENGTH = 0.002
 #: Most derived faces (see the module docstring).
 MAX_DERIVED_FACES = 8
+#: Longest contact range [m] of a derived face (the task schema's default ``oe.contact_span``).
+CONTACT_WINDOW = 0.012
 
 
 @dataclass(frozen=True)
@@ -87,6 +95,18 @@ def _on_platform(e: EdgeContact, radius: float, sec: ReachSector) -> EdgeContact
     return replace(e, world_directions=(float(lo), float(hi)), on_platform=ok)
 
 
+def _window(e: EdgeContact, window: float) -> tuple[float, float]:
+    """The fractions of ``e``'s usable part, or of its stretch of length ``window`` [m] nearest the
+    tool centre point (the origin) when the part is longer."""
+    s0, s1 = e.contact_range
+    half = 0.5 * window / e.length
+    if s1 - s0 <= 2 * half:
+        return s0, s1
+    foot = float(-(e.start @ (e.end - e.start)) / (e.length * e.length))  # origin's projection on the edge
+    mid = min(max(foot, s0 + half), s1 - half)
+    return float(mid - half), float(mid + half)
+
+
 def derive_faces(
     outline: shapely.Polygon,
     object_radius: float = OBJECT_RADIUS,
@@ -95,6 +115,7 @@ def derive_faces(
     c: float = DEFAULT_C,
     min_length: float = MIN_LENGTH,
     max_faces: int = MAX_DERIVED_FACES,
+    window: float = CONTACT_WINDOW,
     platform: OmniPlatform | None = None,
 ) -> Derivation:
     """Every usable contact of ``outline`` for a disc of ``object_radius`` [m] and the faces to plan with.
@@ -106,6 +127,7 @@ def derive_faces(
         c: the object's limit-surface ratio (sideways travel per contact, ``l c^2``).
         min_length: shortest usable part [m] of an edge that makes a face.
         max_faces: most faces kept (the longest usable parts).
+        window: longest contact range of a face [m] (see the module docstring).
         platform: the Omni carrying the tool; with it, faces the Omni cannot push with are dropped
             and each edge contact carries its world push directions.
 
@@ -118,6 +140,7 @@ def derive_faces(
     mu = _positive(friction, "friction", 10.0)
     c = _positive(c, "c", 2.0)
     min_length = _positive(min_length, "min_length", 1.0)
+    window = _positive(window, "window", 1.0)
     if isinstance(max_faces, bool) or not isinstance(max_faces, int) or max_faces < 1:
         raise InputError("max_faces", "a positive integer", repr(max_faces))
     ccw = shapely.geometry.polygon.orient(outline, sign=1.0)
@@ -130,6 +153,6 @@ def derive_faces(
         raise InputError("outline", f"an edge of at least {min_length * 1e3:g} mm the object of radius "
                          f"{radius * 1e3:g} mm can touch (and the Omni can push with)", "none")
     keep = sorted(sorted(usable, key=lambda e: -e.usable_length)[:max_faces], key=lambda e: e.edge)
-    faces = tuple(Face(e.name, e.start, e.end, e.normal_angle, e.friction_half, e.contact_range, e.normal)
+    faces = tuple(Face(e.name, e.start, e.end, e.normal_angle, e.friction_half, _window(e, window), e.normal)
                   for e in keep)
     return Derivation(ccw, radius, mu, c, tuple(edges), tuple(vertex_contacts(ccw, radius, mu)), faces)
