@@ -1,7 +1,7 @@
 """Derived-faces benchmark: faces from the outline against the hand-annotated ones (issue 28).
 
-Run with ``python benchmarks/bench_derive.py`` (``--count N`` for the first N tasks, ``--closed-loop``
-to also execute closed loop, ``--json PATH`` for every row).
+Run with ``python benchmarks/bench_derive.py`` (``--count N`` for the first N tasks, ``--tools a,b`` for
+those tools' tasks, ``--closed-loop`` to also execute closed loop, ``--json PATH`` for every row).
 
 1. Derivation: :func:`tooltransfer.tools.derive.derive_faces` on every library outline (the paper's
    17.5 mm puck, mu 0.8, the Omni with the tool's ``a_t``), the median of 20 runs per tool; and on
@@ -187,6 +187,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--count", type=int, default=None, help="only the first N tasks")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--closed-loop", action="store_true", help="also execute closed loop")
+    ap.add_argument("--tools", default=None, help="only the tasks of these tools (comma-separated)")
     ap.add_argument("--json", type=Path, default=None, help="write every row here")
     args = ap.parse_args(argv)
     from tooltransfer.planner.apps.batch.generate import generate_tasks
@@ -196,6 +197,8 @@ def main(argv: list[str] | None = None) -> None:
     der = derivation_report()
     _init()
     tasks = generate_tasks(load_batch(BATCH), BATCH)[: args.count]
+    if args.tools:
+        tasks = [g for g in tasks if g.tool in args.tools.split(",")]
     jobs = [(g.task_id, g.tool, mode, g.data, args.closed_loop) for g in tasks
             for mode in (("hand", "derived") if g.tool in HAND else ("derived",))]
     rows: list[Row] = []
