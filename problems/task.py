@@ -117,13 +117,15 @@ class InlineFace(_Model):
 
 
 class InlineTool(_Model):
-    """A tool defined in the task itself (same fields as the library's YAML files)."""
+    """A tool defined in the task itself (same fields as the library's YAML files; without ``faces`` the
+    faces are derived from the outline for the task's object, :mod:`tooltransfer.tools.derive`)."""
 
     name: str = Field(min_length=1, max_length=MAX_NAME)
     a_t: float = Field(gt=0, le=0.2, allow_inf_nan=False, strict=True,
                        description="tool length of Table I's tool row [m]")
     outline: list[Point] = Field(min_length=3, max_length=256, description="simple polygon in the tool frame [m]")
-    faces: list[InlineFace] = Field(min_length=1, max_length=8)
+    faces: list[InlineFace] | None = Field(None, min_length=1, max_length=8,
+                                           description="none: derived from the outline")
     description: str = Field("", max_length=MAX_TEXT)
     notes: str = Field("", max_length=MAX_TEXT)
 
@@ -357,7 +359,8 @@ def task_from_dict(data: Any, source: str = "<dict>") -> Task:
         from tooltransfer.tools.library import tool_from_dict
 
         try:
-            tool = tool_from_dict(json.loads(task.tool.model_dump_json(exclude_none=True)), source=f"{source}: tool")
+            tool = tool_from_dict(json.loads(task.tool.model_dump_json(exclude_none=True)), source=f"{source}: tool",
+                                  **_derive_options(task))
         except ToolSpecError as exc:
             raise TaskFileError(source, f"tool.{exc.field}", exc.reason) from None
     else:
@@ -365,7 +368,10 @@ def task_from_dict(data: Any, source: str = "<dict>") -> Task:
 
         if task.tool not in library_names():
             raise TaskFileError(source, "tool", f"a library tool ({', '.join(library_names())})", repr(task.tool))
-        tool = load_tool(task.tool)
+        try:
+            tool = load_tool(task.tool, **_derive_options(task))
+        except ToolSpecError as exc:  # an outline-only library tool with no face for this object
+            raise TaskFileError(source, "tool", exc.reason, repr(task.tool)) from None
     _check_search(task, len(tool.faces), source)
     return task
 
@@ -423,22 +429,48 @@ def task_origin(task: Task, task_path: str | Path | None = None) -> str | Path:
     return task.source if task.source is not None else "."
 
 
-def task_tool(task: Task) -> Tool:
-    """The task's tool."""
+def task_tool(task: Task, friction: float | None = None) -> Tool:
+    """The task's tool. A tool without faces gets the faces derived from its outline for the task's
+    object radius, its platform and the tool-object friction ``friction`` (default the task's
+    ``object.mechanics.mu``, else the platform's nominal 0.8)."""
     from tooltransfer.tools.library import load_tool, tool_from_dict
 
+    options = _derive_options(task, friction)
     if isinstance(task.tool, InlineTool):
-        return tool_from_dict(json.loads(task.tool.model_dump_json(exclude_none=True)), source="task tool")
-    return load_tool(task.tool)
+        return tool_from_dict(json.loads(task.tool.model_dump_json(exclude_none=True)), source="task tool", **options)
+    return load_tool(task.tool, **options)
+
+
+def faces_derived(task: Task) -> bool:
+    """Whether the task's tool has no faces of its own (they are derived from its outline)."""
+    if isinstance(task.tool, InlineTool):
+        return task.tool.faces is None
+    from tooltransfer.tools.library import library_has_faces
+
+    return not library_has_faces(task.tool)
+
+
+def _derive_options(task: Task, friction: float | None = None) -> dict[str, Any]:
+    """What a tool without faces is derived for (:func:`task_tool`): ``object_radius``, ``friction`` and
+    ``platform`` (the task's Omni for the tool's ``a_t``)."""
+    if friction is None and task.object.mechanics is not None:
+        friction = task.object.mechanics.mu
+    return {"object_radius": task.object.radius, "friction": friction,
+            "platform": lambda a_t: _omni(task, a_t)}
 
 
 def task_platform(task: Task, tool: Tool) -> OmniPlatform:
     """The task's Omni carrying ``tool`` (its ``a_t``)."""
+    return _omni(task, tool.a_t)
+
+
+def _omni(task: Task, a_t: float) -> OmniPlatform:
+    """The task's Omni with a tool of length ``a_t`` [m]."""
     from tooltransfer.tools.omni.platform import DEFAULT_LIMITS, JointLimits, OmniPlatform
 
     spec = task.platform
     limits = DEFAULT_LIMITS if spec.limits is None else JointLimits(spec.limits.lower, spec.limits.upper, "task file")
-    return OmniPlatform(a_t=tool.a_t, base_xy=spec.base_xy, base_yaw=spec.base_yaw,
+    return OmniPlatform(a_t=a_t, base_xy=spec.base_xy, base_yaw=spec.base_yaw,
                         table_height=spec.table_height, limits=limits)
 
 
@@ -479,6 +511,7 @@ __all__ = [
     "TaskFileError",
     "UnknownToolError",
     "VirtualMotion",
+    "faces_derived",
     "load_task",
     "min_jerk_time",
     "push_search_steps",

@@ -27,7 +27,7 @@ def _assert_exact(outline: shapely.Polygon, pieces: tuple[shapely.Polygon, ...])
 def test_library_outlines(name: str, tool) -> None:
     pieces = tool.convex_pieces
     _assert_exact(tool.outline, pieces)
-    expected = {"t_shape": 2, "l_shape": 2}.get(name, 1)
+    expected = {"t_shape": 2, "l_shape": 2, "spatula": 2, "cross_head": 3, "rake": 4}.get(name, 1)
     assert len(pieces) == expected
 
 

@@ -179,7 +179,6 @@ def test_theta_b_out_of_range(tmp_path: Path, bad: float | str) -> None:
         ((), "name"),
         ((), "a_t"),
         ((), "outline"),
-        ((), "faces"),
         (("faces", 0), "faces[0].theta_b"),
         (("faces", 1), "faces[1].push_angle"),
         (("faces", 1), "faces[1].segment"),
@@ -193,6 +192,15 @@ def test_missing_fields(tmp_path: Path, path: tuple, field: str) -> None:
         target = target[key]
     del target[field.split(".")[-1]]
     _expect(tmp_path, d, field, "missing required field")
+
+
+def test_a_file_without_faces_gets_them_derived(tmp_path: Path) -> None:
+    d = _finger_dict()
+    del d["faces"]  # valid since issue 28: the faces are derived from the outline
+    path = tmp_path / "bare.yaml"
+    path.write_text(yaml.safe_dump(d), encoding="utf-8")
+    tool = load_tool(path)
+    assert tool.face_names == tuple(f"edge_{i}" for i in range(8))  # every edge of the finger is usable
 
 
 def test_other_invalid_fields(tmp_path: Path) -> None:

@@ -3,6 +3,8 @@
 * :mod:`tooltransfer.tools.model`: a :class:`Tool` is a planar outline in the tool frame [m] with named
   :class:`Face` s (push direction and cone half-angle ``theta_b`` [rad], contact range).
 * :mod:`tooltransfer.tools.library`: tools as YAML files (``tools/library/*.yaml``); :func:`load_tool`.
+* :mod:`tooltransfer.tools.derive`: the faces a round object can be pushed by, derived from an outline
+  (:func:`derive_faces`); a tool file without faces gets them when loaded.
 * :mod:`tooltransfer.tools.decompose`: exact, checked convex decomposition of an outline.
 * :mod:`tooltransfer.tools.objects`: the pushed object (disc of radius 17.5 mm by default) and obstacles.
 * :mod:`tooltransfer.tools.contact`: tool poses putting a face in contact with the object.
@@ -24,6 +26,7 @@ from tooltransfer.tools.clearance import (
 )
 from tooltransfer.tools.contact import Contact, PlatformContact, contact_on_platform, contact_pose
 from tooltransfer.tools.decompose import convex_decomposition
+from tooltransfer.tools.derive import derive_faces
 from tooltransfer.tools.errors import ToolSpecError, UnknownFaceError, UnknownToolError
 from tooltransfer.tools.library import (
     dump_tool,
@@ -54,6 +57,7 @@ __all__ = [
     "contact_on_platform",
     "contact_pose",
     "convex_decomposition",
+    "derive_faces",
     "dump_tool",
     "library_names",
     "load_library",

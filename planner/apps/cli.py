@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 # nothing heavy is imported before main() runs: a Ctrl-C while numpy and the rest load is caught too
-from tooltransfer.planner.apps import cli_learning, cli_planning
+from tooltransfer.planner.apps import cli_derive, cli_learning, cli_planning
 from tooltransfer.planner.common.blas_threads import pin_blas_threads
 from tooltransfer.planner.common.command_line import (
     EXIT_BAD_INPUT,
@@ -43,6 +43,7 @@ OUTPUTS: dict[str, tuple[tuple[str, str, str], ...]] = {
     "segment": (("figure", "--figure", "file"),),
     "schema": (("out", "--out", "file"),),
     "tools": (("out", "--out", "file"),),
+    "tools derive": (("tool_out", "-o/--out", "file"), ("plot", "--plot", "file")),
     "compare": (("out", "--out", "folder"),),
     "paper": (("out", "--out", "folder"),),
     "demos": (("out", "--out", "folder"),),
@@ -54,6 +55,8 @@ OUTPUTS: dict[str, tuple[tuple[str, str, str], ...]] = {
 
 def _check_outputs(args: argparse.Namespace) -> None:
     command = args.command + (f" {args.batch_command}" if args.command == "batch" else "")
+    if args.command == "tools" and getattr(args, "tools_command", None):
+        command += f" {args.tools_command}"
     for dest, option, kind in OUTPUTS.get(command, ()):
         value = getattr(args, dest, None)
         if not isinstance(value, str | Path):
@@ -228,6 +231,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = _add(sub, "tools", "draw the tool library (faces, cones) and the Omni's reach",
              "tooltransfer tools --out out/tools.png", cli_planning.cmd_tools)
     p.add_argument("--out", type=Path, default=DEFAULT_TOOLS_FIGURE, help="output PNG")
+    cli_derive.add_derive_parser(p, _add)
     from tooltransfer.planner.apps.batch.commands import add_batch_parser
 
     add_batch_parser(sub, _add)

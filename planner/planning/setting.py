@@ -23,6 +23,7 @@ from tooltransfer.errors import InputError
 from tooltransfer.problems.task import (
     SAFETY_MARGIN,
     Task,
+    faces_derived,
     resolve,
     task_obstacles,
     task_origin,
@@ -110,7 +111,8 @@ class Setting:
             "tool": {
                 "name": tool.name, "outline": np.asarray(tool.outline.exterior.coords)[:-1].tolist(),
                 "faces": [{"name": f.name, "segment": [f.start.tolist(), f.end.tolist()],
-                           "push_angle": f.push_angle, "theta_b": f.theta_b} for f in tool.faces],
+                           "push_angle": f.push_angle, "theta_b": f.theta_b,
+                           "contact_range": list(f.contact_range)} for f in tool.faces],
             },
             "obstacles": [
                 {"kind": "disc", "centre": o.centre.tolist(), "radius": o.radius} if isinstance(o, Disc)
@@ -201,6 +203,8 @@ def setting_from_task(task: Task, skills: Skills | None = None, task_path: str |
         if skills is None and task.object.mechanics is None:
             skills = task_skills(task, task_path, need_ss=False)
         mechanics = task_mechanics(task, skills)
+    if faces_derived(task):  # faces derived from the outline get the friction cone of these mechanics
+        tool = task_tool(task, friction=mechanics.mu)
     return Setting(tool, platform, DiscObject(task.object.radius), mechanics, obstacles, margin)
 
 

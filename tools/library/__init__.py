@@ -15,20 +15,30 @@ pi written as ``pi/2``, ``0.75*pi``, ``-pi/6``)::
         theta_b: pi/6                # [rad] cone half-angle, in (0, pi/2)
         contact_range: [0.0, 1.0]    # optional, fractions along the segment
 
+``faces`` may be left out: the tool then gets the faces derived from its outline
+(:mod:`tooltransfer.tools.derive`: every edge the object can touch, named ``edge_<i>``, with the full
+friction cone about its normal) for the object radius and friction it is loaded for (by default the
+paper's 17.5 mm puck and mu = 0.8).
+
 Errors name the tool and the field path, e.g. ``faces[1].theta_b``.
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
+from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import shapely
 import yaml
 
 from tooltransfer.tools.errors import ToolSpecError, UnknownToolError
 from tooltransfer.tools.model import Face, Tool
+
+if TYPE_CHECKING:
+    from tooltransfer.tools.omni.platform import OmniPlatform
 
 _PI_EXPR = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)?)\s*\*?\s*pi\s*(?:/\s*(\d+\.?\d*))?\s*$")
 _TOOL_KEYS = {"name", "a_t", "description", "notes", "outline", "faces"}
@@ -89,8 +99,13 @@ MAX_VERTICES = 256
 MAX_FACES = 12
 
 
-def tool_from_dict(data: object, source: str = "<dict>") -> Tool:
-    """Build and validate a :class:`Tool` from parsed YAML; ``source`` names it in errors."""
+def tool_from_dict(data: object, source: str = "<dict>", *, object_radius: float | None = None,
+                   friction: float | None = None,
+                   platform: Callable[[float], OmniPlatform] | None = None) -> Tool:
+    """Build and validate a :class:`Tool` from parsed YAML; ``source`` names it in errors. Without
+    ``faces`` the faces are derived from the outline for a disc of ``object_radius`` [m], tool-object
+    friction ``friction`` and the Omni ``platform(a_t)`` carrying it (defaults of
+    :func:`tooltransfer.tools.derive.tool.derived_tool`); with ``faces`` these are not used."""
     if not isinstance(data, dict):
         raise ToolSpecError(source, "<root>", "a mapping with the tool's fields is required")
     name = data.get("name")
@@ -110,7 +125,16 @@ def tool_from_dict(data: object, source: str = "<dict>") -> Tool:
     outline = _points(raw_outline, tool, "outline")
     if len(outline) < 3:
         raise ToolSpecError(tool, "outline", "at least 3 vertices are required")
-    raw_faces = _require(data, "faces", tool)
+    if "faces" not in data:
+        from tooltransfer.tools.derive.tool import derived_tool
+
+        for key in ("description", "notes"):
+            if not isinstance(data.get(key, ""), str):
+                raise ToolSpecError(tool, key, "a string is required")
+        return derived_tool(name, shapely.Polygon(outline), a_t, description=data.get("description", ""),
+                            notes=data.get("notes", ""), object_radius=object_radius, friction=friction,
+                            platform=None if platform is None else platform(a_t))
+    raw_faces = data["faces"]
     if not isinstance(raw_faces, list) or not raw_faces:
         raise ToolSpecError(tool, "faces", "a non-empty list of faces is required")
     if len(raw_faces) > MAX_FACES:
@@ -202,8 +226,9 @@ def library_names() -> tuple[str, ...]:
     return tuple(sorted(p.stem for p in _library_dir().glob("*.yaml")))
 
 
-def read_tool_file(path: str | Path) -> Tool:
-    """Load and validate one tool file."""
+def read_tool_file(path: str | Path, **derive: Any) -> Tool:
+    """Load and validate one tool file (``derive``: the keyword arguments of :func:`tool_from_dict`
+    for a file without faces)."""
     from tooltransfer.yaml_file import read_yaml
 
     p = Path(path)
@@ -211,11 +236,12 @@ def read_tool_file(path: str | Path) -> Tool:
     def error(source: str, where: str, expected: str, got: object) -> ToolSpecError:
         return ToolSpecError(source, where, expected if got is None else f"{expected}, got {got}")
 
-    return tool_from_dict(read_yaml(p, error, "tool file"), source=str(p))
+    return tool_from_dict(read_yaml(p, error, "tool file"), source=str(p), **derive)
 
 
-def load_tool(name_or_path: str | Path) -> Tool:
-    """A library tool by name (``"finger"``) or a tool file by path.
+def load_tool(name_or_path: str | Path, **derive: Any) -> Tool:
+    """A library tool by name (``"finger"``) or a tool file by path (``derive``: the keyword arguments
+    of :func:`tool_from_dict` for a file without faces).
 
     Raises:
         UnknownToolError: ``name_or_path`` is neither a library name nor an existing file.
@@ -224,7 +250,7 @@ def load_tool(name_or_path: str | Path) -> Tool:
     text = str(name_or_path)
     candidate = _library_dir() / f"{text}.yaml"
     if "/" not in text and "\\" not in text and candidate.is_file():
-        return read_tool_file(candidate)
+        return read_tool_file(candidate, **derive)
     p = Path(name_or_path)
     if (
         isinstance(name_or_path, Path)
@@ -232,8 +258,20 @@ def load_tool(name_or_path: str | Path) -> Tool:
         or p.is_file()
         or "/" in text
     ):
-        return read_tool_file(p)
+        return read_tool_file(p, **derive)
     raise UnknownToolError(text, library_names())
+
+
+@cache
+def library_has_faces(name: str) -> bool:
+    """Whether the library tool ``name`` names its faces (False: they are derived from its outline)."""
+    from tooltransfer.yaml_file import read_yaml
+
+    def error(source: str, where: str, expected: str, got: object) -> ToolSpecError:
+        return ToolSpecError(source, where, expected if got is None else f"{expected}, got {got}")
+
+    data = read_yaml(_library_dir() / f"{name}.yaml", error, "tool file")
+    return isinstance(data, dict) and "faces" in data
 
 
 def load_library() -> dict[str, Tool]:

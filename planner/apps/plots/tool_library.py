@@ -129,9 +129,10 @@ def draw_reach(ax: plt.Axes, tools: dict[str, Tool]) -> None:
 def plot_tool_library(out: str | Path) -> Path:
     """Write the figure (PNG) to ``out``; returns the path."""
     tools = load_library()
-    fig = plt.figure(figsize=(12, 12))
-    grid = fig.add_gridspec(3, 3, height_ratios=[1, 1, 1.6])
+    cols, rows = 4, -(-len(tools) // 4)
+    fig = plt.figure(figsize=(14, 4 * rows + 6))
+    grid = fig.add_gridspec(rows + 1, cols, height_ratios=[1] * rows + [1.6])
     for k, name in enumerate(sorted(tools)):
-        draw_tool(fig.add_subplot(grid[k // 3, k % 3]), tools[name])
-    draw_reach(fig.add_subplot(grid[2, :]), tools)
+        draw_tool(fig.add_subplot(grid[k // cols, k % cols]), tools[name])
+    draw_reach(fig.add_subplot(grid[rows, :]), tools)
     return save_figure(fig, out, dpi=110)

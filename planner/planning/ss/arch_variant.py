@@ -49,6 +49,8 @@ def arch_path(
     until every point is reachable and the tool keeps ``clearance`` [m] (or 90% of the clearance
     at the ends, when an end is closer) from the object and from the disc ``obstacles`` (the tool's
     body reaches behind its head, so clearing the object is not enough). Raises :class:`NoArch`."""
+    if np.any(joint_path(platform, np.vstack([a, b])).violation > 0.0):  # no heading there: no arch either
+        raise NoArch(f"an end of the switch ({np.round(a, 4).tolist()}, {np.round(b, 4).tolist()}) out of reach")
     ends = swept_clearance(tool, platform, np.vstack([a, b]), obj, radius)
     clearance = min(clearance, 0.9 * ends)  # an end closer than that cannot be left or reached otherwise
     da, db = a - obj, b - obj

@@ -130,7 +130,7 @@ def pose_depth_and_gap(tool: Tool, pose: Pose2D, shape: Disc | shapely.Polygon) 
         return penetration_depth(tool, pose, shape), clearance(tool, pose, shape)
     verts, _ = tool_geometry(tool)
     r = rot(pose.yaw)
-    placed = shapely.polygons([v @ r.T + (pose.x, pose.y) for v in verts])
+    placed = np.array([shapely.Polygon(v @ r.T + (pose.x, pose.y)) for v in verts])  # pieces' sizes differ
     dist = float(shapely.distance(placed, shapely.Point(shape.centre)).min())
     if dist > 0.0:  # the centre outside every piece: sd(c, union) is the smallest distance, exactly
         return max(0.0, shape.radius - dist), max(0.0, dist - shape.radius)
