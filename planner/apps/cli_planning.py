@@ -162,6 +162,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         with written(args.figure) as tmp:
             fig12(plan, tmp, executions)
         summary["figure"] = str(args.figure)
+    if args.record:
+        from tooltransfer.planner.execution.recording import write_recording
+
+        write_recording(args.record, executions, str(args.plan))  # type: ignore[arg-type]
+        summary["record"] = str(args.record)
     if args.gif:
         from tooltransfer.planner.apps.plots.paper_figures import execution_gif
 
@@ -188,6 +193,22 @@ def cmd_export(args: argparse.Namespace) -> int:
     from tooltransfer.planner.execution.export import run_export
 
     return run_export(args)
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    from tooltransfer.planner.apps.plots.plan_view import write_plan_view
+    from tooltransfer.planner.planning.plan import read_plan
+
+    plan = read_plan(args.plan)
+    executions = None
+    if args.execution is not None:
+        from tooltransfer.planner.execution.recording import read_recording
+
+        executions = read_recording(args.execution)
+    out = args.out if args.out is not None else args.plan.with_suffix(".html")
+    write_plan_view(plan, out, executions, title=f"plan {args.plan.name}")
+    print(f"wrote {out}")
+    return EXIT_OK
 
 
 def cmd_schema(args: argparse.Namespace) -> int:
