@@ -15,8 +15,8 @@ What a user needs first is here::
     same = tt.read_plan("plan.json")
 
 ``tt.batch`` is the batch package (``tt.batch.load(db)``: a batch's results as a pandas DataFrame,
-with the ``data`` extra). The names are imported on first use, so ``import tooltransfer`` (and every ``tooltransfer`` command)
-stays light.
+with the ``data`` extra). The names are imported on first use, so ``import tooltransfer`` (and every
+``tooltransfer`` command) stays light.
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from tooltransfer.dmp.primitive import DMP
-    from tooltransfer.planner.apps import batch
     from tooltransfer.errors import InfeasibleError, InputError, ToolTransferError
+    from tooltransfer.planner.apps import batch
     from tooltransfer.planner.planning.plan import Plan, read_plan
     from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import Task, load_task

@@ -46,7 +46,8 @@ def recording_dict(executions: dict[str, Execution], plan: str) -> dict[str, Any
             if t - last >= TOOL_STEP - 1e-9 or i == len(e.t_tool) - 1:
                 keep[i], last = True, t
         out[mode] = {"t_object": np.round(e.t_object, 4).tolist(), "object_xy": np.round(e.object_xy, 6).tolist(),
-                     "t_tool": np.round(e.t_tool[keep], 4).tolist(), "tool_pose": np.round(e.tool_pose[keep], 6).tolist(),
+                     "t_tool": np.round(e.t_tool[keep], 4).tolist(),
+                     "tool_pose": np.round(e.tool_pose[keep], 6).tolist(),
                      "contacts": [{"t_start": c.t_start, "t_end": c.t_end, "face": c.face} for c in e.contacts]}
     return {"format": FORMAT, "plan": plan, "executions": out}
 

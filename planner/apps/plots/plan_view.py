@@ -50,7 +50,8 @@ def plotly_js() -> str:
 
 
 def _circle(c: NDArray[np.float64] | list[float], r: float) -> tuple[list[float], list[float]]:
-    return ((c[0] + r * np.cos(_CIRCLE)) * _MM).round(3).tolist(), ((c[1] + r * np.sin(_CIRCLE)) * _MM).round(3).tolist()
+    x, y = (c[0] + r * np.cos(_CIRCLE)) * _MM, (c[1] + r * np.sin(_CIRCLE)) * _MM
+    return x.round(3).tolist(), y.round(3).tolist()
 
 
 def _outline(outline: NDArray[np.float64], pose: NDArray[np.float64]) -> tuple[list[float], list[float]]:
@@ -150,7 +151,8 @@ def view_figure(plan: Plan, executions: dict[str, dict[str, Any]] | None = None)
         idx = np.unique(np.linspace(0, n - 1, min(n, MAX_FRAMES)).round().astype(int))
         first = len(data)
         meta.update(frame_index=idx.tolist(), puck_trace=first)
-        tool_style = {"mode": "lines", "fill": "toself", "line": {"color": "#222"}, "fillcolor": "rgba(31,119,180,0.35)"}
+        tool_style = {"mode": "lines", "fill": "toself", "line": {"color": "#222"},
+                      "fillcolor": "rgba(31,119,180,0.35)"}
 
         def moving(k: int) -> list[dict[str, Any]]:
             tx, ty = _outline(outline, plan.tool_pose[k])
@@ -165,7 +167,8 @@ def view_figure(plan: Plan, executions: dict[str, dict[str, Any]] | None = None)
 
         start_traces = moving(int(idx[0]))
         names = ["puck (plan)", "tool", "face in contact", *(f"puck, {m}" for m in runs)]
-        styles = [{"mode": "lines", "fill": "toself", "line": {"color": "#1f77b4"}, "fillcolor": "rgba(31,119,180,0.2)"},
+        styles = [{"mode": "lines", "fill": "toself", "line": {"color": "#1f77b4"},
+                   "fillcolor": "rgba(31,119,180,0.2)"},
                   tool_style, {"mode": "lines", "line": {"color": "#d62728", "width": 5}},
                   *({"mode": "lines", "line": {"color": colours.get(m, "#2ca02c"), "dash": "dash"}} for m in runs)]
         for trace, name, style in zip(start_traces, names, styles, strict=True):
