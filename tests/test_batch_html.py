@@ -47,8 +47,8 @@ def report(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[dict]]:
                        "reason": REASONS.get(status, ""), "time_total": 0.1 * (i + 1), "cone_violation_max": 0.002,
                        "goal_error": 2e-4 if status == "solved" else None}
                 if status == "solved":
-                    row["metrics_json"] = json.dumps({"qp_time_median": 0.003, "object_path": [[0.04, 0.12], [0.0, 0.16],
-                                                                                 [-0.05, 0.19]]})
+                    path = [[0.04, 0.12], [0.0, 0.16], [-0.05, 0.19]]
+                    row["metrics_json"] = json.dumps({"qp_time_median": 0.003, "object_path": path})
                 store.put(row)
                 put.append(row)
     write_report(db, tmp / "rep", Console(file=io.StringIO(), width=200))
@@ -83,7 +83,7 @@ def test_load_gives_a_dataframe_with_units(report: tuple[Path, list[dict]]) -> N
     assert {"time_total_s", "goal_error_m", "valid", "metric_qp_time_median_s"} <= set(df.columns)
     assert sorted(df["status"].astype(str)) == sorted(p["status"] for p in put)
     assert df["time_total_s"].sum() == pytest.approx(sum(p["time_total"] for p in put))
-    with pytest.raises(tt.InputError, match="missing.sqlite"):
+    with pytest.raises(tt.InputError, match=r"missing\.sqlite"):
         tt.batch.load(tmp / "missing.sqlite")
 
 
@@ -113,7 +113,7 @@ def test_report_page_in_chromium(report: tuple[Path, list[dict]]) -> None:
         shown = filtered(sel.format("status", "infeasible"))
         assert sorted(shown) == sorted(f"infeasible {p['variant']}" for p in put if p["status"] == "infeasible")
         shown = filtered(sel.format("variant", "qp/opt"))
-        assert sorted(shown) == sorted(f"infeasible qp/opt" for p in put
+        assert sorted(shown) == sorted("infeasible qp/opt" for p in put
                                        if p["status"] == "infeasible" and p["variant"] == "qp/opt")
         shown = filtered(sel.format("status", "") + sel.format("variant", "") +
                          "var q = document.getElementById('f-text'); q.value = 'expansions';"
