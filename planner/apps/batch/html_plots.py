@@ -57,6 +57,9 @@ def time_plot(rows: Sequence[dict[str, Any]], variants: Sequence[str]) -> Any:
                                 "task": [r["task_id"] for r in sub], "status": [status] * len(sub)})
         p.scatter("t", jitter("v", 0.5, range=p.y_range), source=src, size=4, alpha=0.6,
                   color=STATUS_COLOURS[status], legend_label=f"{status} ({len(sub)})")
+    if not p.renderers:  # no timed row: an empty plot, said so
+        p.scatter([], [])
+        p.title.text += ": no timed rows"
     p.add_tools(HoverTool(tooltips=[("task", "@task"), ("variant", "@v"), ("status", "@status"),
                                     ("time", "@t{0.0} ms")]))
     if p.legend:
@@ -88,6 +91,9 @@ def error_plot(rows: Sequence[dict[str, Any]], variants: Sequence[str], colours:
             p.step("e", "s", source=src, mode="after", line_dash=dash, color=colours[v],
                    legend_label=f"{v} {name} ({len(pairs)})")
             p.scatter("e", "s", source=src, size=3, color=colours[v])
+    if not p.renderers:  # no solved plan with an error: an empty plot, said so
+        p.scatter([], [])
+        p.title.text = "errors of solved plans: none measured"
     p.add_tools(HoverTool(tooltips=[("task", "@task"), ("error", "@e{0.000} mm"), ("share", "@s{0.00}")]))
     if p.legend:
         p.legend.click_policy = "hide"
