@@ -75,6 +75,7 @@ _MODULES = {"batch": "tooltransfer.planner.apps.batch"}
 
 
 def __getattr__(name: str) -> Any:
+    value: Any
     if name == "__version__":
         value = _version()
     elif name in _MODULES:

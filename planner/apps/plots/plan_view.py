@@ -72,7 +72,7 @@ def _face(plan: Plan, k: int) -> tuple[list[float | None], list[float | None]]:
     if seg is None:
         return [None], [None]
     x, y = _outline(seg, plan.tool_pose[k])
-    return x[:2], y[:2]
+    return list(x[:2]), list(y[:2])
 
 
 def _line(name: str, xy: Any, **style: Any) -> dict[str, Any]:
@@ -158,7 +158,7 @@ def view_figure(plan: Plan, executions: dict[str, dict[str, Any]] | None = None)
             tx, ty = _outline(outline, plan.tool_pose[k])
             fx, fy = _face(plan, k)
             px, py = _circle(plan.object_xy[k], r)
-            out = [{"type": "scatter", "x": px, "y": py}, {"type": "scatter", "x": tx, "y": ty},
+            out: list[dict[str, Any]] = [{"type": "scatter", "x": px, "y": py}, {"type": "scatter", "x": tx, "y": ty},
                    {"type": "scatter", "x": fx, "y": fy}]
             for e in runs.values():
                 ex, ey = _circle(_at(np.asarray(e["t_object"]), np.asarray(e["object_xy"]), float(plan.t[k])), r)
