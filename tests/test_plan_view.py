@@ -99,3 +99,15 @@ def test_view_writes_a_page_without_execution(pages: Path) -> None:
     text = (pages / "plain.html").read_text()
     assert "executed object path" not in text and "planned object path" in text
     assert "<script src=" not in text  # plotly.js inlined: nothing fetched at view time
+
+
+def test_view_without_plotly_names_the_extra(pages: Path, tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    code = ("import sys\nsys.modules['plotly'] = None\nfrom tooltransfer.planner.apps.cli import main\n"
+            f"sys.exit(main(['view', {str(pages / 'plan.json')!r}, '-o', 'x.html']))\n")
+    run = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                         check=False)
+    assert run.returncode == 2 and "tooltransfer[report]" in run.stderr and "Traceback" not in run.stderr
+    assert not (tmp_path / "x.html").exists()

@@ -82,14 +82,14 @@ def load(db: str | Path) -> pandas.DataFrame:
     variant order; ``status`` and ``variant`` as categories.
 
     Raises:
-        ImportError: pandas is not installed (``pip install "tooltransfer[data]"``).
+        ModuleNotFoundError: pandas is not installed (``pip install "tooltransfer[data]"``).
         InputError: ``db`` is not a results file (naming it).
     """
     try:
         import pandas as pd
     except ImportError as exc:
-        raise ImportError("tooltransfer.batch.load needs pandas: pip install \"tooltransfer[data]\" "
-                          "(or pip install pandas)") from exc
+        raise ModuleNotFoundError("tooltransfer.batch.load needs pandas: pip install \"tooltransfer[data]\" "
+                                  "(or pip install pandas)", name="pandas") from exc
     from tooltransfer.errors import InputError
     from tooltransfer.planner.apps.batch.report import is_valid
     from tooltransfer.planner.apps.batch.store import RESULT_COLUMNS, ResultStore

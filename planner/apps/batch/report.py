@@ -423,5 +423,5 @@ def write_report(db: str | Path, out: str | Path | None, console: Console | None
     try:
         written.append(write_html_report(rows, stats, meta, tasks, folder / "report.html"))
     except ImportError as exc:  # Bokeh missing: the tables, CSV files and figures are there all the same
-        console.print(f"note: no report.html: {escape(str(exc))}")
+        console.print(f"note: no report.html: {escape(str(exc))}")  # how to install it
     return written

@@ -32,12 +32,12 @@ table.data td.reason { text-align: left; white-space: pre-wrap; max-width: 70em;
 
 
 def require_bokeh() -> None:
-    """Raise an ``ImportError`` saying how to install Bokeh when it is missing."""
+    """Raise a ``ModuleNotFoundError`` (name ``bokeh``) saying how to install Bokeh when it is missing."""
     try:
         import bokeh  # noqa: F401
     except ImportError as exc:
-        raise ImportError('the HTML pages need Bokeh: pip install "tooltransfer[report]" (or pip install bokeh)') \
-            from exc
+        raise ModuleNotFoundError('the HTML pages need Bokeh: pip install "tooltransfer[report]" (or pip install '
+                                  'bokeh)', name="bokeh") from exc
 
 
 def esc(text: object) -> str:

@@ -37,12 +37,12 @@ def plotly_js() -> str:
     """The text of ``plotly.min.js`` from the installed ``plotly`` package.
 
     Raises:
-        ImportError: plotly is not installed (``pip install "tooltransfer[report]"``).
+        ModuleNotFoundError: plotly is not installed (``pip install "tooltransfer[report]"``).
     """
     spec = importlib.util.find_spec("plotly")
     if spec is None or not spec.submodule_search_locations:
-        raise ImportError('the plan viewer needs plotly (its plotly.min.js): pip install "tooltransfer[report]" '
-                          "(or pip install plotly)")
+        raise ModuleNotFoundError('the plan viewer needs plotly (its plotly.min.js): pip install '
+                                  '"tooltransfer[report]" (or pip install plotly)', name="plotly")
     path = Path(next(iter(spec.submodule_search_locations))) / "package_data" / "plotly.min.js"
     if not path.is_file():
         raise ImportError(f"the installed plotly has no {path.name} at {path.parent}: reinstall plotly")
