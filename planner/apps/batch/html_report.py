@@ -49,8 +49,10 @@ TABLE_COLUMNS: tuple[tuple[str, str, float | None, int], ...] = (
 )
 
 
+#: Widths of the task table's columns [px] (a fixed layout: filtering does not measure every cell).
+COLUMN_WIDTHS = (120, 55, 90, 75, 70, 70, 60, 60, 60, 60, 60, 370)
 #: Rows drawn at a time (the script's page, :data:`~tooltransfer.planner.apps.batch.html_script.TABLE_JS`).
-PAGE_ROWS = 200
+PAGE_ROWS = 100
 
 
 def _num(v: Any, scale: float, digits: int) -> tuple[str, str]:
@@ -82,7 +84,8 @@ def task_table(rows: Sequence[dict[str, Any]]) -> str:
     head = "".join(f'<th class="{"text" if scale is None else "num"}">{esc(h)}</th>'
                    for h, _, scale, _ in TABLE_COLUMNS)
     hidden = ' style="display:none"'  # beyond the first page (the script draws a page at a time)
-    out = [f'<table class="data" id="rows"><thead><tr>{head}</tr></thead><tbody>']
+    cols = "".join(f'<col style="width:{w}px">' for w in COLUMN_WIDTHS)
+    out = [f'<table class="data" id="rows" data-page="{PAGE_ROWS}"><colgroup>{cols}</colgroup><thead><tr>{head}</tr></thead><tbody>']
     for i, r in enumerate(rows):
         cells = []
         for _, key, scale, digits in TABLE_COLUMNS:

@@ -3,7 +3,7 @@
 
 The table: a text filter (over every cell), one select per status, variant and tool, and sorting by
 a click on a header (numbers by their values, text alphabetically; a second click reverses). The
-matching rows are drawn a page of 200 at a time (previous / next): rows are hidden, never rebuilt,
+matching rows are drawn a page at a time (the table's ``data-page`` rows) (previous / next): rows are hidden, never rebuilt,
 and only those whose state changes are touched, so filtering 4,000 rows is one pass over
 precomputed texts and the layout of one page. ``window.ttShown`` holds the number of matching rows,
 ``window.ttDrawn`` those drawn, ``window.ttFilterMs`` the time of the last filtering pass (the layout
@@ -17,6 +17,8 @@ TABLE_CSS = """
 #rows tbody tr { cursor: pointer; } #rows tbody tr:hover { background: #eef5ff; }
 #rows tbody tr.selected { background: #dbeafe; }
 #rows th { cursor: pointer; user-select: none; }
+#rows { table-layout: fixed; width: 1150px; }  /* fixed columns: a page's layout does not measure every cell */
+#rows td { overflow: hidden; text-overflow: ellipsis; }
 .filters { margin: 0.5em 0; } .filters label { margin-right: 1em; } #count { color: #555; }
 #panel { min-width: 440px; max-width: 520px; }
 """
@@ -32,7 +34,7 @@ TABLE_JS = r"""
   var tasks = JSON.parse(document.getElementById("tasks").textContent);
   var count = document.getElementById("count");
 
-  var PAGE = 200;
+  var PAGE = parseInt(table.getAttribute("data-page"), 10);
   var page = 0;
   var matches = [];
   var drawn = rows.map(function (r) { return r.style.display !== "none"; });
