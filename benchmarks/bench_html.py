@@ -45,7 +45,7 @@ def bench_report(n_tasks: int, tmp: Path) -> None:
         times = []
         for _ in range(3):
             for q in QUERIES:
-                ms, shown = d.execute_script(
+                ms, _ = d.execute_script(
                     "var e = document.getElementById('f-text'); e.value = arguments[0];"
                     "e.dispatchEvent(new Event('input')); return [window.ttFilterMs, window.ttShown];", q)
                 times.append(ms)

@@ -85,7 +85,8 @@ def task_table(rows: Sequence[dict[str, Any]]) -> str:
                    for h, _, scale, _ in TABLE_COLUMNS)
     hidden = ' style="display:none"'  # beyond the first page (the script draws a page at a time)
     cols = "".join(f'<col style="width:{w}px">' for w in COLUMN_WIDTHS)
-    out = [f'<table class="data" id="rows" data-page="{PAGE_ROWS}"><colgroup>{cols}</colgroup><thead><tr>{head}</tr></thead><tbody>']
+    out = [f'<table class="data" id="rows" data-page="{PAGE_ROWS}"><colgroup>{cols}</colgroup>'
+           f"<thead><tr>{head}</tr></thead><tbody>"]
     for i, r in enumerate(rows):
         cells = []
         for _, key, scale, digits in TABLE_COLUMNS:

@@ -3,8 +3,8 @@
 
 The table: a text filter (over every cell), one select per status, variant and tool, and sorting by
 a click on a header (numbers by their values, text alphabetically; a second click reverses). The
-matching rows are drawn a page at a time (the table's ``data-page`` rows) (previous / next): rows are hidden, never rebuilt,
-and only those whose state changes are touched, so filtering 4,000 rows is one pass over
+matching rows are drawn a page at a time (the table's ``data-page`` rows; previous / next): rows
+are hidden, never rebuilt, and only those whose state changes are touched, so filtering 4,000 rows is one pass over
 precomputed texts and the layout of one page. ``window.ttShown`` holds the number of matching rows,
 ``window.ttDrawn`` those drawn, ``window.ttFilterMs`` the time of the last filtering pass (the layout
 forced) [ms], measured by the browser test. A click on a row fills the task panel: the
