@@ -45,10 +45,16 @@ def esc(text: object) -> str:
     return html.escape(str(text), quote=True)
 
 
+def script_json(data: Any) -> str:
+    """``data`` as compact JSON safe inside a ``<script>`` element: every ``<`` written ``\\u003c``
+    (the same string to a JSON reader)."""
+    return json.dumps(data, separators=(",", ":"), allow_nan=False).replace("<", "\\u003c")
+
+
 def json_script(element_id: str, data: Any) -> str:
-    """``data`` as JSON in a ``<script type="application/json">`` element (``</`` escaped, so no
-    value can close the element)."""
-    text = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    """``data`` as JSON in a ``<script type="application/json">`` element (every ``<`` written
+    ``\\u003c``, so no value can close the element or open a comment in it)."""
+    text = script_json(data)
     return f'<script type="application/json" id="{esc(element_id)}">{text}</script>'
 
 

@@ -18,7 +18,6 @@ test moves the slider and compares the puck with the plan file).
 from __future__ import annotations
 
 import importlib.util
-import json
 from pathlib import Path
 from typing import Any
 
@@ -179,7 +178,7 @@ def view_figure(plan: Plan, executions: dict[str, dict[str, Any]] | None = None)
                            "layout": {"title": {"text": _title(plan, int(k))}}})
     anim = {"mode": "immediate", "frame": {"duration": 0, "redraw": False}, "transition": {"duration": 0}}
     layout: dict[str, Any] = {
-        "title": {"text": _title(plan, 0) if n else f"plan: {plan.status} ({plan.reason})"},
+        "title": {"text": _title(plan, 0) if n else f"{plan.task.get('name', 'plan')}: {plan.status}, no path"},
         "xaxis": {"title": {"text": "x [mm]"}, "scaleanchor": "y", "scaleratio": 1},
         "yaxis": {"title": {"text": "y [mm]"}}, "height": 760, "hovermode": "closest", "meta": meta,
         "legend": {"font": {"size": 11}}, "margin": {"t": 60, "b": 140},
@@ -210,12 +209,23 @@ def write_plan_view(plan: Plan, out: str | Path, executions: dict[str, dict[str,
                     title: str = "plan") -> Path:
     """Write the page of ``plan`` (and its ``executions``) to ``out`` atomically; returns it."""
     from tooltransfer.atomic import write_text
-    from tooltransfer.planner.apps.plots.html_page import esc
+    from tooltransfer.planner.apps.plots.html_page import esc, script_json
 
-    fig = json.dumps(view_figure(plan, executions), separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
+    fig = script_json(view_figure(plan, executions))
+    m = plan.metrics
+    facts = ", ".join(f"{k} {v}" for k, v in (
+        ("duration", f"{m['duration']:.2f} s" if isinstance(m.get("duration"), float) else None),
+        ("pushes", len(plan.pushes) or None), ("switches", len(plan.switches) or None),
+        ("re-contacts", m.get("n_recontacts")), ("goal error", f"{1e3 * m['goal_error']:.2f} mm"
+                                                 if isinstance(m.get("goal_error"), float) else None)) if v is not None)
+    head = (f"<h1>{esc(plan.task.get('name', 'plan'))}: {esc(plan.status)} "
+            f"({esc(plan.variant.get('oe', '?'))}/{esc(plan.variant.get('ss', '?'))})</h1>\n"
+            + (f'<p id="reason">{esc(plan.reason)}</p>\n' if plan.reason else "")
+            + (f'<p id="facts">{esc(facts)}</p>\n' if facts else ""))
     page = (f'<!DOCTYPE html>\n<html lang="en">\n<head>\n<meta charset="utf-8">\n<title>{esc(title)}</title>\n'
-            "<style>body{font-family:system-ui,sans-serif;margin:1em 2em}</style>\n"
-            f"<script>{plotly_js()}</script>\n</head>\n<body>\n<div id=\"plan\"></div>\n"
+            "<style>body{font-family:system-ui,sans-serif;margin:1em 2em} h1{font-size:1.3em} "
+            "p{max-width:70em;color:#444}</style>\n"
+            f"<script>{plotly_js()}</script>\n</head>\n<body>\n{head}<div id=\"plan\"></div>\n"
             f'<script type="application/json" id="figure">{fig}</script>\n'
             "<script>\n(function () {\n  var fig = JSON.parse(document.getElementById('figure').textContent);\n"
             "  Plotly.newPlot('plan', fig.data, fig.layout, {responsive: true}).then(function (gd) {\n"
