@@ -50,7 +50,7 @@ TYPED := -p tooltransfer.dmp -m tooltransfer -m tooltransfer.errors -m tooltrans
 	-m tooltransfer.planner.execution.export -m tooltransfer.planner.planning.ss.nlp -m tooltransfer.planner.planning.ss.knot_rows \
 	-m tooltransfer.planner.planning.setting -m tooltransfer.planner.planning.variant_registry \
 	-p tooltransfer.planner.planning.verdicts -m tooltransfer.planner.execution.recording \
-	-m tooltransfer.planner.apps.batch.frame -m tooltransfer.planner.apps.plots.plan_view \
+	-m tooltransfer.planner.apps.batch.frame -m tooltransfer.planner.apps.batch.units -m tooltransfer.planner.apps.plots.plan_view \
 	-m tooltransfer.planner.apps.plots.html_page -m tooltransfer.planner.apps.batch.html_report
 typecheck: $(PY)
 	@mkdir -p build/mypy && ln -sfn "$(CURDIR)" build/mypy/tooltransfer

@@ -205,8 +205,6 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also execute closed loop (re-plan the corners from the observed puck)")
     p.add_argument("--figure", type=Path, default=None, help="write planned versus executed paths (Fig. 12) here")
     p.add_argument("--gif", type=Path, default=None, help="write an animated GIF of the (last) execution here")
-    p.add_argument("--record", type=Path, default=None, help="write the executions' object and tool paths (JSON) "
-                   "here, for tooltransfer view PLAN --execution FILE")
     p.add_argument("--json", action="store_true", help="print a JSON summary")
     p.add_argument("--force", action="store_true", help="run a plan that fails its checks against itself and its "
                    "task (or a violated plan) anyway, with a warning")
@@ -222,17 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "(default: the plan's, q1,q2,q3)")
     p.add_argument("--force", action="store_true", help="export a plan that fails its checks against itself and "
                    "its task (or a violated plan) anyway, with a warning")
-    p = _add(sub, "view", "write a plan as an interactive page: the table from above, the tool and the puck "
-             "animated along the plan (time slider, play), contacts, switches and re-contacts, executed paths beside "
-             "the planned ones",
-             "tooltransfer view out/plan.json -o out/plan.html\n"
-             "  tooltransfer simulate out/plan.json --closed-loop --record out/rec.json\n"
-             "  tooltransfer view out/plan.json --execution out/rec.json -o out/plan.html", cli_planning.cmd_view)
-    p.add_argument("plan", type=Path, help="plan file (JSON)")
-    p.add_argument("-o", "--out", type=Path, default=None, help="page to write (default: the plan's name ending .html)")
-    p.add_argument("--execution", type=Path, default=None,
-                   help="a recording of its execution (simulate --record FILE, or a simulate --json summary naming "
-                   "one)")
+    cli_planning.add_view_parser(sub, _add)
     p = _add(sub, "schema", "print the JSON Schema of task files (for editors)",
              "tooltransfer schema > task.schema.json", cli_planning.cmd_schema)
     p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")

@@ -6,6 +6,7 @@ code; :mod:`tooltransfer.planner.apps.cli` parses and dispatches. Heavy imports 
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from pathlib import Path
 
 from tooltransfer.planner.apps.cli_output import file_stem, print_summary, spinner, written
@@ -193,6 +194,27 @@ def cmd_export(args: argparse.Namespace) -> int:
     from tooltransfer.planner.execution.export import run_export
 
     return run_export(args)
+
+
+def add_view_parser(sub: argparse._SubParsersAction,
+                    add: Callable[..., argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """Register ``view`` and the option of ``simulate`` (registered before) that writes what ``view
+    --execution`` reads, ``--record``; ``add(sub, name, help, example, func)`` makes a command."""
+    sub.choices["simulate"].add_argument(
+        "--record", type=Path, default=None,
+        help="write the executions' object and tool paths (JSON) here, for tooltransfer view PLAN --execution FILE")
+    p = add(sub, "view", "write a plan as an interactive page: the table from above, the tool and the puck "
+            "animated along the plan (time slider, play), contacts, switches and re-contacts, executed paths beside "
+            "the planned ones",
+            "tooltransfer view out/plan.json -o out/plan.html\n"
+            "  tooltransfer simulate out/plan.json --closed-loop --record out/rec.json\n"
+            "  tooltransfer view out/plan.json --execution out/rec.json -o out/plan.html", cmd_view)
+    p.add_argument("plan", type=Path, help="plan file (JSON)")
+    p.add_argument("-o", "--out", type=Path, default=None, help="page to write (default: the plan's name ending .html)")
+    p.add_argument("--execution", type=Path, default=None,
+                   help="a recording of its execution (simulate --record FILE, or a simulate --json summary naming "
+                   "one)")
+    return p
 
 
 def cmd_view(args: argparse.Namespace) -> int:

@@ -13,7 +13,8 @@ a long-lived
 - :mod:`tooltransfer.planner.apps.batch.report` and :mod:`tooltransfer.planner.apps.batch.figures`: tables, CSV,
   figures; :mod:`tooltransfer.planner.apps.batch.html_report`: ``report.html``;
 - :mod:`tooltransfer.planner.apps.batch.frame`: :func:`load`, the results as a pandas DataFrame
-  (``tooltransfer.batch.load``), and the unit-suffixed column names of the CSV files;
+  (``tooltransfer.batch.load``); :mod:`tooltransfer.planner.apps.batch.units`: the unit-suffixed
+  column names of the CSV files;
 - :mod:`tooltransfer.planner.apps.batch.commands`: ``tooltransfer batch generate|run|report|schema``.
 
 Scripts that call :func:`run_batch` must guard their entry point with ``if __name__ ==

@@ -9,14 +9,18 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from tooltransfer.planner.apps.batch.report import GroupStats
-
+#: Colours of the statuses in plots (the table's classes use the same hues).
+STATUS_COLOURS = {"solved": "#1a7f37", "infeasible": "#8250df", "unknown": "#bc4c00", "violated": "#fb8500",
+                  "error": "#cf222e", "timeout": "#6e7781"}
+#: Colours of the variants (Bokeh's Category10).
+VARIANT_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
+                   "#bcbd22", "#17becf")
 _STATUSES = ("solved", "violated", "infeasible", "unknown", "error", "timeout")
 
 
-def rate_plot(stats: Sequence[GroupStats]) -> Any:
-    """Success rate per tool and variant (dots) with 95% Wilson intervals (whiskers); hover gives the
-    counts."""
+def rate_plot(stats: Sequence[Any]) -> Any:
+    """Success rate per tool and variant (dots) with 95% Wilson intervals (whiskers; ``stats``:
+    :func:`~tooltransfer.planner.apps.batch.report.summarize`'s); hover gives the counts."""
     from bokeh.models import ColumnDataSource, HoverTool, Whisker
     from bokeh.plotting import figure
 
@@ -43,8 +47,6 @@ def time_plot(rows: Sequence[dict[str, Any]], variants: Sequence[str]) -> Any:
     from bokeh.models import ColumnDataSource, HoverTool
     from bokeh.plotting import figure
     from bokeh.transform import jitter
-
-    from tooltransfer.planner.apps.batch.html_report import STATUS_COLOURS
 
     p = figure(name="times", y_range=list(reversed(variants)), x_axis_type="log", width=620,
                height=120 + 60 * len(variants), title="planning time per variant (every task; hover for the task)",

@@ -28,16 +28,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from tooltransfer.planner.apps.batch.html_plots import VARIANT_COLOURS, error_plot, panel_plot, rate_plot, time_plot
 from tooltransfer.planner.apps.batch.html_script import TABLE_CSS, TABLE_JS
-from tooltransfer.planner.apps.batch.report import GroupStats, all_reasons
 from tooltransfer.planner.apps.plots.html_page import esc, json_script, plot, require_bokeh, write_page
-
-#: Colours of the statuses in plots (the table's classes use the same hues).
-STATUS_COLOURS = {"solved": "#1a7f37", "infeasible": "#8250df", "unknown": "#bc4c00", "violated": "#fb8500",
-                  "error": "#cf222e", "timeout": "#6e7781"}
-#: Colours of the variants (Bokeh's Category10).
-VARIANT_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
-                   "#bcbd22", "#17becf")
 
 #: The task table's columns: header, row key, shown unit's scale (None: text), digits.
 TABLE_COLUMNS: tuple[tuple[str, str, float | None, int], ...] = (
@@ -104,8 +97,9 @@ def task_table(rows: Sequence[dict[str, Any]]) -> str:
     return "".join(out)
 
 
-def summary_table(stats: Sequence[GroupStats]) -> str:
-    """Per tool and variant: counts, the rates with their 95% Wilson intervals, planning times."""
+def summary_table(stats: Sequence[Any]) -> str:
+    """Per tool and variant (``stats``: :func:`~tooltransfer.planner.apps.batch.report.summarize`'s
+    ``GroupStats``): counts, the rates with their 95% Wilson intervals, planning times."""
     head = ("tool", "variant", "n", "solved", "rate [%]", "95% CI [%]", "infeasible", "95% CI [%]", "unknown",
             "95% CI [%]", "violated", "error", "timeout", "t50 [ms]", "t90 [ms]", "t99 [ms]")
     out = ['<table class="data" id="summary"><thead><tr>',
@@ -122,11 +116,12 @@ def summary_table(stats: Sequence[GroupStats]) -> str:
     return "".join(out)
 
 
-def reasons_table(rows: Sequence[dict[str, Any]]) -> str:
-    """Every distinct reason in full, per variant and failing status, with its count."""
+def reasons_table(reasons: Sequence[dict[str, Any]]) -> str:
+    """Every distinct reason in full, per variant and failing status, with its count (``reasons``:
+    :func:`~tooltransfer.planner.apps.batch.report.all_reasons`)."""
     out = ['<table class="data" id="reasons"><thead><tr><th class="text">variant</th><th class="text">status</th>'
            '<th>count</th><th class="text">reason</th></tr></thead><tbody>']
-    for e in all_reasons(rows):
+    for e in reasons:
         out.append(f'<tr><td class="text">{esc(e["variant"])}</td><td class="text s-{esc(e["status"])}">'
                    f'{esc(e["status"])}</td><td>{e["count"]}</td><td class="reason">{esc(e["reason"])}</td></tr>')
     out.append("</tbody></table>")
@@ -158,11 +153,13 @@ def task_panels(rows: Sequence[dict[str, Any]], tasks: dict[str, dict[str, Any]]
     return out
 
 
-def write_html_report(rows: Sequence[dict[str, Any]], stats: Sequence[GroupStats], meta: dict[str, str],
-                      tasks: dict[str, dict[str, Any]], path: Path) -> Path:
-    """Write ``report.html`` (module docstring) to ``path``; returns it."""
+def write_html_report(rows: Sequence[dict[str, Any]], stats: Sequence[Any], reasons: Sequence[dict[str, Any]],
+                      meta: dict[str, str], tasks: dict[str, dict[str, Any]], path: Path) -> Path:
+    """Write ``report.html`` (module docstring) to ``path``: of the store's ``rows``, their ``stats``
+    (:func:`~tooltransfer.planner.apps.batch.report.summarize`), every reason
+    (:func:`~tooltransfer.planner.apps.batch.report.all_reasons`), the store's ``meta`` and its
+    ``tasks`` by id; returns it."""
     require_bokeh()
-    from tooltransfer.planner.apps.batch.html_plots import error_plot, panel_plot, rate_plot, time_plot
 
     variants = sorted({r["variant"] for r in rows})
     colours = {v: VARIANT_COLOURS[i % len(VARIANT_COLOURS)] for i, v in enumerate(variants)}
@@ -186,6 +183,6 @@ def write_html_report(rows: Sequence[dict[str, Any]], stats: Sequence[GroupStats
             '<span id="count"></span></div>'
             '<div class="row"><div class="scroll">' + task_table(rows) + '</div><div id="panel">'
             '<h3 id="panel-title">task</h3>' + plot("panel") + '<div id="panel-text"></div></div></div>'
-            "<h2>Reasons in full</h2>" + reasons_table(rows)
+            "<h2>Reasons in full</h2>" + reasons_table(reasons)
             + json_script("tasks", task_panels(rows, tasks)) + json_script("colours", colours))
     return write_page(path, f"batch {name}", body, models, css=TABLE_CSS, script=TABLE_JS)

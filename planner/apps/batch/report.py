@@ -369,7 +369,7 @@ def write_csv(path: Path, rows: Sequence[dict[str, Any]], columns: Sequence[str]
 
 def write_report(db: str | Path, out: str | Path | None, console: Console | None = None) -> list[Path]:
     """Print the report of the store ``db``; with ``out``, write ``results.csv``, ``summary.csv``,
-    ``reasons.csv`` (column names with their units: :mod:`tooltransfer.planner.apps.batch.frame`;
+    ``reasons.csv`` (column names with their units: :mod:`tooltransfer.planner.apps.batch.units`;
     reasons in full), the figures and ``report.html`` (:mod:`tooltransfer.planner.apps.batch.html_report`)
     there. Returns the written paths.
 
@@ -407,7 +407,7 @@ def write_report(db: str | Path, out: str | Path | None, console: Console | None
     print_report(stats, reasons, console)
     if out is None:
         return []
-    from tooltransfer.planner.apps.batch.frame import SUMMARY_UNITS, columns_with_units, rows_with_units
+    from tooltransfer.planner.apps.batch.units import SUMMARY_UNITS, columns_with_units, rows_with_units
 
     folder = Path(out)
     results = [{**r, "valid": int(is_valid(r))} for r in rows]
@@ -421,7 +421,7 @@ def write_report(db: str | Path, out: str | Path | None, console: Console | None
 
     written += plot_batch(rows, folder)
     try:
-        written.append(write_html_report(rows, stats, meta, tasks, folder / "report.html"))
+        written.append(write_html_report(rows, stats, all_reasons(rows), meta, tasks, folder / "report.html"))
     except ImportError as exc:  # Bokeh missing: the tables, CSV files and figures are there all the same
         console.print(f"note: no report.html: {escape(str(exc))}")  # how to install it
     return written
