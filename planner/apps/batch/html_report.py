@@ -43,7 +43,7 @@ TABLE_COLUMNS: tuple[tuple[str, str, float | None, int], ...] = (
 
 
 #: Widths of the task table's columns [px] (a fixed layout: filtering does not measure every cell).
-COLUMN_WIDTHS = (120, 55, 90, 75, 70, 70, 60, 60, 60, 60, 60, 370)
+COLUMN_WIDTHS = (120, 60, 125, 85, 80, 70, 60, 60, 60, 60, 60, 370)
 #: Rows drawn at a time (the script's page, :data:`~tooltransfer.planner.apps.batch.html_script.TABLE_JS`).
 PAGE_ROWS = 100
 
@@ -78,7 +78,8 @@ def task_table(rows: Sequence[dict[str, Any]]) -> str:
                    for h, _, scale, _ in TABLE_COLUMNS)
     hidden = ' style="display:none"'  # beyond the first page (the script draws a page at a time)
     cols = "".join(f'<col style="width:{w}px">' for w in COLUMN_WIDTHS)
-    out = [f'<table class="data" id="rows" data-page="{PAGE_ROWS}"><colgroup>{cols}</colgroup>'
+    out = [f'<table class="data" id="rows" data-page="{PAGE_ROWS}" '
+           f'style="width:{sum(COLUMN_WIDTHS)}px"><colgroup>{cols}</colgroup>'
            f"<thead><tr>{head}</tr></thead><tbody>"]
     for i, r in enumerate(rows):
         cells = []

@@ -17,7 +17,7 @@ TABLE_CSS = """
 #rows tbody tr { cursor: pointer; } #rows tbody tr:hover { background: #eef5ff; }
 #rows tbody tr.selected { background: #dbeafe; }
 #rows th { cursor: pointer; user-select: none; }
-#rows { table-layout: fixed; width: 1150px; }  /* fixed columns: a page's layout does not measure every cell */
+#rows { table-layout: fixed; }  /* fixed columns: a page's layout does not measure every cell */
 #rows td { overflow: hidden; text-overflow: ellipsis; }
 .filters { margin: 0.5em 0; } .filters label { margin-right: 1em; } #count { color: #555; }
 #panel { min-width: 440px; max-width: 520px; }
