@@ -14,7 +14,7 @@ import pytest
 from browser import browser, console_errors, open_page
 
 from tooltransfer.planner.apps.cli import main
-from tooltransfer.planner.planning.plan import read_plan
+from tooltransfer.planner.planning.plan import Plan, read_plan
 
 TASK = "paper/transfer_tool2"
 
@@ -29,6 +29,12 @@ def pages(tmp_path_factory: pytest.TempPathFactory) -> Path:
     assert main(["view", str(tmp / "plan.json"), "-o", str(tmp / "plain.html")]) == 0
     assert main(["view", str(tmp / "plan.json"), "--execution", str(tmp / "rec.json"), "-o",
                  str(tmp / "plan.html")]) == 0
+    # a plan without a path (the solved plan's task, tool and obstacles; status infeasible, no samples)
+    solved = read_plan(tmp / "plan.json")
+    Plan(status="infeasible", variant=solved.variant, task=solved.task, platform=solved.platform,
+         object=solved.object, tool=solved.tool, obstacles=solved.obstacles,
+         reason="certified infeasible: <b>no</b> face reaches the target").write(tmp / "none.json")
+    assert main(["view", str(tmp / "none.json"), "-o", str(tmp / "none.html")]) == 0
     return tmp
 
 
@@ -92,6 +98,12 @@ def test_view_in_chromium_moves_the_puck_along_the_plan(pages: Path) -> None:
                          ".find(b => b.textContent === 'play').dispatchEvent(new MouseEvent('click'))")
         time.sleep(1.0)
         assert d.execute_script("return document.getElementById('plan')._fullLayout.sliders[0].active") > 0
+        assert console_errors(d) == []
+        # a plan without a path: the scene, the reason as text, no slider
+        open_page(d, pages / "none.html", "window.ttReady")
+        assert d.execute_script("return document.getElementById('reason').textContent") == \
+            "certified infeasible: <b>no</b> face reaches the target"
+        assert d.execute_script("return document.querySelectorAll('.slider-rail-touch-rect').length") == 0
         assert console_errors(d) == []
 
 
