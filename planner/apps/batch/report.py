@@ -2,7 +2,8 @@
 violated (a whole plan that breaks a hard check: :func:`tooltransfer.planner.planning.solve.hard_check_failures`;
 counted apart, never as a success), infeasible, error and timeout counts with the top reasons,
 planning-time percentiles, violation maxima and, for a batch run with ``--simulate``, executed
-success; rich tables and CSV files.
+success; rich tables (the top reasons grouped, numbers shown as ``#``), CSV files (quantities named
+with their units; ``reasons.csv`` every reason in full) and ``report.html``.
 
 Executed success: a solved plan executed on the simulated platform succeeds within 2 mm (5 mm)
 when the object ends within 2 mm (5 mm) of the target (:data:`EXEC_TOLS`), open loop and closed
