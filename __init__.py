@@ -14,8 +14,9 @@ What a user needs first is here::
     plan.write("plan.json")
     same = tt.read_plan("plan.json")
 
-The names are imported on first use, so ``import tooltransfer`` (and every ``tooltransfer`` command)
-stays light.
+``tt.batch`` is the batch package (``tt.batch.load(db)``: a batch's results as a pandas DataFrame,
+with the ``data`` extra). The names are imported on first use, so ``import tooltransfer`` (and every
+``tooltransfer`` command) stays light.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from tooltransfer.dmp.primitive import DMP
     from tooltransfer.errors import InfeasibleError, InputError, ToolTransferError
+    from tooltransfer.planner.apps import batch
     from tooltransfer.planner.planning.plan import Plan, read_plan
     from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import Task, load_task
@@ -38,6 +40,7 @@ __all__ = [
     "Task",
     "ToolTransferError",
     "__version__",
+    "batch",
     "load_task",
     "read_plan",
     "solve",
@@ -67,9 +70,16 @@ def _version() -> str:
         return "0+unknown"
 
 
+#: Subpackages reached by a short name (``tt.batch.load(db)``), imported when first asked for.
+_MODULES = {"batch": "tooltransfer.planner.apps.batch"}
+
+
 def __getattr__(name: str) -> Any:
+    value: Any
     if name == "__version__":
         value = _version()
+    elif name in _MODULES:
+        value = import_module(_MODULES[name])
     elif name in _HOMES:
         value = getattr(import_module(_HOMES[name]), name)
     else:

@@ -222,8 +222,9 @@ def test_report_statistics_and_files(tmp_path, capsys) -> None:
     assert (s.sim_n, s.sim_success) == (7, 5) and s.valid == 7
     written = write_report(db, tmp_path / "rep")
     assert {p.name for p in written} == {"results.csv", "summary.csv", "reasons.csv", "success_vs_difficulty.png",
-                                         "time_distributions.png"}
-    assert "reach: target # mm out" in (tmp_path / "rep" / "reasons.csv").read_text()
+                                         "time_distributions.png", "report.html"}
+    reasons = (tmp_path / "rep" / "reasons.csv").read_text()
+    assert "reach: target 7 mm out" in reasons and "reach: target 8 mm out" in reasons  # whole, numbers kept
     assert len((tmp_path / "rep" / "results.csv").read_text().splitlines()) == 11
     assert "70.0" in capsys.readouterr().out
     assert main(["batch", "report", str(tmp_path / "missing.sqlite")]) == 2

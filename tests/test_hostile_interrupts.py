@@ -38,6 +38,7 @@ def _argv(tmp: Path) -> dict[str, list[str]]:
         "solve": ["solve", str(TASK), "-o", str(tmp / "plan.json")],
         "simulate": ["simulate", str(tmp / "plan.json"), "--figure", str(tmp / "fig.png")],
         "export": ["export", str(tmp / "plan.json"), "--format", "csv", "-o", str(tmp / "plan.csv")],
+        "view": ["view", str(tmp / "plan.json"), "-o", str(tmp / "plan.html")],
         "schema": ["schema", "--out", str(tmp / "schema.json")],
         "tools": ["tools", "--out", str(tmp / "tools.png")],
         "tasks": ["tasks"],

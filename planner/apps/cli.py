@@ -225,6 +225,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "(default: the plan's, q1,q2,q3)")
     p.add_argument("--force", action="store_true", help="export a plan that fails its checks against itself and "
                    "its task (or a violated plan) anyway, with a warning")
+    cli_planning.add_view_parser(sub, _add)
     p = _add(sub, "schema", "print the JSON Schema of task files (for editors)",
              "tooltransfer schema > task.schema.json", cli_planning.cmd_schema)
     p.add_argument("--out", type=Path, default=None, help="write to this file instead of stdout")

@@ -6,6 +6,7 @@ code; :mod:`tooltransfer.planner.apps.cli` parses and dispatches. Heavy imports 
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from pathlib import Path
 
 from tooltransfer.planner.apps.cli_output import file_stem, print_summary, spinner, written
@@ -166,6 +167,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         with written(args.figure) as tmp:
             fig12(plan, tmp, executions)
         summary["figure"] = str(args.figure)
+    if args.record:
+        from tooltransfer.planner.execution.recording import write_recording
+
+        write_recording(args.record, executions, str(args.plan))  # type: ignore[arg-type]
+        summary["record"] = str(args.record)
     if args.gif:
         from tooltransfer.planner.apps.plots.paper_figures import execution_gif
 
@@ -197,6 +203,43 @@ def cmd_export(args: argparse.Namespace) -> int:
     from tooltransfer.planner.execution.export import run_export
 
     return run_export(args)
+
+
+def add_view_parser(sub: argparse._SubParsersAction,
+                    add: Callable[..., argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """Register ``view`` and the option of ``simulate`` (registered before) that writes what ``view
+    --execution`` reads, ``--record``; ``add(sub, name, help, example, func)`` makes a command."""
+    sub.choices["simulate"].add_argument(
+        "--record", type=Path, default=None,
+        help="write the executions' object and tool paths (JSON) here, for tooltransfer view PLAN --execution FILE")
+    p = add(sub, "view", "write a plan as an interactive page: the table from above, the tool and the puck "
+            "animated along the plan (time slider, play), contacts, switches and re-contacts, executed paths beside "
+            "the planned ones",
+            "tooltransfer view out/plan.json -o out/plan.html\n"
+            "  tooltransfer simulate out/plan.json --closed-loop --record out/rec.json\n"
+            "  tooltransfer view out/plan.json --execution out/rec.json -o out/plan.html", cmd_view)
+    p.add_argument("plan", type=Path, help="plan file (JSON)")
+    p.add_argument("-o", "--out", type=Path, default=None, help="page to write (default: the plan's name ending .html)")
+    p.add_argument("--execution", type=Path, default=None,
+                   help="a recording of its execution (simulate --record FILE, or a simulate --json summary naming "
+                   "one)")
+    return p
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    from tooltransfer.planner.apps.plots.plan_view import write_plan_view
+    from tooltransfer.planner.planning.plan import read_plan
+
+    plan = read_plan(args.plan)
+    executions = None
+    if args.execution is not None:
+        from tooltransfer.planner.execution.recording import read_recording
+
+        executions = read_recording(args.execution)
+    out = args.out if args.out is not None else args.plan.with_suffix(".html")
+    write_plan_view(plan, out, executions, title=f"plan {args.plan.name}")
+    print(f"wrote {out}")
+    return EXIT_OK
 
 
 def cmd_schema(args: argparse.Namespace) -> int:

@@ -81,7 +81,8 @@ def check_output(option: str, path: Path, kind: str = "file", *, make_folders: b
 
 
 #: Optional dependencies by their import name -> the extra that installs them (``pyproject.toml``).
-EXTRAS = {"mujoco": "sim", "matplotlib": "plots", "PIL": "plots", "dask": "dask", "distributed": "dask"}
+EXTRAS = {"mujoco": "sim", "matplotlib": "plots", "PIL": "plots", "dask": "dask", "distributed": "dask",
+          "bokeh": "report", "plotly": "report", "pandas": "data"}
 
 
 def missing_extra(exc: BaseException) -> str | None:

@@ -11,7 +11,10 @@ a long-lived
 - :mod:`tooltransfer.planner.apps.batch.store_settings`: a store tied to its batch and settings;
 - :mod:`tooltransfer.planner.apps.batch.runner`: submit, store as each finishes, progress, Ctrl-C;
 - :mod:`tooltransfer.planner.apps.batch.report` and :mod:`tooltransfer.planner.apps.batch.figures`: tables, CSV,
-  figures;
+  figures; :mod:`tooltransfer.planner.apps.batch.html_report`: ``report.html``;
+- :mod:`tooltransfer.planner.apps.batch.frame`: :func:`load`, the results as a pandas DataFrame
+  (``tooltransfer.batch.load``); :mod:`tooltransfer.planner.apps.batch.units`: the unit-suffixed
+  column names of the CSV files;
 - :mod:`tooltransfer.planner.apps.batch.commands`: ``tooltransfer batch generate|run|report|schema``.
 
 Scripts that call :func:`run_batch` must guard their entry point with ``if __name__ ==
@@ -26,7 +29,7 @@ from typing import Any
 _EXPORTS = {
     "BatchSpec": "spec", "load_batch": "spec", "GeneratedTask": "generate", "generate_tasks": "generate",
     "write_tasks": "generate", "ResultStore": "store", "RunSummary": "runner", "run_batch": "runner",
-    "summarize": "report", "write_report": "report",
+    "summarize": "report", "write_report": "report", "load": "frame",
 }
 __all__ = sorted(_EXPORTS)
 

@@ -39,10 +39,11 @@ def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: 
                 budget: float = 1.0) -> dict[str, Any]:
     """Plan ``task`` (task-file fields; relative paths are relative to ``source``'s folder) with the
     variants ``oe`` and ``ss``. Returns the row's measures: status, reason, times [s], the plan's
-    metrics (SI units; infinities stored as NULL and kept in ``metrics_json``), switch count and
-    penetration; with ``keep_plan`` a solved plan also comes back pickled under ``"plan"`` (for the
-    execution stages; not a column). ``budget``: :func:`~tooltransfer.planner.planning.solve.solve`'s (the
-    search's and the certificate's budgets multiplied)."""
+    metrics (SI units; infinities stored as NULL and kept in ``metrics_json``, beside the evidence and
+    the object path's outline, :func:`path_outline`), switch count and penetration; with ``keep_plan``
+    a solved plan also comes back pickled under ``"plan"`` (for the execution stages; not a column).
+    ``budget``: :func:`~tooltransfer.planner.planning.solve.solve`'s (the search's and the
+    certificate's budgets multiplied)."""
     from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import Variants, task_from_dict
 
@@ -68,10 +69,27 @@ def execute_job(task: dict[str, Any], source: str, oe: str, ss: str, keep_plan: 
     if cert:  # the certificate's kind, reason and rules; its polygons are in the plan file (solve -o)
         evidence["certificate"] = {k: cert[k] for k in ("kind", "reason", "rules", "start_gap") if k in cert}
     row["metrics_json"] = json.dumps({**{k: (v if finite_or_none(v) is not None else str(v)) for k, v in m.items()},
-                                      "evidence": evidence})
+                                      "evidence": evidence, **path_outline(plan)})
     if keep_plan and plan.status == "solved":
         row["plan"] = pickle.dumps(plan, protocol=pickle.HIGHEST_PROTOCOL)
     return row
+
+
+#: Most samples of the object path kept in a row (:func:`path_outline`).
+PATH_SAMPLES = 60
+
+
+def path_outline(plan: Any) -> dict[str, list[list[float]]]:
+    """The planned object path of a whole plan (solved or violated) for the batch report's task
+    panels: ``{"object_path": [[x, y], ...]}`` [m], at most :data:`PATH_SAMPLES` samples evenly spaced
+    in the plan's samples (the first and the last kept), rounded to 0.1 mm; ``{}`` without a path."""
+    xy = getattr(plan, "object_xy", None)
+    if plan.status not in ("solved", "violated") or xy is None or len(xy) == 0:
+        return {}
+    import numpy as np
+
+    idx = np.unique(np.linspace(0, len(xy) - 1, min(len(xy), PATH_SAMPLES)).round().astype(int))
+    return {"object_path": np.round(np.asarray(xy, dtype=float)[idx], 4).tolist()}
 
 
 def open_loop(plan: bytes, tolerance: float = 0.01) -> dict[str, Any]:

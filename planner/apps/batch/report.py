@@ -2,7 +2,8 @@
 violated (a whole plan that breaks a hard check: :func:`tooltransfer.planner.planning.solve.hard_check_failures`;
 counted apart, never as a success), infeasible, error and timeout counts with the top reasons,
 planning-time percentiles, violation maxima and, for a batch run with ``--simulate``, executed
-success; rich tables and CSV files.
+success; rich tables (the top reasons grouped, numbers shown as ``#``), CSV files (quantities named
+with their units; ``reasons.csv`` every reason in full) and ``report.html``.
 
 Executed success: a solved plan executed on the simulated platform succeeds within 2 mm (5 mm)
 when the object ends within 2 mm (5 mm) of the target (:data:`EXEC_TOLS`), open loop and closed
@@ -233,15 +234,35 @@ def top_reasons(rows: Sequence[dict[str, Any]], k: int = 3) -> list[dict[str, An
     the executions of solved plans: ``open loop error``, ``closed loop closest``, ...)."""
     groups: dict[tuple[str, str], Counter] = defaultdict(Counter)
     for r in rows:
-        if r["status"] != "solved":
-            groups[(r["variant"], r["status"])][reason_class(r.get("reason") or "")] += 1
-            continue
-        for key, loop in (("open_loop", "open loop"), ("closed_loop", "closed loop")):
-            st = r.get(f"{key}_status")
-            if st not in (None, "done", "reached"):
-                groups[(r["variant"], f"{loop} {st}")][reason_class(r.get(f"{key}_reason") or "")] += 1
+        for status, reason in failure_reasons(r):
+            groups[(r["variant"], status)][reason_class(reason)] += 1
     return [{"variant": v, "status": s, "count": n, "reason": text}
             for (v, s), cnt in sorted(groups.items()) for text, n in cnt.most_common(k)]
+
+
+def failure_reasons(r: dict[str, Any]) -> list[tuple[str, str]]:
+    """The ``(status, reason)`` pairs of row ``r`` that are not successes: its planning status and
+    reason when not solved, else each execution that did not end done or reached (``closed loop
+    closest``, ...); reasons in full."""
+    if r["status"] != "solved":
+        return [(r["status"], r.get("reason") or "")]
+    out = []
+    for key, loop in (("open_loop", "open loop"), ("closed_loop", "closed loop")):
+        st = r.get(f"{key}_status")
+        if st not in (None, "done", "reached"):
+            out.append((f"{loop} {st}", r.get(f"{key}_reason") or ""))
+    return out
+
+
+def all_reasons(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Every distinct reason in full per variant and failing status (:func:`failure_reasons`) with
+    how many rows gave it, most frequent first: ``reasons.csv``."""
+    groups: dict[tuple[str, str], Counter] = defaultdict(Counter)
+    for r in rows:
+        for status, reason in failure_reasons(r):
+            groups[(r["variant"], status)][reason] += 1
+    return [{"variant": v, "status": s, "count": n, "reason": text}
+            for (v, s), cnt in sorted(groups.items()) for text, n in cnt.most_common()]
 
 
 def _fmt(v: float, scale: float = 1.0, digits: int = 2) -> str:
@@ -349,7 +370,9 @@ def write_csv(path: Path, rows: Sequence[dict[str, Any]], columns: Sequence[str]
 
 def write_report(db: str | Path, out: str | Path | None, console: Console | None = None) -> list[Path]:
     """Print the report of the store ``db``; with ``out``, write ``results.csv``, ``summary.csv``,
-    ``reasons.csv`` and the figures there. Returns the written paths.
+    ``reasons.csv`` (column names with their units: :mod:`tooltransfer.planner.apps.batch.units`;
+    reasons in full), the figures and ``report.html`` (:mod:`tooltransfer.planner.apps.batch.html_report`)
+    there. Returns the written paths.
 
     The store is opened read-only and never changed (a read-only file or folder is fine); messages
     name the file as the command's ``db`` argument. An empty file, or a store without rows, has
@@ -375,6 +398,7 @@ def write_report(db: str | Path, out: str | Path | None, console: Console | None
         store.check_rows()  # numbers where numbers belong
         rows = store.rows()
         meta = store.meta()
+        tasks = store.task_documents()
     if not rows:
         console.print(f"{escape(str(p))}: no results yet" + (" (an SQLite file without tables)" if store.empty else ""))
         return []
@@ -384,11 +408,21 @@ def write_report(db: str | Path, out: str | Path | None, console: Console | None
     print_report(stats, reasons, console)
     if out is None:
         return []
+    from tooltransfer.planner.apps.batch.units import SUMMARY_UNITS, columns_with_units, rows_with_units
+
     folder = Path(out)
-    written = [write_csv(folder / "results.csv", [{**r, "valid": int(is_valid(r))} for r in rows]),
-               write_csv(folder / "summary.csv", [asdict(s) for s in stats], [f.name for f in fields(GroupStats)]),
-               write_csv(folder / "reasons.csv", reasons, ["variant", "status", "count", "reason"])]
+    results = [{**r, "valid": int(is_valid(r))} for r in rows]
+    names = [f.name for f in fields(GroupStats)]
+    written = [write_csv(folder / "results.csv", rows_with_units(results), columns_with_units(list(results[0]))),
+               write_csv(folder / "summary.csv", rows_with_units([asdict(s) for s in stats], SUMMARY_UNITS),
+                         columns_with_units(names, SUMMARY_UNITS)),
+               write_csv(folder / "reasons.csv", all_reasons(rows), ["variant", "status", "count", "reason"])]
     from tooltransfer.planner.apps.batch.figures import plot_batch
+    from tooltransfer.planner.apps.batch.html_report import write_html_report
 
     written += plot_batch(rows, folder)
+    try:
+        written.append(write_html_report(rows, stats, all_reasons(rows), meta, tasks, folder / "report.html"))
+    except ImportError as exc:  # Bokeh missing: the tables, CSV files and figures are there all the same
+        console.print(f"note: no report.html: {escape(str(exc))}")  # how to install it
     return written

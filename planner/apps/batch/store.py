@@ -280,6 +280,23 @@ class ResultStore:
                              open_loop_wall_time=r.get("sim_wall_time"))
         return rows
 
+    def task_documents(self) -> dict[str, dict[str, Any]]:
+        """Each recorded task's task-file fields by task id (``{}`` without a tasks table; a task whose
+        JSON does not read as an object is left out)."""
+        if self.empty or tables(self.db).get("tasks") != "table":
+            return {}
+        with self._guard():
+            found = self.db.execute("SELECT task_id, task_json FROM tasks").fetchall()
+        out: dict[str, dict[str, Any]] = {}
+        for tid, text in found:
+            try:
+                doc = json.loads(text or "null")
+            except ValueError:
+                continue
+            if isinstance(doc, dict):
+                out[str(tid)] = doc
+        return out
+
     def count(self) -> int:
         if self.empty:
             return 0
