@@ -137,10 +137,13 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
             recontact: Any, base: dict[str, Any], start: float) -> Plan:
     """The first whole plan of the variant's guided search (its push plans, one per attempt) that passes
     every check, where the scored candidates left ``failed``; else ``failed`` with each attempt's reason
-    added. A switch that found no tool path is sent back to the search (it may avoid it)."""
+    added. A switch that found no tool path is sent back to the search (it may avoid it). A plan whose
+    tool comes within :data:`GUIDED_ROOM` of an obstacle is kept only when no later attempt gives one
+    with more room (the closed loop's corrections need some)."""
     clock = time.perf_counter()
     whys: list[str] = []
     refused: SwitchFailed | None = None  # sent back: the search may avoid that change of face there
+    tight: Plan | None = None  # the first solved plan with little room, if no roomier one comes
     while True:
         try:
             guided = attempts.send(refused)
@@ -157,12 +160,27 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
                 plan.metrics["time_total"] = time.perf_counter() - start
                 tried = float(failed.metrics.get("alternatives_tried", 0.0))
                 plan.metrics["alternatives_tried"] = tried + 1.0 + len(whys)
-                return plan
+                room = min(plan.metrics["tool_obstacle_clearance_min"], plan.metrics["switch_obstacle_clearance_min"])
+                if room >= GUIDED_ROOM:
+                    return plan
+                tight = plan if tight is None else tight
+                whys.append(f"a plan whose tool passes {room * 1e3:.2f} mm from an obstacle (kept unless one "
+                            f"with {GUIDED_ROOM * 1e3:g} mm comes)")
+                continue
             whys.append(plan.reason)
         else:
             whys.append(guided.reason)
+    if tight is not None:
+        tight.metrics["time_guided"] = time.perf_counter() - clock
+        tight.metrics["time_total"] = time.perf_counter() - start
+        return tight
     metrics = {**failed.metrics, "time_guided": time.perf_counter() - clock}
     return replace(failed, metrics=metrics, reason=f"{failed.reason}; the guided search: {'; then '.join(whys)}")
+
+
+#: Room [m] between the tool and the obstacles a guided plan should leave for the closed loop's
+#: corrections (its safety envelope refuses commands within 0.25 mm of an obstacle).
+GUIDED_ROOM = 0.001
 
 
 def _candidates(task: Task, setting: Setting, push_plan: Any, switch: Any, recontact: Any,
