@@ -1,5 +1,6 @@
 """A guided path fitted one face at a time: each run of one face its own constrained DMP fit, from rest
-to rest, the object standing still at every change of face.
+to rest, the object standing still at every change of face; a run may use at most ``oe.max_contacts``
+contacts of its face, as one push of the one fit may.
 
 The guided search (:mod:`tooltransfer.planner.planning.oe.guided`) proposes a path of many short
 straight pushes; fitted as one DMP over the whole duration
@@ -97,6 +98,10 @@ def fit_runs(xy: NDArray[np.float64], step_faces: tuple[str, ...], t0: float, du
     pieces: list[PushPlan] = []
     for face, a, b in _runs(step_faces):
         got = _fit_run(xy[a:b + 1], times[a:b + 1], face, setting, options)
+        contacts = 0 if isinstance(got, str) else sum(len(p.pushes) for p in got)
+        if contacts > options.max_contacts:  # the one fit's bound on one push's contacts, for the whole run
+            got = (f"its pieces need {contacts} contacts of the face (oe.max_contacts: {options.max_contacts} "
+                   "contacts per push)")
         if isinstance(got, str):
             empty, at = np.zeros((0, 2)), np.round(xy[a], 4).tolist()
             return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, xy,
