@@ -163,6 +163,29 @@ REFUSED_RADIUS = 2 * STEP
 REFUSALS = 2
 
 
+def _pointing(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
+    """The middle [rad] of ``fm``'s admissible directions in the world with the object at ``p``."""
+    yaw = _heading(fm.cone, p)
+    if yaw is None:  # the middle of the range is between its ends: held wherever they are
+        yaw = float(fm.cone.heading(p[None])[0])
+    return yaw + fm.cone.push_angle
+
+
+def _stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float,
+             step: float) -> NDArray[np.float64] | None:
+    """Where a step of ``step`` [m] of ``fm`` in direction ``ang`` [rad] from ``p`` ends, its direction kept inside
+    the face's cone at both ends of the step (the cone turns with the heading the Omni imposes, so a
+    step along its edge at ``p`` may leave it at the step's end: it is turned back inside), or None
+    where no direction near ``ang`` is inside both."""
+    for _ in range(2):
+        q = p + step * np.array([math.cos(ang), math.sin(ang)])
+        off = math.remainder(ang - _pointing(fm, q), 2 * math.pi)
+        if abs(off) <= half:
+            return q
+        ang -= off - math.copysign(half, off)
+    return None
+
+
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = ()) -> GuidedPath | GuidedMiss:
@@ -206,28 +229,8 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 continue
             if touches(fm, [y for y in yaws if y is not None], p, near):
                 continue
-            out.append((fm.name, pointing(fm, p), CONE * fm.cone.theta_b))
+            out.append((fm.name, _pointing(fm, p), CONE * fm.cone.theta_b))
         return out
-
-    def pointing(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
-        """The middle [rad] of ``fm``'s admissible directions in the world with the object at ``p``."""
-        yaw = _heading(fm.cone, p)
-        if yaw is None:  # the middle of the range is between its ends: held wherever they are
-            yaw = float(fm.cone.heading(p[None])[0])
-        return yaw + fm.cone.push_angle
-
-    def stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float) -> NDArray[np.float64] | None:
-        """Where a step of ``fm`` in direction ``ang`` [rad] from ``p`` ends, its direction kept inside
-        the face's cone at both ends of the step (the cone turns with the heading the Omni imposes, so a
-        step along its edge at ``p`` may leave it at the step's end: it is turned back inside), or None
-        where no direction near ``ang`` is inside both."""
-        for _ in range(2):
-            q = p + step * np.array([math.cos(ang), math.sin(ang)])
-            off = math.remainder(ang - pointing(fm, q), 2 * math.pi)
-            if abs(off) <= half:
-                return q
-            ang -= off - math.copysign(half, off)
-        return None
 
     def free(q: NDArray[np.float64]) -> bool:
         return centre_zone is None or not shapely.intersects_xy(centre_zone, float(q[0]), float(q[1]))
@@ -277,7 +280,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
             if not allowed(came, name, p):
                 continue
             for ang in (mid - half, mid, mid + half):
-                q = stepped(by_name[name], p, ang, half)
+                q = _stepped(by_name[name], p, ang, half, step)
                 if q is None or (int(q[0] // cell), int(q[1] // cell), name) in seen or not free(q):
                     continue
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
