@@ -189,10 +189,9 @@ def _stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float,
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = ()) -> GuidedPath | GuidedMiss:
-    """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss`
-    within ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact
-    margin and span); ``switch_price`` [m]: the path length a face change is worth; ``refused``: changes
-    of face it does not make (:class:`Refusal`)."""
+    """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
+    ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin and
+    span); ``switch_price`` [m]: a face change's worth in path; ``refused``: changes it does not make."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
     # where the tool outline may not come (the obstacles grown by the slack) and where the object's
