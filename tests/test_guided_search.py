@@ -116,9 +116,13 @@ def test_a_guided_path_fitted_run_by_run_is_continuous_at_rest_between_runs_and_
     assert np.hypot(*np.diff(plan.object_xy, axis=0).T).max() < 1e-3  # no jump where the fits meet
     seen = np.concatenate([p.samples for p in plan.pushes])
     assert np.all(np.diff(seen) >= 0) and seen[0] == 0 and seen[-1] == plan.t.size - 1
+    contacts = [1]  # per run of a face: at most oe.max_contacts, as one push of the one fit
     for before, after in zip(plan.pushes, plan.pushes[1:], strict=False):
         if after.face != before.face:  # a switch: the object stands still while the tool goes round it
             assert np.linalg.norm(plan.object_v[after.samples[0]]) < 1e-6
+            contacts.append(0)
+        contacts[-1] += 1
+    assert len(contacts) == runs and max(contacts) <= options.max_contacts
     frames = {f: FaceFrame.build(setting, f, friction_cone_fraction=options.friction_cone_fraction)
               for f in setting.tool.face_names}
     measured = plan_metrics(plan, frames, np.array(task.target), setting)
