@@ -18,12 +18,15 @@ demo: $(PY)
 	$(BYTECODE)
 	$(VENV)/bin/tooltransfer paper --out out
 
+# The suite on two processes, each test file on one of them (its module fixtures built once), then the
+# tests marked `serial` (wall-time bounds, real signals racing the work) alone, as on an idle machine.
 test: $(PY)
 	$(PY) -m pip install -q -e ".[test]"
 	$(BYTECODE)
 	$(PY) -m ruff check .
 	$(MAKE) --no-print-directory typecheck
-	$(PY) -m pytest
+	$(PY) -m pytest -n 2 --dist loadfile -m "not serial"
+	$(PY) -m pytest -m serial
 
 # mypy on the DMP core and the public entry points ([tool.mypy] in pyproject.toml says why the link)
 TYPED := -p tooltransfer.dmp -m tooltransfer -m tooltransfer.errors -m tooltransfer.validation \
