@@ -3,6 +3,7 @@ factory of small batch files."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -16,7 +17,12 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(autouse=True, scope="session")
 def _skill_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     mp = pytest.MonkeyPatch()
-    mp.setenv("TOOLTRANSFER_CACHE", str(tmp_path_factory.mktemp("skill_cache")))
+    if os.environ.get("PYTEST_XDIST_WORKER"):  # one cache for the run's workers (its files are written atomically)
+        cache = tmp_path_factory.getbasetemp().parent / "skill_cache"
+        cache.mkdir(exist_ok=True)
+    else:
+        cache = tmp_path_factory.mktemp("skill_cache")
+    mp.setenv("TOOLTRANSFER_CACHE", str(cache))
     yield
     mp.undo()
 

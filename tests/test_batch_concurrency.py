@@ -46,6 +46,7 @@ def _all_rows(db: Path) -> list[tuple]:
         return c.execute("SELECT * FROM results ORDER BY task_id, variant").fetchall()
 
 
+@pytest.mark.serial  # refused within 10 s while the first run, a real process, still holds the store
 def test_a_second_run_on_a_store_in_use_is_refused_and_the_first_keeps_each_pair_once(tmp_path, capsys) -> None:
     batch = _batch(tmp_path)
     db = tmp_path / "conc.sqlite"
@@ -116,6 +117,7 @@ def test_a_million_tasks_are_generated_as_the_run_goes(tmp_path) -> None:
     assert len(list((tmp_path / "tasks").glob("*.yaml"))) == 3
 
 
+@pytest.mark.serial  # rows within 60 s, then a real SIGINT
 def test_a_million_task_run_stores_rows_within_seconds_and_stops_cleanly(tmp_path) -> None:
     batch = _batch(tmp_path, name="mega", count=1_000_000)
     db = tmp_path / "mega.sqlite"
@@ -190,6 +192,7 @@ def test_dask_workers_that_cannot_read_the_dataset_are_refused() -> None:
             check_workers(client, "--scheduler", "/nowhere")
 
 
+@pytest.mark.serial  # refused within 10 s
 def test_an_address_where_no_scheduler_answers_is_refused_in_seconds() -> None:
     from tooltransfer.planner.apps.batch.executors import open_executor
 

@@ -133,6 +133,7 @@ def _children(pid: int) -> list[int]:
     return [int(x) for x in out.split()]
 
 
+@pytest.mark.serial  # a real SIGKILL must land while the run is under way
 def test_sigkill_mid_run_then_resume_stores_each_pair_once_and_recomputes_nothing(tmp_path) -> None:
     batch = _batch(tmp_path, name="kill", count=7)
     db = tmp_path / "kill.sqlite"
@@ -166,6 +167,7 @@ def test_sigkill_mid_run_then_resume_stores_each_pair_once_and_recomputes_nothin
     assert set(before) <= set(after)  # finished rows untouched: same status and completion time
 
 
+@pytest.mark.serial  # a real SIGINT must land while the run is under way
 def test_ctrl_c_stops_cleanly_and_resume_finishes(tmp_path) -> None:
     # the runner keeps up to 2 jobs per slot in flight (4 here) and the first Ctrl-C lets them finish:
     # with 7 jobs, the 5 left after the second row were all in flight or next, so every row could be
@@ -185,6 +187,7 @@ def test_ctrl_c_stops_cleanly_and_resume_finishes(tmp_path) -> None:
     assert len({(t, v) for t, v, *_ in _rows(db)}) == len(_rows(db)) == count
 
 
+@pytest.mark.serial  # the stop comes 1.5 s in, while jobs run
 def test_stop_event_drains_running_jobs(tmp_path) -> None:
     jobs = [Job(f"s{i}", "v", entry="time:sleep", args=(0.3,), timeout=10) for i in range(40)]
     stop = threading.Event()

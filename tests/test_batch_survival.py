@@ -26,6 +26,7 @@ from tooltransfer.planner.apps.cli_planning import simulate_exit_code
 from tooltransfer.planner.common.command_line import EXIT_NOT_REACHED
 
 ROOT = Path(__file__).resolve().parents[1]
+pytestmark = pytest.mark.serial  # stopping times bounded; real SIGINTs and SIGKILLs mid-run
 
 
 def _spawn(args: list[str], env_extra: dict[str, str] | None = None) -> subprocess.Popen:

@@ -25,6 +25,7 @@ def plan_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
+@pytest.mark.serial  # a real-time factor: simulated seconds per wall-clock second
 def test_closed_loop_reaches_the_target_where_open_loop_drifts(plan_file: Path, tmp_path: Path, capsys) -> None:
     capsys.readouterr()
     fig, gif = tmp_path / "fig12.png", tmp_path / "run.gif"

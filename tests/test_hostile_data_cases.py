@@ -226,6 +226,7 @@ def test_the_row_cap_streams_and_stops_with_a_message(copy: Path, monkeypatch: p
         load_dataset(copy)
 
 
+@pytest.mark.serial  # refused within 10 s, reading 500,000 rows
 def test_a_long_csv_is_read_into_arrays_not_row_lists(copy: Path) -> None:
     """The loader streams: a 30 MB recording (over 500,000 rows) is refused at the row cap within
     seconds, and a long valid one holds its samples as float arrays."""

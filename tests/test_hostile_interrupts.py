@@ -148,6 +148,7 @@ def _interrupt(argv: list[str], after: float, env: dict[str, str] | None = None)
     return proc.returncode, err
 
 
+@pytest.mark.serial  # the command must still run 2 s in, and end within 10 s of the SIGINT
 @pytest.mark.parametrize("command", ["solve", "learn", "simulate", "demos", "compare"])
 def test_sigint_mid_run_exits_130_with_one_line(tmp_path: Path, plan_file: Path, command: str) -> None:
     # commands of 5 s or more (solve and learn learn the skills afresh), interrupted 2 s in

@@ -17,6 +17,8 @@ import pytest
 
 from tooltransfer.planner.planning.ss.interrupts import keep_interrupts
 
+pytestmark = pytest.mark.serial  # a real SIGINT to this process, answered within a bounded time
+
 
 def _swallowing_solver() -> str:
     """Like CasADi's nlpsol under a Ctrl-C: the interrupt arrives while it runs and is turned into a status."""

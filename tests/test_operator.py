@@ -111,6 +111,7 @@ def _csv_values(path: Path) -> tuple[list[str], np.ndarray, np.ndarray]:
     return lines[:1], empty, values
 
 
+@pytest.mark.serial  # the generation's wall time is bounded
 def test_regenerating_reproduces_the_committed_dataset(regenerated: tuple[Path, float]) -> None:
     fresh, wall = regenerated
     assert wall < 60.0

@@ -90,6 +90,7 @@ def test_synthetic_pushes_give_back_mu_and_c(mu: float, c: float) -> None:
     assert np.median(ident.end_error) < 0.7e-3  # the recorded end's own noise: 0.39 mm median
 
 
+@pytest.mark.serial  # the identification's wall time is bounded
 def test_the_uncertainty_shrinks_with_more_pushes() -> None:
     truth = PushMechanics(0.6, 0.7)
     few = identify_mechanics(TOOL, OBJECT_RADIUS, synthetic_pushes(truth, 18, seed=2))
@@ -163,6 +164,7 @@ def test_the_calibration_recording_is_a_dataset_of_straight_pushes(calibration: 
         assert lateral <= tool.length  # the tool's sideways travel (>= the contact's) fits on the face
 
 
+@pytest.mark.serial  # the identification's wall time is bounded
 def test_the_identified_model_predicts_the_platforms_pushes(calibration: Path) -> None:
     from tooltransfer.planner.learning.identify import identify_dataset
 
