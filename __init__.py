@@ -13,6 +13,8 @@ What a user needs first is here::
     plan = tt.solve(task)  # a tt.Plan; plan.status is "solved" only when every hard check holds
     plan.write("plan.json")
     same = tt.read_plan("plan.json")
+    choice = tt.choose_tool(task, ["finger", "slope"])  # each tool planned and executed, ranked
+    best = choice.best  # the best candidate (its tool, plan, executions), None when no tool solves it
 
 The names are imported on first use, so ``import tooltransfer`` (and every ``tooltransfer`` command)
 stays light.
@@ -26,18 +28,21 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from tooltransfer.dmp.primitive import DMP
     from tooltransfer.errors import InfeasibleError, InputError, ToolTransferError
+    from tooltransfer.planner.apps.choose.run import Choice, choose_tool
     from tooltransfer.planner.planning.plan import Plan, read_plan
     from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import Task, load_task
 
 __all__ = [
     "DMP",
+    "Choice",
     "InfeasibleError",
     "InputError",
     "Plan",
     "Task",
     "ToolTransferError",
     "__version__",
+    "choose_tool",
     "load_task",
     "read_plan",
     "solve",
@@ -46,6 +51,8 @@ __all__ = [
 #: Where each public name lives (imported when first asked for).
 _HOMES = {
     "DMP": "tooltransfer.dmp.primitive",
+    "Choice": "tooltransfer.planner.apps.choose.run",
+    "choose_tool": "tooltransfer.planner.apps.choose.run",
     "InfeasibleError": "tooltransfer.errors",
     "InputError": "tooltransfer.errors",
     "ToolTransferError": "tooltransfer.errors",
