@@ -20,7 +20,7 @@ from typing import Any
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.problems.task import Task
 
-#: The executions of a solved plan, by the name :class:`~tooltransfer.planner.apps.choose.ranking.Executions` gives them.
+#: The executions of a solved plan, by the names :class:`.ranking.Executions` gives them.
 MODES = ("open_loop", "closed_loop", "mismatch_closed_loop")
 #: The mismatched plant's frictions (the nominal platform's: tool 0.8 against the puck, table 0.3).
 MISMATCH_FRICTION = {"tool_friction": 0.5, "table_friction": 0.2}
