@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test typecheck docs figures bench bench-sim bench-ss bench-batch bench-exec bench-verdicts lint clean
+.PHONY: demo test typecheck docs figures bench bench-sim bench-ss bench-batch bench-exec bench-verdicts bench-choose lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -98,6 +98,11 @@ bench-exec: $(PY)
 bench-verdicts: $(PY)
 	$(PY) -m pip install -q -e ".[all]"
 	$(PY) benchmarks/bench_verdicts.py
+
+# 100 generated tasks, each given to `tooltransfer choose` over the library's tools (long: see benchmarks/README.md)
+bench-choose: $(PY)
+	$(PY) -m pip install -q -e ".[all]"
+	$(PY) benchmarks/bench_choose.py
 
 lint: $(PY)
 	$(PY) -m ruff check .
