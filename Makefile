@@ -32,7 +32,7 @@ TYPED := -p tooltransfer.dmp -m tooltransfer -m tooltransfer.errors -m tooltrans
 	-m tooltransfer.planner.execution.fault_plants -m tooltransfer.planner.execution.guarded_plant \
 	-m tooltransfer.planner.execution.export -m tooltransfer.planner.planning.ss.nlp -m tooltransfer.planner.planning.ss.knot_rows \
 	-m tooltransfer.planner.planning.setting -m tooltransfer.planner.planning.variant_registry \
-	-p tooltransfer.planner.planning.verdicts
+	-p tooltransfer.planner.planning.verdicts -p tooltransfer.planner.apps.choose
 typecheck: $(PY)
 	@mkdir -p build/mypy && ln -sfn "$(CURDIR)" build/mypy/tooltransfer
 	cd build/mypy && MYPYPATH=. $(abspath $(PY)) -m mypy --config-file "$(CURDIR)/pyproject.toml" $(TYPED)

@@ -170,9 +170,9 @@ def _plan_all(cands: Sequence[Candidate], pool: Executor | None, budget: float) 
 def _execute(planned: Sequence[Planned], pool: Executor | None, workers: int, execute_all: bool, seed: int,
              say: Callable[[str], None]) -> tuple[dict[int, dict[str, Executed]], float]:
     """Execute the solved plans (module docstring): the runs by candidate and mode, and their CPU time [s]."""
-    solved = [i for i, p in enumerate(planned) if p.verdict == "solved" and p.plan is not None]
-    order = [i for i in plan_order([(planned[i].verdict, planned[i].plan.metrics) for i in solved])]  # type: ignore[union-attr]
-    order = [solved[k] for k in order]
+    plans: dict[int, Plan] = {i: p.plan for i, p in enumerate(planned) if p.verdict == "solved" and p.plan is not None}
+    solved = list(plans)
+    order = [solved[k] for k in plan_order([("solved", plans[i].metrics) for i in solved])]
     runs: dict[int, dict[str, Executed]] = {}
     executed: dict[int, Executions] = {}
     cpu = 0.0
@@ -192,11 +192,11 @@ def _execute(planned: Sequence[Planned], pool: Executor | None, workers: int, ex
             i, mode = queued[0]
             say(f"executing {mode.replace('_', ' ')} of candidate {i + 1}")
             t = time.process_time()
-            runs.setdefault(i, {})[mode] = execute(planned[i].plan, mode, seed)  # type: ignore[arg-type]
+            runs.setdefault(i, {})[mode] = execute(plans[i], mode, seed)
             cpu += time.process_time() - t
         else:
             for i, mode in queued[:max(0, workers - len(inflight))]:
-                inflight[pool.submit(_timed_execute, planned[i].plan, mode, seed)] = (i, mode)
+                inflight[pool.submit(_timed_execute, plans[i], mode, seed)] = (i, mode)
             done, _ = wait(list(inflight), return_when=_FIRST)
             for f in done:
                 i, mode = inflight.pop(f)
