@@ -78,7 +78,7 @@ def cmd_choose(args: argparse.Namespace) -> int:
         from tooltransfer.planner.apps.plots.execution import plot_plans
 
         args.out.mkdir(parents=True, exist_ok=True)
-        shown = {f"{r.rank}. {r.label} ({r.verdict})": r.plan for r in choice.ranking if r.plan is not None}
+        shown = {_panel_title(r): r.plan for r in choice.ranking if r.plan is not None}
         if shown:
             path = args.out / f"choose_{file_stem(task.name)}.png"
             with written(path) as tmp:
@@ -103,3 +103,12 @@ def cmd_choose(args: argparse.Namespace) -> int:
             print(f"wrote the candidates side by side to {figure} and the solved plans to {args.out}/")
         print(f"chose in {choice.wall:.1f} s (CPU {choice.cpu:.1f} s)")
     return VERDICT_EXIT[choice.verdict]
+
+
+def _panel_title(r: object) -> str:
+    """A candidate's panel title in the side-by-side figure: rank, tool, verdict and, for an executed
+    plan, its closed loop's final error."""
+    ex = getattr(r, "executions", None)
+    closed = getattr(ex, "closed_loop", None)
+    tail = f"; closed loop {1e3 * closed:.2f} mm" if closed is not None else ""
+    return f"{r.rank}. {r.label} ({r.verdict}{tail})"  # type: ignore[attr-defined]
