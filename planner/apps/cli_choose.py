@@ -10,8 +10,12 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from tooltransfer.planner.common.command_line import VERDICT_EXIT
+
+if TYPE_CHECKING:
+    from tooltransfer.planner.apps.choose.run import Ranked
 
 HELP = ("plan a task with each candidate tool (in parallel), execute the solved plans on the simulated platform "
         "(open and closed loop, and closed loop on a mismatched plant) and rank the tools: executed success, "
@@ -105,10 +109,9 @@ def cmd_choose(args: argparse.Namespace) -> int:
     return VERDICT_EXIT[choice.verdict]
 
 
-def _panel_title(r: object) -> str:
+def _panel_title(r: Ranked) -> str:
     """A candidate's panel title in the side-by-side figure: rank, tool, verdict and, for an executed
     plan, its closed loop's final error."""
-    ex = getattr(r, "executions", None)
-    closed = getattr(ex, "closed_loop", None)
+    closed = r.executions.closed_loop if r.executions is not None else None
     tail = f"; closed loop {1e3 * closed:.2f} mm" if closed is not None else ""
-    return f"{r.rank}. {r.label} ({r.verdict}{tail})"  # type: ignore[attr-defined]
+    return f"{r.rank}. {r.label} ({r.verdict}{tail})"
