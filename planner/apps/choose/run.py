@@ -1,10 +1,13 @@
 """``choose_tool``: plan a task with every candidate tool in parallel, execute the solved plans, rank them.
 
 The work runs in a process pool of ``workers`` processes (default 2, at most the machine's cores;
-BLAS on one thread each, as the command line sets it): first every candidate is planned, then the
-solved plans are executed (:mod:`.executions`) in the order of their plans' margins and duration
+BLAS on one thread each, as the command line sets it): every candidate is planned, and the solved
+plans are executed (:mod:`.executions`) in the order of their plans' margins and duration
 (:func:`.ranking.plan_order`), one execution per pool slot at a time, until one plan passes every
 execution (the best is then known, :mod:`.ranking`; ``execute_all`` executes every solved plan).
+Plans go first; executions fill the slots the plans leave free, so a plan solved early is executed
+while the slow candidates (those left without a plan, whose certificate searches take longest) are
+still planned.
 The pool's processes are forked from this one where the platform allows, after the task's skills
 are learned (or read from the cache) here, so no process learns or loads them again.
 """
@@ -149,66 +152,101 @@ def choose_tool(task: Task | str | Path, tools: Sequence[str | Path] | None = No
         pool = _pool(workers)
     try:
         say(f"planning with {len(cands)} tools")
-        planned = _plan_all(cands, pool, budget)
-        jobs_cpu = sum(p.cpu for p in planned)
-        runs, cpu = _execute(planned, pool, workers, execute_all, seed, say)
-        jobs_cpu += cpu
+        w = _work(cands, pool, workers, budget, execute_all, seed, say)
     finally:
         if own and isinstance(pool, ProcessPoolExecutor):
             _stop(pool)
-    ranking = _rank(cands, planned, runs)
-    return Choice(task, ranking, time.perf_counter() - wall0, time.process_time() - cpu0 + (jobs_cpu if pool else 0.0))
+    ranking = _rank(cands, [w.planned[i] for i in range(len(cands))],
+                    {i: r for i, r in w.runs.items() if i in w.executed})
+    return Choice(task, ranking, time.perf_counter() - wall0, time.process_time() - cpu0 + w.cpu)
 
 
-def _plan_all(cands: Sequence[Candidate], pool: Executor | None, budget: float) -> list[Planned]:
-    if pool is None:
-        return [plan_candidate(c.task, budget) for c in cands]
-    futures = [pool.submit(plan_candidate, c.task, budget) for c in cands]
-    return [f.result() for f in futures]
+class _Work:
+    """The state of one choice's work: the plans and executions done, and what to run next."""
 
+    def __init__(self, n: int, execute_all: bool) -> None:
+        self.n = n
+        self.execute_all = execute_all
+        self.planned: dict[int, Planned] = {}
+        self.runs: dict[int, dict[str, Executed]] = {}
+        self.executed: dict[int, Executions] = {}
+        self.cpu = 0.0  # of the jobs [s]
 
-def _execute(planned: Sequence[Planned], pool: Executor | None, workers: int, execute_all: bool, seed: int,
-             say: Callable[[str], None]) -> tuple[dict[int, dict[str, Executed]], float]:
-    """Execute the solved plans (module docstring): the runs by candidate and mode, and their CPU time [s]."""
-    plans: dict[int, Plan] = {i: p.plan for i, p in enumerate(planned) if p.verdict == "solved" and p.plan is not None}
-    solved = list(plans)
-    order = [solved[k] for k in plan_order([("solved", plans[i].metrics) for i in solved])]
-    runs: dict[int, dict[str, Executed]] = {}
-    executed: dict[int, Executions] = {}
-    cpu = 0.0
+    def order(self) -> list[int]:
+        """The solved candidates planned so far, by their plans' margins and duration (best first)."""
+        solved = [i for i in sorted(self.planned) if self.planned[i].verdict == "solved"
+                  and self.planned[i].plan is not None]
+        return [solved[k] for k in plan_order([("solved", self.plan(i).metrics) for i in solved])]
 
-    def todo() -> list[int]:
-        return [i for i in order if i not in executed] if execute_all else needs_execution(order, executed)
+    def plan(self, i: int) -> Plan:
+        plan = self.planned[i].plan
+        assert plan is not None  # only solved candidates with a plan are executed
+        return plan
 
-    inflight: dict[Future, tuple[int, str]] = {}
-    queued: list[tuple[int, str]] = []
-    while True:
-        want = todo()
-        if not want:
-            break
-        queued = [(i, m) for i in want for m in _SUBMIT_ORDER
-                  if m not in runs.get(i, {}) and (i, m) not in inflight.values()]
-        if pool is None:
-            i, mode = queued[0]
-            say(f"executing {mode.replace('_', ' ')} of candidate {i + 1}")
-            t = time.process_time()
-            runs.setdefault(i, {})[mode] = execute(plans[i], mode, seed)
-            cpu += time.process_time() - t
+    def wanted(self) -> list[tuple[int, str]]:
+        """The executions still to run, best candidate first: until the best is known once every
+        candidate is planned (:func:`.ranking.needs_execution`); before, every solved plan's (in the
+        pool's free slots: the best so far may be the best)."""
+        order = self.order()
+        if len(self.planned) < self.n or self.execute_all:
+            want = [i for i in order if i not in self.executed]
         else:
-            for i, mode in queued[:max(0, workers - len(inflight))]:
-                inflight[pool.submit(_timed_execute, plans[i], mode, seed)] = (i, mode)
-            done, _ = wait(list(inflight), return_when=_FIRST)
-            for f in done:
-                i, mode = inflight.pop(f)
+            want = needs_execution(order, self.executed)
+        return [(i, m) for i in want for m in _SUBMIT_ORDER if m not in self.runs.get(i, {})]
+
+    def done(self) -> bool:
+        return len(self.planned) == self.n and not self.wanted()
+
+    def add_run(self, i: int, mode: str, result: Executed, cpu: float) -> None:
+        self.cpu += cpu
+        by_mode = self.runs.setdefault(i, {})
+        by_mode[mode] = result
+        if all(m in by_mode for m in MODES):
+            self.executed[i] = Executions(**{m: by_mode[m].error for m in MODES},
+                                          status={m: by_mode[m].status for m in MODES})
+
+
+def _work(cands: Sequence[Candidate], pool: Executor | None, workers: int, budget: float, execute_all: bool,
+          seed: int, say: Callable[[str], None]) -> _Work:
+    """Plan every candidate and execute the solved plans (module docstring). In a pool, the plans go
+    first and the executions fill the slots the plans leave free, so the executions of the plans solved
+    early overlap the planning of the slow candidates (those without a plan, whose certificate searches
+    take longest)."""
+    w = _Work(len(cands), execute_all)
+    if pool is None:
+        for i, c in enumerate(cands):
+            w.planned[i] = plan_candidate(c.task, budget)
+        while not w.done():
+            i, mode = w.wanted()[0]
+            say(f"executing {mode.replace('_', ' ')} of {cands[i].label}")
+            w.add_run(i, mode, execute(w.plan(i), mode, seed), 0.0)  # its CPU time is this process's
+        return w
+    to_plan = list(range(len(cands)))
+    inflight: dict[Future, tuple[int, str]] = {}  # (candidate, "plan" or an execution mode)
+    while not w.done():
+        busy = set(inflight.values())
+        queue = [(i, "plan") for i in to_plan] + [job for job in w.wanted() if job not in busy]
+        for i, what in queue[:max(0, workers - len(inflight))]:
+            if what == "plan":
+                to_plan.remove(i)
+                inflight[pool.submit(plan_candidate, cands[i].task, budget)] = (i, what)
+            else:
+                inflight[pool.submit(_timed_execute, w.plan(i), what, seed)] = (i, what)
+        if not inflight:  # pragma: no cover - done() would hold
+            break
+        finished, _ = wait(list(inflight), return_when=_FIRST)
+        for f in finished:
+            i, what = inflight.pop(f)
+            if what == "plan":
+                p = f.result()
+                w.planned[i] = p
+                w.cpu += p.cpu
+                say(f"{len(w.planned)}/{len(cands)} planned ({cands[i].label}: {p.verdict})")
+            else:
                 result, used = f.result()
-                cpu += used
-                runs.setdefault(i, {})[mode] = result
-        for i, by_mode in runs.items():
-            if i not in executed and all(m in by_mode for m in MODES):
-                executed[i] = Executions(**{m: by_mode[m].error for m in MODES},
-                                         status={m: by_mode[m].status for m in MODES})
-                say(f"candidate {i + 1} executed")
-    return {i: r for i, r in runs.items() if i in executed}, cpu
+                w.add_run(i, what, result, used)
+                say(f"{cands[i].label}: {what.replace('_', ' ')} {result.status}")
+    return w
 
 
 def _timed_execute(plan: Plan, mode: str, seed: int) -> tuple[Executed, float]:
