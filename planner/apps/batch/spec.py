@@ -200,11 +200,13 @@ class BatchSpec(_Model):
         return self
 
     def digest(self) -> str:
-        """Hash of the batch's content without ``simulate.enabled`` (a store refuses to resume a different
-        batch; whether plans are executed is a setting of its own, checked by name:
+        """Hash of the batch's content without ``simulate.enabled`` (nor ``choose`` when false; a store
+        refuses to resume a different batch; whether plans are executed is a setting of its own, checked by name:
         :func:`tooltransfer.planner.apps.batch.store_settings.open_batch_store`)."""
         data = self.model_dump(mode="json")
         data["simulate"].pop("enabled")
+        if not data["choose"]:  # the digests of batches without a choice are those they had before it existed
+            data.pop("choose")
         return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 
