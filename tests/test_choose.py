@@ -120,6 +120,8 @@ def test_a_batch_may_choose_its_tools(tmp_path: Path, small_batch, capsys) -> No
 
     every = batch_from_dict({"name": "c", "count": 1, "tools": "choose", "dataset": "."})
     assert every.choose and every.tools == list(library_names())
+    listed = batch_from_dict({"name": "c", "count": 1, "tools": list(library_names()), "dataset": "."})
+    assert not listed.choose and listed.digest() != every.digest()  # choosing is part of the batch
     batch = small_batch(name="pick", count=1, oe=("qp",), ss=("opt",), tools={"choose": ["trapezoid", "finger"]},
                         obstacles={"count": [0, 0]}, heading=[1.9, 3.1], distance=[0.04, 0.06],
                         timeout=900)
