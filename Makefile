@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test typecheck docs figures bench bench-sim bench-ss bench-batch bench-exec bench-verdicts lint clean
+.PHONY: demo test typecheck docs figures bench bench-sim bench-ss bench-batch bench-exec bench-verdicts bench-choose lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -52,7 +52,7 @@ TYPED := -p tooltransfer.dmp -m tooltransfer -m tooltransfer.errors -m tooltrans
 	-m tooltransfer.planner.execution.fault_plants -m tooltransfer.planner.execution.guarded_plant \
 	-m tooltransfer.planner.execution.export -m tooltransfer.planner.execution.scene -m tooltransfer.planner.planning.ss.nlp -m tooltransfer.planner.planning.ss.knot_rows \
 	-m tooltransfer.planner.planning.setting -m tooltransfer.planner.planning.variant_registry \
-	-p tooltransfer.planner.planning.verdicts -p tooltransfer.tools.derive -m tooltransfer.planner.execution.recording \
+	-p tooltransfer.planner.planning.verdicts -p tooltransfer.tools.derive -p tooltransfer.planner.apps.choose -m tooltransfer.planner.execution.recording \
 	-m tooltransfer.planner.apps.batch.frame -m tooltransfer.planner.apps.batch.units -m tooltransfer.planner.apps.plots.plan_view \
 	-m tooltransfer.planner.apps.plots.html_page -m tooltransfer.planner.apps.batch.html_report
 typecheck: $(PY)
@@ -129,6 +129,11 @@ bench-exec: $(PY)
 bench-verdicts: $(PY)
 	$(PY) -m pip install -q -e ".[all]"
 	$(PY) benchmarks/bench_verdicts.py
+
+# 100 generated tasks, each given to `tooltransfer choose` over the library's tools (long: see benchmarks/README.md)
+bench-choose: $(PY)
+	$(PY) -m pip install -q -e ".[all]"
+	$(PY) benchmarks/bench_choose.py
 
 lint: $(PY)
 	$(PY) -m ruff check .

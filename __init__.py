@@ -13,6 +13,8 @@ What a user needs first is here::
     plan = tt.solve(task)  # a tt.Plan; plan.status is "solved" only when every hard check holds
     plan.write("plan.json")
     same = tt.read_plan("plan.json")
+    choice = tt.choose_tool(task, ["finger", "slope"])  # each tool planned and executed, ranked
+    best = choice.best  # the best candidate (its tool, plan, executions), None when no tool solves it
 
 ``tt.batch`` is the batch package (``tt.batch.load(db)``: a batch's results as a pandas DataFrame,
 with the ``data`` extra). The names are imported on first use, so ``import tooltransfer`` (and every
@@ -28,12 +30,14 @@ if TYPE_CHECKING:
     from tooltransfer.dmp.primitive import DMP
     from tooltransfer.errors import InfeasibleError, InputError, ToolTransferError
     from tooltransfer.planner.apps import batch
+    from tooltransfer.planner.apps.choose.run import Choice, choose_tool
     from tooltransfer.planner.planning.plan import Plan, read_plan
     from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import Task, load_task
 
 __all__ = [
     "DMP",
+    "Choice",
     "InfeasibleError",
     "InputError",
     "Plan",
@@ -41,6 +45,7 @@ __all__ = [
     "ToolTransferError",
     "__version__",
     "batch",
+    "choose_tool",
     "load_task",
     "read_plan",
     "solve",
@@ -49,6 +54,8 @@ __all__ = [
 #: Where each public name lives (imported when first asked for).
 _HOMES = {
     "DMP": "tooltransfer.dmp.primitive",
+    "Choice": "tooltransfer.planner.apps.choose.run",
+    "choose_tool": "tooltransfer.planner.apps.choose.run",
     "InfeasibleError": "tooltransfer.errors",
     "InputError": "tooltransfer.errors",
     "ToolTransferError": "tooltransfer.errors",

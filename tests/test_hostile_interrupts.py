@@ -42,6 +42,7 @@ def _argv(tmp: Path) -> dict[str, list[str]]:
         "schema": ["schema", "--out", str(tmp / "schema.json")],
         "tools": ["tools", "--out", str(tmp / "tools.png")],
         "tasks": ["tasks"],
+        "choose": ["choose", str(TASK), "--tools", "finger", "-o", str(tmp / "best.json")],
         "batch generate": ["batch", "generate", str(BATCH), "--out", str(tmp / "tasks")],
         "batch run": ["batch", "run", str(BATCH), "--db", str(tmp / "r.sqlite"), "-q"],
         "batch report": ["batch", "report", str(tmp / "r.sqlite"), "--out", str(tmp / "rep")],

@@ -43,6 +43,7 @@ FILE_OUTPUTS = [
     (["schema"], "--out", "--out", ".json"),
     (["tools"], "--out", "--out", ".png"),
     (["batch", "run", str(BATCH), "-q"], "--db", "--db", ".sqlite"),
+    (["choose", str(TASK), "--tools", "finger"], "-o", "-o", ".json"),
 ]
 FOLDER_OUTPUTS = [
     (["compare", str(TASK)], "--out", "--out"),
@@ -50,6 +51,7 @@ FOLDER_OUTPUTS = [
     (["demos", "--n", "1"], "--out", "--out"),
     (["batch", "generate", str(BATCH)], "--out", "--out"),
     (["batch", "report", "results.sqlite"], "--out", "--out"),
+    (["choose", str(TASK), "--tools", "finger"], "--out", "--out"),
 ]
 
 

@@ -16,8 +16,9 @@ BOTTOM = ("errors", "validation", "atomic", "versioned_json", "readable_json", "
 LAYERS = {**dict.fromkeys(BOTTOM, 0), "dmp": 1, "tools": 2, "problems": 3, "planner": 4}
 #: planner's sub-packages, bottom to top: learning sits below planning, which plans with the learned skills
 PLANNER = {"common": 0, "learning": 1, "planning": 2, "execution": 3, "apps": 4}
-#: inside apps: the scripted operator and the figures, then batch runs (their figures use plots.save), then the rest
-APPS = {"operator": 0, "plots": 0, "batch": 1}
+#: inside apps: the scripted operator, the figures and the tool choice, then batch runs (their figures use plots.save;
+#: a batch may choose its tools), then the rest
+APPS = {"operator": 0, "plots": 0, "choose": 0, "batch": 1}
 APPS_TOP = 2
 
 

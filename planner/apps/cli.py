@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 # nothing heavy is imported before main() runs: a Ctrl-C while numpy and the rest load is caught too
-from tooltransfer.planner.apps import cli_derive, cli_learning, cli_planning
+from tooltransfer.planner.apps import cli_choose, cli_derive, cli_learning, cli_planning
 from tooltransfer.planner.common.blas_threads import pin_blas_threads
 from tooltransfer.planner.common.command_line import (
     EXIT_BAD_INPUT,
@@ -45,6 +45,7 @@ OUTPUTS: dict[str, tuple[tuple[str, str, str], ...]] = {
     "tools": (("out", "--out", "file"),),
     "tools derive": (("tool_out", "-o/--out", "file"), ("plot", "--plot", "file")),
     "compare": (("out", "--out", "folder"),),
+    "choose": (("best", "-o", "file"), ("out", "--out", "folder")),
     "paper": (("out", "--out", "folder"),),
     "demos": (("out", "--out", "folder"),),
     "batch generate": (("out", "--out", "folder"),),
@@ -233,6 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
              "tooltransfer tools --out out/tools.png", cli_planning.cmd_tools)
     p.add_argument("--out", type=Path, default=DEFAULT_TOOLS_FIGURE, help="output PNG")
     cli_derive.add_derive_parser(p, _add)
+    cli_choose.add_choose_parser(sub, _add, cli_planning.task_file)
     from tooltransfer.planner.apps.batch.commands import add_batch_parser
 
     add_batch_parser(sub, _add)

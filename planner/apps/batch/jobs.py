@@ -54,7 +54,8 @@ def warmup_calls(spec: BatchSpec, batch_path: str | Path, first: GeneratedTask |
 def task_jobs(spec: BatchSpec, batch_path: str | Path, t: GeneratedTask, timeout: float | None = None,
               simulate: bool | None = None, warm: tuple[tuple[str, tuple], ...] = (),
               skills: str | None = None, budget: float = 1.0) -> list[Job]:
-    """The jobs of one task: one per variant pair (:func:`batch_jobs`); ``skills``: the digest of the
+    """The jobs of one task: one per variant pair (:func:`batch_jobs`; with ``tools: choose`` each one the
+    choice of a tool, :mod:`tooltransfer.planner.apps.batch.choose_job`); ``skills``: the digest of the
     shipped skills they plan with (:attr:`tooltransfer.planner.apps.batch.worker.Job.skills`); ``budget``:
     the search's and the certificate's budgets multiplied (``batch run --budget``)."""
     sim = simulate_setting(spec, simulate)
@@ -67,6 +68,10 @@ def task_jobs(spec: BatchSpec, batch_path: str | Path, t: GeneratedTask, timeout
                         cfg.timeout),
                   Stage("closed_loop", "tooltransfer.planner.apps.batch.execute:closed_loop",
                         (cfg.closed_loop_seed(t.index), cfg.closed_loop_tolerance, cfg.camera_noise), cfg.timeout))
+    if spec.choose:  # the best of the batch's tools, executed by the choice itself (choose_job)
+        return [Job(t.task_id, f"{oe}/{ss}", entry="tooltransfer.planner.apps.batch.choose_job:choose_job",
+                    args=(t.data, source, oe, ss, tuple(spec.tools), cfg.closed_loop_seed(t.index), cfg.tolerance,
+                          budget), timeout=limit, warmup=warm, skills=skills) for oe, ss in spec.variants.pairs()]
     return [Job(t.task_id, f"{oe}/{ss}", args=(t.data, source, oe, ss, sim, budget), timeout=limit, warmup=warm,
                 stages=stages, skills=skills) for oe, ss in spec.variants.pairs()]
 

@@ -358,6 +358,17 @@ def print_execution(stats: Sequence[GroupStats], console: Console) -> None:
     console.print(e)
 
 
+def chosen_tools(rows: Sequence[dict[str, Any]]) -> dict[str, int]:
+    """How often each tool was chosen, most often first, over the rows of a ``tools: choose`` batch (those
+    whose ``metrics_json`` holds a ``"choice"``; ``none``: no tool solved the task); empty for other batches."""
+    counts: Counter = Counter()
+    for r in rows:
+        text = r.get("metrics_json") or ""
+        if '"choice"' in text and r["status"] not in ("error", "timeout"):
+            counts[r.get("tool") or "?"] += 1
+    return dict(counts.most_common())
+
+
 def write_csv(path: Path, rows: Sequence[dict[str, Any]], columns: Sequence[str] | None = None) -> Path:
     """Write ``rows`` as CSV (``columns`` default: the first row's keys)."""
     cols = list(columns) if columns is not None else (list(rows[0]) if rows else [])
@@ -406,6 +417,9 @@ def write_report(db: str | Path, out: str | Path | None, console: Console | None
     reasons = top_reasons(rows)
     console.print(f"batch {escape(str(meta.get('batch_name', '?')))}: {len(rows)} results in {escape(str(p))}")
     print_report(stats, reasons, console)
+    chosen = chosen_tools(rows)
+    if chosen:
+        console.print("tools chosen (tools: choose): " + ", ".join(f"{escape(t)} {n}" for t, n in chosen.items()))
     if out is None:
         return []
     from tooltransfer.planner.apps.batch.units import SUMMARY_UNITS, columns_with_units, rows_with_units

@@ -21,6 +21,12 @@ shape, which variants to run, the timeout and whether to simulate. Example::
     timeout: 60
     task: {safety_margin: 0.005}         # extra task fields, the same in every task
 
+With ``tools: choose`` (every library tool) or ``tools: {choose: [slope, finger]}`` every task is
+given to :func:`tooltransfer.choose_tool` with those tools (one job per task and variant pair, the
+choice's executions included, ``timeout`` for the whole choice): the row's tool is the chosen one
+(``none`` when no tool solves the task) and ``batch report`` counts how often each tool is chosen.
+The tools are still used in turn to place each task's start and target inside a tool's reach.
+
 :func:`load_batch` reports errors with the file, the field path and what was expected.
 """
 
@@ -139,8 +145,10 @@ class BatchSpec(_Model):
     description: str = Field("", max_length=4000)
     seed: Seed = 0
     count: Annotated[int, Field(ge=1, le=1_000_000)]
-    tools: list[Annotated[str, Field(max_length=100)]] = Field(min_length=1, max_length=64,
-                                                               description="library tool names, used in turn")
+    tools: list[Annotated[str, Field(max_length=100)]] = Field(
+        min_length=1, max_length=64, description="library tool names, used in turn; or 'choose' (every library "
+        "tool) or {choose: [names]}: each task with the best of these tools (tooltransfer choose)")
+    choose: bool = Field(False, description="each task with the best of ``tools`` (set by ``tools: choose``)")
     dataset: str = Field(min_length=1, max_length=4096,
                          description="demonstration dataset folder, relative to the batch file")
     start: Region = Region(reach_margin=0.015)
@@ -156,6 +164,21 @@ class BatchSpec(_Model):
     simulate: Simulation = Simulation()
     timeout: Seconds = Field(60.0, description="per task and variant [s], at most 3600")
     task: dict[str, Any] = Field({}, description="extra task fields, the same in every task")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _choose_tools(cls, data: Any) -> Any:
+        """``tools: choose`` and ``tools: {choose: [names]}`` as ``choose: true`` with the tools listed."""
+        if not isinstance(data, dict):
+            return data
+        tools = data.get("tools")
+        if tools == "choose":
+            from tooltransfer.tools.library import library_names
+
+            return {**data, "tools": list(library_names()), "choose": True}
+        if isinstance(tools, dict) and set(tools) == {"choose"}:
+            return {**data, "tools": tools["choose"], "choose": True}
+        return data
 
     @field_validator("tools")
     @classmethod
@@ -177,11 +200,13 @@ class BatchSpec(_Model):
         return self
 
     def digest(self) -> str:
-        """Hash of the batch's content without ``simulate.enabled`` (a store refuses to resume a different
-        batch; whether plans are executed is a setting of its own, checked by name:
+        """Hash of the batch's content without ``simulate.enabled`` (nor ``choose`` when false; a store
+        refuses to resume a different batch; whether plans are executed is a setting of its own, checked by name:
         :func:`tooltransfer.planner.apps.batch.store_settings.open_batch_store`)."""
         data = self.model_dump(mode="json")
         data["simulate"].pop("enabled")
+        if not data["choose"]:  # the digests of batches without a choice are those they had before it existed
+            data.pop("choose")
         return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
 
 

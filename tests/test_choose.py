@@ -1,0 +1,139 @@
+"""The ranked choice of a tool (``tooltransfer choose``, ``tt.choose_tool``): the ranking's rules, the
+command's JSON and best plan, bad input (exit 2), and a ``tools: choose`` batch."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+import yaml
+
+from tooltransfer.planner.apps.choose.ranking import (
+    Executions,
+    margin_score,
+    needs_execution,
+    plan_order,
+    rank_key,
+)
+from tooltransfer.planner.apps.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+LIBRARY = ROOT / "tools" / "library"
+GOOD = Executions(open_loop=0.001, closed_loop=0.0005, mismatch_closed_loop=0.001)
+WIDE = {"friction_cone_margin_min": 0.3, "contact_edge_margin_min": 0.004, "duration": 20.0}
+
+
+def test_executed_success_ranks_before_margins_and_margins_before_duration() -> None:
+    narrow = {**WIDE, "contact_edge_margin_min": 0.0002}
+    closed_miss = Executions(open_loop=0.001, closed_loop=0.0025, mismatch_closed_loop=0.001)
+    mismatch_miss = Executions(open_loop=0.001, closed_loop=0.001, mismatch_closed_loop=0.004)
+    # a plan that passes every execution beats one with wider margins that misses the closed loop by 0.5 mm
+    assert rank_key("solved", narrow, GOOD) > rank_key("solved", WIDE, closed_miss)
+    # the nominal closed loop weighs more than the mismatched plant's
+    assert rank_key("solved", narrow, mismatch_miss) > rank_key("solved", WIDE, closed_miss)
+    # equal executions: the wider margins, then the shorter plan
+    assert rank_key("solved", WIDE, GOOD) > rank_key("solved", narrow, GOOD)
+    assert rank_key("solved", WIDE, GOOD) > rank_key("solved", {**WIDE, "duration": 25.0}, GOOD)
+    # any solved plan (even one not executed) before an unknown task, an unknown before a certified infeasible one
+    assert rank_key("solved", narrow, None) > rank_key("unknown", {}, None) > rank_key("infeasible", {}, None)
+
+
+def test_the_margin_score_is_the_weakest_margin_on_its_scale() -> None:
+    assert margin_score(WIDE) == 1.0  # every margin at least its scale; no obstacle: infinite clearance
+    assert margin_score({**WIDE, "contact_edge_margin_min": 0.001}) == 0.5
+    assert margin_score({**WIDE, "friction_cone_margin_min": -0.1}) == 0.0
+    assert margin_score({**WIDE, "obstacle_clearance_min": 0.005, "tool_obstacle_clearance_min": 0.0015}) == 0.3
+    assert margin_score({"friction_cone_margin_min": float("nan")}) == 0.0
+
+
+def test_execution_stops_once_the_best_is_known() -> None:
+    metrics = [("solved", WIDE), ("infeasible", {}), ("solved", {**WIDE, "duration": 30.0}),
+               ("solved", {**WIDE, "contact_edge_margin_min": 0.001})]
+    order = [i for i in plan_order(metrics) if metrics[i][0] == "solved"]
+    assert order == [0, 2, 3]
+    assert needs_execution(order, {}) == [0, 2, 3]
+    assert needs_execution(order, {0: GOOD}) == []  # the first in margin order passed everything: it is the best
+    failed = Executions(open_loop=0.001, closed_loop=0.01, mismatch_closed_loop=0.001)
+    assert needs_execution(order, {0: failed}) == [2, 3]
+    assert needs_execution(order, {0: failed, 2: GOOD}) == []
+
+
+def test_choose_ranks_every_tool_writes_the_best_plan_and_draws_them(tmp_path: Path, capsys) -> None:
+    from tooltransfer import read_plan
+
+    rake = tmp_path / "tools" / "my_slope.yaml"  # a tool file by path (a copy of a library tool, renamed)
+    rake.parent.mkdir()
+    data = yaml.safe_load((LIBRARY / "slope.yaml").read_text())
+    rake.write_text(yaml.safe_dump({**data, "name": "my_slope"}))
+    best = tmp_path / "best.json"
+    code = main(["choose", "paper/transfer_tool2", "--tools", f"finger,{rake}", "-o", str(best),
+                 "--out", str(tmp_path / "fig"), "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["verdict"] == "solved"
+    assert set(out) >= {"task", "verdict", "best", "plan", "figure", "wall_time", "cpu_time", "ranking"}
+    ranking = out["ranking"]
+    assert [e["rank"] for e in ranking] == [1, 2]
+    assert {e["tool"] for e in ranking} == {"finger", str(rake)}
+    assert {e["name"] for e in ranking} == {"finger", "my_slope"}
+    assert all(e["verdict"] in ("solved", "infeasible", "unknown") and e["reason"] for e in ranking)
+    first = ranking[0]
+    assert out["best"] == first["tool"] and first["executed"]
+    assert first["closed_loop_error"] <= 0.002 and first["mismatch_closed_loop_error"] <= 0.003
+    assert first["open_loop_error"] <= 0.005 and first["reason"].startswith("passed every execution")
+    assert first["friction_cone_margin"] > 0 and first["contact_edge_margin"] > 0 and first["duration"] > 0
+    plan = read_plan(best)
+    assert plan.status == "solved" and plan.tool["name"] == first["name"] and out["plan"] == str(best)
+    assert Path(out["figure"]).is_file() and out["figure"].endswith(".png")
+    assert out["cpu_time"] > 0 and out["wall_time"] > 0 and math.isfinite(out["cpu_time"])
+
+
+@pytest.mark.parametrize("tools, says", [
+    ("finger,no_such_tool", "--tools: expected library tool names"),
+    ("finger,,slope", "--tools: expected library tool names or tool files, comma-separated, none empty"),
+    ("missing/tool.yaml", "no such file"),
+    ("{bad}", "a valid tool file"),
+])
+def test_bad_tools_exit_2_naming_the_option(tools: str, says: str, tmp_path: Path, capsys) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: bad\noutline: [[0, 0], [0.01, 0], [0, 0.01]]\n")  # no a_t
+    code = main(["choose", "paper/transfer_tool2", "--tools", tools.replace("{bad}", str(bad))])
+    err = capsys.readouterr().err
+    assert code == 2 and says in err and "Traceback" not in err
+
+
+def test_bad_outputs_and_options_exit_2(tmp_path: Path, capsys) -> None:
+    assert main(["choose", "paper/transfer_tool2", "--tools", "finger", "-o", str(tmp_path / "no" / "b.json")]) == 2
+    assert "-o" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["choose", "paper/transfer_tool2", "--tools", "finger", "--library"])
+    assert exc.value.code == 2
+
+
+def test_a_batch_may_choose_its_tools(tmp_path: Path, small_batch, capsys) -> None:
+    from tooltransfer.planner.apps.batch.report import write_report
+    from tooltransfer.planner.apps.batch.runner import run_batch
+    from tooltransfer.planner.apps.batch.spec import batch_from_dict
+    from tooltransfer.planner.apps.batch.store import ResultStore
+    from tooltransfer.tools.library import library_names
+
+    every = batch_from_dict({"name": "c", "count": 1, "tools": "choose", "dataset": "."})
+    assert every.choose and every.tools == list(library_names())
+    listed = batch_from_dict({"name": "c", "count": 1, "tools": list(library_names()), "dataset": "."})
+    assert not listed.choose and listed.digest() != every.digest()  # choosing is part of the batch
+    batch = small_batch(name="pick", count=1, oe=("qp",), ss=("opt",), tools={"choose": ["trapezoid", "finger"]},
+                        obstacles={"count": [0, 0]}, heading=[1.9, 3.1], distance=[0.04, 0.06],
+                        timeout=900)
+    assert yaml.safe_load(batch.read_text())["tools"] == {"choose": ["trapezoid", "finger"]}
+    summary = run_batch(batch, tmp_path / "pick.sqlite", workers=1, progress=False)
+    assert summary.stored == 1
+    with ResultStore(tmp_path / "pick.sqlite") as store:
+        (row,) = store.rows()
+    assert row["status"] == "solved", (row["status"], row["reason"], row.get("detail"))
+    choice = json.loads(row["metrics_json"])["choice"]
+    assert {e["tool"] for e in choice} == {"trapezoid", "finger"}
+    assert row["status"] == "solved" and row["tool"] == choice[0]["tool"]
+    assert row["closed_loop_error"] == pytest.approx(choice[0]["closed_loop_error"])
+    write_report(tmp_path / "pick.sqlite", None)
+    assert f"tools chosen (tools: choose): {row['tool']} 1" in capsys.readouterr().out
