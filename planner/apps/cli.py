@@ -177,12 +177,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--calibration", type=Path, default=None,
                    help="identify the push mechanics from this calibration recording (tooltransfer demos "
                    "--calibration) instead of the dataset's pushes")
-    p = _add(sub, "segment", "segment a dataset into pushes and switches (and draw it)",
-             "tooltransfer segment problems/data/finger_demos --figure out/demos.png", cli_learning.cmd_segment)
-    p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs, see the README)")
-    p.add_argument("--figure", type=Path, default=None, help="write the figure (Figs. 4b/8a style) here")
-    p.add_argument("--fixed-points", type=Path, default=None,
-                   help="JSON file {demo name: [[x, y], ...]} [m] overriding the automatic corners")
+    cli_learning.add_segment_parser(sub, _add)
     p = _add(sub, "tasks", "list the bundled task files by name (solve and compare take a name or a file)",
              "tooltransfer tasks\n  tooltransfer solve paper/transfer_tool2", cli_planning.cmd_tasks)
     p.add_argument("--paths", action="store_true", help="print each task's file instead of its description")

@@ -7,6 +7,8 @@ calibration), ``learn`` (the OE and SS skills and the push mechanics into a skil
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
+from typing import Any
 
 from tooltransfer.planner.apps.cli_output import written
 from tooltransfer.planner.common.command_line import EXIT_OK
@@ -81,3 +83,13 @@ def cmd_segment(args: argparse.Namespace) -> int:
             plot_demonstrations(ds, segs, tool, tmp)
         print(f"wrote {args.figure}")
     return EXIT_OK
+
+
+def add_segment_parser(sub: Any, add: Any) -> None:
+    """The ``segment`` command's parser on the sub-parsers ``sub`` (``add``: the CLI's command maker)."""
+    p = add(sub, "segment", "segment a dataset into pushes and switches (and draw it)",
+            "tooltransfer segment problems/data/finger_demos --figure out/demos.png", cmd_segment)
+    p.add_argument("dataset", type=Path, help="dataset folder (meta.yaml and CSVs, see the README)")
+    p.add_argument("--figure", type=Path, default=None, help="write the figure (Figs. 4b/8a style) here")
+    p.add_argument("--fixed-points", type=Path, default=None,
+                   help="JSON file {demo name: [[x, y], ...]} [m] overriding the automatic corners")
