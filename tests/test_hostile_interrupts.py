@@ -41,6 +41,8 @@ def _argv(tmp: Path) -> dict[str, list[str]]:
         "view": ["view", str(tmp / "plan.json"), "-o", str(tmp / "plan.html")],
         "schema": ["schema", "--out", str(tmp / "schema.json")],
         "tools": ["tools", "--out", str(tmp / "tools.png")],
+        "tools derive": ["tools", "derive", "finger", "-o", str(tmp / "finger.yaml")],
+        "mjcf": ["mjcf", str(TASK), "-o", str(tmp / "scene.xml")],
         "tasks": ["tasks"],
         "choose": ["choose", str(TASK), "--tools", "finger", "-o", str(tmp / "best.json")],
         "batch generate": ["batch", "generate", str(BATCH), "--out", str(tmp / "tasks")],
@@ -54,7 +56,8 @@ def _leaves(parser: argparse.ArgumentParser, prefix: tuple[str, ...] = ()) -> di
     subs = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
     if not subs:
         return {" ".join(prefix): parser}
-    out: dict[str, argparse.ArgumentParser] = {}
+    # a command whose sub-commands are optional (``tools``, ``tools derive``) is a command of its own too
+    out: dict[str, argparse.ArgumentParser] = {} if subs[0].required else {" ".join(prefix): parser}
     for name, p in subs[0].choices.items():
         out.update(_leaves(p, (*prefix, name)))
     return out
