@@ -225,7 +225,7 @@ class OEOptions(_Model):
         description="widest share of the friction cone's half-angle the guided search may use where no plan "
                     "keeps to friction_cone_fraction (at most friction_cone_fraction: never wider)")
     guided_budget: int = Field(
-        20000, ge=100, le=1_000_000, strict=True,
+        4000, ge=100, le=1_000_000, strict=True,
         description="expansions of the guided search per attempt (cone share and contact span) "
                     "(its coverage grows with it)")
     contact_margin: float = Field(
