@@ -42,3 +42,15 @@ def small_batch(tmp_path: Path) -> Callable[..., Path]:
         return path
 
     return make
+
+
+@pytest.fixture(scope="session")
+def transfer_plan_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The paper's transfer task (problems/paper/transfer_tool2.yaml) solved once and written as a plan file."""
+    from tooltransfer.planner.planning.solve import solve
+    from tooltransfer.problems.task import load_task
+
+    task = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
+    plan = solve(load_task(task), task)
+    assert plan.status == "solved", plan.reason
+    return plan.write(tmp_path_factory.mktemp("transfer") / "plan.json")

@@ -29,13 +29,9 @@ TASK = ROOT / "problems" / "paper" / "transfer_tool2.yaml"
 
 
 @pytest.fixture(scope="module")
-def plan_path(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from tooltransfer.planner.planning.solve import solve
-    from tooltransfer.problems.task import load_task
-
-    plan = solve(load_task(TASK), TASK)
-    assert plan.status == "solved", plan.reason
-    return plan.write(tmp_path_factory.mktemp("export") / "plan.json")
+def plan_path(transfer_plan_file: Path) -> Path:
+    """The transfer task's plan file (tests/conftest.py), solved once for the session."""
+    return transfer_plan_file
 
 
 @pytest.fixture(scope="module")
