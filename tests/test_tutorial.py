@@ -24,14 +24,14 @@ def _python_blocks() -> list[str]:
 def test_the_tutorial_covers_each_step() -> None:
     text = TUTORIAL.read_text(encoding="utf-8")
     headings = re.findall(r"^## \d\. (\w+)", text, re.MULTILINE)
-    assert headings == ["Learn", "Solve", "Look", "Execute", "Batch"]
+    assert headings == ["Learn", "Solve", "Look", "Execute", "Choose", "Batch"]
     assert len(_python_blocks()) == len(headings)
     nav = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
     assert "tutorial.md" in nav
 
 
 def test_the_tutorial_runs_from_an_empty_folder(tmp_path: Path) -> None:
-    """Steps 1-4 in one process, as pasted into a session; step 5 saved as ``batch.py`` and run."""
+    """Steps 1-5 in one process, as pasted into a session; step 6 saved as ``batch.py`` and run."""
     pytest.importorskip("mujoco")
     pytest.importorskip("matplotlib")
     *steps, batch = _python_blocks()
@@ -42,6 +42,7 @@ def test_the_tutorial_runs_from_an_empty_folder(tmp_path: Path) -> None:
     out = proc.stdout
     assert "demonstrations of finger" in out and "solved inclined->" in out, out
     assert "open loop: the puck ends" in out, out
+    assert "choose: slope solved" in out and "choose: best " in out, out
     for name in ("plan.json", "plan.png", "scene.xml"):
         assert (tmp_path / name).stat().st_size > 0, name
     (tmp_path / "batch.py").write_text(batch, encoding="utf-8")
