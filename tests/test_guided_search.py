@@ -106,7 +106,7 @@ def test_a_guided_path_fitted_run_by_run_is_continuous_at_rest_between_runs_and_
     options = qp_options(task)
     found = guided_path(setting, np.array(task.start), np.array(task.target), options=options)
     assert isinstance(found, GuidedPath)
-    plan = fit_runs(found.xy, found.faces, 2.0, 10.0, setting, options)
+    plan = fit_runs(found.xy, found.faces, 2.0 + found.sequence(10.0)[0], setting, options)
     assert plan.status == "solved", plan.reason
     runs = 1 + sum(a != b for a, b in zip(found.faces, found.faces[1:], strict=False))
     assert plan.metrics["piecewise_fits"] >= runs

@@ -337,7 +337,7 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
     tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
     plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
     if plan.status != "solved":  # one fit per run of a face, the object at rest between them
-        runs = fit_runs(found.xy, found.faces, float(t[0]), float(t[-1] - t[0]), setting, opts)
+        runs = fit_runs(found.xy, found.faces, tg + t[0], setting, opts)
         plan = runs if runs.status == "solved" else replace(plan, reason=f"{plan.reason}; {runs.reason}")
     if plan.status == "solved":  # measured like every plan of the variant, at the share it used
         frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces

@@ -88,13 +88,11 @@ def _join(pieces: list[PushPlan]) -> PushPlan:
                              "piecewise_fits": float(len(pieces))})
 
 
-def fit_runs(xy: NDArray[np.float64], step_faces: tuple[str, ...], t0: float, duration: float,
+def fit_runs(xy: NDArray[np.float64], step_faces: tuple[str, ...], times: NDArray[np.float64],
              setting: Setting, options: QPOptions) -> PushPlan:
-    """The guided path ``xy`` (K, 2) [m] (``step_faces`` (K - 1,): the face of each step) fitted run by
-    run (module docstring) over ``duration`` [s] from ``t0`` [s], times in proportion to the path's
-    length; ``infeasible`` with the reason of the run that cannot be fitted."""
-    seg = np.hypot(*np.diff(xy, axis=0).T)
-    times = t0 + duration * np.concatenate([[0.0], np.cumsum(seg)]) / float(seg.sum())
+    """The guided path ``xy`` (K, 2) [m] at ``times`` (K,) [s] (``step_faces`` (K - 1,): the face of each
+    step) fitted run by run (module docstring); ``infeasible`` with the reason of the run that cannot be
+    fitted."""
     pieces: list[PushPlan] = []
     for face, a, b in _runs(step_faces):
         got = _fit_run(xy[a:b + 1], times[a:b + 1], face, setting, options)
