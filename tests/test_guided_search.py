@@ -84,6 +84,34 @@ def test_a_task_the_candidates_miss_is_solved_by_the_guided_search_and_executes(
     assert simulate_plan(plan).final_error < 0.005
 
 
+def test_steps_along_either_edge_of_a_turning_cone_are_taken_and_stay_inside_it() -> None:
+    """The cone turns with the heading the Omni imposes as the puck moves; a step aimed along the edge
+    it turns towards ends outside it and is turned back inside. Before, it was turned back onto the edge
+    itself, which the cone had again left by the step's end: every step along that edge was dropped and
+    the search lost one side of each cone (here the slope's inclined face could not push up-left
+    steeply enough to reach the target, which a search with both edges reaches)."""
+    from tooltransfer.planner.planning.oe.guided import CONE, _face_moves, _pointing, _stepped
+
+    batch = ROOT / "problems" / "batch" / "verdicts_200.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "verd200-00011")
+    task = task_from_dict(data, str(batch))
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": 0.8})
+    p = np.array(task.start)
+    for fm in _face_moves(setting, options):
+        half = CONE * fm.cone.theta_b
+        mid = FaceFrame.build(setting, fm.name, friction_cone_fraction=0.8)
+        for side in (-1.0, 1.0):
+            q = _stepped(fm, p, _pointing(fm, p) + side * half, half, 0.004)
+            assert q is not None, f"no step along the {'lower' if side < 0 else 'upper'} edge of {fm.name}"
+            d = q - p
+            assert np.hypot(*d) == pytest.approx(0.004)
+            for end in (p, q):  # inside the cone (the search's share of it) at both ends, by the fit's frame
+                off = math.remainder(math.atan2(d[1], d[0]) - mid.push_direction(end[None])[0], 2 * math.pi)
+                assert abs(off) <= half + 1e-12
+            assert side * math.remainder(math.atan2(d[1], d[0]) - _pointing(fm, p), 2 * math.pi) > 0.8 * half
+
+
 def test_a_search_that_cannot_move_says_its_space_closed() -> None:
     """A start no face can push from: the search's space closes at once, and it says so (not 'budget')."""
     task = _task("exec60-00023")

@@ -153,6 +153,9 @@ class Refusal:
 #: Share of a face's narrowed cone the search's steps use (the fit's cone rows are linearised).
 CONE = 0.98
 
+#: Share of a cone's half-width a step turned back inside it aims at (:func:`_stepped`).
+EDGE_INSIDE = 0.95
+
 #: Step [m] of the search's straight pushes.
 STEP = 0.004
 
@@ -177,12 +180,14 @@ def _stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float,
     the face's cone at both ends of the step (the cone turns with the heading the Omni imposes, so a
     step along its edge at ``p`` may leave it at the step's end: it is turned back inside), or None
     where no direction near ``ang`` is inside both."""
-    for _ in range(2):
+    for _ in range(3):
         q = p + step * np.array([math.cos(ang), math.sin(ang)])
         off = math.remainder(ang - _pointing(fm, q), 2 * math.pi)
         if abs(off) <= half:
             return q
-        ang -= off - math.copysign(half, off)
+        # turned back to just inside the edge: the cone at the new end turns a little further with
+        # it, so aiming at the edge itself would fall outside again, however many times repeated
+        ang -= off - math.copysign(EDGE_INSIDE * half, off)
     return None
 
 
@@ -246,7 +251,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         there = {name: (mid, half) for name, mid, half in held(target)}
         way = math.atan2(d[1], d[0])
         for name, mid, half in here:
-            if name in there and allowed(came, name, p) and all(abs(math.remainder(way - m, 2 * math.pi)) <= 0.9 * h
+            if name in there and allowed(came, name, p) and all(abs(math.remainder(way - m, 2 * math.pi)) <= h
                                      for m, h in ((mid, half), there[name])):
                 return name
         return None
