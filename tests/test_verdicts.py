@@ -128,6 +128,29 @@ def test_a_generated_task_with_an_obstacle_certified_and_the_lattice_search_find
     assert closest > 0.003, f"the lattice search came {closest * 1e3:.2f} mm from the target of a certified task"
 
 
+def test_a_certificate_on_the_finest_grid_and_the_lattice_search_finds_nothing() -> None:
+    """An execution-benchmark task (slope tool, one obstacle) whose set reaches the start on 10 mm and
+    5 mm cells: on 2.5 mm cells each face's cone turns by less over a block and the set leaves the start
+    out; the check replays it block by block and the lattice search stays away from the target."""
+    from tooltransfer.planner.apps.batch.generate import generate_tasks
+    from tooltransfer.planner.apps.batch.spec import load_batch
+    from tooltransfer.problems.task import task_from_dict
+
+    batch = ROOT / "problems" / "batch" / "execution_60.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "exec60-00016")
+    task = task_from_dict(data, str(batch))
+    setting, rules = _rules_of(task)
+    for coarser in ((0.01,), (0.01, 0.005)):
+        cert, why = certify(rules, np.array(task.start), np.array(task.target), h=coarser)
+        assert cert is None and "came within the gap of the start" in why
+    cert, why = certify(rules, np.array(task.start), np.array(task.target))
+    assert cert is not None and cert.kind == "backward_reachable" and cert.grid is not None, why
+    assert cert.grid.h == pytest.approx(0.0025)
+    assert check_certificate(cert, rules) == []
+    closest = lattice_search(setting, np.array(task.start), np.array(task.target))
+    assert closest > 0.003, f"the lattice search came {closest * 1e3:.2f} mm from the target of a certified task"
+
+
 def test_a_certificate_on_the_finer_grid_and_the_lattice_search_finds_nothing() -> None:
     """A finger task round an obstacle (from a seed no project file uses): 10 mm cells cut the corner
     round the obstacle and reach the start; 5 mm cells leave it out, and the check holds."""

@@ -79,20 +79,22 @@ def _goal(rules: PushRules, target: np.ndarray) -> shapely.Geometry:
 
 
 #: Cell sides [m] of the backward-reachable set, tried in turn while the set reaches the start: a finer
-#: grid cuts fewer corners round the obstacles (a push piece is shorter than half a cell), at about four
-#: times the blocks.
-CELL_SIDES = (0.01, 0.005)
-#: Block updates a finer grid may make (it starts again from the goal; the first grid has the rest).
-FINE_BLOCKS = 5000
+#: grid cuts fewer corners round the obstacles and turns each face's cone by less over a block (a push
+#: piece is shorter than half a cell), at about four times the blocks.
+CELL_SIDES = (0.01, 0.005, 0.0025)
+#: Block updates a finer grid may make (it starts again from the goal; the first grid has the rest of
+#: ``max_blocks``), one per grid after the first. The finest grid's share is small: at about 4 ms per
+#: block it costs at most some 6 s where the set still reaches the start (benchmarks/README.md).
+FINE_BLOCKS = (5000, 1500)
 
 
 def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple[float, ...] = CELL_SIDES,
-            max_blocks: int = 20000, fine_blocks: int = FINE_BLOCKS) -> tuple[Certificate | None, str]:
+            max_blocks: int = 20000, fine_blocks: tuple[int, ...] = FINE_BLOCKS) -> tuple[Certificate | None, str]:
     """A certificate that ``start`` (2,) [m] cannot reach ``target`` (2,) [m] under ``rules``, or None
     with what was tried (an honest "not proved": the task may still be infeasible). The
-    backward-reachable set is built on cells of side ``h[0]`` [m], then of the next side while it comes
-    within the gap of the start; ``max_blocks`` block updates in all, at most ``fine_blocks`` on a
-    finer grid."""
+    backward-reachable set is built on cells of side ``h[0]`` [m], then of each next side in turn while it
+    comes within the gap of the start; ``max_blocks`` block updates in all, at most ``fine_blocks[k]`` on
+    the grid ``h[k + 1]`` (the last allowance for any further grid)."""
     t0 = time.perf_counter()
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
     if np.hypot(*(start - target)) <= rules.goal_tol:
@@ -110,8 +112,8 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
                            f"{rules.goal_tol * 1e3:.2g} mm of the target, so no push ends there", **common,
                            time=time.perf_counter() - t0), ""
     tried, left = [], max_blocks
-    for side in h:
-        allowed = left if side == h[0] else min(left, fine_blocks)
+    for k, side in enumerate(h):
+        allowed = left if k == 0 else min(left, fine_blocks[min(k, len(fine_blocks)) - 1])
         back = backward_set(rules, space, goal, start, h=side, gap=START_GAP, max_blocks=allowed)
         tried.append(f"cells of {side * 1e3:g} mm: {back.stopped} (after {back.blocks_processed} blocks)")
         left -= back.blocks_processed

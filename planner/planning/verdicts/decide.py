@@ -29,14 +29,15 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                    max_blocks: int = CERTIFY_BLOCKS, budget: float = 1.0) -> Plan:
     """``plan`` (not ``solved``) with its verdict and evidence (module docstring); a solved plan is
     returned as it is, with the evidence that it is one. ``budget`` scales the certificate's block
-    updates (``max_blocks`` and :data:`FINE_BLOCKS`)."""
+    updates (``max_blocks`` and each of :data:`FINE_BLOCKS`)."""
     if plan.status == "solved":
         return replace(plan, evidence={"verdict": "solved", "kind": "plan",
                                        "checks": "every hard check holds (metrics)", "budget": budget})
     t0 = time.perf_counter()
     rules = setting_rules(setting)
     cert, why = certify(rules, np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64),
-                        max_blocks=round(max_blocks * budget), fine_blocks=round(FINE_BLOCKS * budget))
+                        max_blocks=round(max_blocks * budget),
+                        fine_blocks=tuple(round(b * budget) for b in FINE_BLOCKS))
     spent = time.perf_counter() - t0
     metrics = {**plan.metrics, "time_certify": spent}
     if "time_total" in metrics:
