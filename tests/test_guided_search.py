@@ -112,6 +112,44 @@ def test_steps_along_either_edge_of_a_turning_cone_are_taken_and_stay_inside_it(
             assert side * math.remainder(math.atan2(d[1], d[0]) - _pointing(fm, p), 2 * math.pi) > 0.8 * half
 
 
+def test_the_search_counts_the_contact_rolling_as_the_inverse_push_model_does() -> None:
+    """The search keeps track of how far each step rolls the contact along its face (a sideways step
+    moves it 1/c^2 times as far, a turn of the heading R per radian) and starts a new contact where one
+    cannot carry the run. Its count agrees with the project's inverse push model run on the path (the
+    contact's excursion over each run, from the middle of the face), and no run needs more than
+    ``oe.max_contacts`` contacts."""
+    from tooltransfer.planner.planning.oe.guided import _face_moves, _roll
+    from tooltransfer.tools.pushing.inverse import push_tool_path
+
+    task = _task("exec60-00023")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task)
+    found = guided_path(setting, np.array(task.start), np.array(task.target), options=options)
+    assert isinstance(found, GuidedPath)
+    moves = {fm.name: fm for fm in _face_moves(setting, options)}
+    k = 0
+    while k < len(found.faces):
+        name, a = found.faces[k], k
+        while k < len(found.faces) and found.faces[k] == name:
+            k += 1
+        run = found.xy[a:k + 1]
+        dense = np.concatenate([np.linspace(run[i], run[i + 1], 9)[:-1] for i in range(len(run) - 1)] + [run[-1:]])
+        lo, hi = usable_range(setting.tool, name, options)
+        model = push_tool_path(setting.tool, name, dense, setting.radius, setting.mechanics, 0.5 * (lo + hi),
+                               platform=setting.platform)
+        travel = model.s - model.s[0]
+        searched = np.concatenate([[0.0], np.cumsum([_roll(moves[name], run[i], run[i + 1],
+                                                           setting.mechanics.rolling, setting.radius)
+                                                     for i in range(len(run) - 1)])])
+        assert np.abs(travel[::8] - searched).max() <= 0.1 * np.ptp(travel) + 3e-4
+        at_steps = travel[::8]
+        width, contacts, first = hi - lo, 1, 0  # the contacts the model's travel needs, one after another
+        for j in range(1, len(at_steps)):
+            if np.ptp(at_steps[first:j + 1]) > width:
+                contacts, first = contacts + 1, j - 1
+        assert contacts <= options.max_contacts
+
+
 def test_a_search_that_cannot_move_says_its_space_closed() -> None:
     """A start no face can push from: the search's space closes at once, and it says so (not 'budget')."""
     task = _task("exec60-00023")

@@ -7,7 +7,11 @@ cone intersected with the tool file's cone, turned by the heading the Omni impos
 ends of the step, since it turns as the object moves), the face held
 under the fit's own rows (the Omni reaching the contact at both ends of its usable range, the tool
 outline there clear of the obstacles), the puck the safety margin from them; A* on the path length
-plus a price per face change, ending with a straight step to the target inside a cone. Its faces
+plus a price per face change, ending with a straight step to the target inside a cone. Each step
+rolls the contact along its face as the inverse push model has it (``1/c^2`` times the step's
+sideways travel, ``R`` per radian the heading turns; :mod:`tooltransfer.tools.pushing.inverse`); a
+run of one face starts a new contact (a re-contact) where the contact's excursion would outgrow the
+face's usable range, and uses at most ``oe.max_contacts`` contacts, as one push of the fit may. Its faces
 and the times of their changes (in proportion to the path's length, over the universal path's
 duration) are then fitted by
 :func:`~tooltransfer.planner.planning.oe.qp_variant.condense_sequence` with the path as reference,
@@ -37,6 +41,7 @@ from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.qp_variant import condense_sequence
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.pushing.inverse import FaceGeometry
 
 
 @dataclass(frozen=True)
@@ -74,6 +79,9 @@ class _FaceMoves:
     cone: FaceFrame
     ends: tuple[FaceFrame, ...]
     spans: tuple[float, ...]
+    direction: tuple[float, float] = (1.0, 0.0)
+    sigma: float = 1.0
+    width: float = math.inf
 
 
 def _face_moves(setting: Setting, options: QPOptions) -> list[_FaceMoves]:
@@ -91,7 +99,9 @@ def _face_moves(setting: Setting, options: QPOptions) -> list[_FaceMoves]:
                                      friction_cone_fraction=options.friction_cone_fraction) for v in sorted({a, b}))
         outline = np.asarray(setting.tool.outline.exterior.coords)
         spans = tuple(float(np.hypot(*(outline - e.centre_in_tool).T).max()) for e in ends)
-        out.append(_FaceMoves(f.name, cone, ends, spans))
+        g = FaceGeometry.of(setting.tool, f.name)
+        out.append(_FaceMoves(f.name, cone, ends, spans, (float(g.direction[0]), float(g.direction[1])),
+                              g.sigma, b - a))
     return out
 
 
@@ -174,6 +184,45 @@ def _pointing(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
     return yaw + fm.cone.push_angle
 
 
+def _roll(fm: _FaceMoves, p: NDArray[np.float64], q: NDArray[np.float64], side: float, radius: float) -> float:
+    """How far [m] the contact rolls along ``fm``'s face while it pushes the object from ``p`` to ``q``
+    (2,) [m] (:mod:`tooltransfer.tools.pushing.inverse`: ``ds = -side (d . e_w) - sigma R dpsi`` with
+    ``side = 1 / c^2``), the heading taken with the contact at the face's middle."""
+    a, b = _yaw(fm, p), _yaw(fm, q)
+    turn = math.remainder(b - a, 2 * math.pi)
+    mid = a + 0.5 * turn
+    ex, ey = fm.direction
+    wx, wy = math.cos(mid) * ex - math.sin(mid) * ey, math.sin(mid) * ex + math.cos(mid) * ey
+    return -side * (float(q[0] - p[0]) * wx + float(q[1] - p[1]) * wy) - fm.sigma * radius * turn
+
+
+def _yaw(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
+    """The tool's yaw [rad] with ``fm``'s middle contact holding the object at ``p`` (2,) [m]."""
+    yaw = _heading(fm.cone, p)
+    return float(fm.cone.heading(p[None])[0]) if yaw is None else yaw
+
+
+@dataclass(frozen=True)
+class _Contact:
+    """The contact of the run a search node is in: how many contacts of its face the run has used and
+    the excursion ``(lo, now, hi)`` [m] of the present one's travel along the face since it began."""
+
+    count: int = 1
+    lo: float = 0.0
+    now: float = 0.0
+    hi: float = 0.0
+
+    def after(self, ds: float, width: float) -> _Contact | None:
+        """This contact after rolling ``ds`` [m]; a new contact of the face (a re-contact) where the
+        excursion would outgrow ``width`` [m]; None where one step alone outgrows it."""
+        now = self.now + ds
+        if max(self.hi, now) - min(self.lo, now) <= width:
+            return _Contact(self.count, min(self.lo, now), now, max(self.hi, now))
+        if abs(ds) > width:
+            return None
+        return _Contact(self.count + 1, min(0.0, ds), ds, max(0.0, ds))
+
+
 def _stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float,
              step: float) -> NDArray[np.float64] | None:
     """Where a step of ``step`` [m] of ``fm`` in direction ``ang`` [rad] from ``p`` ends, its direction kept inside
@@ -195,8 +244,10 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = ()) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
-    ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin and
-    span); ``switch_price`` [m]: a face change's worth in path; ``refused``: changes it does not make."""
+    ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin,
+    span and most contacts per push); ``switch_price`` [m]: a face change's worth in path; ``refused``:
+    changes it does not make. A lattice cell is visited once per face, with the contacts its first
+    visit had used."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
     # where the tool outline may not come (the obstacles grown by the slack) and where the object's
@@ -256,14 +307,24 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 return name
         return None
 
+    side = setting.mechanics.rolling
+
+    def rolled(came: str | None, touch: _Contact, name: str, p: NDArray[np.float64],
+               q: NDArray[np.float64]) -> _Contact | None:
+        """The contact after ``name`` pushes the object from ``p`` to ``q``: a run's first contact where
+        the face changes; None where the run would need more than ``max_contacts`` contacts."""
+        fm = by_name[name]
+        after = (touch if came == name else _Contact()).after(_roll(fm, p, q, side, setting.radius), fm.width)
+        return None if after is None or after.count > options.max_contacts else after
+
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
     heap: list = [(float(np.hypot(*(target - start))), 0.0, 0, None)]
-    nodes: list[tuple[NDArray[np.float64], int, str | None]] = [(start, -1, None)]
+    nodes: list[tuple[NDArray[np.float64], int, str | None, _Contact]] = [(start, -1, None, _Contact())]
     seen: set = set()
     n = 0
     while heap and n < budget:
         _, g, k, _ = heapq.heappop(heap)
-        p, _, came = nodes[k]
+        p, _, came, touch = nodes[k]
         key = (int(p[0] // cell), int(p[1] // cell), came)
         if key in seen:
             continue
@@ -271,10 +332,10 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         n += 1
         here = held(p)
         last = finish(p, came, here)
-        if last is not None:
+        if last is not None and rolled(came, touch, last, p, target) is not None:
             xy, fs = [target], [last]
             while k >= 0:
-                q, parent, face = nodes[k]
+                q, parent, face, _ = nodes[k]
                 xy.append(q)
                 if face is not None:
                     fs.append(face)
@@ -285,10 +346,13 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 continue
             for ang in (mid - half, mid, mid + half):
                 q = _stepped(by_name[name], p, ang, half, step)
-                if q is None or (int(q[0] // cell), int(q[1] // cell), name) in seen or not free(q):
+                if q is None or not free(q):
+                    continue
+                after = rolled(came, touch, name, p, q)
+                if after is None or (int(q[0] // cell), int(q[1] // cell), name) in seen:
                     continue
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
-                nodes.append((q, k, name))
+                nodes.append((q, k, name, after))
                 heapq.heappush(heap, (g2 + float(np.hypot(*(target - q))), g2, len(nodes) - 1, name))
     return GuidedMiss(n, not heap, step)
 
