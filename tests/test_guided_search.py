@@ -115,9 +115,9 @@ def test_steps_along_either_edge_of_a_turning_cone_are_taken_and_stay_inside_it(
 def test_the_search_counts_the_contact_rolling_as_the_inverse_push_model_does() -> None:
     """The search keeps track of how far each step rolls the contact along its face (a sideways step
     moves it 1/c^2 times as far, a turn of the heading R per radian) and starts a new contact where one
-    cannot carry the run. Its count agrees with the project's inverse push model run on the path (the
-    contact's excursion over each run, from the middle of the face), and no run needs more than
-    ``oe.max_contacts`` contacts."""
+    cannot carry the run. Each step's rolling agrees with the project's inverse push model pushing the
+    object along that step (the contact starting at the middle of the usable range; the search takes
+    the heading there), and no run needs more than ``oe.max_contacts`` contacts by the model's rolling."""
     from tooltransfer.planner.planning.oe.guided import _face_moves, _roll
     from tooltransfer.tools.pushing.inverse import push_tool_path
 
@@ -127,25 +127,24 @@ def test_the_search_counts_the_contact_rolling_as_the_inverse_push_model_does() 
     found = guided_path(setting, np.array(task.start), np.array(task.target), options=options)
     assert isinstance(found, GuidedPath)
     moves = {fm.name: fm for fm in _face_moves(setting, options)}
-    k = 0
-    while k < len(found.faces):
-        name, a = found.faces[k], k
-        while k < len(found.faces) and found.faces[k] == name:
-            k += 1
-        run = found.xy[a:k + 1]
-        dense = np.concatenate([np.linspace(run[i], run[i + 1], 9)[:-1] for i in range(len(run) - 1)] + [run[-1:]])
+    runs: dict[int, list[float]] = {}
+    run = 0
+    for k, name in enumerate(found.faces):
+        run += int(k > 0 and name != found.faces[k - 1])
         lo, hi = usable_range(setting.tool, name, options)
-        model = push_tool_path(setting.tool, name, dense, setting.radius, setting.mechanics, 0.5 * (lo + hi),
-                               platform=setting.platform)
-        travel = model.s - model.s[0]
-        searched = np.concatenate([[0.0], np.cumsum([_roll(moves[name], run[i], run[i + 1],
-                                                           setting.mechanics.rolling, setting.radius)
-                                                     for i in range(len(run) - 1)])])
-        assert np.abs(travel[::8] - searched).max() <= 0.1 * np.ptp(travel) + 3e-4
-        at_steps = travel[::8]
-        width, contacts, first = hi - lo, 1, 0  # the contacts the model's travel needs, one after another
-        for j in range(1, len(at_steps)):
-            if np.ptp(at_steps[first:j + 1]) > width:
+        p, q = found.xy[k], found.xy[k + 1]
+        model = push_tool_path(setting.tool, name, np.linspace(p, q, 9), setting.radius, setting.mechanics,
+                               0.5 * (lo + hi), platform=setting.platform)
+        rolls = float(model.s[-1] - model.s[0])
+        searched = _roll(moves[name], p, q, setting.mechanics.rolling, setting.radius)
+        assert abs(rolls - searched) <= 0.1 * abs(rolls) + 1e-4, (k, name, rolls, searched)
+        runs.setdefault(run, []).append(rolls)
+        runs[run].append(hi - lo)
+    for steps in runs.values():  # the contacts each run needs by the model's rolling, one after another
+        travel, width = np.concatenate([[0.0], np.cumsum(steps[0::2])]), steps[1]
+        contacts, first = 1, 0
+        for j in range(1, len(travel)):
+            if np.ptp(travel[first:j + 1]) > width:
                 contacts, first = contacts + 1, j - 1
         assert contacts <= options.max_contacts
 

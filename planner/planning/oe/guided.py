@@ -240,6 +240,27 @@ def _stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float,
     return None
 
 
+def _rolled(setting: Setting, options: QPOptions, fm: _FaceMoves, touch: _Contact, p: NDArray[np.float64],
+            q: NDArray[np.float64]) -> _Contact | None:
+    """The contact ``touch`` of ``fm`` after it pushes the object from ``p`` to ``q`` (2,) [m]; None where
+    its run would need more than ``options.max_contacts`` contacts."""
+    after = touch.after(_roll(fm, p, q, setting.mechanics.rolling, setting.radius), fm.width)
+    return None if after is None or after.count > options.max_contacts else after
+
+
+def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str) -> GuidedPath:
+    """The path of the search's node ``k`` (``nodes``: position, parent, face, contact) and its last step
+    to ``target`` with face ``last``."""
+    xy, fs = [target], [last]
+    while k >= 0:
+        q, parent, face, _ = nodes[k]
+        xy.append(q)
+        if face is not None:
+            fs.append(face)
+        k = parent
+    return GuidedPath(np.array(xy[::-1]), tuple(fs[::-1]))
+
+
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = ()) -> GuidedPath | GuidedMiss:
@@ -307,16 +328,6 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 return name
         return None
 
-    side = setting.mechanics.rolling
-
-    def rolled(came: str | None, touch: _Contact, name: str, p: NDArray[np.float64],
-               q: NDArray[np.float64]) -> _Contact | None:
-        """The contact after ``name`` pushes the object from ``p`` to ``q``: a run's first contact where
-        the face changes; None where the run would need more than ``max_contacts`` contacts."""
-        fm = by_name[name]
-        after = (touch if came == name else _Contact()).after(_roll(fm, p, q, side, setting.radius), fm.width)
-        return None if after is None or after.count > options.max_contacts else after
-
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
     heap: list = [(float(np.hypot(*(target - start))), 0.0, 0, None)]
     nodes: list[tuple[NDArray[np.float64], int, str | None, _Contact]] = [(start, -1, None, _Contact())]
@@ -332,15 +343,9 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         n += 1
         here = held(p)
         last = finish(p, came, here)
-        if last is not None and rolled(came, touch, last, p, target) is not None:
-            xy, fs = [target], [last]
-            while k >= 0:
-                q, parent, face, _ = nodes[k]
-                xy.append(q)
-                if face is not None:
-                    fs.append(face)
-                k = parent
-            return GuidedPath(np.array(xy[::-1]), tuple(fs[::-1]))
+        if last is not None and _rolled(setting, options, by_name[last], touch if came == last else _Contact(),
+                                        p, target) is not None:
+            return _backtrack(nodes, k, target, last)
         for name, mid, half in here:
             if not allowed(came, name, p):
                 continue
@@ -348,7 +353,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 q = _stepped(by_name[name], p, ang, half, step)
                 if q is None or not free(q):
                     continue
-                after = rolled(came, touch, name, p, q)
+                after = _rolled(setting, options, by_name[name], touch if came == name else _Contact(), p, q)
                 if after is None or (int(q[0] // cell), int(q[1] // cell), name) in seen:
                     continue
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
