@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from tooltransfer.planner.apps.choose.ranking import TOLERANCES, margin_score, margins, weakest_margin
+from tooltransfer.planner.apps.choose.ranking import EXECUTIONS, TOLERANCES, margin_score, margins, weakest_margin
 from tooltransfer.planner.apps.choose.run import Choice, Ranked
 
 _NAMES = {"open_loop": "open loop", "closed_loop": "closed loop", "mismatch_closed_loop": "mismatched closed loop"}
@@ -44,7 +44,7 @@ def reason(r: Ranked, best: Ranked | None) -> str:
         return "not executed; " + _margin_text(r)
     failed = [f"{_NAMES[k]} {_mm(getattr(r.executions, k))} > {1e3 * TOLERANCES[k]:g} mm"
               + (f" ({r.runs[k].status})" if k in r.runs and r.runs[k].status not in ("done", "reached") else "")
-              for k, ok in zip(TOLERANCES, r.executions.passes(), strict=True) if not ok]
+              for k, ok in zip(EXECUTIONS, r.executions.passes(), strict=True) if not ok]
     head = "failed: " + "; ".join(failed) if failed else "passed every execution"
     return f"{head}; {_margin_text(r)}"
 

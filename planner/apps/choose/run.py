@@ -156,8 +156,7 @@ def choose_tool(task: Task | str | Path, tools: Sequence[str | Path] | None = No
     finally:
         if own and isinstance(pool, ProcessPoolExecutor):
             _stop(pool)
-    ranking = _rank(cands, [w.planned[i] for i in range(len(cands))],
-                    {i: r for i, r in w.runs.items() if i in w.executed})
+    ranking = _rank(cands, [w.planned[i] for i in range(len(cands))], w.runs, w.executed)
     return Choice(task, ranking, time.perf_counter() - wall0, time.process_time() - cpu0 + w.cpu)
 
 
@@ -255,16 +254,13 @@ def _timed_execute(plan: Plan, mode: str, seed: int) -> tuple[Executed, float]:
     return out, time.process_time() - t
 
 
-def _rank(cands: Sequence[Candidate], planned: Sequence[Planned], runs: dict[int, dict[str, Executed]]) -> list[Ranked]:
-    def executions(i: int) -> Executions | None:
-        r = runs.get(i)
-        if not r:
-            return None
-        return Executions(**{m: r[m].error for m in MODES}, status={m: r[m].status for m in MODES})
-
+def _rank(cands: Sequence[Candidate], planned: Sequence[Planned], runs: dict[int, dict[str, Executed]],
+          executed: dict[int, Executions]) -> list[Ranked]:
+    """The candidates best first (:func:`.ranking.rank_key`); ``executed``: the plans every execution of
+    which ran, ``runs``: every execution run (a plan whose executions were cut short keeps none)."""
     def key(i: int) -> tuple[Any, ...]:
         p = planned[i]
-        ex = executions(i)
+        ex = executed.get(i)
         metrics = p.plan.metrics if p.plan is not None else {}
         # executed plans before those not executed at equal keys (a plan not executed passed nothing yet)
         return (*rank_key(p.verdict, metrics, ex), ex is not None)
@@ -272,5 +268,6 @@ def _rank(cands: Sequence[Candidate], planned: Sequence[Planned], runs: dict[int
     order = sorted(range(len(cands)), key=key, reverse=True)
     return [Ranked(rank=n + 1, label=cands[i].label, tool=cands[i].tool, verdict=planned[i].verdict,
                    reason=planned[i].reason if planned[i].verdict != "solved" else "", plan=planned[i].plan,
-                   executions=executions(i), runs=dict(runs.get(i, {})), planning_wall=planned[i].wall,
+                   executions=executed.get(i), runs=dict(runs.get(i, {})) if i in executed else {},
+                   planning_wall=planned[i].wall,
                    planning_cpu=planned[i].cpu) for n, i in enumerate(order)]

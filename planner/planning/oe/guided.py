@@ -79,9 +79,9 @@ class _FaceMoves:
     cone: FaceFrame
     ends: tuple[FaceFrame, ...]
     spans: tuple[float, ...]
-    direction: tuple[float, float] = (1.0, 0.0)
-    sigma: float = 1.0
-    width: float = math.inf
+    direction: tuple[float, float]
+    sigma: float
+    width: float
 
 
 def _face_moves(setting: Setting, options: QPOptions) -> list[_FaceMoves]:
@@ -184,16 +184,16 @@ def _pointing(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
     return yaw + fm.cone.push_angle
 
 
-def _roll(fm: _FaceMoves, p: NDArray[np.float64], q: NDArray[np.float64], side: float, radius: float) -> float:
+def _roll(fm: _FaceMoves, p: NDArray[np.float64], q: NDArray[np.float64], rolling: float, radius: float) -> float:
     """How far [m] the contact rolls along ``fm``'s face while it pushes the object from ``p`` to ``q``
-    (2,) [m] (:mod:`tooltransfer.tools.pushing.inverse`: ``ds = -side (d . e_w) - sigma R dpsi`` with
-    ``side = 1 / c^2``), the heading taken with the contact at the face's middle."""
+    (2,) [m] (:mod:`tooltransfer.tools.pushing.inverse`: ``ds = -rolling (d . e_w) - sigma R dpsi`` with
+    ``rolling = 1 / c^2``), the heading taken with the contact at the face's middle."""
     a, b = _yaw(fm, p), _yaw(fm, q)
     turn = math.remainder(b - a, 2 * math.pi)
     mid = a + 0.5 * turn
     ex, ey = fm.direction
     wx, wy = math.cos(mid) * ex - math.sin(mid) * ey, math.sin(mid) * ex + math.cos(mid) * ey
-    return -side * (float(q[0] - p[0]) * wx + float(q[1] - p[1]) * wy) - fm.sigma * radius * turn
+    return -rolling * (float(q[0] - p[0]) * wx + float(q[1] - p[1]) * wy) - fm.sigma * radius * turn
 
 
 def _yaw(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
@@ -240,11 +240,13 @@ def _stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float,
     return None
 
 
-def _rolled(setting: Setting, options: QPOptions, fm: _FaceMoves, touch: _Contact, p: NDArray[np.float64],
-            q: NDArray[np.float64]) -> _Contact | None:
-    """The contact ``touch`` of ``fm`` after it pushes the object from ``p`` to ``q`` (2,) [m]; None where
-    its run would need more than ``options.max_contacts`` contacts."""
-    after = touch.after(_roll(fm, p, q, setting.mechanics.rolling, setting.radius), fm.width)
+def _rolled(setting: Setting, options: QPOptions, fm: _FaceMoves, came: str | None, touch: _Contact,
+            p: NDArray[np.float64], q: NDArray[np.float64]) -> _Contact | None:
+    """The contact of ``fm`` after it pushes the object from ``p`` to ``q`` (2,) [m]: ``touch`` rolled on
+    where the node's face ``came`` is ``fm``'s, a run's first contact where the face changes; None where
+    the run would need more than ``options.max_contacts`` contacts."""
+    own = touch if came == fm.name else _Contact()
+    after = own.after(_roll(fm, p, q, setting.mechanics.rolling, setting.radius), fm.width)
     return None if after is None or after.count > options.max_contacts else after
 
 
@@ -343,8 +345,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         n += 1
         here = held(p)
         last = finish(p, came, here)
-        if last is not None and _rolled(setting, options, by_name[last], touch if came == last else _Contact(),
-                                        p, target) is not None:
+        if last is not None and _rolled(setting, options, by_name[last], came, touch, p, target) is not None:
             return _backtrack(nodes, k, target, last)
         for name, mid, half in here:
             if not allowed(came, name, p):
@@ -353,7 +354,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 q = _stepped(by_name[name], p, ang, half, step)
                 if q is None or not free(q):
                     continue
-                after = _rolled(setting, options, by_name[name], touch if came == name else _Contact(), p, q)
+                after = _rolled(setting, options, by_name[name], came, touch, p, q)
                 if after is None or (int(q[0] // cell), int(q[1] // cell), name) in seen:
                     continue
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
