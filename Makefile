@@ -18,6 +18,9 @@ demo: $(PY)
 	$(BYTECODE)
 	$(VENV)/bin/tooltransfer paper --out out
 
+# pytest, told to require the browser tests where chromium and its driver are installed
+PYTEST = TT_REQUIRE_BROWSER=$$([ -x $(CHROMIUM) ] && [ -x $(CHROMEDRIVER) ] && echo 1) $(PY) -m pytest
+
 # The suite on two processes, each test file on one of them (its module fixtures built once), then the
 # tests marked `serial` (wall-time bounds, real signals racing the work) alone, as on an idle machine.
 test: $(PY)
@@ -26,8 +29,8 @@ test: $(PY)
 	$(PY) -m ruff check .
 	$(MAKE) --no-print-directory typecheck
 	$(MAKE) --no-print-directory browser
-	TT_REQUIRE_BROWSER=$$([ -x $(CHROMIUM) ] && [ -x $(CHROMEDRIVER) ] && echo 1) $(PY) -m pytest -n 2 --dist loadfile -m "not serial"
-	TT_REQUIRE_BROWSER=$$([ -x $(CHROMIUM) ] && [ -x $(CHROMEDRIVER) ] && echo 1) $(PY) -m pytest -m serial
+	$(PYTEST) -n 2 --dist loadfile -m "not serial"
+	$(PYTEST) -m serial
 
 # Debian's chromium and chromedriver for the browser tests of the HTML pages (tests/browser.py):
 # installed where this runs as root with apt-get and they are missing (about a minute, once per
