@@ -28,7 +28,6 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
 import json
-import math
 import sys
 import time
 from collections import Counter
@@ -86,22 +85,14 @@ def _mm(v: float | None) -> str:
     return "-" if v is None else f"{1e3 * v:.2f} mm"
 
 
-def wilson(k: int, n: int, z: float = 1.96) -> tuple[float, float]:
-    if n == 0:
-        return (math.nan, math.nan)
-    p = k / n
-    d = 1 + z * z / n
-    c = (p + z * z / (2 * n)) / d
-    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return (c - h, c + h)
-
-
 def report(rows: Sequence[dict[str, Any]], tools: Sequence[str], wall: float) -> None:
     from rich.console import Console
 
     con = Console(width=None if sys.stdout.isatty() else 150, markup=False, highlight=False)
     solved = [r for r in rows if r["verdict"] == "solved"]
     ok = sum(r["closed_loop_error"] is not None and r["closed_loop_error"] <= WITHIN for r in solved)
+    from tooltransfer.planner.apps.batch.stats import wilson
+
     lo, hi = wilson(ok, len(solved))
     con.rule(f"tool choice over {len(tools)} tools ({', '.join(tools)}), {len(rows)} tasks, seed {SEED}")
     others = Counter(r["verdict"] for r in rows if r["verdict"] != "solved")
