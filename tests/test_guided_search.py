@@ -90,7 +90,8 @@ def test_steps_along_either_edge_of_a_turning_cone_are_taken_and_stay_inside_it(
     itself, which the cone had again left by the step's end: every step along that edge was dropped and
     the search lost one side of each cone (here the slope's inclined face could not push up-left
     steeply enough to reach the target, which a search with both edges reaches)."""
-    from tooltransfer.planner.planning.oe.guided import CONE, _face_moves, _pointing, _stepped
+    from tooltransfer.planner.planning.oe.guided import CONE
+    from tooltransfer.planner.planning.oe.guided_moves import _face_moves, _pointing, _stepped
 
     batch = ROOT / "problems" / "batch" / "verdicts_200.yaml"
     data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "verd200-00011")
@@ -112,25 +113,17 @@ def test_steps_along_either_edge_of_a_turning_cone_are_taken_and_stay_inside_it(
             assert side * math.remainder(math.atan2(d[1], d[0]) - _pointing(fm, p), 2 * math.pi) > 0.8 * half
 
 
-def test_the_search_counts_the_contact_rolling_as_the_inverse_push_model_does() -> None:
-    """The search keeps track of how far each step rolls the contact along its face (a sideways step
-    moves it 1/c^2 times as far, a turn of the heading R per radian) and starts a new contact where one
-    cannot carry the run. Each step's rolling agrees with the project's inverse push model pushing the
-    object along that step (the contact starting at the middle of the usable range; the search takes
-    the heading there), and no run needs more than ``oe.max_contacts`` contacts by the model's rolling."""
-    from tooltransfer.planner.planning.oe.guided import _face_moves, _roll
+def _rolling_by_run(found: GuidedPath, setting, options) -> list[tuple[list[float], float]]:
+    """Each run's steps' rolling of the contact along the face [m] by the project's inverse push model
+    (the object pushed along the step, the contact from the middle of the usable range), with the
+    usable width [m]; checked on the way against the search's own count (within 10 % + 0.1 mm)."""
+    from tooltransfer.planner.planning.oe.guided_moves import _face_moves, _roll
     from tooltransfer.tools.pushing.inverse import push_tool_path
 
-    task = _task("exec60-00023")
-    setting = setting_from_task(task, task_skills(task, need_ss=False))
-    options = qp_options(task)
-    found = guided_path(setting, np.array(task.start), np.array(task.target), options=options)
-    assert isinstance(found, GuidedPath)
     moves = {fm.name: fm for fm in _face_moves(setting, options)}
-    runs: dict[int, list[float]] = {}
-    run = 0
+    runs: list[tuple[list[float], float]] = []
+    marks = found.runs or (0,) * len(found.faces)
     for k, name in enumerate(found.faces):
-        run += int(k > 0 and name != found.faces[k - 1])
         lo, hi = usable_range(setting.tool, name, options)
         p, q = found.xy[k], found.xy[k + 1]
         model = push_tool_path(setting.tool, name, np.linspace(p, q, 9), setting.radius, setting.mechanics,
@@ -138,15 +131,61 @@ def test_the_search_counts_the_contact_rolling_as_the_inverse_push_model_does() 
         rolls = float(model.s[-1] - model.s[0])
         searched = _roll(moves[name], p, q, setting.mechanics.rolling, setting.radius)
         assert abs(rolls - searched) <= 0.1 * abs(rolls) + 1e-4, (k, name, rolls, searched)
-        runs.setdefault(run, []).append(rolls)
-        runs[run].append(hi - lo)
-    for steps in runs.values():  # the contacts each run needs by the model's rolling, one after another
-        travel, width = np.concatenate([[0.0], np.cumsum(steps[0::2])]), steps[1]
-        contacts, first = 1, 0
-        for j in range(1, len(travel)):
-            if np.ptp(travel[first:j + 1]) > width:
-                contacts, first = contacts + 1, j - 1
-        assert contacts <= options.max_contacts
+        if k == 0 or name != found.faces[k - 1] or marks[k] != marks[k - 1]:
+            runs.append(([], hi - lo))
+        runs[-1][0].append(rolls)
+    return runs
+
+
+def _contacts(rolls: list[float], width: float) -> int:
+    """The contacts one after another that carry steps rolling ``rolls`` [m] on ``width`` [m] of face."""
+    travel = np.concatenate([[0.0], np.cumsum(rolls)])
+    contacts, first = 1, 0
+    for j in range(1, len(travel)):
+        if np.ptp(travel[first:j + 1]) > width:
+            contacts, first = contacts + 1, j - 1
+    return contacts
+
+
+def test_the_search_counts_the_contact_rolling_as_the_inverse_push_model_does() -> None:
+    """The search keeps track of how far each step rolls the contact along its face (a sideways step
+    moves it 1/c^2 times as far, a turn of the heading R per radian) and starts a new contact where one
+    cannot carry the run. Each step's rolling agrees with the project's inverse push model pushing the
+    object along that step (the contact starting at the middle of the usable range; the search takes
+    the heading there), and no run needs more than ``oe.max_contacts`` contacts by the model's rolling."""
+    task = _task("exec60-00023")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task)
+    found = guided_path(setting, np.array(task.start), np.array(task.target), options=options)
+    assert isinstance(found, GuidedPath)
+    for rolls, width in _rolling_by_run(found, setting, options):
+        assert _contacts(rolls, width) <= options.max_contacts
+
+
+@pytest.mark.parametrize("task_id", ["verd200-00001", "verd200-00065"])
+def test_a_face_that_cannot_carry_a_run_in_its_contacts_pushes_in_shorter_steps_and_more_runs(task_id) -> None:
+    """A short face pushing sideways rolls its contact off the face within one 4 mm step: the search takes
+    half a step there (verd200-00001, the slope's 5 mm face); a run that needs more than
+    ``oe.max_contacts`` contacts stops, and the face touches the resting object again for a new run
+    (verd200-00065, the finger). Before, the search dropped those steps and its space closed or ran out.
+    Each run needs at most ``oe.max_contacts`` contacts by the model's rolling, no step rolls more than
+    the face's usable width, and the path fitted run by run is a solved push plan."""
+    task = _verdict_task(task_id)
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": 0.8})
+    found = guided_path(setting, np.array(task.start), np.array(task.target), options=options)
+    assert isinstance(found, GuidedPath), found
+    steps = np.hypot(*np.diff(found.xy, axis=0).T)[:-1]
+    assert np.any(steps < 0.003) or max(found.runs) > 0  # what the search could not do before
+    runs = _rolling_by_run(found, setting, options)
+    for rolls, width in runs:
+        assert max(abs(r) for r in rolls) <= width + 1e-4
+        assert _contacts(rolls, width) <= options.max_contacts
+    tg = found.sequence(10.0)[0]
+    plan = fit_runs(found.xy, found.faces, tg, setting, options, found.windows, found.runs)
+    assert plan.status == "solved", plan.reason
+    assert plan.metrics["piecewise_fits"] >= len(runs)
+    assert np.linalg.norm(plan.object_xy[-1] - task.target) <= 1e-4
 
 
 def test_a_search_that_cannot_move_says_its_space_closed() -> None:
@@ -192,3 +231,57 @@ def test_a_guided_path_fitted_run_by_run_is_continuous_at_rest_between_runs_and_
               for f in setting.tool.face_names}
     measured = plan_metrics(plan, frames, np.array(task.target), setting)
     assert hard_check_failures(measured) == []
+
+
+def _verdict_task(task_id: str) -> Task:
+    batch = ROOT / "problems" / "batch" / "verdicts_200.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == task_id)
+    return task_from_dict(data, str(batch))
+
+
+def test_contact_windows_cover_each_face_evenly_and_the_middle_one_is_the_usable_range() -> None:
+    from tooltransfer.planner.planning.oe.guided_moves import MAX_WINDOWS, contact_windows
+    from tooltransfer.tools.pushing.inverse import FaceGeometry
+
+    for task in (_task("exec60-00023"), _verdict_task("verd200-00056")):
+        setting = setting_from_task(task, task_skills(task, need_ss=False))
+        options = qp_options(task).model_copy(update={"contact_span": 0.004})
+        for face in setting.tool.face_names:
+            g = FaceGeometry.of(setting.tool, face)
+            lo, hi = g.lo + options.contact_margin, g.hi - options.contact_margin
+            wins = contact_windows(setting.tool, face, options)
+            assert len(wins) % 2 == 1 and len(wins) <= MAX_WINDOWS
+            assert wins[len(wins) // 2] == pytest.approx(usable_range(setting.tool, face, options))
+            if hi - lo > options.contact_span:  # spread from one end of the face to the other, one span each
+                assert wins[0][0] == pytest.approx(lo) and wins[-1][1] == pytest.approx(hi)
+                assert all(b - a == pytest.approx(options.contact_span) for a, b in wins)
+                gaps = np.diff([a for a, _ in wins])
+                assert np.allclose(gaps, gaps[0]) and gaps[0] > 0  # evenly spaced
+                if (hi - lo) / options.contact_span <= MAX_WINDOWS - 1:  # few enough: they cover the face
+                    assert gaps[0] <= options.contact_span + 1e-12
+
+
+def test_a_start_held_only_toward_one_end_of_a_face_is_pushed_from_with_the_contact_kept_there() -> None:
+    """The slope's inclined face holds the puck at this start only with its contact on the upper part of
+    the face: the search with the contact anywhere on the usable range (the fit holds the Omni at both
+    of its ends) cannot move at all, the search by contact windows can. Each step it takes keeps the
+    rules at both ends of its window (the Omni's inverse kinematics reaching the tool there)."""
+    task = _verdict_task("verd200-00056")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": 0.8, "contact_span": 0.004})
+    start, target = np.array(task.start), np.array(task.target)
+    whole = guided_path(setting, start, target, options=options)
+    assert isinstance(whole, GuidedMiss) and whole.exhausted and whole.expansions == 1
+    found = guided_path(setting, start, target, options=options, windows=True)
+    assert isinstance(found, GuidedPath), found
+    assert len(found.windows) == len(found.faces)
+    for k, (name, window) in enumerate(zip(found.faces, found.windows, strict=True)):
+        lo, hi = window or usable_range(setting.tool, name, options)
+        assert hi - lo <= options.contact_span + 1e-12
+        face = setting.tool.face(name)
+        for s in (lo, hi):
+            frame = FaceFrame.build(setting, name, s=s / face.length, friction_cone_fraction=0.8)
+            x, y, yaw = frame.tool_pose(found.xy[k][None])[0]
+            ik = inverse_kinematics(setting.platform, [x, y])
+            assert ik.reachable and ik.heading is not None
+            assert abs(math.remainder(ik.heading - yaw, 2 * math.pi)) < 1e-6

@@ -24,12 +24,15 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from shapely import Polygon
 
 from tooltransfer.errors import ToolTransferError
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.planning.ss.result import SwitchPath
+from tooltransfer.planner.planning.tool_clearance import tool_obstacle_clearance
 from tooltransfer.timing import min_jerk_along, min_jerk_duration, stretch_factor
 from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pose import rotation
@@ -55,17 +58,22 @@ class Motion:
 
 
 def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: float,
-                    distance: float) -> NDArray[np.float64]:
+                    distance: float, tool: Tool | None = None, obstacles: Sequence[Disc | Polygon] = (),
+                    ) -> NDArray[np.float64]:
     """Offset (2,) backing off from ``at`` against ``direction`` [rad] by ``distance`` [m], halved
-    until the whole straight move stays within the Omni's reach (at least 2 mm); when no length
-    along ``direction`` stays within it, directions 20 and 40 degrees to either side are tried (the
-    tool still meets the object where the push starts, a little obliquely)."""
+    until the whole straight move stays within the Omni's reach (at least 2 mm) with the ``tool``'s
+    outline clear of the ``obstacles`` (at the heading the Omni imposes); when no length along
+    ``direction`` does, directions 20 and 40 degrees to either side are tried (the tool still meets
+    the object where the push starts, a little obliquely)."""
     for turn in np.radians([0.0, 20.0, -20.0, 40.0, -40.0]):
         u = -np.array([np.cos(direction + turn), np.sin(direction + turn)])
         d = distance
         while d >= 0.002:
             line = at + np.linspace(0.0, d, 20)[:, None] * u
-            if np.all(joint_path(platform, line).violation == 0.0):
+            jp = joint_path(platform, line)
+            if np.all(jp.violation == 0.0) and (
+                    tool is None or not obstacles
+                    or tool_obstacle_clearance(tool, np.column_stack([line, jp.heading]), obstacles).distance > 0.0):
                 return d * u
             d /= 2
     return -0.002 * np.array([np.cos(direction), np.sin(direction)])
@@ -95,6 +103,7 @@ def assemble(
     a_max: float,
     approach_distance: float,
     dt: float = 0.01,
+    obstacles: Sequence[Disc | Polygon] = (),
 ) -> Motion:
     """Assemble the timed tool motion of a solved push plan (see the module docstring).
 
@@ -103,6 +112,8 @@ def assemble(
         switch: plans each change of face; recontact: each re-contact of the same face.
         v_max, a_max: tool speed [m/s] and acceleration [m/s^2] limits; approach_distance: [m].
         dt: sample spacing [s] of approach, switches and retreat (pushes keep the plan's samples).
+        obstacles: what the approach and the retreat keep the tool's outline clear of, where a
+            direction of theirs allows it.
     """
     pushes = plan.pushes
     poses = [p.tool_pose for p in pushes]
@@ -128,7 +139,8 @@ def assemble(
         now = float(t_parts[-1][-1]) if len(t_parts[-1]) else now
 
     first, last = pushes[0], pushes[-1]
-    back0 = _reachable_back(platform, poses[0][0, :2], _normal_angle(tool, first, 0), approach_distance)
+    back0 = _reachable_back(platform, poses[0][0, :2], _normal_angle(tool, first, 0), approach_distance, tool,
+                            obstacles)
     tt, xy = _line(poses[0][0, :2] + back0, poses[0][0, :2], v_max, a_max, dt)
     add(tt, np.repeat(plan.object_xy[first.samples[:1]], len(tt), axis=0), xy, "approach", None)
     for i, p in enumerate(pushes):
@@ -150,7 +162,7 @@ def assemble(
             add(tt, np.repeat(obj[None], n, axis=0), xy, "switch", None)
             switch_spans.append((p.face, nxt.face, start, now, sw))
     end = poses[-1][-1, :2]
-    back1 = _reachable_back(platform, end, _normal_angle(tool, last, -1), approach_distance)
+    back1 = _reachable_back(platform, end, _normal_angle(tool, last, -1), approach_distance, tool, obstacles)
     tt, xy = _line(end, end + back1, v_max, a_max, dt)
     add(tt, np.repeat(plan.object_xy[last.samples[-1:]], len(tt), axis=0), xy, "retreat", None)
     t = np.concatenate(t_parts)

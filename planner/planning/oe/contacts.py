@@ -60,9 +60,13 @@ class PushRefused(ToolTransferError):
 def usable_range(tool: Tool, face: str, limits: ContactLimits) -> tuple[float, float]:
     """Arc lengths ``[lo, hi]`` [m] along ``face`` the contact may use: the face's contact range less
     the ``limits``' ``contact_margin`` at both ends, at most ``contact_span`` about its middle (a long
-    face keeps the contact near its middle, where the planner's reach rows hold)."""
+    face keeps the contact near its middle, where the planner's reach rows hold), or within the
+    window the ``limits`` name for the face (``contact_windows``, where they have one)."""
     g = FaceGeometry.of(tool, face)
     lo, hi = g.lo + limits.contact_margin, g.hi - limits.contact_margin
+    window = getattr(limits, "contact_windows", {}).get(face)
+    if window is not None and max(lo, window[0]) <= min(hi, window[1]):
+        return max(lo, window[0]), min(hi, window[1])
     mid = 0.5 * (g.lo + g.hi)
     if hi <= lo:  # a face shorter than twice the margin: its middle only
         return mid, mid

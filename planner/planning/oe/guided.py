@@ -32,8 +32,17 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.planner.planning.oe.contacts import usable_range
-from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame
+from tooltransfer.planner.planning.oe.guided_moves import (
+    REACH_SLACK,
+    _Contact,
+    _face_moves,
+    _FaceMoves,
+    _heading,
+    _pointing,
+    _rolled,
+    _step_of,
+)
 from tooltransfer.planner.planning.oe.metrics import plan_metrics
 from tooltransfer.planner.planning.oe.piecewise import fit_runs
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
@@ -41,7 +50,6 @@ from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.qp_variant import condense_sequence
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.tools.objects import Disc
-from tooltransfer.tools.pushing.inverse import FaceGeometry
 
 
 @dataclass(frozen=True)
@@ -51,6 +59,17 @@ class GuidedPath:
 
     xy: NDArray[np.float64]
     faces: tuple[str, ...]
+    windows: tuple[tuple[float, float] | None, ...] = ()
+    runs: tuple[int, ...] = ()
+
+    def face_windows(self) -> dict[str, tuple[float, float]] | None:
+        """The contact window [m] of each face whose steps keep to one (:func:`contact_windows`), or
+        None where a face's steps use several (the path is then fitted run by run)."""
+        out: dict[str, tuple[float, float] | None] = {}
+        for face, w in zip(self.faces, self.windows or (None,) * len(self.faces), strict=True):
+            if out.setdefault(face, w) != w:
+                return None
+        return {f: w for f, w in out.items() if w is not None}
 
     def sequence(self, duration: float) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[str, ...],
                                                   tuple[float, ...]]:
@@ -66,64 +85,6 @@ class GuidedPath:
                 switches.append(float(t[k]))
         return t, self.xy, tuple(faces), tuple(switches)
 
-
-@dataclass(frozen=True)
-class _FaceMoves:
-    """What the ``qp`` fit demands of one face (:class:`~tooltransfer.planner.planning.oe.sequence_fit.SequenceFit`):
-    the frame of its heading cone (contact at the middle of the face) and the frames at the ends of the
-    contact's usable range, from each of which the Omni must reach the object, with the farthest the
-    tool outline reaches [m] from the object's centre there (a body farther from an obstacle cannot
-    touch it)."""
-
-    name: str
-    cone: FaceFrame
-    ends: tuple[FaceFrame, ...]
-    spans: tuple[float, ...]
-    direction: tuple[float, float]
-    sigma: float
-    width: float
-
-
-def _face_moves(setting: Setting, options: QPOptions) -> list[_FaceMoves]:
-    """One :class:`_FaceMoves` per face that can push under ``options`` (the plan's narrowed cone, its
-    contact margin and span)."""
-    out = []
-    for f in setting.tool.faces:
-        lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b,
-                                 options.friction_cone_fraction * setting.mechanics.friction_angle)
-        if hi <= lo:
-            continue
-        cone = FaceFrame.build(setting, f.name, friction_cone_fraction=options.friction_cone_fraction)
-        a, b = usable_range(setting.tool, f.name, options)
-        ends = tuple(FaceFrame.build(setting, f.name, s=v / f.length,
-                                     friction_cone_fraction=options.friction_cone_fraction) for v in sorted({a, b}))
-        outline = np.asarray(setting.tool.outline.exterior.coords)
-        spans = tuple(float(np.hypot(*(outline - e.centre_in_tool).T).max()) for e in ends)
-        g = FaceGeometry.of(setting.tool, f.name)
-        out.append(_FaceMoves(f.name, cone, ends, spans, (float(g.direction[0]), float(g.direction[1])),
-                              g.sigma, b - a))
-    return out
-
-
-def _heading(frame: FaceFrame, p: NDArray[np.float64]) -> float | None:
-    """The tool's yaw [rad] with ``frame``'s contact holding the object at ``p`` (2,) [m]
-    (:meth:`FaceFrame.heading` for one point), or None where the Omni holds it nowhere (outside its
-    reach or waist range, with :data:`REACH_SLACK` to spare: the fit's reach rows are an inner
-    approximation within 2e-4 m)."""
-    dx, dy = float(p[0] - frame.base[0]), float(p[1] - frame.base[1])
-    r2 = dx * dx + dy * dy
-    if r2 <= frame.offset ** 2:
-        return None
-    u = math.sqrt(r2 - frame.offset ** 2)
-    a = math.atan2(dy, dx) - math.atan2(frame.offset, u)
-    if not (frame.reach[0] + REACH_SLACK <= u <= frame.reach[1] - REACH_SLACK
-            and frame.waist[0] + REACH_SLACK / u <= a <= frame.waist[1] - REACH_SLACK / u):
-        return None
-    return a - math.pi / 2
-
-
-#: Room [m] the search keeps inside the Omni's reach and between the tool outline and the obstacles.
-REACH_SLACK = 5e-4
 
 
 @dataclass(frozen=True)
@@ -163,9 +124,6 @@ class Refusal:
 #: Share of a face's narrowed cone the search's steps use (the fit's cone rows are linearised).
 CONE = 0.98
 
-#: Share of a cone's half-width a step turned back inside it aims at (:func:`_stepped`).
-EDGE_INSIDE = 0.95
-
 #: Step [m] of the search's straight pushes.
 STEP = 0.004
 
@@ -176,101 +134,32 @@ REFUSED_RADIUS = 2 * STEP
 REFUSALS = 2
 
 
-def _pointing(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
-    """The middle [rad] of ``fm``'s admissible directions in the world with the object at ``p``."""
-    yaw = _heading(fm.cone, p)
-    if yaw is None:  # the middle of the range is between its ends: held wherever they are
-        yaw = float(fm.cone.heading(p[None])[0])
-    return yaw + fm.cone.push_angle
-
-
-def _roll(fm: _FaceMoves, p: NDArray[np.float64], q: NDArray[np.float64], rolling: float, radius: float) -> float:
-    """How far [m] the contact rolls along ``fm``'s face while it pushes the object from ``p`` to ``q``
-    (2,) [m] (:mod:`tooltransfer.tools.pushing.inverse`: ``ds = -rolling (d . e_w) - sigma R dpsi`` with
-    ``rolling = 1 / c^2``), the heading taken with the contact at the face's middle."""
-    a, b = _yaw(fm, p), _yaw(fm, q)
-    turn = math.remainder(b - a, 2 * math.pi)
-    mid = a + 0.5 * turn
-    ex, ey = fm.direction
-    wx, wy = math.cos(mid) * ex - math.sin(mid) * ey, math.sin(mid) * ex + math.cos(mid) * ey
-    return -rolling * (float(q[0] - p[0]) * wx + float(q[1] - p[1]) * wy) - fm.sigma * radius * turn
-
-
-def _yaw(fm: _FaceMoves, p: NDArray[np.float64]) -> float:
-    """The tool's yaw [rad] with ``fm``'s middle contact holding the object at ``p`` (2,) [m]."""
-    yaw = _heading(fm.cone, p)
-    return float(fm.cone.heading(p[None])[0]) if yaw is None else yaw
-
-
-@dataclass(frozen=True)
-class _Contact:
-    """The contact of the run a search node is in: how many contacts of its face the run has used and
-    the excursion ``(lo, now, hi)`` [m] of the present one's travel along the face since it began."""
-
-    count: int = 1
-    lo: float = 0.0
-    now: float = 0.0
-    hi: float = 0.0
-
-    def after(self, ds: float, width: float) -> _Contact | None:
-        """This contact after rolling ``ds`` [m]; a new contact of the face (a re-contact) where the
-        excursion would outgrow ``width`` [m]; None where one step alone outgrows it."""
-        now = self.now + ds
-        if max(self.hi, now) - min(self.lo, now) <= width:
-            return _Contact(self.count, min(self.lo, now), now, max(self.hi, now))
-        if abs(ds) > width:
-            return None
-        return _Contact(self.count + 1, min(0.0, ds), ds, max(0.0, ds))
-
-
-def _stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float,
-             step: float) -> NDArray[np.float64] | None:
-    """Where a step of ``step`` [m] of ``fm`` in direction ``ang`` [rad] from ``p`` ends, its direction kept inside
-    the face's cone at both ends of the step (the cone turns with the heading the Omni imposes, so a
-    step along its edge at ``p`` may leave it at the step's end: it is turned back inside), or None
-    where no direction near ``ang`` is inside both."""
-    for _ in range(3):
-        q = p + step * np.array([math.cos(ang), math.sin(ang)])
-        off = math.remainder(ang - _pointing(fm, q), 2 * math.pi)
-        if abs(off) <= half:
-            return q
-        # turned back to just inside the edge: the cone at the new end turns a little further with
-        # it, so aiming at the edge itself would fall outside again, however many times repeated
-        ang -= off - math.copysign(EDGE_INSIDE * half, off)
-    return None
-
-
-def _rolled(setting: Setting, options: QPOptions, fm: _FaceMoves, came: str | None, touch: _Contact,
-            p: NDArray[np.float64], q: NDArray[np.float64]) -> _Contact | None:
-    """The contact of ``fm`` after it pushes the object from ``p`` to ``q`` (2,) [m]: ``touch`` rolled on
-    where the node's face ``came`` is ``fm``'s, a run's first contact where the face changes; None where
-    the run would need more than ``options.max_contacts`` contacts."""
-    own = touch if came == fm.name else _Contact()
-    after = own.after(_roll(fm, p, q, setting.mechanics.rolling, setting.radius), fm.width)
-    return None if after is None or after.count > options.max_contacts else after
-
-
-def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str) -> GuidedPath:
-    """The path of the search's node ``k`` (``nodes``: position, parent, face, contact) and its last step
-    to ``target`` with face ``last``."""
-    xy, fs = [target], [last]
+def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touch: _Contact,
+               moves: dict[str, _FaceMoves]) -> GuidedPath:
+    """The path of the search's node ``k`` (``nodes``: position, parent, face's key in ``moves``,
+    contact) and its last step to ``target`` with the face of key ``last``, its contact ``touch``."""
+    xy, fs, runs = [target], [last], [touch.run]
     while k >= 0:
-        q, parent, face, _ = nodes[k]
+        q, parent, face, contact = nodes[k]
         xy.append(q)
         if face is not None:
             fs.append(face)
+            runs.append(contact.run)
         k = parent
-    return GuidedPath(np.array(xy[::-1]), tuple(fs[::-1]))
+    keys = fs[::-1]
+    return GuidedPath(np.array(xy[::-1]), tuple(moves[f].name for f in keys), tuple(moves[f].window for f in keys),
+                      tuple(runs[::-1]))
 
 
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
-                budget: int = 3000, refused: Sequence[Refusal] = ()) -> GuidedPath | GuidedMiss:
+                budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
     ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin,
     span and most contacts per push); ``switch_price`` [m]: a face change's worth in path; ``refused``:
-    changes it does not make. A lattice cell is visited once per face, with the contacts its first
-    visit had used."""
+    changes it does not make; ``windows``: each face's runs keep their contact to one of its
+    :func:`contact_windows` (a change of window is a re-contact, priced as a change of face). A lattice
+    cell is visited once per face (and window), with the contacts its first visit had used."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
     # where the tool outline may not come (the obstacles grown by the slack) and where the object's
@@ -281,8 +170,8 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     for z in zones:
         if z is not None:
             shapely.prepare(z)
-    faces = _face_moves(setting, options)
-    by_name = {fm.name: fm for fm in faces}
+    faces = _face_moves(setting, options, windows)
+    by_name = {fm.key: fm for fm in faces}
 
     def touches(fm: _FaceMoves, yaws: list[float], p: NDArray[np.float64], near: float) -> bool:
         """Whether the tool outline, holding ``fm``'s contact at each end at the yaws [rad] with the
@@ -307,14 +196,15 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 continue
             if touches(fm, [y for y in yaws if y is not None], p, near):
                 continue
-            out.append((fm.name, _pointing(fm, p), CONE * fm.cone.theta_b))
+            out.append((fm.key, _pointing(fm, p), CONE * fm.cone.theta_b))
         return out
 
     def free(q: NDArray[np.float64]) -> bool:
         return centre_zone is None or not shapely.intersects_xy(centre_zone, float(q[0]), float(q[1]))
 
     def allowed(came: str | None, face: str, p: NDArray[np.float64]) -> bool:
-        return came is None or came == face or not any(r.near(came, face, p) for r in refused)
+        return came is None or came == face or not any(r.near(by_name[came].name, by_name[face].name, p)
+                                                       for r in refused)
 
     def finish(p: NDArray[np.float64], came: str | None, here: list[tuple[str, float, float]]) -> str | None:
         """A face that pushes the object from ``p`` straight to the target (within its cone at both
@@ -345,18 +235,17 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         n += 1
         here = held(p)
         last = finish(p, came, here)
-        if last is not None and _rolled(setting, options, by_name[last], came, touch, p, target) is not None:
-            return _backtrack(nodes, k, target, last)
+        final = None if last is None else _rolled(setting, options, by_name[last], came, touch, p, target)
+        if last is not None and final is not None:
+            return _backtrack(nodes, k, target, last, final, by_name)
         for name, mid, half in here:
             if not allowed(came, name, p):
                 continue
             for ang in (mid - half, mid, mid + half):
-                q = _stepped(by_name[name], p, ang, half, step)
-                if q is None or not free(q):
+                got = _step_of(setting, options, by_name[name], came, touch, p, ang, half, step)
+                if got is None or not free(got[0]) or (int(got[0][0] // cell), int(got[0][1] // cell), name) in seen:
                     continue
-                after = _rolled(setting, options, by_name[name], came, touch, p, q)
-                if after is None or (int(q[0] // cell), int(q[1] // cell), name) in seen:
-                    continue
+                q, after = got
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
                 nodes.append((q, k, name, after))
                 heapq.heappush(heap, (g2 + float(np.hypot(*(target - q))), g2, len(nodes) - 1, name))
@@ -381,16 +270,17 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     most :data:`REFUSALS` times per attempt); anything else, the next attempt."""
     target = universal[-1] if target is None else target
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
-    tries = [{"friction_cone_fraction": options.friction_cone_fraction}]
+    tries: list[tuple[dict[str, float], bool]] = [({"friction_cone_fraction": options.friction_cone_fraction}, False)]
     if wide > options.friction_cone_fraction:
-        tries.append({"friction_cone_fraction": wide})
+        tries.append(({"friction_cone_fraction": wide}, False))
     if span < options.contact_span:
-        tries.append({"friction_cone_fraction": max(wide, options.friction_cone_fraction), "contact_span": span})
-    for change in tries:
+        tries.append(({"friction_cone_fraction": max(wide, options.friction_cone_fraction), "contact_span": span},
+                      True))
+    for change, windows in tries:
         opts = options.model_copy(update=change)
         refused: list[Refusal] = []
         for _ in range(1 + REFUSALS):
-            plan = _attempt(t, setting, target, opts, universal, refused)
+            plan = _attempt(t, setting, target, opts, universal, refused, windows)
             failed = yield plan
             where = getattr(failed, "where", None)
             if plan.status != "solved" or where is None:
@@ -399,20 +289,26 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
 
 
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
-             universal: NDArray[np.float64], refused: list[Refusal]) -> PushPlan:
-    """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes."""
+             universal: NDArray[np.float64], refused: list[Refusal], windows: bool = False) -> PushPlan:
+    """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes
+    (``windows``: the contact of each run kept to one of its face's :func:`contact_windows`)."""
     share = opts.friction_cone_fraction
-    found = guided_path(setting, universal[0], target, options=opts, budget=opts.guided_budget, refused=refused)
+    found = guided_path(setting, universal[0], target, options=opts, budget=opts.guided_budget, refused=refused,
+                        windows=windows)
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
         but = f" without the {len(refused)} change(s) of face refused," if refused else ""
-        on = f" (the contact on {opts.contact_span * 1e3:g} mm of each face)"
+        on = f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if windows else ''} of each face)"
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
                         reason=f"at {share:g} of the friction cone{on},{but} {found.describe()}")
     tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
-    plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches), opts)
+    kept = found.face_windows()  # None: a face's runs keep to different windows, fitted run by run only
+    plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches),
+                             opts.model_copy(update={"contact_windows": kept}) if kept else opts) \
+        if kept is not None else PushPlan("qp", "infeasible", np.zeros(0), np.zeros((0, 2)), np.zeros((0, 2)), ref,
+                                          reason="a face's runs keep their contact to different windows")
     if plan.status != "solved":  # one fit per run of a face, the object at rest between them
-        runs = fit_runs(found.xy, found.faces, tg + t[0], setting, opts)
+        runs = fit_runs(found.xy, found.faces, tg + t[0], setting, opts, found.windows, found.runs)
         plan = runs if runs.status == "solved" else replace(plan, reason=f"{plan.reason}; {runs.reason}")
     if plan.status == "solved":  # measured like every plan of the variant, at the share it used
         frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces

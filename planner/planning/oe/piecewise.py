@@ -17,6 +17,7 @@ before it stopped, so the joined path is continuous, at rest at every joint.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -33,15 +34,20 @@ __all__ = ["MIN_RUN", "fit_runs"]
 MIN_RUN = 0.006
 
 
-def _runs(faces: tuple[str, ...]) -> list[tuple[str, int, int]]:
-    """``(face, first step, one past the last step)`` of each run of one face in the steps' ``faces``."""
-    out: list[tuple[str, int, int]] = []
-    for k, f in enumerate(faces):
-        if out and out[-1][0] == f:
-            out[-1] = (f, out[-1][1], k + 1)
+Window = tuple[float, float] | None
+
+
+def _runs(faces: tuple[str, ...], windows: Sequence[Window], runs: Sequence[int],
+          ) -> list[tuple[str, Window, int, int]]:
+    """``(face, contact window, first step, one past the last step)`` of each run of one face (one
+    window, one run number) in the steps' ``faces``, ``windows`` and ``runs``."""
+    out: list[tuple[str, Window, int, int, int]] = []
+    for k, (f, w, r) in enumerate(zip(faces, windows, runs, strict=True)):
+        if out and out[-1][:2] == (f, w) and out[-1][4] == r:
+            out[-1] = (f, w, out[-1][2], k + 1, r)
         else:
-            out.append((f, k, k + 1))
-    return out
+            out.append((f, w, k, k + 1, r))
+    return [run[:4] for run in out]
 
 
 def _fit_run(xy: NDArray[np.float64], times: NDArray[np.float64], face: str, setting: Setting,
@@ -89,13 +95,17 @@ def _join(pieces: list[PushPlan]) -> PushPlan:
 
 
 def fit_runs(xy: NDArray[np.float64], step_faces: tuple[str, ...], times: NDArray[np.float64],
-             setting: Setting, options: QPOptions) -> PushPlan:
+             setting: Setting, options: QPOptions, windows: Sequence[Window] = (),
+             runs: Sequence[int] = ()) -> PushPlan:
     """The guided path ``xy`` (K, 2) [m] at ``times`` (K,) [s] (``step_faces`` (K - 1,): the face of each
-    step) fitted run by run (module docstring); ``infeasible`` with the reason of the run that cannot be
-    fitted."""
+    step; ``windows``: the contact window [m] of each step, :func:`~.guided_moves.contact_windows`, or
+    none; ``runs``: the run of its face each step is in, where the search started a new one) fitted
+    run by run (module docstring); ``infeasible`` with the reason of the run that cannot be fitted."""
     pieces: list[PushPlan] = []
-    for face, a, b in _runs(step_faces):
-        got = _fit_run(xy[a:b + 1], times[a:b + 1], face, setting, options)
+    k = len(step_faces)
+    for face, window, a, b in _runs(step_faces, windows or (None,) * k, runs or (0,) * k):
+        opts = options.model_copy(update={"contact_windows": {face: window}}) if window else options
+        got = _fit_run(xy[a:b + 1], times[a:b + 1], face, setting, opts)
         contacts = 0 if isinstance(got, str) else sum(len(p.pushes) for p in got)
         if contacts > options.max_contacts:  # the one fit's bound on one push's contacts, for the whole run
             got = (f"its pieces need {contacts} contacts of the face (oe.max_contacts: {options.max_contacts} "

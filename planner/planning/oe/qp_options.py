@@ -59,6 +59,9 @@ class QPOptions(BaseModel):
             ``contact_span``; the contact then re-touches more often).
         contact_margin, contact_span: where on a face the contact may be [m]
             (:func:`tooltransfer.planner.planning.oe.contacts.usable_range`).
+        contact_windows: per face, the arc lengths ``(lo, hi)`` [m] the contact keeps to instead of
+            ``contact_span`` about the face's middle (the guided search's choice where the Omni holds
+            a face only with its contact toward one end; empty by default).
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -84,6 +87,7 @@ class QPOptions(BaseModel):
     guided_contact_span: float = Field(0.004, gt=0, allow_inf_nan=False)
     contact_margin: float = _TASK["contact_margin"]
     contact_span: float = _TASK["contact_span"]
+    contact_windows: dict[str, tuple[float, float]] = Field(default_factory=dict)
 
     @classmethod
     def from_task(cls, oe: OEOptions) -> QPOptions:
