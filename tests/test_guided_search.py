@@ -167,13 +167,15 @@ def test_a_face_that_cannot_carry_a_run_in_its_contacts_pushes_in_shorter_steps_
     """A short face pushing sideways rolls its contact off the face within one 4 mm step: the search takes
     half a step there (verd200-00001, the slope's 5 mm face); a run that needs more than
     ``oe.max_contacts`` contacts stops, and the face touches the resting object again for a new run
-    (verd200-00065, the finger). Before, the search dropped those steps and its space closed or ran out.
+    (verd200-00065, the finger). Without these (``more=False``, the first attempts) its space closes.
     Each run needs at most ``oe.max_contacts`` contacts by the model's rolling, no step rolls more than
     the face's usable width, and the path fitted run by run is a solved push plan."""
     task = _verdict_task(task_id)
     setting = setting_from_task(task, task_skills(task, need_ss=False))
     options = qp_options(task).model_copy(update={"friction_cone_fraction": 0.8})
-    found = guided_path(setting, np.array(task.start), np.array(task.target), options=options)
+    plain = guided_path(setting, np.array(task.start), np.array(task.target), options=options)
+    assert isinstance(plain, GuidedMiss) and plain.exhausted
+    found = guided_path(setting, np.array(task.start), np.array(task.target), options=options, more=True)
     assert isinstance(found, GuidedPath), found
     steps = np.hypot(*np.diff(found.xy, axis=0).T)[:-1]
     assert np.any(steps < 0.003) or max(found.runs) > 0  # what the search could not do before
@@ -272,7 +274,7 @@ def test_a_start_held_only_toward_one_end_of_a_face_is_pushed_from_with_the_cont
     start, target = np.array(task.start), np.array(task.target)
     whole = guided_path(setting, start, target, options=options)
     assert isinstance(whole, GuidedMiss) and whole.exhausted and whole.expansions == 1
-    found = guided_path(setting, start, target, options=options, windows=True)
+    found = guided_path(setting, start, target, options=options, windows=True, more=True)
     assert isinstance(found, GuidedPath), found
     assert len(found.windows) == len(found.faces)
     for k, (name, window) in enumerate(zip(found.faces, found.windows, strict=True)):

@@ -153,12 +153,15 @@ def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touc
 
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
-                budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False) -> GuidedPath | GuidedMiss:
+                budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False,
+                more: bool = False) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
     ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin,
     span and most contacts per push); ``switch_price`` [m]: a face change's worth in path; ``refused``:
     changes it does not make; ``windows``: each face's runs keep their contact to one of its
-    :func:`contact_windows` (a change of window is a re-contact, priced as a change of face). A lattice
+    :func:`contact_windows` (a change of window is a re-contact, priced as a change of face); ``more``:
+    half steps where a whole one rolls the contact off its face and a new run of a face where one
+    outgrows ``oe.max_contacts`` contacts (:func:`~.guided_moves._step_of`). A lattice
     cell is visited once per face (and window), with the contacts its first visit had used."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
@@ -203,8 +206,10 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         return centre_zone is None or not shapely.intersects_xy(centre_zone, float(q[0]), float(q[1]))
 
     def allowed(came: str | None, face: str, p: NDArray[np.float64]) -> bool:
-        return came is None or came == face or not any(r.near(by_name[came].name, by_name[face].name, p)
-                                                       for r in refused)
+        """Whether the change from ``came`` to ``face`` at ``p`` was not refused (``face`` "": a re-contact
+        of ``came``)."""
+        a, b = (by_name[came].name, by_name[face or came].name) if came is not None else ("", "")
+        return came is None or came == face or not any(r.near(a, b, p) for r in refused)
 
     def finish(p: NDArray[np.float64], came: str | None, here: list[tuple[str, float, float]]) -> str | None:
         """A face that pushes the object from ``p`` straight to the target (within its cone at both
@@ -235,17 +240,19 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         n += 1
         here = held(p)
         last = finish(p, came, here)
-        final = None if last is None else _rolled(setting, options, by_name[last], came, touch, p, target)
+        final = None if last is None else _rolled(setting, options, by_name[last], came, touch, p, target, more)
         if last is not None and final is not None:
             return _backtrack(nodes, k, target, last, final, by_name)
         for name, mid, half in here:
             if not allowed(came, name, p):
                 continue
             for ang in (mid - half, mid, mid + half):
-                got = _step_of(setting, options, by_name[name], came, touch, p, ang, half, step)
+                got = _step_of(setting, options, by_name[name], came, touch, p, ang, half, step, more)
                 if got is None or not free(got[0]) or (int(got[0][0] // cell), int(got[0][1] // cell), name) in seen:
                     continue
                 q, after = got
+                if came == name and (after.count, after.run) != (touch.count, touch.run) and not allowed(name, "", p):
+                    continue  # a re-contact of the face the later stages refused near here
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
                 nodes.append((q, k, name, after))
                 heapq.heappush(heap, (g2 + float(np.hypot(*(target - q))), g2, len(nodes) - 1, name))
@@ -256,7 +263,8 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
                  target: NDArray[np.float64] | None, options: QPOptions) -> Generator[PushPlan, Any, None]:
     """The ``qp`` variant's fallback when its scored candidates fail: for each share of the friction
     cone in turn (``options.friction_cone_fraction``, then ``friction_cone_fraction_max`` where that is
-    wider, then that share with the contact kept on ``guided_contact_span`` of each face where that is
+    wider, then that share with half steps and new runs where the contact rolls off its face, then
+    that with each run's contact kept to one window of ``guided_contact_span`` of its face where that is
     narrower than ``contact_span``), the sequence of :func:`guided_path` (``options.guided_budget``
     expansions) fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
@@ -270,17 +278,18 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     most :data:`REFUSALS` times per attempt); anything else, the next attempt."""
     target = universal[-1] if target is None else target
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
-    tries: list[tuple[dict[str, float], bool]] = [({"friction_cone_fraction": options.friction_cone_fraction}, False)]
-    if wide > options.friction_cone_fraction:
-        tries.append(({"friction_cone_fraction": wide}, False))
+    share = options.friction_cone_fraction
+    tries: list[tuple[dict[str, float], bool, bool]] = [({"friction_cone_fraction": share}, False, False)]
+    if wide > share:
+        tries.append(({"friction_cone_fraction": wide}, False, False))
+    tries.append(({"friction_cone_fraction": max(wide, share)}, False, True))
     if span < options.contact_span:
-        tries.append(({"friction_cone_fraction": max(wide, options.friction_cone_fraction), "contact_span": span},
-                      True))
-    for change, windows in tries:
+        tries.append(({"friction_cone_fraction": max(wide, share), "contact_span": span}, True, True))
+    for change, windows, more in tries:
         opts = options.model_copy(update=change)
         refused: list[Refusal] = []
         for _ in range(1 + REFUSALS):
-            plan = _attempt(t, setting, target, opts, universal, refused, windows)
+            plan = _attempt(t, setting, target, opts, universal, refused, windows, more)
             failed = yield plan
             where = getattr(failed, "where", None)
             if plan.status != "solved" or where is None:
@@ -289,16 +298,18 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
 
 
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
-             universal: NDArray[np.float64], refused: list[Refusal], windows: bool = False) -> PushPlan:
+             universal: NDArray[np.float64], refused: list[Refusal], windows: bool = False,
+             more: bool = False) -> PushPlan:
     """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes
-    (``windows``: the contact of each run kept to one of its face's :func:`contact_windows`)."""
+    (``windows``, ``more``: as :func:`guided_path` takes them)."""
     share = opts.friction_cone_fraction
     found = guided_path(setting, universal[0], target, options=opts, budget=opts.guided_budget, refused=refused,
-                        windows=windows)
+                        windows=windows, more=more)
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
         but = f" without the {len(refused)} change(s) of face refused," if refused else ""
-        on = f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if windows else ''} of each face)"
+        on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if windows else ''} of each face"
+              f"{', half steps and new runs where it rolls off' if more else ''})")
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
                         reason=f"at {share:g} of the friction cone{on},{but} {found.describe()}")
     tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))

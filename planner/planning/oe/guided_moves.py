@@ -180,31 +180,31 @@ def _stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float,
 
 
 def _rolled(setting: Setting, options: QPOptions, fm: _FaceMoves, came: str | None, touch: _Contact,
-            p: NDArray[np.float64], q: NDArray[np.float64]) -> _Contact | None:
+            p: NDArray[np.float64], q: NDArray[np.float64], new_runs: bool = False) -> _Contact | None:
     """The contact of ``fm`` after it pushes the object from ``p`` to ``q`` (2,) [m]: ``touch`` rolled on
-    where the node's face ``came`` is ``fm``'s, a run's first contact where the face changes, a new run
-    of the face where this one would need more than ``options.max_contacts`` contacts; None where the
-    step alone rolls the contact across more than the face's usable range."""
+    where the node's face ``came`` is ``fm``'s, a run's first contact where the face changes; where the
+    run would need more than ``options.max_contacts`` contacts, a new run of the face (``new_runs``) or
+    None; None where the step alone rolls the contact across more than the face's usable range."""
     own = touch if came == fm.key else _Contact()
     ds = _roll(fm, p, q, setting.mechanics.rolling, setting.radius)
     after = own.after(ds, fm.width)
     if after is not None and after.count > options.max_contacts:
-        return _Contact(1, min(0.0, ds), ds, max(0.0, ds), own.run + 1)
+        return _Contact(1, min(0.0, ds), ds, max(0.0, ds), own.run + 1) if new_runs else None
     return after
 
 
 def _step_of(setting: Setting, options: QPOptions, fm: _FaceMoves, came: str | None, touch: _Contact,
-             p: NDArray[np.float64], ang: float, half: float, step: float,
+             p: NDArray[np.float64], ang: float, half: float, step: float, more: bool = False,
              ) -> tuple[NDArray[np.float64], _Contact] | None:
     """A step of ``fm`` from ``p`` toward ``ang`` [rad] (:func:`_stepped`) and its contact after it
-    (:func:`_rolled`): of ``step`` [m], or of half of it where the whole step rolls the contact across
-    more than the face's usable range (a short face pushing sideways re-touches every millimetre or
-    two); None where neither is a step of the face."""
-    for size in (step, 0.5 * step):
+    (:func:`_rolled`, its ``new_runs`` with ``more``): of ``step`` [m], or with ``more`` of half of it
+    where the whole step rolls the contact across more than the face's usable range (a short face
+    pushing sideways re-touches every millimetre or two); None where neither is a step of the face."""
+    for size in (step, 0.5 * step) if more else (step,):
         q = _stepped(fm, p, ang, half, size)
         if q is None:
             return None
-        after = _rolled(setting, options, fm, came, touch, p, q)
+        after = _rolled(setting, options, fm, came, touch, p, q, more)
         if after is not None:
             return q, after
     return None
