@@ -287,3 +287,17 @@ def test_a_start_held_only_toward_one_end_of_a_face_is_pushed_from_with_the_cont
             ik = inverse_kinematics(setting.platform, [x, y])
             assert ik.reachable and ik.heading is not None
             assert abs(math.remainder(ik.heading - yaw, 2 * math.pi)) < 1e-6
+
+
+def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the_start() -> None:
+    """The windows' attempt is the costliest (up to five moves per face): it runs where every attempt
+    before it closed at the start (verd200-00056: no face holds the puck there with its contact at the
+    middle of the face) and not where they moved and failed later (verd200-00011)."""
+    stuck = solve(_verdict_task("verd200-00056"))
+    assert stuck.verdict != "solved"
+    # three attempts closed at once, then the windows' attempt (its path fails later, at the approach)
+    assert (stuck.reason or "").count("its space closed after 1 expansions") == 3
+    assert "; then " in (stuck.reason or "").split("half steps and new runs")[1]
+    moved = solve(_verdict_task("verd200-00011"))
+    assert moved.verdict != "solved" and "windows" not in (moved.reason or "")
+    assert "half steps and new runs" in (moved.reason or "")

@@ -265,8 +265,9 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     cone in turn (``options.friction_cone_fraction``, then ``friction_cone_fraction_max`` where that is
     wider, then that share with half steps and new runs where the contact rolls off its face, then
     that with each run's contact kept to one window of ``guided_contact_span`` of its face where that is
-    narrower than ``contact_span``), the sequence of :func:`guided_path` (``options.guided_budget``
-    expansions) fitted by
+    narrower than ``contact_span`` and no attempt before could push from the start at all: the Omni may
+    hold a face there only with its contact toward one end), the sequence of :func:`guided_path`
+    (``options.guided_budget`` expansions) fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
     [m]) under that share. Yields each attempt's push plan, ``infeasible`` with the reason when the search
     or the fit fails; the caller stops at the first whose whole plan passes its checks. The share a plan
@@ -285,11 +286,15 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     tries.append(({"friction_cone_fraction": max(wide, share)}, False, True))
     if span < options.contact_span:
         tries.append(({"friction_cone_fraction": max(wide, share), "contact_span": span}, True, True))
+    stuck = True  # every attempt so far could not push from the start at all
     for change, windows, more in tries:
+        if windows and not stuck:
+            break
         opts = options.model_copy(update=change)
         refused: list[Refusal] = []
         for _ in range(1 + REFUSALS):
             plan = _attempt(t, setting, target, opts, universal, refused, windows, more)
+            stuck = stuck and plan.metrics.get("guided_expansions") == 1.0
             failed = yield plan
             where = getattr(failed, "where", None)
             if plan.status != "solved" or where is None:
@@ -311,7 +316,8 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
         on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if windows else ''} of each face"
               f"{', half steps and new runs where it rolls off' if more else ''})")
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
-                        reason=f"at {share:g} of the friction cone{on},{but} {found.describe()}")
+                        reason=f"at {share:g} of the friction cone{on},{but} {found.describe()}",
+                        metrics={"guided_expansions": float(found.expansions)})
     tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
     kept = found.face_windows()  # None: a face's runs keep to different windows, fitted run by run only
     plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches),
