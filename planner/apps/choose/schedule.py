@@ -6,15 +6,16 @@ shares the cores among them, and ``workers`` processes that execute the solved p
 solves the task so has its plan (0.6 s of CPU on the library's tools) while the slow candidates are
 still in their searches, instead of waiting for a slot they hold (the planner's budgets count
 expansions and updates, not time, so a verdict does not depend on how the cores are shared). The
-planners keep the normal priority: a lower one would let the best plan's executions take the cores
-from the candidates still planning, but on a machine other work shares it starves the planners
-behind that work (measured: a 0.6 s plan took 15 s at ``nice`` 10 beside six other processes). The
-executions (:mod:`.executions`) start as soon as a plan is solved, best plan first
-(:func:`.ranking.plan_order`, ``workers`` at a time), while the slow candidates (those left without
-a plan, whose guided searches and certificates take longest) are still planned; with one pool given
-(``executor``), ``workers`` jobs run in all, plans first. Only the plans that may still be the best
-are executed (:func:`.ranking.needs_execution`: those ahead of the first that passed every
-execution; ``execute_all``: every solved plan).
+planners keep the normal priority until the first plan is executed, then become :data:`PLAN_NICE`
+nicer, so that the best plan's executions take the cores from the candidates still planning (by then
+mostly the slow ones the deadline stops); not from the start, since a lower priority starves the
+planners behind any other work on the machine (measured: a 0.6 s plan took 15 s at ``nice`` 10
+beside six other processes). The executions (:mod:`.executions`) start as soon as a plan is solved,
+best plan first (:func:`.ranking.plan_order`, ``workers`` at a time), while the slow candidates
+(those left without a plan, whose guided searches and certificates take longest) are still planned;
+with one pool given (``executor``), ``workers`` jobs run in all, plans first. Only the plans that
+may still be the best are executed (:func:`.ranking.needs_execution`: those ahead of the first that
+passed every execution; ``execute_all``: every solved plan).
 
 **The deadline.** Once the best plan so far has passed every execution (:func:`.ranking.known_best`:
 every plan ranked above it by margins was executed and failed one), the candidates still planning
@@ -36,6 +37,7 @@ pool it was given (its processes are not this choice's to end).
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED as _FIRST
@@ -52,6 +54,8 @@ from tooltransfer.problems.task import Task
 _SUBMIT_ORDER = ("closed_loop", "mismatch_closed_loop", "open_loop")
 #: The most processes of a pool per worker (the cores a choice uses).
 PROCESSES_PER_WORKER = 4
+#: How much nicer the planning processes become once the first plan is executed (module docstring).
+PLAN_NICE = 10
 #: The shortest grace [s] the candidates still planning get once a plan passed every execution.
 GRACE_MIN = 1.0
 
@@ -115,6 +119,17 @@ class Pools:
     @classmethod
     def given(cls, executor: Executor, workers: int) -> Pools:
         return cls(executor, executor, workers, workers, False)
+
+    def yield_to_executions(self) -> None:
+        """Lower the planning processes' priority by :data:`PLAN_NICE` (this choice's own pools, where
+        the platform can): called when the first execution starts (module docstring)."""
+        if not self.own:
+            return
+        for proc in list((getattr(self.plan, "_processes", None) or {}).values()):
+            try:
+                os.setpriority(os.PRIO_PROCESS, proc.pid, os.getpriority(os.PRIO_PROCESS, proc.pid) + PLAN_NICE)
+            except (AttributeError, OSError):  # pragma: no cover - no priorities here, or the process ended
+                pass
 
     def stop(self) -> None:
         """End this choice's own pools (:func:`stop`); a pool given is left open."""
@@ -267,6 +282,7 @@ def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say:
     to_plan = list(range(len(cands)))
     started: dict[int, float] = {}
     inflight: dict[Future, tuple[int, str]] = {}  # (candidate, "plan" or an execution mode)
+    yielded = False
     while not w.done():
         for i, what in _next_jobs(w, pools, to_plan, inflight):
             if what == "plan":
@@ -274,6 +290,9 @@ def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say:
                 started[i] = time.perf_counter()
                 inflight[pools.plan.submit(plan_candidate, cands[i].task, options.budget)] = (i, what)
             else:
+                if not yielded:  # the first execution: the planners make way
+                    pools.yield_to_executions()
+                    yielded = True
                 inflight[pools.run.submit(_timed_execute, w.plan(i), what, options.seed)] = (i, what)
         if not inflight:  # pragma: no cover - done() would hold
             break
