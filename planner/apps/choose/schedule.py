@@ -25,14 +25,17 @@ pool's and their verdict is ``unknown``, the reason :func:`stopped_reason` (neve
 ``solved``: nothing was decided). Why that grace: a tool that solves the task solves it on the first
 scored push sequences, in about the time the first solved candidate took (0.6 s of CPU on the
 library's tools); a candidate still planning after that, the executions of the best plan and the
-grace is in its guided search or infeasibility certificate (5-40 s of CPU each), which ends, with a
-few exceptions, in ``unknown`` or ``infeasible``: a verdict that cannot change the choice (a
-candidate without a plan ranks below any solved one). The grace lets a candidate that is merely
-slower than the first solve finish; the 1 s floor covers a first plan solved in less time than a
-process needs to be scheduled on a loaded machine. ``wait_all`` waits for every verdict, and so does
-a choice no plan of which passed every execution (nothing is then stopped), one run in this process
-(``workers=1``: the candidates are planned one after the other before any execution) and one in a
-pool it was given (its processes are not this choice's to end).
+grace is in its guided search or infeasibility certificate (5-40 s of CPU each), which ends mostly
+in ``unknown`` or ``infeasible``: a verdict that cannot change the choice (a candidate without a
+plan ranks below any solved one). Not always: of the 5 candidates stopped on 30 benchmark tasks
+(2026-12-04, ``benchmarks/README.md``) 3 would have been certified infeasible, 1 left unknown and 1
+solved, ranked above the plan chosen instead by margins and duration (which passed every execution
+all the same); ``wait_all`` is for a choice that must rank every tool. The grace lets a candidate
+that is merely slower than the first solve finish; the 1 s floor covers a first plan solved in less
+time than a process needs to be scheduled on a loaded machine. ``wait_all`` waits for every verdict,
+and so does a choice no plan of which passed every execution (nothing is then stopped), one run in
+this process (``workers=1``: the candidates are planned one after the other before any execution)
+and one in a pool it was given (its processes are not this choice's to end).
 """
 
 from __future__ import annotations
