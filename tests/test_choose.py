@@ -1,5 +1,6 @@
 """The ranked choice of a tool (``tooltransfer choose``, ``tt.choose_tool``): the ranking's rules, the
-command's JSON and best plan, bad input (exit 2), and a ``tools: choose`` batch."""
+command's JSON and best plan, bad input (exit 2), a ``tools: choose`` batch, and the deadline of the
+candidates still planning once a plan passed every execution (``--wait-all`` waits for them)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import yaml
 
 from tooltransfer.planner.apps.choose.ranking import (
     Executions,
+    known_best,
     margin_score,
     needs_execution,
     plan_order,
@@ -58,6 +60,10 @@ def test_execution_stops_once_the_best_is_known() -> None:
     failed = Executions(open_loop=0.001, closed_loop=0.01, mismatch_closed_loop=0.001)
     assert needs_execution(order, {0: failed}) == [2, 3]
     assert needs_execution(order, {0: failed, 2: GOOD}) == []
+    # a plan that passed with one ahead of it not executed yet: only that one may still rank above it
+    assert needs_execution(order, {2: GOOD}) == [0]
+    assert known_best(order, {2: GOOD}) is None and known_best(order, {0: failed, 2: GOOD}) == 2
+    assert known_best(order, {0: failed}) is None and known_best(order, {0: GOOD}) == 0
 
 
 def test_choose_ranks_every_tool_writes_the_best_plan_and_draws_them(tmp_path: Path, capsys) -> None:
@@ -137,3 +143,64 @@ def test_a_batch_may_choose_its_tools(tmp_path: Path, small_batch, capsys) -> No
     assert row["closed_loop_error"] == pytest.approx(choice[0]["closed_loop_error"])
     write_report(tmp_path / "pick.sqlite", None)
     assert f"tools chosen (tools: choose): {row['tool']} 1" in capsys.readouterr().out
+
+
+#: A generated task (bench_choose's task 5: seed 2812, six tools) the trapezoid solves at once and the
+#: finger only certifies infeasible after a long search (about 25 s of CPU).
+LONG_FOR_FINGER = {
+    "format": "tooltransfer.task/1", "tool": "trapezoid", "name": "choose100-00005",
+    "skills": {"dataset": str(ROOT / "problems" / "data" / "finger_demos")},
+    "start": [0.012985, 0.187288], "target": [-0.046971, 0.195274],
+    "obstacles": [{"kind": "disc", "centre": [-0.017634, 0.175164], "radius": 0.004442}]}
+
+
+@pytest.mark.serial
+def test_candidates_still_planning_are_stopped_once_a_plan_passed_every_execution(tmp_path: Path, capsys) -> None:
+    import multiprocessing
+
+    task = tmp_path / "long_for_finger.yaml"
+    task.write_text(yaml.safe_dump(LONG_FOR_FINGER))
+    code = main(["choose", str(task), "--tools", "trapezoid,finger", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["best"] == "trapezoid"
+    best, finger = out["ranking"]
+    assert best["reason"].startswith("passed every execution") and not best["stopped"]
+    assert best["closed_loop_error"] <= 0.002
+    assert finger["tool"] == "finger" and finger["stopped"] and not finger["executed"]
+    assert finger["verdict"] == "unknown"  # never infeasible (nothing was certified) nor solved
+    assert finger["reason"] == "stopped after trapezoid passed every execution; `--wait-all` waits for its verdict"
+    assert not multiprocessing.active_children()  # the pools' processes ended and waited for
+
+
+@pytest.mark.serial
+def test_wait_all_waits_for_every_verdict() -> None:
+    import multiprocessing
+
+    from tooltransfer import choose_tool
+    from tooltransfer.problems.task import task_from_dict
+
+    choice = choose_tool(task_from_dict(LONG_FOR_FINGER, str(ROOT / "long_for_finger.yaml")), ["trapezoid", "finger"],
+                         wait_all=True)
+    best, finger = choice.ranking
+    assert choice.best is best and best.label == "trapezoid" and best.executions is not None
+    assert finger.label == "finger" and not finger.stopped
+    assert finger.verdict == "infeasible" and finger.reason.startswith("certified infeasible"), finger.reason
+    assert choice.cpu >= finger.planning_cpu > 5.0  # the long certificate ran to its end, and is counted
+    assert not multiprocessing.active_children()
+
+
+def test_nothing_is_stopped_without_a_plan_that_passed_every_execution() -> None:
+    from tooltransfer.planner.apps.choose.executions import Planned
+    from tooltransfer.planner.apps.choose.schedule import Options, Work, grace, processes, stopped_reason
+
+    assert grace(0.2) == 1.0 and grace(3.5) == 3.5
+    assert processes(2, 6) == 6 and processes(2, 10) == 8 and processes(2, 1) == 2
+    assert "`--wait-all`" in stopped_reason("slope")
+    said: list[str] = []
+    w = Work(["a", "b", "c"], Options())
+    w.add_plan(0, Planned(None, "unknown", "no plan", 1.0, 1.0))
+    w.set_deadline(True, said.append)
+    assert w.deadline is None and not said  # no plan passed: every verdict is waited for
+    waiting = Work(["a", "b"], Options(wait_all=True))
+    waiting.set_deadline(True, said.append)
+    assert waiting.deadline is None

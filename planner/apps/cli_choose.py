@@ -19,7 +19,9 @@ if TYPE_CHECKING:
 
 HELP = ("plan a task with each candidate tool (in parallel), execute the solved plans on the simulated platform "
         "(open and closed loop, and closed loop on a mismatched plant) and rank the tools: executed success, "
-        "then margins (friction cone, contact edge, clearance), then duration. Exit codes: 0 a tool solves "
+        "then margins (friction cone, contact edge, clearance), then duration. Once a plan has passed every "
+        "execution, the tools still planning get a grace period (at least 1 s) and are then stopped, their verdict "
+        "unknown (--wait-all waits for every verdict). Exit codes: 0 a tool solves "
         "the task, 1 every tool certified infeasible, 3 none solves it and some are unknown, 2 bad input "
         "(an unknown tool, a missing or invalid tool file, a bad task or path), 130 Ctrl-C")
 EXAMPLE = ("tooltransfer choose paper/transfer_tool2 --tools finger,slope,trapezoid -o out/best.json --out out/choose\n"
@@ -41,9 +43,14 @@ def add_choose_parser(sub: argparse._SubParsersAction, add: Callable[..., argpar
     p.add_argument("--out", type=Path, default=None, metavar="DIR",
                    help="write the candidates' plans side by side (choose.png) and every solved plan here")
     p.add_argument("--json", action="store_true", help="print a JSON summary (its \"ranking\" lists every tool)")
-    p.add_argument("--workers", type=int, default=2, help="processes (default 2; at most the CPU count)")
+    p.add_argument("--workers", type=int, default=2,
+                   help="cores (default 2; at most the CPU count): a process per tool, up to 4 per core, share them")
     p.add_argument("--execute-all", action="store_true",
                    help="execute every solved plan (default: until the best is known)")
+    p.add_argument("--wait-all", action="store_true",
+                   help="wait for every tool's verdict (default: once a plan has passed every execution, the tools "
+                   "still planning get the larger of 1 s and the first solved tool's planning time, then are stopped "
+                   "and reported unknown)")
     p.add_argument("--seed", type=int, default=0, help="camera-noise seed of the closed loops")
     return p
 
@@ -72,8 +79,8 @@ def cmd_choose(args: argparse.Namespace) -> int:
             if s is not None:
                 s.update(f"choosing a tool for {args.task}: {text}")
 
-        choice = choose_tool(task, tools, workers=args.workers, execute_all=args.execute_all, seed=args.seed,
-                             progress=progress)
+        choice = choose_tool(task, tools, workers=args.workers, execute_all=args.execute_all,
+                             wait_all=args.wait_all, seed=args.seed, progress=progress)
     plan_path = figure = None
     if args.best is not None and choice.plan is not None:
         choice.plan.write(args.best)

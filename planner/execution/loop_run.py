@@ -230,8 +230,9 @@ class LoopRun:
                 what = f"switch {self.face} -> {face}" if change else f"re-contact of {face}"
                 raise LoopStop(f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
             xy = sw.xy
-        clear = [swept_clearance(self.tool, self.platform, xy[j:j + 1], o, self.setting.radius) for j in range(len(xy))]
-        j = next((j for j, c in enumerate(clear) if c >= 0.5 * BACK_OFF), 0)
+        # the first pose clear of the object (checked in turn, not all of them: the rest are not used)
+        j = next((j for j in range(len(xy)) if swept_clearance(self.tool, self.platform, xy[j:j + 1], o,
+                                                                self.setting.radius) >= 0.5 * BACK_OFF), 0)
         self.move(np.vstack([back, xy[j:]]))
         if change:
             self.n_switches += 1

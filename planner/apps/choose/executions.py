@@ -8,7 +8,11 @@ The executions (:data:`MODES`): the open loop (:func:`tooltransfer.planner.execu
 and the closed loop (:func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`) on the nominal
 MuJoCo platform, and the closed loop on a mismatched plant: the MuJoCo platform with the tool's
 friction :data:`MISMATCH_FRICTION` ``tool_friction`` and the table's ``table_friction`` (the benchmarks'
-mismatched platform, ``benchmarks/bench_execution.py``).
+mismatched platform, ``benchmarks/bench_execution.py``). The mismatched closed loop stays on MuJoCo: on
+the quasi-static push model as the plant (:class:`tooltransfer.planner.execution.plant.ModelPlant`
+with ``mu`` and ``c`` 0.6 or 1.4 times the plan's, the benchmarks' other mismatched plants) the loop
+is no cheaper (measured 2026-12-04 on two solved plans: 1.7-5.4 s of CPU there against 3.9-4.3 s on
+MuJoCo), since its re-plans and the push model's adaptation, not the physics, take most of its time.
 """
 
 from __future__ import annotations

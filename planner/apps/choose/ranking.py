@@ -135,12 +135,24 @@ def plan_order(candidates: Sequence[tuple[str, Mapping[str, Any]]]) -> list[int]
 
 def needs_execution(order: Sequence[int], executed: Mapping[int, Executions]) -> list[int]:
     """The solved candidates (``order``: indices by :func:`plan_order`, solved ones only) still to
-    execute: none once one has passed every execution after all before it failed one (the module
-    docstring says why the best is then known), else the ones not yet executed."""
+    execute: those not yet executed ahead of the first that passed every execution (none once every
+    candidate ahead of it was executed and failed one: the module docstring says why it is then the
+    best; one behind it can never rank above it), all of those not yet executed while none has passed."""
+    for n, i in enumerate(order):
+        ex = executed.get(i)
+        if ex is not None and ex.passed_all():
+            return [j for j in order[:n] if j not in executed]
+    return [j for j in order if j not in executed]
+
+
+def known_best(order: Sequence[int], executed: Mapping[int, Executions]) -> int | None:
+    """The candidate of ``order`` (as for :func:`needs_execution`) known to be the best of those
+    planned: the first that passed every execution with every one ahead of it executed (and failed
+    one); None while there is none."""
     for i in order:
         ex = executed.get(i)
         if ex is None:
-            return [j for j in order if j not in executed]
+            return None
         if ex.passed_all():
-            return []
-    return []
+            return i
+    return None

@@ -3,7 +3,8 @@
 
 The summary: ``{"task", "verdict", "best", "plan", "figure", "wall_time", "cpu_time", "ranking": [...]}``,
 one ranking entry per candidate, best first: ``rank``, ``tool`` (as named), ``name`` (the tool's own),
-``verdict`` (``solved|infeasible|unknown``), ``reason``, ``executed`` (whether its plan was executed),
+``verdict`` (``solved|infeasible|unknown``), ``reason``, ``stopped`` (whether its planning was stopped
+once another plan had passed every execution: then ``unknown``), ``executed`` (whether its plan was executed),
 the final errors [m] ``open_loop_error``, ``closed_loop_error``, ``mismatch_closed_loop_error`` and the
 closed loops' statuses, the margins ``friction_cone_margin`` [rad], ``contact_edge_margin`` [m],
 ``clearance`` [m] (null: infinite, no obstacle), ``margin_score``, ``duration`` [s] and
@@ -60,7 +61,7 @@ def entry(r: Ranked, best: Ranked | None) -> dict[str, Any]:
     ex = r.executions
     out: dict[str, Any] = {
         "rank": r.rank, "tool": r.label, "name": r.tool, "verdict": r.verdict, "reason": reason(r, best),
-        "executed": ex is not None,
+        "stopped": r.stopped, "executed": ex is not None,
         "open_loop_error": ex.open_loop if ex else None, "closed_loop_error": ex.closed_loop if ex else None,
         "mismatch_closed_loop_error": ex.mismatch_closed_loop if ex else None,
         "closed_loop_status": r.runs["closed_loop"].status if "closed_loop" in r.runs else None,

@@ -1,15 +1,17 @@
 """``choose_tool``: plan a task with every candidate tool in parallel, execute the solved plans, rank them.
 
-The work runs in a process pool of ``workers`` processes (default 2, at most the machine's cores;
-BLAS on one thread each, as the command line sets it): every candidate is planned, and the solved
-plans are executed (:mod:`.executions`) in the order of their plans' margins and duration
-(:func:`.ranking.plan_order`), one execution per pool slot at a time, until one plan passes every
-execution (the best is then known, :mod:`.ranking`; ``execute_all`` executes every solved plan).
-Plans go first; executions fill the slots the plans leave free, so a plan solved early is executed
-while the slow candidates (those left without a plan, whose certificate searches take longest) are
-still planned.
-The pool's processes are forked from this one where the platform allows, after the task's skills
-are learned (or read from the cache) here, so no process learns or loads them again.
+The work runs on ``workers`` cores (default 2, at most the machine's; BLAS on one thread each, as the
+command line sets it), as :mod:`.schedule` says: a process per candidate (up to
+:data:`.schedule.PROCESSES_PER_WORKER` per core) plans it, so every candidate plans from the start
+and a slow one holds back neither the others nor the best plan's executions; the solved plans are
+executed (:mod:`.executions`) as soon as they are solved, in the order of their plans' margins and
+duration (:func:`.ranking.plan_order`), ``workers`` executions at a time, until one plan passes
+every execution (the best is then known, :mod:`.ranking`; ``execute_all`` executes every solved
+plan). Once a plan has passed every execution, the candidates still planning get a grace period and
+are then stopped, their verdict ``unknown`` (:mod:`.schedule`'s deadline; ``wait_all`` waits for
+every verdict). The processes are forked from this one where the platform allows, after the task's
+skills are learned (or read from the cache) and the jobs' modules imported here, so no process
+learns, loads or imports them again.
 """
 
 from __future__ import annotations
@@ -17,21 +19,18 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED as _FIRST
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, wait
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from tooltransfer.errors import InputError
+from tooltransfer.planner.apps.choose import schedule
 from tooltransfer.planner.apps.choose.candidates import Candidate, candidates
-from tooltransfer.planner.apps.choose.executions import MODES, Executed, Planned, execute, plan_candidate
-from tooltransfer.planner.apps.choose.ranking import Executions, needs_execution, plan_order, rank_key
+from tooltransfer.planner.apps.choose.executions import Executed, Planned
+from tooltransfer.planner.apps.choose.ranking import Executions, rank_key
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.problems.task import Task
-
-#: The order in which one plan's executions are handed out (the longest first: two slots finish together).
-_SUBMIT_ORDER = ("closed_loop", "mismatch_closed_loop", "open_loop")
 
 
 @dataclass(frozen=True)
@@ -46,7 +45,9 @@ class Ranked:
         plan: the plan (None when planning raised).
         executions: the final errors of the executions run (None: not executed).
         runs: every execution run, by mode (:data:`.executions.MODES`).
-        planning_wall, planning_cpu: [s].
+        planning_wall, planning_cpu: [s] (a candidate stopped: the wall time until it was stopped, CPU 0:
+            its CPU time counts in the choice's only).
+        stopped: whether its planning was stopped at the deadline (:mod:`.schedule`; verdict ``unknown``).
     """
 
     rank: int
@@ -59,6 +60,7 @@ class Ranked:
     runs: dict[str, Executed] = field(default_factory=dict)
     planning_wall: float = 0.0
     planning_cpu: float = 0.0
+    stopped: bool = False
 
 
 @dataclass(frozen=True)
@@ -89,45 +91,31 @@ class Choice:
         return "solved" if "solved" in verdicts else "unknown" if "unknown" in verdicts else "infeasible"
 
 
-def _pool(workers: int) -> ProcessPoolExecutor:
-    import multiprocessing
-
-    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-    return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method))
-
-
-def _stop(pool: ProcessPoolExecutor) -> None:
-    """End a pool this choice made now: jobs queued are dropped, running ones (executions no longer
-    needed) are ended with their processes."""
-    pool.shutdown(wait=False, cancel_futures=True)
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
-        if proc.is_alive():
-            proc.terminate()
-
-
-def _warm(task: Task) -> None:
-    """Learn (or read from the cache) the task's skills here, before the pool's processes fork."""
-    from tooltransfer.planner.planning.setting import task_skills
-    from tooltransfer.planner.planning.variant_registry import needs_ss_skill
-
-    task_skills(task, need_ss=needs_ss_skill(task.variants.ss))
-
-
 def choose_tool(task: Task | str | Path, tools: Sequence[str | Path] | None = None, *, workers: int = 2,
-                execute_all: bool = False, seed: int = 0, budget: float = 1.0, executor: Executor | None = None,
-                progress: Callable[[str], None] | None = None) -> Choice:
+                execute_all: bool = False, wait_all: bool = False, seed: int = 0, budget: float = 1.0,
+                executor: Executor | None = None, progress: Callable[[str], None] | None = None) -> Choice:
     """Choose the best tool for ``task`` among ``tools`` (module docstring).
 
     Args:
         task: a :class:`~tooltransfer.problems.task.Task`, a task file or a bundled task's name; its own
             tool is not a candidate unless listed.
         tools: library tool names and tool-file paths (None: every library tool).
-        workers: processes planning and executing (1: all in this process); at most the machine's cores.
+        workers: the cores the choice uses (1: all in this process); at most the machine's. The pool this
+            call makes has a process per candidate, at most :data:`.schedule.PROCESSES_PER_WORKER` per
+            worker (the cores shared among them); a given ``executor`` runs ``workers`` jobs at a time.
         execute_all: execute every solved plan, not only until the best is known.
+        wait_all: wait for every candidate's verdict; default: once a plan passed every execution, the
+            candidates still planning are stopped after a grace period (:mod:`.schedule`) and ranked
+            ``unknown`` with the reason "stopped after <tool> passed every execution; ..." (only in
+            the pool this call makes: with ``workers=1`` or an ``executor`` every verdict is waited for).
         seed: the closed loops' camera-noise seed.
         budget: the planner's search and certificate budgets multiplied (``solve(budget=)``).
         executor: a pool to use (kept open) instead of one made for this call.
         progress: called with a line of text as the work goes.
+
+    Returns:
+        The :class:`Choice`; its ``cpu`` counts this process and, for the pool this call makes, its
+        processes' whole CPU time (jobs stopped or cut short included), else the jobs' own.
 
     Raises:
         InputError: naming ``tools``: an unknown tool name, a missing or invalid tool file.
@@ -145,119 +133,34 @@ def choose_tool(task: Task | str | Path, tools: Sequence[str | Path] | None = No
     cands = candidates(task, tools, field="tools")
     say = progress or (lambda text: None)
     workers = min(workers, os.cpu_count() or 1, max(1, len(cands)))
-    pool: Executor | None = executor
     own = executor is None and workers > 1
+    children0 = schedule.children_cpu()
+    pools: schedule.Pools | None = None
     if own:
-        _warm(task)
-        pool = _pool(workers)
+        schedule.warm(task)
+        pools = schedule.Pools.make(workers, len(cands))
+    elif executor is not None:
+        pools = schedule.Pools.given(executor, workers)
+    options = schedule.Options(budget=budget, seed=seed, execute_all=execute_all, wait_all=wait_all)
     try:
         say(f"planning with {len(cands)} tools")
-        w = _work(cands, pool, workers, budget, execute_all, seed, say)
+        w = schedule.work(cands, pools, options, say)
     finally:
-        if own and isinstance(pool, ProcessPoolExecutor):
-            _stop(pool)
-    ranking = _rank(cands, [w.planned[i] for i in range(len(cands))], w.runs, w.executed)
-    return Choice(task, ranking, time.perf_counter() - wall0, time.process_time() - cpu0 + w.cpu)
-
-
-class _Work:
-    """The state of one choice's work: the plans and executions done, and what to run next."""
-
-    def __init__(self, n: int, execute_all: bool) -> None:
-        self.n = n
-        self.execute_all = execute_all
-        self.planned: dict[int, Planned] = {}
-        self.runs: dict[int, dict[str, Executed]] = {}
-        self.executed: dict[int, Executions] = {}
-        self.cpu = 0.0  # of the jobs [s]
-
-    def order(self) -> list[int]:
-        """The solved candidates planned so far, by their plans' margins and duration (best first)."""
-        solved = [i for i in sorted(self.planned) if self.planned[i].verdict == "solved"
-                  and self.planned[i].plan is not None]
-        return [solved[k] for k in plan_order([("solved", self.plan(i).metrics) for i in solved])]
-
-    def plan(self, i: int) -> Plan:
-        plan = self.planned[i].plan
-        assert plan is not None  # only solved candidates with a plan are executed
-        return plan
-
-    def wanted(self) -> list[tuple[int, str]]:
-        """The executions still to run, best candidate first: until the best is known once every
-        candidate is planned (:func:`.ranking.needs_execution`); before, every solved plan's (in the
-        pool's free slots: the best so far may be the best)."""
-        order = self.order()
-        if len(self.planned) < self.n or self.execute_all:
-            want = [i for i in order if i not in self.executed]
-        else:
-            want = needs_execution(order, self.executed)
-        return [(i, m) for i in want for m in _SUBMIT_ORDER if m not in self.runs.get(i, {})]
-
-    def done(self) -> bool:
-        return len(self.planned) == self.n and not self.wanted()
-
-    def add_run(self, i: int, mode: str, result: Executed, cpu: float) -> None:
-        self.cpu += cpu
-        by_mode = self.runs.setdefault(i, {})
-        by_mode[mode] = result
-        if all(m in by_mode for m in MODES):
-            self.executed[i] = Executions(**{m: by_mode[m].error for m in MODES},
-                                          status={m: by_mode[m].status for m in MODES})
-
-
-def _work(cands: Sequence[Candidate], pool: Executor | None, workers: int, budget: float, execute_all: bool,
-          seed: int, say: Callable[[str], None]) -> _Work:
-    """Plan every candidate and execute the solved plans (module docstring). In a pool, the plans go
-    first and the executions fill the slots the plans leave free, so the executions of the plans solved
-    early overlap the planning of the slow candidates (those without a plan, whose certificate searches
-    take longest)."""
-    w = _Work(len(cands), execute_all)
-    if pool is None:
-        for i, c in enumerate(cands):
-            w.planned[i] = plan_candidate(c.task, budget)
-        while not w.done():
-            i, mode = w.wanted()[0]
-            say(f"executing {mode.replace('_', ' ')} of {cands[i].label}")
-            w.add_run(i, mode, execute(w.plan(i), mode, seed), 0.0)  # its CPU time is this process's
-        return w
-    to_plan = list(range(len(cands)))
-    inflight: dict[Future, tuple[int, str]] = {}  # (candidate, "plan" or an execution mode)
-    while not w.done():
-        busy = set(inflight.values())
-        queue = [(i, "plan") for i in to_plan] + [job for job in w.wanted() if job not in busy]
-        for i, what in queue[:max(0, workers - len(inflight))]:
-            if what == "plan":
-                to_plan.remove(i)
-                inflight[pool.submit(plan_candidate, cands[i].task, budget)] = (i, what)
-            else:
-                inflight[pool.submit(_timed_execute, w.plan(i), what, seed)] = (i, what)
-        if not inflight:  # pragma: no cover - done() would hold
-            break
-        finished, _ = wait(list(inflight), return_when=_FIRST)
-        for f in finished:
-            i, what = inflight.pop(f)
-            if what == "plan":
-                p = f.result()
-                w.planned[i] = p
-                w.cpu += p.cpu
-                say(f"{len(w.planned)}/{len(cands)} planned ({cands[i].label}: {p.verdict})")
-            else:
-                result, used = f.result()
-                w.add_run(i, what, result, used)
-                say(f"{cands[i].label}: {what.replace('_', ' ')} {result.status}")
-    return w
-
-
-def _timed_execute(plan: Plan, mode: str, seed: int) -> tuple[Executed, float]:
-    t = time.process_time()
-    out = execute(plan, mode, seed)
-    return out, time.process_time() - t
+        if pools is not None:
+            pools.stop()
+    jobs = w.cpu
+    children1 = schedule.children_cpu()
+    if own and children0 is not None and children1 is not None:  # the pool's processes, waited for
+        jobs = max(jobs, children1 - children0)
+    ranking = _rank(cands, [w.planned[i] for i in range(len(cands))], w.runs, w.executed, set(w.stopped))
+    return Choice(task, ranking, time.perf_counter() - wall0, time.process_time() - cpu0 + jobs)
 
 
 def _rank(cands: Sequence[Candidate], planned: Sequence[Planned], runs: dict[int, dict[str, Executed]],
-          executed: dict[int, Executions]) -> list[Ranked]:
+          executed: dict[int, Executions], stopped: set[int]) -> list[Ranked]:
     """The candidates best first (:func:`.ranking.rank_key`); ``executed``: the plans every execution of
-    which ran, ``runs``: every execution run (a plan whose executions were cut short keeps none)."""
+    which ran, ``runs``: every execution run (a plan whose executions were cut short keeps none);
+    ``stopped``: the candidates stopped at the deadline."""
     def key(i: int) -> tuple[Any, ...]:
         p = planned[i]
         ex = executed.get(i)
@@ -270,4 +173,4 @@ def _rank(cands: Sequence[Candidate], planned: Sequence[Planned], runs: dict[int
                    reason=planned[i].reason if planned[i].verdict != "solved" else "", plan=planned[i].plan,
                    executions=executed.get(i), runs=dict(runs.get(i, {})) if i in executed else {},
                    planning_wall=planned[i].wall,
-                   planning_cpu=planned[i].cpu) for n, i in enumerate(order)]
+                   planning_cpu=planned[i].cpu, stopped=i in stopped) for n, i in enumerate(order)]

@@ -1,0 +1,347 @@
+"""The work of one tool choice: planning every candidate and executing the solved plans, in a pool.
+
+A choice makes two pools: the planners, a process per candidate (:func:`processes`: at most
+:data:`PROCESSES_PER_WORKER` per worker), all planning from the start while the operating system
+shares the cores among them, and ``workers`` processes that execute the solved plans. A tool that
+solves the task so has its plan (0.6 s of CPU on the library's tools) while the slow candidates are
+still in their searches, instead of waiting for a slot they hold (the planner's budgets count
+expansions and updates, not time, so a verdict does not depend on how the cores are shared). The
+planners keep the normal priority until the first plan is executed, then become :data:`PLAN_NICE`
+nicer, so that the best plan's executions take the cores from the candidates still planning (by then
+mostly the slow ones the deadline stops); not from the start, since a lower priority starves the
+planners behind any other work on the machine (measured: a 0.6 s plan took 15 s at ``nice`` 10
+beside six other processes). The executions (:mod:`.executions`) start as soon as a plan is solved,
+best plan first (:func:`.ranking.plan_order`, ``workers`` at a time), while the slow candidates
+(those left without a plan, whose guided searches and certificates take longest) are still planned;
+with one pool given (``executor``), ``workers`` jobs run in all, plans first. Only the plans that
+may still be the best are executed (:func:`.ranking.needs_execution`: those ahead of the first that
+passed every execution; ``execute_all``: every solved plan).
+
+**The deadline.** Once the best plan so far has passed every execution (:func:`.ranking.known_best`:
+every plan ranked above it by margins was executed and failed one), the candidates still planning
+get a grace period of :func:`grace` (the larger of :data:`GRACE_MIN` and the planning wall time of
+the first candidate that solved the task) and are then stopped: their processes are ended with the
+pool's and their verdict is ``unknown``, the reason :func:`stopped_reason` (never ``infeasible`` nor
+``solved``: nothing was decided). Why that grace: a tool that solves the task solves it on the first
+scored push sequences, in about the time the first solved candidate took (0.6 s of CPU on the
+library's tools); a candidate still planning after that, the executions of the best plan and the
+grace is in its guided search or infeasibility certificate (5-40 s of CPU each), which ends mostly
+in ``unknown`` or ``infeasible``: a verdict that cannot change the choice (a candidate without a
+plan ranks below any solved one). Not always: of the 5 candidates stopped on 30 benchmark tasks
+(2026-12-04, ``benchmarks/README.md``) 3 would have been certified infeasible, 1 left unknown and 1
+solved, ranked above the plan chosen instead by margins and duration (which passed every execution
+all the same); ``wait_all`` is for a choice that must rank every tool. The grace lets a candidate
+that is merely slower than the first solve finish; the 1 s floor covers a first plan solved in less
+time than a process needs to be scheduled on a loaded machine. ``wait_all`` waits for every verdict,
+and so does a choice no plan of which passed every execution (nothing is then stopped), one run in
+this process (``workers=1``: the candidates are planned one after the other before any execution)
+and one in a pool it was given (its processes are not this choice's to end).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED as _FIRST
+from concurrent.futures import Executor, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+
+from tooltransfer.planner.apps.choose.candidates import Candidate
+from tooltransfer.planner.apps.choose.executions import MODES, Executed, Planned, execute, plan_candidate
+from tooltransfer.planner.apps.choose.ranking import Executions, known_best, needs_execution, plan_order
+from tooltransfer.planner.planning.plan import Plan
+from tooltransfer.problems.task import Task
+
+#: The order in which one plan's executions are handed out (the longest first: two slots finish together).
+_SUBMIT_ORDER = ("closed_loop", "mismatch_closed_loop", "open_loop")
+#: The most processes of a pool per worker (the cores a choice uses).
+PROCESSES_PER_WORKER = 4
+#: How much nicer the planning processes become once the first plan is executed (module docstring).
+PLAN_NICE = 10
+#: The shortest grace [s] the candidates still planning get once a plan passed every execution.
+GRACE_MIN = 1.0
+
+
+def grace(first_solved_wall: float) -> float:
+    """The grace [s] of the candidates still planning (module docstring): the larger of
+    :data:`GRACE_MIN` and ``first_solved_wall``, the planning wall time [s] of the first candidate
+    that solved the task."""
+    return max(GRACE_MIN, first_solved_wall)
+
+
+def stopped_reason(best: str) -> str:
+    """The reason of a candidate stopped at the deadline, ``best`` the candidate that passed."""
+    return f"stopped after {best} passed every execution; `--wait-all` waits for its verdict"
+
+
+@dataclass(frozen=True)
+class Options:
+    """How one choice works: the planner's ``budget``, the closed loops' ``seed``, whether every solved
+    plan is executed (``execute_all``), whether every verdict is waited for (``wait_all``)."""
+
+    budget: float = 1.0
+    seed: int = 0
+    execute_all: bool = False
+    wait_all: bool = False
+
+
+def processes(workers: int, candidates: int) -> int:
+    """The processes of a choice's pool on ``workers`` cores for ``candidates`` tools: one per candidate,
+    at least ``workers`` and at most :data:`PROCESSES_PER_WORKER` per worker."""
+    return max(workers, min(candidates, PROCESSES_PER_WORKER * workers))
+
+
+def pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` processes, forked from this one where the platform allows."""
+    import multiprocessing
+
+    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    return ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method))
+
+
+@dataclass(frozen=True)
+class Pools:
+    """Where a choice's jobs run: the candidates' planning in ``plan``, at most ``plan_slots`` at a time,
+    the executions in ``run``, at most ``run_slots``; ``own``: this choice's pools (two: the planners,
+    a process per candidate, and ``workers`` processes executing), which
+    :meth:`stop` ends; else one pool the caller gave, ``plan_slots`` jobs in all, plans first."""
+
+    plan: Executor
+    run: Executor
+    plan_slots: int
+    run_slots: int
+    own: bool
+
+    @classmethod
+    def make(cls, workers: int, candidates: int) -> Pools:
+        """This choice's pools on ``workers`` cores for ``candidates`` tools (module docstring)."""
+        n = processes(workers, candidates)
+        return cls(pool(n), pool(workers), n, workers, True)
+
+    @classmethod
+    def given(cls, executor: Executor, workers: int) -> Pools:
+        return cls(executor, executor, workers, workers, False)
+
+    def yield_to_executions(self) -> None:
+        """Lower the planning processes' priority by :data:`PLAN_NICE` (this choice's own pools, where
+        the platform can): called when the first execution starts (module docstring)."""
+        if not self.own:
+            return
+        for proc in list((getattr(self.plan, "_processes", None) or {}).values()):
+            try:
+                os.setpriority(os.PRIO_PROCESS, proc.pid, os.getpriority(os.PRIO_PROCESS, proc.pid) + PLAN_NICE)
+            except (AttributeError, OSError):  # pragma: no cover - no priorities here, or the process ended
+                pass
+
+    def stop(self) -> None:
+        """End this choice's own pools (:func:`stop`); a pool given is left open."""
+        if self.own:
+            for p in (self.plan, self.run):
+                if isinstance(p, ProcessPoolExecutor):
+                    stop(p)
+
+
+def stop(p: ProcessPoolExecutor) -> None:
+    """End a pool this choice made now: jobs queued are dropped, running ones (executions no longer
+    needed, candidates stopped at the deadline) are ended with their processes, and every process is
+    waited for (none is left behind, and its CPU time is counted: :func:`children_cpu`)."""
+    procs = list((getattr(p, "_processes", None) or {}).values())
+    p.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
+        if proc.is_alive():
+            proc.terminate()
+    for proc in procs:
+        proc.join(5.0)
+        if proc.exitcode is None:  # pragma: no cover - a process that ignores SIGTERM
+            proc.kill()
+            proc.join(5.0)
+
+
+def children_cpu() -> float | None:
+    """The CPU time [s] (user and system) of this process's ended and waited-for child processes
+    (None where the platform does not say)."""
+    try:
+        import resource
+    except ImportError:  # pragma: no cover - not on POSIX
+        return None
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
+#: The modules the pool's jobs use, imported before the processes fork (each would import them again).
+_JOB_MODULES = ("tooltransfer.planner.planning.solve", "tooltransfer.planner.planning.verdicts.certificate",
+                "tooltransfer.planner.execution.closed_loop", "tooltransfer.planner.execution.simulate",
+                "tooltransfer.planner.execution.plant", "tooltransfer.planner.planning.oe.correction",
+                "tooltransfer.tools.pushing.adaptation", "tooltransfer.tools.sim.platform", "scipy.optimize")
+
+
+def warm(task: Task) -> None:
+    """Learn (or read from the cache) the task's skills here, and import the modules the jobs use
+    (:data:`_JOB_MODULES`: the planner, the closed loop, MuJoCo), before the pool's processes fork:
+    no process learns, loads or imports them again."""
+    import importlib
+
+    from tooltransfer.planner.planning.setting import task_skills
+    from tooltransfer.planner.planning.variant_registry import needs_ss_skill
+
+    task_skills(task, need_ss=needs_ss_skill(task.variants.ss))
+    for name in _JOB_MODULES:
+        importlib.import_module(name)
+
+
+class Work:
+    """The state of one choice's work: the plans and executions done, and what to run next."""
+
+    def __init__(self, labels: Sequence[str], options: Options) -> None:
+        self.labels = list(labels)
+        self.n = len(labels)
+        self.options = options
+        self.planned: dict[int, Planned] = {}
+        self.runs: dict[int, dict[str, Executed]] = {}
+        self.executed: dict[int, Executions] = {}
+        self.cpu = 0.0  # of the jobs [s]
+        self.first_solved_wall: float | None = None  # planning wall [s] of the first candidate solved
+        self.deadline: float | None = None  # perf_counter [s] at which the candidates still planning stop
+        self.stopped: list[int] = []
+
+    def order(self) -> list[int]:
+        """The solved candidates planned so far, by their plans' margins and duration (best first)."""
+        solved = [i for i in sorted(self.planned) if self.planned[i].verdict == "solved"
+                  and self.planned[i].plan is not None]
+        return [solved[k] for k in plan_order([("solved", self.plan(i).metrics) for i in solved])]
+
+    def plan(self, i: int) -> Plan:
+        plan = self.planned[i].plan
+        assert plan is not None  # only solved candidates with a plan are executed
+        return plan
+
+    def best(self) -> int | None:
+        """The candidate known to be the best of those planned so far (:func:`.ranking.known_best`)."""
+        return known_best(self.order(), self.executed)
+
+    def wanted(self) -> list[tuple[int, str]]:
+        """The executions still to run, best candidate first (:func:`.ranking.needs_execution`; with
+        ``execute_all`` every solved plan's)."""
+        order = self.order()
+        want = [i for i in order if i not in self.executed] if self.options.execute_all \
+            else needs_execution(order, self.executed)
+        return [(i, m) for i in want for m in _SUBMIT_ORDER if m not in self.runs.get(i, {})]
+
+    def done(self) -> bool:
+        return len(self.planned) == self.n and not self.wanted()
+
+    def add_plan(self, i: int, p: Planned) -> None:
+        self.planned[i] = p
+        self.cpu += p.cpu
+        if p.verdict == "solved" and self.first_solved_wall is None:
+            self.first_solved_wall = p.wall
+
+    def add_run(self, i: int, mode: str, result: Executed, cpu: float) -> None:
+        self.cpu += cpu
+        by_mode = self.runs.setdefault(i, {})
+        by_mode[mode] = result
+        if all(m in by_mode for m in MODES):
+            self.executed[i] = Executions(**{m: by_mode[m].error for m in MODES},
+                                          status={m: by_mode[m].status for m in MODES})
+
+    def set_deadline(self, stoppable: bool, say: Callable[[str], None]) -> None:
+        """Set the deadline of the candidates still planning once a plan passed every execution
+        (module docstring), where they can be stopped and ``wait_all`` is not asked for."""
+        if not stoppable or self.options.wait_all or self.deadline is not None or len(self.planned) == self.n:
+            return
+        best = self.best()
+        if best is None:
+            return
+        g = grace(self.first_solved_wall or 0.0)
+        self.deadline = time.perf_counter() + g
+        say(f"{self.labels[best]} passed every execution: the {self.n - len(self.planned)} candidates still "
+            f"planning have {g:.1f} s")
+
+    def stop_planning(self, started: dict[int, float]) -> None:
+        """The candidates not yet planned become ``unknown``, stopped (``started``: when each began
+        planning, perf_counter [s]); their CPU time is not known here (the choice's counts it)."""
+        best = self.best()
+        name = self.labels[best] if best is not None else "the best plan"
+        now = time.perf_counter()
+        for i in range(self.n):
+            if i not in self.planned:
+                self.planned[i] = Planned(None, "unknown", stopped_reason(name), now - started.get(i, now), 0.0)
+                self.stopped.append(i)
+
+
+def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say: Callable[[str], None]) -> Work:
+    """Plan every candidate and execute the solved plans (module docstring) in ``pools`` (None: in this
+    process); the deadline applies to this choice's own pools (their processes :func:`stop` ends)."""
+    w = Work([c.label for c in cands], options)
+    if pools is None:
+        for i, c in enumerate(cands):
+            w.add_plan(i, plan_candidate(c.task, options.budget))
+        while not w.done():
+            i, mode = w.wanted()[0]
+            say(f"executing {mode.replace('_', ' ')} of {cands[i].label}")
+            w.add_run(i, mode, execute(w.plan(i), mode, options.seed), 0.0)  # its CPU time is this process's
+        return w
+    to_plan = list(range(len(cands)))
+    started: dict[int, float] = {}
+    inflight: dict[Future, tuple[int, str]] = {}  # (candidate, "plan" or an execution mode)
+    yielded = False
+    while not w.done():
+        for i, what in _next_jobs(w, pools, to_plan, inflight):
+            if what == "plan":
+                to_plan.remove(i)
+                started[i] = time.perf_counter()
+                inflight[pools.plan.submit(plan_candidate, cands[i].task, options.budget)] = (i, what)
+            else:
+                if not yielded:  # the first execution: the planners make way
+                    pools.yield_to_executions()
+                    yielded = True
+                inflight[pools.run.submit(_timed_execute, w.plan(i), what, options.seed)] = (i, what)
+        if not inflight:  # pragma: no cover - done() would hold
+            break
+        timeout = None if w.deadline is None else max(0.0, w.deadline - time.perf_counter())
+        finished, _ = wait(list(inflight), timeout=timeout, return_when=_FIRST)
+        for f in finished:
+            _take(w, cands, inflight.pop(f), f, say)
+        w.set_deadline(pools.own, say)
+        if w.deadline is not None and time.perf_counter() >= w.deadline and len(w.planned) < w.n:
+            w.stop_planning(started)
+            say(f"stopped {len(w.stopped)} candidates still planning")
+            for f, (_, what) in list(inflight.items()):
+                if what == "plan":  # its process is ended with the pool's (stop)
+                    del inflight[f]
+    return w
+
+
+def _next_jobs(w: Work, pools: Pools, to_plan: list[int],
+               inflight: dict[Future, tuple[int, str]]) -> list[tuple[int, str]]:
+    """The jobs to hand out now: plans first, then the executions wanted, each kind up to its slots
+    (one pool given: ``plan_slots`` jobs in all)."""
+    busy = set(inflight.values())
+    plans = [(i, "plan") for i in to_plan]
+    runs = [job for job in w.wanted() if job not in busy]
+    if not pools.own:
+        return (plans + runs)[:max(0, pools.plan_slots - len(inflight))]
+    n_plans = sum(what == "plan" for what in busy)
+    n_runs = len(busy) - n_plans
+    return plans[:max(0, pools.plan_slots - n_plans)] + runs[:max(0, pools.run_slots - n_runs)]
+
+
+def _take(w: Work, cands: Sequence[Candidate], job: tuple[int, str], f: Future, say: Callable[[str], None]) -> None:
+    """Record the finished job ``job`` (candidate, ``"plan"`` or an execution mode) of future ``f``."""
+    i, what = job
+    if what == "plan":
+        p: Planned = f.result()
+        w.add_plan(i, p)
+        say(f"{len(w.planned)}/{len(cands)} planned ({cands[i].label}: {p.verdict})")
+    else:
+        result, used = f.result()
+        w.add_run(i, what, result, used)
+        say(f"{cands[i].label}: {what.replace('_', ' ')} {result.status}")
+
+
+def _timed_execute(plan: Plan, mode: str, seed: int) -> tuple[Executed, float]:
+    t = time.process_time()
+    out = execute(plan, mode, seed)
+    return out, time.process_time() - t
+
