@@ -316,7 +316,7 @@ def main(argv: list[str] | None = None) -> int:
 
 #: Commands that end the process as soon as their work is done (:func:`_quick_exit`): they start no
 #: process or thread that outlives them and write their files atomically before returning.
-QUICK_EXIT = frozenset({"solve", "export", "schema", "tasks"})
+QUICK_EXIT = frozenset({"solve", "export", "view", "schema", "tasks"})
 
 
 def _fewer_collections() -> None:
