@@ -191,11 +191,11 @@ def _plan_mechanics(plan: Plan, source: str, task: Task) -> PushMechanics:
 def _check_replay(plan: Plan, source: str, task: Task, setting: Setting, start: NDArray[np.float64]) -> None:
     """The planned tool path, replayed through the push model from ``start`` [m] with the plan's
     mechanics (:func:`_plan_mechanics`), moves the object along the planned path."""
-    from tooltransfer.tools.pushing.forward import simulate
+    from tooltransfer.tools.pushing.forward import object_path  # simulate's path, without naming the faces
 
     t = plan.t
-    replay = simulate(setting.tool, plan.tool_pose, start, setting.radius, _plan_mechanics(plan, source, task))
-    off = np.hypot(*(replay.object_xy - plan.object_xy).T)
+    replay = object_path(setting.tool, plan.tool_pose, start, setting.radius, _plan_mechanics(plan, source, task))
+    off = np.hypot(*(replay - plan.object_xy).T)
     tol = max(REPLAY_TOL, 10 * task.oe.self_consistency_tol)
     if off.max() > tol:
         k = int(np.argmax(off > tol))
