@@ -276,7 +276,6 @@ def _interrupted(exc: BaseException) -> bool:
 def main(argv: list[str] | None = None) -> int:
     """Run the command line ``argv`` (default ``sys.argv[1:]``); returns the exit code."""
     import signal
-    import traceback
 
     if argv is None:  # the console command: one BLAS thread unless the user chose (before NumPy loads)
         pin_blas_threads()
@@ -296,6 +295,8 @@ def main(argv: list[str] | None = None) -> int:
         return code
     except KeyboardInterrupt:
         if verbose:
+            import traceback  # here: a command that succeeds does not need it
+
             traceback.print_exc()
         print("tooltransfer: interrupted (Ctrl-C)", file=sys.stderr)
         _handled_interrupt()
