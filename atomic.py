@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import secrets
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -20,7 +19,7 @@ from pathlib import Path
 def _temporary(target: Path) -> Path:
     """A fresh hidden name beside ``target`` that keeps its suffix (``.plan.json.1f3a9c.tmp.json``),
     at most 255 bytes long."""
-    tag = f".{os.getpid()}-{secrets.token_hex(4)}.tmp{target.suffix}"
+    tag = f".{os.getpid()}-{os.urandom(4).hex()}.tmp{target.suffix}"  # secrets.token_hex(4), without its imports
     stem = target.name.encode()[: 255 - len(tag.encode()) - 1].decode(errors="ignore")
     return target.with_name(f".{stem}{tag}")
 

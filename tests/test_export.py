@@ -19,6 +19,7 @@ from tooltransfer.planner.execution.export import (
     Trajectory,
     export_plan,
     joint_trajectory_message,
+    joint_trajectory_text,
     read_trajectory,
 )
 from tooltransfer.planner.execution.simulate import check_plan
@@ -221,6 +222,20 @@ def test_the_joint_trajectory_is_shaped_like_the_ros_message(plan: Plan) -> None
     ns = [p["time_from_start"]["sec"] * 10**9 + p["time_from_start"]["nanosec"] for p in msg["points"]]
     assert np.all(np.diff(ns) > 0)
     json.dumps(msg, allow_nan=False)
+
+
+def test_the_joint_trajectory_file_is_the_message_as_readable_json(plan: Plan) -> None:
+    """The file's text (a template per point) is the message laid out by readable_json, byte for byte:
+    the plan's, with other names, with non-finite and extreme numbers, and with no points."""
+    from tooltransfer.readable_json import dumps
+
+    inf, nan = float("inf"), float("nan")
+    odd = np.array([[nan, inf, -inf], [1e-300, -0.0, 5e300], [1, 2, 3]])
+    trajectories = [Trajectory.from_plan(plan), Trajectory.from_plan(plan, ('a"b', "\u00e9", "x\\y")),
+                    Trajectory(np.array([0.0, 0.9999999999, 1e9]), odd, -odd, odd * 1e-7),
+                    Trajectory(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))]
+    for traj in trajectories:
+        assert joint_trajectory_text(traj) == dumps(joint_trajectory_message(traj)) + "\n"
 
 
 def test_a_time_just_below_a_second_carries_over() -> None:

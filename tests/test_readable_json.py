@@ -45,3 +45,21 @@ def test_non_string_keys_and_non_finite_numbers_as_json_dumps() -> None:
     assert dumps(doc).replace("\n", "").replace(" ", "") == json.dumps(doc).replace(" ", "")
     with pytest.raises(ValueError):
         dumps(doc, allow_nan=False)
+
+
+def test_arrays_of_objects_and_circular_references_as_json_dumps() -> None:
+    """An array whose first item is an object is laid out without being encoded whole first; the text
+    is the same, and a document that holds itself is refused as json.dumps refuses it."""
+    points = [{"p": [0.1, 2.0], "t": {"sec": k, "nanosec": 5}} for k in range(3)]
+    doc = {"points": points, "mixed": [1, {"a": []}], "strings": ["{", {}]}
+    assert json.loads(dumps(doc)) == doc
+    assert dumps({"points": points[:1]}).splitlines() == [
+        "{", ' "points": [', "  {", '   "p": [0.1, 2.0],', '   "t": {', '    "sec": 0,', '    "nanosec": 5',
+        "   }", "  }", " ]", "}"]
+    loop: list[object] = [{}]
+    loop.append(loop)
+    for bad in (loop, {"x": loop}):
+        with pytest.raises(ValueError, match="Circular reference"):
+            json.dumps(bad)
+        with pytest.raises(ValueError, match="Circular reference"):
+            dumps(bad)

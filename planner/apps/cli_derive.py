@@ -20,7 +20,13 @@ from tooltransfer.planner.common.command_line import EXIT_OK
 
 def add_derive_parser(tools: argparse.ArgumentParser, add: Any) -> None:
     """The ``derive`` sub-command of ``tools`` (``add``: the CLI's sub-parser helper)."""
-    from tooltransfer.tools.derive import ARC_TOLERANCE, DEFAULT_C, DEFAULT_FRICTION, MAX_DERIVED_FACES, MIN_LENGTH
+    from tooltransfer.tools.derive.defaults import (
+        ARC_TOLERANCE,
+        DEFAULT_C,
+        DEFAULT_FRICTION,
+        MAX_DERIVED_FACES,
+        MIN_LENGTH,
+    )
 
     sub = tools.add_subparsers(dest="tools_command", metavar="{derive}")
     p = add(sub, "derive", "derive a tool's contact faces from its outline and write the tool file",

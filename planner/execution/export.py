@@ -101,6 +101,37 @@ def joint_trajectory_message(traj: Trajectory) -> dict[str, Any]:
     }
 
 
+#: One point of :func:`joint_trajectory_text` as :func:`tooltransfer.readable_json.dumps` lays it out in
+#: the message (the arrays' numbers, the seconds and the nanoseconds put in).
+_POINT = ('\n  {\n   "positions": [%s],\n   "velocities": [%s],\n   "accelerations": [%s],\n   "effort": [],'
+          '\n   "time_from_start": {\n    "sec": %d,\n    "nanosec": %d\n   }\n  }')
+
+
+def _rows(values: NDArray[np.float64]) -> list[str]:
+    """Each row of ``values`` (T, 3) as JSON writes the numbers of a list (``a, b, c``), from one call of
+    the encoder on them all (rows of numbers hold no bracket: the text splits at ``], [``)."""
+    text = _JSON_ROWS.encode(values.tolist())
+    return text[2:-2].split("], [") if len(values) else []
+
+
+_JSON_ROWS = json.JSONEncoder(allow_nan=True, separators=(", ", ": "))
+
+
+def joint_trajectory_text(traj: Trajectory) -> str:
+    """``dumps(joint_trajectory_message(traj)) + "\n"`` (:func:`tooltransfer.readable_json.dumps`), the
+    same text written from a template: the header and the names by ``dumps``, every point by
+    :data:`_POINT`, its numbers by three calls of the JSON encoder for all points (twice as quick as
+    laying out the message's thousands of objects one by one)."""
+    head = dumps({"header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""},
+                  "joint_names": list(traj.joint_names)})
+    if not len(traj.t):
+        return head[:-2] + ',\n "points": []\n}\n'
+    times = [_duration(t) for t in traj.t.tolist()]
+    points = ",".join([_POINT % (p, v, a, d["sec"], d["nanosec"]) for p, v, a, d in zip(
+        _rows(traj.positions), _rows(traj.velocities), _rows(traj.accelerations), times, strict=True)])
+    return head[:-2] + ',\n "points": [' + points + "\n ]\n}\n"
+
+
 def _csv_text(traj: Trajectory) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
@@ -125,7 +156,7 @@ def export_plan(plan: Plan, out: str | Path, fmt: str, joint_names: tuple[str, .
     if fmt == "csv":
         return write_text(out, _csv_text(traj))
     if fmt == "joint-trajectory":
-        return write_text(out, dumps(joint_trajectory_message(traj)) + "\n")
+        return write_text(out, joint_trajectory_text(traj))
     with atomic_path(out) as tmp, open(tmp, "wb") as f:  # a file object: numpy adds no ".npz" to the name
         np.savez(f, t=traj.t, positions=traj.positions, velocities=traj.velocities,
                  accelerations=traj.accelerations, joint_names=np.array(traj.joint_names),

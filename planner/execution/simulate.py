@@ -22,16 +22,18 @@ from tooltransfer.planner.planning.setting import Setting, setting_from_task, ta
 from tooltransfer.problems.task import Task, task_from_dict
 from tooltransfer.tools.pose import wrap_angle
 from tooltransfer.tools.pushing.mechanics import PushMechanics
-from tooltransfer.tools.sim.config import SimConfig
-from tooltransfer.tools.sim.execution import Execution
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # the simulation's types (imported where it runs: checking or exporting a plan needs neither)
     from tooltransfer.tools.omni.platform import OmniPlatform
+    from tooltransfer.tools.sim.config import SimConfig
+    from tooltransfer.tools.sim.execution import Execution
 
 
 def task_sim_config(task: Task, **overrides: float) -> SimConfig:
     """The simulated platform's settings for ``task``'s object (radius, mass, table friction), with
     ``overrides`` of any :class:`SimConfig` field (e.g. ``tool_friction=0.5`` for a mismatched plant)."""
+    from tooltransfer.tools.sim.config import SimConfig
+
     o = task.object
     return SimConfig(**{"puck_radius": o.radius, "puck_mass": o.mass, "table_friction": o.friction, **overrides})
 
@@ -189,11 +191,11 @@ def _plan_mechanics(plan: Plan, source: str, task: Task) -> PushMechanics:
 def _check_replay(plan: Plan, source: str, task: Task, setting: Setting, start: NDArray[np.float64]) -> None:
     """The planned tool path, replayed through the push model from ``start`` [m] with the plan's
     mechanics (:func:`_plan_mechanics`), moves the object along the planned path."""
-    from tooltransfer.tools.pushing.forward import simulate
+    from tooltransfer.tools.pushing.forward import object_path  # simulate's path, without naming the faces
 
     t = plan.t
-    replay = simulate(setting.tool, plan.tool_pose, start, setting.radius, _plan_mechanics(plan, source, task))
-    off = np.hypot(*(replay.object_xy - plan.object_xy).T)
+    replay = object_path(setting.tool, plan.tool_pose, start, setting.radius, _plan_mechanics(plan, source, task))
+    off = np.hypot(*(replay - plan.object_xy).T)
     tol = max(REPLAY_TOL, 10 * task.oe.self_consistency_tol)
     if off.max() > tol:
         k = int(np.argmax(off > tol))

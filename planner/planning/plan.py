@@ -26,6 +26,7 @@ breaks a hard check, :func:`tooltransfer.planner.planning.solve.hard_check_failu
 
 from __future__ import annotations
 
+import itertools
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -220,14 +221,8 @@ def _numbers(where: str, name: str, value: object, width: int | None, unit: str,
     if not isinstance(value, list):
         raise PlanFileError(where, field, "a list" + (f" of [{width} numbers] rows" if width else " of numbers"),
                             _kind(value))
-    for i, row in enumerate(value):
-        cells = row if width is not None else [row]
-        if width is not None and (not isinstance(row, list) or len(row) != width):
-            raise PlanFileError(where, f"{field}[{i}]", f"a row of {width} numbers {unit}", _kind(row))
-        for j, x in enumerate(cells):
-            if type(x) is not float and type(x) is not int:
-                at = f"{field}[{i}]" + (f"[{j}]" if width is not None else "")
-                raise PlanFileError(where, at, f"a number {unit}", _kind(x))
+    if not _all_numbers(value, width):  # then the first bad row or entry, named
+        _first_not_number(where, field, value, width, unit)
     arr = np.array(value, dtype=np.float64).reshape((len(value), width) if width else (len(value),))
     with np.errstate(invalid="ignore"):
         bad = ~(np.abs(arr) <= bound)
@@ -238,6 +233,31 @@ def _numbers(where: str, name: str, value: object, width: int | None, unit: str,
         raise PlanFileError(where, at, f"a finite number {unit}" + ("" if not np.isfinite(v) else
                             f" within +-{bound:g}"), v)
     return arr
+
+
+def _all_numbers(value: list[Any], width: int | None) -> bool:
+    """Whether every entry of ``value`` (or of each of its rows, lists of ``width``) is a JSON number
+    (``float`` or ``int``, not a bool): the types gathered by C loops, as quick as reading them."""
+    if width is None:
+        return set(map(type, value)) <= _NUMBER_TYPES
+    return (set(map(type, value)) <= {list} and set(map(len, value)) <= {width}
+            and set(map(type, itertools.chain.from_iterable(value))) <= _NUMBER_TYPES)
+
+
+_NUMBER_TYPES = frozenset((float, int))
+
+
+def _first_not_number(where: str, field: str, value: list[Any], width: int | None, unit: str) -> None:
+    """Raise the :class:`PlanFileError` of the first row of ``value`` that is not a list of ``width``
+    numbers (or the first entry that is not a number), if there is one."""
+    for i, row in enumerate(value):
+        cells = row if width is not None else [row]
+        if width is not None and (not isinstance(row, list) or len(row) != width):
+            raise PlanFileError(where, f"{field}[{i}]", f"a row of {width} numbers {unit}", _kind(row))
+        for j, x in enumerate(cells):
+            if type(x) is not float and type(x) is not int:
+                at = f"{field}[{i}]" + (f"[{j}]" if width is not None else "")
+                raise PlanFileError(where, at, f"a number {unit}", _kind(x))
 
 
 #: Largest plan file read [bytes] and largest number of samples (a plan of 2,000 samples takes about

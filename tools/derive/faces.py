@@ -30,23 +30,17 @@ import shapely
 
 from tooltransfer.errors import InputError
 from tooltransfer.tools.derive.contacts import EdgeContact, VertexContact, edge_contacts, vertex_contacts
+from tooltransfer.tools.derive.defaults import (  # the defaults, under their names here too
+    CONTACT_WINDOW,
+    DEFAULT_C,
+    DEFAULT_FRICTION,
+    MAX_DERIVED_FACES,
+    MIN_LENGTH,
+)
 from tooltransfer.tools.model import Face
 from tooltransfer.tools.objects import OBJECT_RADIUS
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.omni.reach import ReachSector, reach_sector
-
-#: Default tool-object friction coefficient (the platform's nominal ``mu``,
-#: :class:`tooltransfer.tools.pushing.mechanics.PushMechanics`).
-DEFAULT_FRICTION = 0.8
-#: Default limit-surface ratio ``c`` (sets the sideways travel one contact carries).
-DEFAULT_C = 0.59
-#: Shortest usable part [m] of an edge that makes a face: room for the contact to roll while the
-#: object moves sideways by ``MIN_LENGTH c^2`` (0.7 mm at c = 0.59).
-MIN_LENGTH = 0.002
-#: Most derived faces (see the module docstring).
-MAX_DERIVED_FACES = 8
-#: Longest contact range [m] of a derived face (the task schema's default ``oe.contact_span``).
-CONTACT_WINDOW = 0.012
 
 
 @dataclass(frozen=True)

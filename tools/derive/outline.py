@@ -16,12 +16,9 @@ import numpy as np
 import shapely
 
 from tooltransfer.errors import InputError
+from tooltransfer.tools.derive.defaults import ARC_TOLERANCE, SVG_SCALE  # the defaults, under their names here too
 from tooltransfer.tools.derive.svg_path import flatten_path
 
-#: Default largest distance [m] between an SVG curve or arc and the chords replacing it (0.1 mm).
-ARC_TOLERANCE = 1e-4
-#: Default metres per SVG unit (millimetres).
-SVG_SCALE = 1e-3
 _PATH_START = re.compile(r"^\s*[Mm]")
 
 

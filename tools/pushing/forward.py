@@ -16,6 +16,7 @@ simulates all recorded pushes at once); :func:`simulate` is the one-run form.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -180,16 +181,59 @@ def simulate_batch(
     return xy, mode, edge, contact
 
 
+_Nearest = Callable[[float, float], tuple[float, int, float, float, float, float]]
+
+
+def _outline_queries(outline: Outline, r: float) -> _Nearest:
+    """``nearest(lx, ly)``: for a disc of radius ``r`` centred at the tool-frame point, ``(gap, edge, qx,
+    qy, nx, ny)``: its gap to the outline [m] (negative: overlapping), the nearest outline point's edge
+    and place, and the contact normal (tool frame; the edge's normal when the centre is inside)."""
+    segs = [(float(a[0]), float(a[1]), float(d[0]), float(d[1]), float(l2), m)
+            for m, (a, d, l2) in enumerate(zip(outline.start, outline.direction, outline.length2, strict=True))]
+    normals = [(float(n[0]), float(n[1])) for n in outline.normal]
+    sides = [(ax, ay, dx, dy) for ax, ay, dx, dy, _, _ in segs]
+    sqrt, inf = math.sqrt, math.inf
+
+    def inside(lx: float, ly: float) -> bool:
+        """Whether the tool-frame point lies inside the outline (crossing number; a nearest point at a
+        vertex says nothing about the side by one edge's normal)."""
+        odd = False
+        for ax, ay, dx, dy in sides:
+            if (ay > ly) != (ay + dy > ly) and lx < ax + (ly - ay) * dx / dy:
+                odd = not odd
+        return odd
+
+    def nearest(lx: float, ly: float) -> tuple[float, int, float, float, float, float]:
+        best, bm, bqx, bqy = inf, -1, 0.0, 0.0
+        for ax, ay, dx, dy, l2, m in segs:
+            u = ((lx - ax) * dx + (ly - ay) * dy) / l2
+            u = 0.0 if u < 0.0 else (1.0 if u > 1.0 else u)
+            qx, qy = ax + u * dx, ay + u * dy
+            d2 = (lx - qx) ** 2 + (ly - qy) ** 2
+            if d2 < best:
+                best, bm, bqx, bqy = d2, m, qx, qy
+        dist = sqrt(best)
+        if dist > 1e-15:
+            nx, ny = (lx - bqx) / dist, (ly - bqy) / dist
+            if dist < r and inside(lx, ly):  # the centre inside the outline: out along the edge's normal
+                (nx, ny), dist = normals[bm], -dist
+        else:
+            nx, ny = normals[bm]
+        return dist - r, bm, bqx, bqy, nx, ny
+
+    return nearest
+
+
 def _run_scalar(
     tool: Tool, p: NDArray[np.float64], start: NDArray[np.float64], r: float, mech: PushMechanics, h: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.int8], NDArray[np.intp], NDArray[np.float64]]:
     """:func:`simulate_batch` for one run in scalar arithmetic (faster than the batch code at B = 1:
-    no array overhead per substep)."""
+    no array overhead per substep; the samples gathered in lists, the arrays filled once)."""
     outline = Outline.of(tool)
-    edges = [(float(a[0]), float(a[1]), float(d[0]), float(d[1]), float(l2), float(n[0]), float(n[1]))
-             for a, d, l2, n in zip(outline.start, outline.direction, outline.length2, outline.normal, strict=True)]
+    nearest = _outline_queries(outline, r)
     reach = r + outline.radius + 1e-4
     mu, kappa = mech.mu, mech.kappa
+    cos, sin = math.cos, math.sin
     k_n = p.shape[0]
     xy = np.empty((k_n, 2))
     mode = np.zeros(k_n, dtype=np.int8)
@@ -198,54 +242,30 @@ def _run_scalar(
     cx, cy = float(start[0]), float(start[1])
     xy[0] = cx, cy
     rows = p.tolist()
-
-    def inside(lx: float, ly: float) -> bool:
-        """Whether the tool-frame point lies inside the outline (crossing number; a nearest point at a
-        vertex says nothing about the side by one edge's normal)."""
-        odd = False
-        for ax, ay, dx, dy, _, _, _ in edges:
-            if (ay > ly) != (ay + dy > ly) and lx < ax + (ly - ay) * dx / dy:
-                odd = not odd
-        return odd
-
-    def nearest(px: float, py: float, yaw: float) -> tuple[float, float, float, float, float, int, float, float]:
-        """(gap, qx, qy (tool frame), nx, ny (world), edge, cos, sin) of the centre at the pose."""
-        co, si = math.cos(yaw), math.sin(yaw)
-        lx, ly = co * (cx - px) + si * (cy - py), -si * (cx - px) + co * (cy - py)
-        best, bm, bqx, bqy = math.inf, -1, 0.0, 0.0
-        for m, (ax, ay, dx, dy, l2, _, _) in enumerate(edges):
-            u = ((lx - ax) * dx + (ly - ay) * dy) / l2
-            u = 0.0 if u < 0.0 else (1.0 if u > 1.0 else u)
-            qx, qy = ax + u * dx, ay + u * dy
-            d2 = (lx - qx) ** 2 + (ly - qy) ** 2
-            if d2 < best:
-                best, bm, bqx, bqy = d2, m, qx, qy
-        dist = math.sqrt(best)
-        enx, eny = edges[bm][5], edges[bm][6]
-        if dist > 1e-15:
-            nx, ny = (lx - bqx) / dist, (ly - bqy) / dist
-            if dist < r and inside(lx, ly):  # the centre inside the outline: out along the edge's normal
-                nx, ny, dist = enx, eny, -dist
-        else:
-            nx, ny = enx, eny
-        return dist - r, bqx, bqy, co * nx - si * ny, si * nx + co * ny, bm, co, si
-
+    centres, modes, edges, contacts = [], [], [], []  # from sample 1 on
     for k in range(k_n - 1):
         ax, ay, ayaw = rows[k]
         bx, by, byaw = rows[k + 1]
         move = math.hypot(bx - ax, by - ay) + abs(byaw - ayaw) * outline.radius
-        if math.hypot(cx - ax, cy - ay) - move > reach or nearest(ax, ay, ayaw)[0] > move + 1e-9:
-            xy[k + 1] = cx, cy  # no outline point moves far enough to reach the puck in this interval
+        pc, ps = cos(ayaw), sin(ayaw)  # of the pose before each substep's
+        ex, ey = cx - ax, cy - ay
+        if math.hypot(ex, ey) - move > reach or nearest(pc * ex + ps * ey, -ps * ex + pc * ey)[0] > move + 1e-9:
+            centres.append((cx, cy))  # no outline point moves far enough to reach the puck in this interval
+            modes.append(FREE)
+            edges.append(-1)
+            contacts.append((math.nan, math.nan))
             continue
         n_sub = max(1, math.ceil(move / h))
         last_mode, last_edge, lqx, lqy = FREE, -1, math.nan, math.nan
-        px, py, pyaw = ax, ay, ayaw
+        px, py = ax, ay
         for j in range(1, n_sub + 1):
             f = j / n_sub
             x, y, yaw = ax + f * (bx - ax), ay + f * (by - ay), ayaw + f * (byaw - ayaw)
-            gap, qx, qy, nx, ny, m, co, si = nearest(x, y, yaw)
+            co, si = cos(yaw), sin(yaw)
+            ex, ey = cx - x, cy - y
+            gap, m, qx, qy, nx, ny = nearest(co * ex + si * ey, -si * ex + co * ey)
             if gap < 0.0:
-                pc, ps = math.cos(pyaw), math.sin(pyaw)
+                nx, ny = co * nx - si * ny, si * nx + co * ny  # the normal in the world
                 mx = (x + co * qx - si * qy) - (px + pc * qx - ps * qy)
                 my = (y + si * qx + co * qy) - (py + ps * qx + pc * qy)
                 a, slip = -gap, -ny * mx + nx * my
@@ -256,16 +276,42 @@ def _run_scalar(
                 cx += a * nx - lat * ny
                 cy += a * ny + lat * nx
                 for _ in range(3):  # a sliver of overlap left by a turning normal: out along the new one
-                    g2, qx, qy, nx2, ny2, m, _, _ = nearest(x, y, yaw)
+                    ex, ey = cx - x, cy - y
+                    g2, m, qx, qy, nx2, ny2 = nearest(co * ex + si * ey, -si * ex + co * ey)
                     if g2 >= -1e-13:
                         break
-                    cx, cy = cx - g2 * nx2, cy - g2 * ny2
+                    cx, cy = cx - g2 * (co * nx2 - si * ny2), cy - g2 * (si * nx2 + co * ny2)
                 last_edge, lqx, lqy = m, qx, qy  # where the contact is once the object has moved
-            px, py, pyaw = x, y, yaw
-        xy[k + 1] = cx, cy
-        mode[k + 1], edge[k + 1] = last_mode, last_edge
-        contact[k + 1] = lqx, lqy
+            px, py, pc, ps = x, y, co, si
+        centres.append((cx, cy))
+        modes.append(last_mode)
+        edges.append(last_edge)
+        contacts.append((lqx, lqy))
+    if k_n > 1:
+        xy[1:], mode[1:], edge[1:], contact[1:] = centres, modes, edges, contacts
     return xy, mode, edge, contact
+
+
+def _run_checked(
+    tool: Tool, poses: ArrayLike, object_start: ArrayLike, radius: float, mech: PushMechanics, max_step: float,
+) -> tuple[NDArray[np.float64], tuple[NDArray[np.float64], NDArray[np.int8], NDArray[np.intp], NDArray[np.float64]]]:
+    """The arguments of :func:`simulate` checked, the poses as an array, and :func:`_run_scalar` on them."""
+    if not isinstance(tool, Tool):
+        raise InputError("tool", "a tooltransfer.tools.model.Tool", type(tool).__name__)
+    if not isinstance(mech, PushMechanics):
+        raise InputError("mech", "a PushMechanics", type(mech).__name__)
+    p = check_array(poses, "poses", shape=(None, 3))
+    start = check_array(object_start, "object_start", shape=(2,))
+    return p, _run_scalar(tool, p, start, check_positive(radius, "radius"), mech, check_positive(max_step, "max_step"))
+
+
+def object_path(
+    tool: Tool, poses: ArrayLike, object_start: ArrayLike, radius: float, mech: PushMechanics, *,
+    max_step: float = MAX_STEP,
+) -> NDArray[np.float64]:
+    """The puck's path (K, 2) [m] of :func:`simulate` (the same numbers), without naming the faces
+    and the contact events: for a replay that compares paths only (checking a plan file)."""
+    return _run_checked(tool, poses, object_start, radius, mech, max_step)[1][0]
 
 
 def simulate(
@@ -277,14 +323,7 @@ def simulate(
     See :func:`simulate_batch`; the result names the faces the contact lies on and lists the
     contact events.
     """
-    if not isinstance(tool, Tool):
-        raise InputError("tool", "a tooltransfer.tools.model.Tool", type(tool).__name__)
-    if not isinstance(mech, PushMechanics):
-        raise InputError("mech", "a PushMechanics", type(mech).__name__)
-    p = check_array(poses, "poses", shape=(None, 3))
-    start = check_array(object_start, "object_start", shape=(2,))
-    xy, mode, edge, contact = _run_scalar(tool, p, start, check_positive(radius, "radius"), mech,
-                                          check_positive(max_step, "max_step"))
+    p, (xy, mode, edge, contact) = _run_checked(tool, poses, object_start, radius, mech, max_step)
     outline = Outline.of(tool)
     faces_on = _face_of_edge(tool, outline)
     names: list[str | None] = []

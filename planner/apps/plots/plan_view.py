@@ -147,7 +147,8 @@ def view_figure(plan: Plan, executions: dict[str, dict[str, Any]] | None = None)
     frames: list[dict[str, Any]] = []
     meta: dict[str, Any] = {"frame_index": [], "puck_trace": None}
     if n:
-        idx = np.unique(np.linspace(0, n - 1, min(n, MAX_FRAMES)).round().astype(int))
+        idx = np.linspace(0, n - 1, min(n, MAX_FRAMES)).round().astype(int)
+        idx = idx[np.r_[True, idx[1:] != idx[:-1]]]  # non-decreasing: np.unique, without its import of numpy.ma
         first = len(data)
         meta.update(frame_index=idx.tolist(), puck_trace=first)
         tool_style = {"mode": "lines", "fill": "toself", "line": {"color": "#222"},
