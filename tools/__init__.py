@@ -22,9 +22,10 @@ function, as it was when the names were imported eagerly.
 """
 
 import sys
-from importlib import import_module
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
+
+from tooltransfer.lazy import lazy_attribute
 
 if TYPE_CHECKING:
     from tooltransfer.tools.clearance import (
@@ -97,11 +98,7 @@ __all__ = [
 
 
 def __getattr__(name: str) -> Any:
-    if name in _HOMES:
-        value = getattr(import_module(f"tooltransfer.tools.{_HOMES[name]}"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'tooltransfer.tools' has no attribute {name!r}")
+    return lazy_attribute(__name__, _HOMES, name)
 
 
 def __dir__() -> list[str]:

@@ -11,8 +11,9 @@ The names are imported on first use: :mod:`.defaults` (the default settings, no 
 be imported without the rest.
 """
 
-from importlib import import_module
 from typing import TYPE_CHECKING, Any
+
+from tooltransfer.lazy import lazy_attribute
 
 if TYPE_CHECKING:
     from tooltransfer.tools.derive.contacts import EdgeContact, VertexContact
@@ -60,11 +61,7 @@ __all__ = [
 
 
 def __getattr__(name: str) -> Any:
-    if name in _HOMES:
-        value = getattr(import_module(f"tooltransfer.tools.derive.{_HOMES[name]}"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'tooltransfer.tools.derive' has no attribute {name!r}")
+    return lazy_attribute(__name__, _HOMES, name)
 
 
 def __dir__() -> list[str]:

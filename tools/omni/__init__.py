@@ -4,8 +4,9 @@ The names are imported on first use: checking a plan needs :mod:`.platform` and 
 inverse kinematics and the reach (shapely).
 """
 
-from importlib import import_module
 from typing import TYPE_CHECKING, Any
+
+from tooltransfer.lazy import lazy_attribute
 
 if TYPE_CHECKING:
     from tooltransfer.tools.omni.dh import dh_transform, forward_kinematics, jacobian
@@ -55,11 +56,7 @@ __all__ = [
 
 
 def __getattr__(name: str) -> Any:
-    if name in _HOMES:
-        value = getattr(import_module(f"tooltransfer.tools.omni.{_HOMES[name]}"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'tooltransfer.tools.omni' has no attribute {name!r}")
+    return lazy_attribute(__name__, _HOMES, name)
 
 
 def __dir__() -> list[str]:

@@ -16,8 +16,9 @@
 SI units and the world frame of docs/design.md section 2 throughout.
 """
 
-from importlib import import_module
 from typing import Any
+
+from tooltransfer.lazy import lazy_attribute
 
 #: Each public name and its submodule, imported on first use: ``config``, ``execution``, ``mjcf`` and
 #: ``reference`` need no mujoco (the optional ``sim`` extra), so checking or exporting a plan does not.
@@ -30,8 +31,4 @@ __all__ = sorted(_HOMES)
 
 
 def __getattr__(name: str) -> Any:
-    if name in _HOMES:
-        value = getattr(import_module(f"tooltransfer.tools.sim.{_HOMES[name]}"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'tooltransfer.tools.sim' has no attribute {name!r}")
+    return lazy_attribute(__name__, _HOMES, name)

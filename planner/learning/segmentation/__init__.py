@@ -6,8 +6,9 @@ The public names are imported on first use: the segmentation needs ``scipy.signa
 file uses, needs only NumPy; importing that module must not load the rest.
 """
 
-from importlib import import_module
 from typing import TYPE_CHECKING, Any
+
+from tooltransfer.lazy import lazy_attribute
 
 if TYPE_CHECKING:
     from tooltransfer.planner.learning.segmentation.core import PushSegment, Segmentation, SwitchSegment, segment
@@ -20,8 +21,4 @@ __all__ = ["PushSegment", "Segmentation", "SwitchSegment", "load_fixed_points", 
 
 
 def __getattr__(name: str) -> Any:
-    if name in _HOMES:
-        value = getattr(import_module(f"tooltransfer.planner.learning.segmentation.{_HOMES[name]}"), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'tooltransfer.planner.learning.segmentation' has no attribute {name!r}")
+    return lazy_attribute(__name__, _HOMES, name)

@@ -151,6 +151,18 @@ def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touc
                       tuple(runs[::-1]))
 
 
+def _zones(setting: Setting) -> list[Any]:
+    """Where the tool outline may not come (the obstacles grown by :data:`REACH_SLACK`) and where the
+    object's centre may not be (grown by its radius and the margin), prepared; None without obstacles."""
+    obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
+    zones = [shapely.union_all([shapely.buffer(o, d, quad_segs=32) for o in obstacles]) if obstacles else None
+             for d in (REACH_SLACK, setting.radius + max(setting.margin - 1e-5, 0.0) + 1e-4)]
+    for z in zones:
+        if z is not None:
+            shapely.prepare(z)
+    return zones
+
+
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False,
@@ -164,15 +176,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     outgrows ``oe.max_contacts`` contacts (:func:`~.guided_moves._step_of`). A lattice
     cell is visited once per face (and window), with the contacts its first visit had used."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
-    obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
-    # where the tool outline may not come (the obstacles grown by the slack) and where the object's
-    # centre may not be (grown by its radius and the margin)
-    zones = [shapely.union_all([shapely.buffer(o, d, quad_segs=32) for o in obstacles]) if obstacles else None
-             for d in (REACH_SLACK, setting.radius + max(setting.margin - 1e-5, 0.0) + 1e-4)]
-    body_zone, centre_zone = zones
-    for z in zones:
-        if z is not None:
-            shapely.prepare(z)
+    body_zone, centre_zone = _zones(setting)
     faces = _face_moves(setting, options, windows)
     by_name = {fm.key: fm for fm in faces}
 
