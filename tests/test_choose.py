@@ -160,6 +160,7 @@ def test_candidates_still_planning_are_stopped_once_a_plan_passed_every_executio
 
     task = tmp_path / "long_for_finger.yaml"
     task.write_text(yaml.safe_dump(LONG_FOR_FINGER))
+    before = {p.pid for p in multiprocessing.active_children()}  # an earlier test's, not the choice's
     code = main(["choose", str(task), "--tools", "trapezoid,finger", "--json"])
     out = json.loads(capsys.readouterr().out)
     assert code == 0 and out["best"] == "trapezoid"
@@ -169,7 +170,7 @@ def test_candidates_still_planning_are_stopped_once_a_plan_passed_every_executio
     assert finger["tool"] == "finger" and finger["stopped"] and not finger["executed"]
     assert finger["verdict"] == "unknown"  # never infeasible (nothing was certified) nor solved
     assert finger["reason"] == "stopped after trapezoid passed every execution; `--wait-all` waits for its verdict"
-    assert not multiprocessing.active_children()  # the pools' processes ended and waited for
+    assert not {p.pid for p in multiprocessing.active_children()} - before  # the choice's processes waited for
 
 
 @pytest.mark.serial
@@ -179,6 +180,7 @@ def test_wait_all_waits_for_every_verdict() -> None:
     from tooltransfer import choose_tool
     from tooltransfer.problems.task import task_from_dict
 
+    before = {p.pid for p in multiprocessing.active_children()}  # an earlier test's, not the choice's
     choice = choose_tool(task_from_dict(LONG_FOR_FINGER, str(ROOT / "long_for_finger.yaml")), ["trapezoid", "finger"],
                          wait_all=True)
     best, finger = choice.ranking
@@ -186,7 +188,7 @@ def test_wait_all_waits_for_every_verdict() -> None:
     assert finger.label == "finger" and not finger.stopped
     assert finger.verdict == "infeasible" and finger.reason.startswith("certified infeasible"), finger.reason
     assert choice.cpu >= finger.planning_cpu > 5.0  # the long certificate ran to its end, and is counted
-    assert not multiprocessing.active_children()
+    assert not {p.pid for p in multiprocessing.active_children()} - before
 
 
 def test_nothing_is_stopped_without_a_plan_that_passed_every_execution() -> None:

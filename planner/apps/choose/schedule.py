@@ -156,6 +156,7 @@ def stop(p: ProcessPoolExecutor) -> None:
         if proc.exitcode is None:  # pragma: no cover - a process that ignores SIGTERM
             proc.kill()
             proc.join(5.0)
+    p.shutdown(wait=True)  # the pool's own thread ends too, having reaped every process it knew of
 
 
 def children_cpu() -> float | None:
