@@ -155,12 +155,11 @@ LONG_FOR_FINGER = {
 
 
 @pytest.mark.serial
-def test_candidates_still_planning_are_stopped_once_a_plan_passed_every_execution(tmp_path: Path, capsys) -> None:
-    import multiprocessing
-
+def test_candidates_still_planning_are_stopped_once_a_plan_passed_every_execution(tmp_path: Path, capsys,
+                                                                                  monkeypatch) -> None:
     task = tmp_path / "long_for_finger.yaml"
     task.write_text(yaml.safe_dump(LONG_FOR_FINGER))
-    before = {p.pid for p in multiprocessing.active_children()}  # an earlier test's, not the choice's
+    ended = _pools_ended(monkeypatch)
     code = main(["choose", str(task), "--tools", "trapezoid,finger", "--json"])
     out = json.loads(capsys.readouterr().out)
     assert code == 0 and out["best"] == "trapezoid"
@@ -170,17 +169,15 @@ def test_candidates_still_planning_are_stopped_once_a_plan_passed_every_executio
     assert finger["tool"] == "finger" and finger["stopped"] and not finger["executed"]
     assert finger["verdict"] == "unknown"  # never infeasible (nothing was certified) nor solved
     assert finger["reason"] == "stopped after trapezoid passed every execution; `--wait-all` waits for its verdict"
-    assert not {p.pid for p in multiprocessing.active_children()} - before  # the choice's processes waited for
+    _check_ended(ended)
 
 
 @pytest.mark.serial
-def test_wait_all_waits_for_every_verdict() -> None:
-    import multiprocessing
-
+def test_wait_all_waits_for_every_verdict(monkeypatch) -> None:
     from tooltransfer import choose_tool
     from tooltransfer.problems.task import task_from_dict
 
-    before = {p.pid for p in multiprocessing.active_children()}  # an earlier test's, not the choice's
+    ended = _pools_ended(monkeypatch)
     choice = choose_tool(task_from_dict(LONG_FOR_FINGER, str(ROOT / "long_for_finger.yaml")), ["trapezoid", "finger"],
                          wait_all=True)
     best, finger = choice.ranking
@@ -188,7 +185,35 @@ def test_wait_all_waits_for_every_verdict() -> None:
     assert finger.label == "finger" and not finger.stopped
     assert finger.verdict == "infeasible" and finger.reason.startswith("certified infeasible"), finger.reason
     assert choice.cpu >= finger.planning_cpu > 5.0  # the long certificate ran to its end, and is counted
-    assert not {p.pid for p in multiprocessing.active_children()} - before
+    _check_ended(ended)
+
+
+def _pools_ended(monkeypatch) -> list:
+    """The processes of every pool the choice ends (:func:`schedule.stop`), recorded as it ends them."""
+    from tooltransfer.planner.apps.choose import schedule
+
+    seen: list = []
+    real = schedule.stop
+
+    def recording_stop(p) -> None:
+        seen.append(list((getattr(p, "_processes", None) or {}).values()))
+        real(p)
+
+    monkeypatch.setattr(schedule, "stop", recording_stop)
+    return seen
+
+
+def _check_ended(ended: list) -> None:
+    """Both of the choice's pools were ended, and every process of theirs was ended and waited for (its
+    exit code known, no longer this process's child). Compared by process, not with every child of the
+    test process: an earlier test's pool may still be starting or ending one of its own."""
+    import multiprocessing
+
+    assert len(ended) == 2 and ended[0], ended  # the planners' pool and the executions'
+    procs = [p for pool in ended for p in pool]
+    alive = {p.pid for p in multiprocessing.active_children()}
+    assert all(p.exitcode is not None and p.pid not in alive for p in procs), \
+        [(p.pid, p.name, p.exitcode) for p in procs]
 
 
 def test_nothing_is_stopped_without_a_plan_that_passed_every_execution() -> None:

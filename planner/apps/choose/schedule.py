@@ -157,6 +157,10 @@ def stop(p: ProcessPoolExecutor) -> None:
             proc.kill()
             proc.join(5.0)
     p.shutdown(wait=True)  # the pool's own thread ends too, having reaped every process it knew of
+    for proc in procs:  # one the pool's thread and this one both waited for, seen running by one of them
+        if proc.exitcode is None:  # pragma: no cover - a race of two waits on one process
+            proc.kill()
+            proc.join(5.0)
 
 
 def children_cpu() -> float | None:
