@@ -154,15 +154,7 @@ def test_a_certificate_on_the_finest_grid_and_the_lattice_search_finds_nothing()
 def test_a_certificate_on_the_finer_grid_and_the_lattice_search_finds_nothing() -> None:
     """A finger task round an obstacle (from a seed no project file uses): 10 mm cells cut the corner
     round the obstacle and reach the start; 5 mm cells leave it out, and the check holds."""
-    from tooltransfer.problems.task import task_from_dict
-
-    data = {"format": "tooltransfer.task/1", "tool": "finger",
-            "skills": {"dataset": str(ROOT / "problems" / "data" / "finger_demos")},
-            "name": "round_the_obstacle", "start": [0.088601, 0.136626], "target": [0.022829, 0.175063],
-            "obstacles": [{"kind": "polygon", "vertices": [[0.077844, 0.166433], [0.072647, 0.169323],
-                                                           [0.068293, 0.165272], [0.070799, 0.15988],
-                                                           [0.076702, 0.160598]]}]}
-    task = task_from_dict(data, "round_the_obstacle")
+    task = _round_the_obstacle()
     setting, rules = _rules_of(task)
     cert, why = certify(rules, np.array(task.start), np.array(task.target))
     assert cert is not None and cert.kind == "backward_reachable" and cert.grid is not None, why
@@ -172,17 +164,35 @@ def test_a_certificate_on_the_finer_grid_and_the_lattice_search_finds_nothing() 
     assert closest > 0.003, f"the lattice search came {closest * 1e3:.2f} mm from the target of a certified task"
 
 
+def _round_the_obstacle():
+    from tooltransfer.problems.task import task_from_dict
+
+    data = {"format": "tooltransfer.task/1", "tool": "finger",
+            "skills": {"dataset": str(ROOT / "problems" / "data" / "finger_demos")},
+            "name": "round_the_obstacle", "start": [0.088601, 0.136626], "target": [0.022829, 0.175063],
+            "obstacles": [{"kind": "polygon", "vertices": [[0.077844, 0.166433], [0.072647, 0.169323],
+                                                           [0.068293, 0.165272], [0.070799, 0.15988],
+                                                           [0.076702, 0.160598]]}]}
+    return task_from_dict(data, "round_the_obstacle")
+
+
 def test_a_tampered_certificate_fails_its_check() -> None:
-    task = load_task(ROOT / "problems" / "hard" / "only_face_pushes_away.yaml")
+    """A backward set grown on the start's side of the polar invariant (the finger's faces all lean the
+    puck one way round the Omni's axis): a shrunk set, a set holding the start and a tampered invariant
+    are refused."""
+    task = _round_the_obstacle()
     _, rules = _rules_of(task)
     cert, _ = certify(rules, np.array(task.start), np.array(task.target))
     assert cert is not None and cert.kind == "backward_reachable" and cert.region is not None
-    shrunk = shapely.buffer(cert.region, -0.004)
-    cert.region = shrunk
+    assert "invariant" in cert.extra and check_certificate(cert, rules) == []
+    region, inv = cert.region, cert.extra["invariant"]
+    cert.region = shapely.buffer(region, -0.002)
     problems = check_certificate(cert, rules)
     assert problems and any("not closed" in p or "goal" in p for p in problems)
     cert.region = shapely.box(-1, -1, 1, 1)
     assert any("start" in p for p in check_certificate(cert, rules))
+    cert.region, cert.extra = region, {**cert.extra, "invariant": dict(inv, slopes=[-m for m in inv["slopes"]])}
+    assert any("not allowed" in p for p in check_certificate(cert, rules))
 
 
 def test_a_solved_task_gets_no_certificate_and_its_path_obeys_the_rules() -> None:

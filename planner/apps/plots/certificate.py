@@ -1,6 +1,7 @@
 """The figure of a verdict's certificate: where any face can hold the puck (the push space), the
-backward-reachable set of the target (``backward_reachable``), the obstacles, the start and the
-target, seen from above (lengths in mm)."""
+backward-reachable set of the target (``backward_reachable``) or the side of the start of the
+quantity no push decreases (``polar_invariant``), the obstacles, the start and the target, seen from
+above (lengths in mm)."""
 
 from __future__ import annotations
 
@@ -39,8 +40,10 @@ def certificate_figure(evidence: dict[str, Any], obstacles: list[dict[str, Any]]
     fig, ax = plt.subplots(figsize=(6.4, 5.2))
     _fill(ax, shapely.from_wkt(cert["space_wkt"]), color="#dfe8f2", label="push space (any face can hold the puck)")
     if cert.get("region_wkt"):
-        _fill(ax, shapely.from_wkt(cert["region_wkt"]), color="#f4b183", alpha=0.8,
-              label="positions that could reach the target")
+        forward = cert["kind"] == "polar_invariant"  # the invariant's side of the start, not the target's set
+        _fill(ax, shapely.from_wkt(cert["region_wkt"]), color="#a9d18e" if forward else "#f4b183", alpha=0.8,
+              label="positions a plan from the start could reach" if forward
+              else "positions that could reach the target")
     for i, o in enumerate(obstacles):
         shape = (shapely.Point(o["centre"]).buffer(o["radius"]) if o["kind"] == "disc"
                  else shapely.Polygon(o["vertices"]))

@@ -210,15 +210,19 @@ class BackwardResult:
 
 
 def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geometry, start: np.ndarray, *,
-                 h: float = 0.01, gap: float = 5e-4, max_blocks: int = 20000) -> BackwardResult:
+                 h: float = 0.01, gap: float = 5e-4, max_blocks: int = 20000,
+                 zone: shapely.Geometry | None = None) -> BackwardResult:
     """The smallest closed set (module docstring) holding ``goal`` [m], grown inside ``space`` (the
     push space, :func:`~tooltransfer.planner.planning.verdicts.bounds.push_space`), on blocks of cells of side
-    ``h`` [m]; stops early once it comes within ``gap`` [m] of ``start`` (2,).
+    ``h`` [m]; stops early once it comes within ``gap`` [m] of ``start`` (2,). ``zone``: where no path
+    from the start goes (default: the obstacles' zone; a larger one, such as the far side of a quantity no
+    push decreases, :func:`~tooltransfer.planner.planning.verdicts.spiral.start_side`, keeps the argument
+    sound: every piece of such a path lies outside it).
 
     Two passes: a coarse one whose pieces are grown by :data:`COARSEN` and simplified (few vertices,
     quick), then an exact one from the coarse set until no block adds area beyond the rounding."""
     grid = grid_over(shapely.union(space, goal), h)
-    zone, regions = obstacle_zone(rules), face_regions(rules)
+    zone, regions = obstacle_zone(rules) if zone is None else zone, face_regions(rules)
     models: dict[tuple[int, int], list] = {}
     cells = _split(grid, goal)
     done = 0

@@ -7,6 +7,9 @@ Kinds, cheapest first:
   or inside an obstacle's zone), so the puck never moves, and the start is not at the target;
 - ``target_unpushable``: no face can hold the puck anywhere within ``goal_tol`` of the target, so no
   push ends there;
+- ``polar_invariant``: a quantity every admissible push increases (the puck's polar angle about the
+  Omni's axis less a function of its distance from it, :mod:`.spiral`) is lower everywhere on the
+  target's goal disc than at the start;
 - ``backward_reachable``: a closed set holding the target's goal disc (:mod:`.backward`) leaves the
   start out by at least ``gap``.
 
@@ -27,6 +30,7 @@ import shapely
 from tooltransfer.planner.planning.verdicts.backward import BlockGrid, backward_set, block_faces, face_regions, grow
 from tooltransfer.planner.planning.verdicts.bounds import obstacle_zone, push_space
 from tooltransfer.planner.planning.verdicts.rules import PushRules
+from tooltransfer.planner.planning.verdicts.spiral import V_GAP, Spiral, check_spiral, invariant, start_side
 
 #: The start's least distance [m] from a certificate's set (far above the polygons' rounding).
 START_GAP = 5e-4
@@ -111,27 +115,50 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
         return Certificate("target_unpushable", "no face of the tool can hold the puck within "
                            f"{rules.goal_tol * 1e3:.2g} mm of the target, so no push ends there", **common,
                            time=time.perf_counter() - t0), ""
+    sp = invariant(rules, start, target)
+    if sp is not None and sp.v_goal < sp.v_start - V_GAP:
+        return Certificate("polar_invariant", "every admissible push increases the puck's polar angle about the "
+                           f"Omni's axis {'less' if sp.sigma > 0 else 'negated, less'} a function of its distance "
+                           "from the axis (checked on 1 mm bands of distance, every face's cone at every offset), "
+                           f"and that quantity is {(sp.v_start - sp.v_goal) * 1e3:.1f} mrad lower everywhere within "
+                           f"{rules.goal_tol * 1e3:.2g} mm of the target than at the start", **common,
+                           region=shapely.intersection(space, start_side(rules, sp, start)),
+                           time=time.perf_counter() - t0, extra={"invariant": sp.to_dict()}), ""
+    # a quantity no push decreases that does not separate start and target still bounds where a plan goes
+    zone = None if sp is None else restricted_zone(rules, sp, start, space, goal)
+    inside = space if zone is None else shapely.difference(space, zone)
     tried, left = [], max_blocks
     for k, side in enumerate(h):
         allowed = left if k == 0 else min(left, fine_blocks[min(k, len(fine_blocks)) - 1])
-        back = backward_set(rules, space, goal, start, h=side, gap=START_GAP, max_blocks=allowed)
+        back = backward_set(rules, inside, goal, start, h=side, gap=START_GAP, max_blocks=allowed, zone=zone)
         tried.append(f"cells of {side * 1e3:g} mm: {back.stopped} (after {back.blocks_processed} blocks)")
         left -= back.blocks_processed
         if back.region is not None or left <= 0:
             break
     if back.region is None:
         return None, "backward-reachable set of the target: " + "; ".join(tried)
+    within = "" if sp is None else (" on the side of the start of a quantity no push decreases (the polar angle "
+                                    "about the Omni's axis less a function of the distance)")
     cert = Certificate("backward_reachable", "the positions from which any push sequence could reach the target "
-                       "(over-approximated: every face's cone at every heading its reach allows, the tool body "
-                       "only where it overlaps an obstacle whatever the contact, switches free) leave the start out by "
-                       f"{shapely.distance(back.region, shapely.Point(start)) * 1e3:.1f} mm", **common,
+                       f"{within}(over-approximated: every face's cone at every heading its reach allows, the tool "
+                       "body only where it overlaps an obstacle whatever the contact, switches free) leave the start "
+                       f"out by {shapely.distance(back.region, shapely.Point(start)) * 1e3:.1f} mm", **common,
                        region=back.region, grid=back.grid, time=time.perf_counter() - t0,
-                       extra={"blocks_processed": back.blocks_processed})
+                       extra={"blocks_processed": back.blocks_processed}
+                       | ({} if sp is None else {"invariant": sp.to_dict()}))
     problems = check_certificate(cert, rules)
     if problems:
         return None, "backward-reachable set of the target: its check failed: " + "; ".join(problems)
     cert.time = time.perf_counter() - t0
     return cert, ""
+
+
+def restricted_zone(rules: PushRules, sp: Spiral, start: np.ndarray, space: shapely.Geometry,
+                    goal: shapely.Geometry) -> shapely.Geometry:
+    """Where no plan from ``start`` goes: the obstacles' zone and, about the push ``space`` and the
+    ``goal``, the far side of the quantity ``sp`` no push decreases (:func:`.spiral.start_side`)."""
+    around = shapely.buffer(shapely.envelope(shapely.union(space, goal)), 0.05, join_style="mitre")
+    return shapely.union(obstacle_zone(rules), shapely.difference(around, start_side(rules, sp, start)))
 
 
 def check_certificate(cert: Certificate, rules: PushRules) -> list[str]:
@@ -152,6 +179,11 @@ def check_certificate(cert: Certificate, rules: PushRules) -> list[str]:
     elif cert.kind == "target_unpushable":
         if shapely.distance(space, goal) <= START_GAP:
             problems.append("a face can hold the puck at the target")
+    elif cert.kind == "polar_invariant":
+        inv = cert.extra.get("invariant")
+        if not isinstance(inv, dict):
+            return [*problems, "no invariant stored"]
+        problems += check_spiral(rules, Spiral.from_dict(inv), start, target)
     elif cert.kind == "backward_reachable":
         region, grid = cert.region, cert.grid
         if region is None or grid is None:
@@ -160,10 +192,15 @@ def check_certificate(cert: Certificate, rules: PushRules) -> list[str]:
             problems.append("the set does not hold the target's goal disc")
         if shapely.distance(region, shapely.Point(start)) <= START_GAP:
             problems.append("the set does not leave the start out")
+        zone, regions = obstacle_zone(rules), face_regions(rules)
+        if "invariant" in cert.extra:  # the set was grown on the start's side of a quantity no push decreases
+            sp = Spiral.from_dict(cert.extra["invariant"])
+            problems += check_spiral(rules, sp, start, target, separating=False)
+            zone = restricted_zone(rules, sp, start, space, goal)
+            space = shapely.difference(space, zone)
         gx0, gy0, gx1, gy1 = grid.block_box(0, 0)[0], grid.block_box(0, 0)[1], *grid.block_box(*grid.shape)[2:]
         if not shapely.covers(shapely.box(gx0, gy0, gx1, gy1), shapely.union(space, goal)):
             problems.append("the grid does not cover the push space")
-        zone, regions = obstacle_zone(rules), face_regions(rules)
         for i, j in grid.blocks():
             box = grid.block_box(i, j)
             own = shapely.intersection(region, shapely.box(*box))
