@@ -77,6 +77,19 @@ def _run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]
     return code, err.strip()
 
 
+FIGURES = [(h, o, n) for h, o, n, suffix, in FILE_OUTPUTS if suffix == ".png"]
+
+
+@pytest.mark.parametrize(("head", "option", "named"), FIGURES, ids=[f"{h[0]} {o}" for h, o, _ in FIGURES])
+def test_a_figure_path_without_a_figure_format_exits_2_before_any_work(tmp_path: Path, capsys, head: list[str],
+                                                                      option: str, named: str) -> None:
+    """The format is taken from the name's ending: ``--plot fig`` was an internal error after the solve."""
+    code, err = _run([*head, option, str(tmp_path / "figure")], capsys)
+    assert code == 2, err
+    assert err.startswith(f"tooltransfer: error: {named}: expected a figure file name ending in .png"), err
+    assert not list(tmp_path.iterdir())
+
+
 def _listing(tmp: Path) -> set[str]:
     return {str(p.relative_to(tmp)) for p in tmp.rglob("*")}
 

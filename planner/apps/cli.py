@@ -35,15 +35,15 @@ DEFAULT_TOOLS_FIGURE = Path("out/tools.png")
 
 #: Output options by command: (argument name, option as shown, kind; see :func:`check_output`).
 OUTPUTS: dict[str, tuple[tuple[str, str, str], ...]] = {
-    "solve": (("out", "-o/--out", "file"), ("plot", "--plot", "file")),
+    "solve": (("out", "-o/--out", "file"), ("plot", "--plot", "figure")),
     "learn": (("out", "-o/--out", "file"),),
-    "simulate": (("figure", "--figure", "file"), ("gif", "--gif", "file")),
+    "simulate": (("figure", "--figure", "figure"), ("gif", "--gif", "file")),
     "export": (("out", "-o/--out", "file"),),
     "mjcf": (("out", "-o/--out", "file"),),
-    "segment": (("figure", "--figure", "file"),),
+    "segment": (("figure", "--figure", "figure"),),
     "schema": (("out", "--out", "file"),),
-    "tools": (("out", "--out", "file"),),
-    "tools derive": (("tool_out", "-o/--out", "file"), ("plot", "--plot", "file")),
+    "tools": (("out", "--out", "figure"),),
+    "tools derive": (("tool_out", "-o/--out", "file"), ("plot", "--plot", "figure")),
     "compare": (("out", "--out", "folder"),),
     "choose": (("best", "-o", "file"), ("out", "--out", "folder")),
     "paper": (("out", "--out", "folder"),),

@@ -99,7 +99,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if args.plot:  # checked before the solve: the default is named after the task
         figure = Path(args.plot) if isinstance(args.plot, str) else (
             args.out.with_suffix(".png") if args.out else Path(f"plan_{file_stem(task.name)}.png"))
-        check_output("--plot", figure)
+        check_output("--plot", figure, "figure")
     chosen = {"oe": args.oe, "ss": args.ss}
     if args.variant:
         oe, _, ss = args.variant.partition("/")

@@ -47,13 +47,22 @@ def _writable(folder: Path) -> str:
     return ""
 
 
+#: The file name endings a figure may have (the formats matplotlib writes without further packages).
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf", ".jpg", ".jpeg", ".eps", ".ps", ".tif", ".tiff", ".webp")
+
+
 def check_output(option: str, path: Path, kind: str = "file", *, make_folders: bool = False) -> None:
     """Check an output path before any work is done; raise :class:`~tooltransfer.errors.InputError` naming
     ``option`` and ``path``. ``kind``: ``"file"`` (its folder must exist, unless ``make_folders``),
+    ``"figure"`` (a file whose name ends in one of :data:`FIGURE_SUFFIXES`: the format is taken from it),
     ``"folder"`` (made with its parents when missing)."""
     from tooltransfer.errors import InputError
 
     path = Path(path)
+    if kind == "figure":
+        if path.suffix.lower() not in FIGURE_SUFFIXES:
+            raise InputError(option, f"a figure file name ending in {', '.join(FIGURE_SUFFIXES)}", str(path))
+        kind = "file"
     if len(os.fsencode(str(path))) > 4000 or any(len(os.fsencode(part)) > 255 for part in path.parts):
         raise InputError(option, "a path whose names have at most 255 bytes", f"{str(path)[:100]}...")
     if kind == "folder":
