@@ -51,6 +51,7 @@ def test_the_slopes_allowed_keep_every_direction_on_the_increasing_side(seed: in
             if iv is None:
                 continue
             found += 1
+            assert iv[0] <= iv[1]
             for m in (iv[0], 0.5 * (iv[0] + iv[1]), iv[1]):
                 assert all((_rates(f, r_lo, r_hi, sigma, m) >= -1e-9).all() for f in faces), (sigma, m, iv)
             for m, step in ((iv[0], -1), (iv[1], 1)):  # just beyond an end, some direction decreases it

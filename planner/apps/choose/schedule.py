@@ -147,20 +147,22 @@ def stop(p: ProcessPoolExecutor) -> None:
     needed, candidates stopped at the deadline) are ended with their processes, and every process is
     waited for (none is left behind, and its CPU time is counted: :func:`children_cpu`)."""
     procs = list((getattr(p, "_processes", None) or {}).values())
+    # the pool's own thread, which also waits for its processes: the first shutdown forgets it, so that the
+    # second would not wait for it; joined here, it has recorded the exit of every process it reaped (a
+    # process it reaped and this thread then polled looks running to this one until it has)
+    manager = getattr(p, "_executor_manager_thread", None)
     p.shutdown(wait=False, cancel_futures=True)
     for proc in procs:
         if proc.is_alive():
             proc.terminate()
     for proc in procs:
         proc.join(5.0)
-        if proc.exitcode is None:  # pragma: no cover - a process that ignores SIGTERM
+        if proc.exitcode is None:  # a process that ignores SIGTERM, or one the pool's thread is reaping
             proc.kill()
             proc.join(5.0)
-    p.shutdown(wait=True)  # the pool's own thread ends too, having reaped every process it knew of
-    for proc in procs:  # one the pool's thread and this one both waited for, seen running by one of them
-        if proc.exitcode is None:  # pragma: no cover - a race of two waits on one process
-            proc.kill()
-            proc.join(5.0)
+    if manager is not None:
+        manager.join(30.0)
+    p.shutdown(wait=True)
 
 
 def children_cpu() -> float | None:

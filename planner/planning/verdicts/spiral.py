@@ -136,10 +136,8 @@ def slopes(rules: PushRules, r_lo: float, r_hi: float, sigma: int) -> tuple[floa
             best = (a, b) if best is None or b - a > best[1] - best[0] else best
     if best is None:
         return None
-    a, b = best[0] + ANGLE_ROOM, best[1] - ANGLE_ROOM
-    if a > b:
-        return None
-    return max(-MAX_SLOPE, math.tan(a)), min(MAX_SLOPE, math.tan(b))
+    m_lo, m_hi = max(-MAX_SLOPE, math.tan(best[0] + ANGLE_ROOM)), min(MAX_SLOPE, math.tan(best[1] - ANGLE_ROOM))
+    return (m_lo, m_hi) if m_lo <= m_hi else None  # (none within the slopes used)
 
 
 def _one_branch(rules: PushRules) -> bool:
@@ -194,7 +192,8 @@ def invariant(rules: PushRules, start: np.ndarray, target: np.ndarray) -> Spiral
     lo, hi = min(r_lo, r_s, r_t) - BAND, max(r_hi, r_s, r_t) + BAND
     if lo <= 0.0 or not _one_branch(rules):
         return None
-    edges = np.append(np.arange(lo, hi, BAND), hi)
+    n = max(1, math.ceil((hi - lo) / BAND))
+    edges = lo + (hi - lo) * np.arange(n + 1) / n  # bands of at most BAND, increasing, ending at hi
     for sigma in (1, -1):
         m = []
         for a, b in itertools.pairwise(edges):
