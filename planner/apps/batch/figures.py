@@ -64,7 +64,11 @@ def plot_batch(rows: Sequence[dict[str, Any]], out: Path) -> list[Path]:
            ylabel="success rate (solved)", ylim=(-0.03, 1.03), title="success against reach margin")
     for a in (a1, a2):
         a.grid(alpha=0.3)
-        a.legend(fontsize=8)
+        if a.get_legend_handles_labels()[0]:
+            a.legend(fontsize=8)
+        else:  # no row of the batch has the measure (e.g. a store written before it was recorded)
+            a.text(0.5, 0.5, "no rows with this measure", ha="center", va="center", transform=a.transAxes,
+                   color="0.4")
     written = [save_figure(fig, out / "success_vs_difficulty.png")]
 
     fig, ax = plt.subplots(figsize=(7, 4.2))
