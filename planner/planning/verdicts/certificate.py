@@ -139,8 +139,8 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
             break
     if back.region is None:
         return None, "backward-reachable set of the target: " + "; ".join(tried)
-    within = "" if sp is None else (" on the side of the start of a quantity no push decreases (the polar angle "
-                                    "about the Omni's axis less a function of the distance)")
+    within = "" if sp is None else ("on the side of the start of a quantity no push decreases (the polar angle "
+                                    "about the Omni's axis less a function of the distance) ")
     cert = Certificate("backward_reachable", "the positions from which any push sequence could reach the target "
                        f"{within}(over-approximated: every face's cone at every heading its reach allows, the tool "
                        "body only where it overlaps an obstacle whatever the contact, switches free) leave the start "
