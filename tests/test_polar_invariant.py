@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
-from test_verdicts import _holds, _rules_of, lattice_search
+from test_verdicts import _holds, _rules_of, generated, lattice_search
 
 from tooltransfer.planner.planning.verdicts.certificate import certify, check_certificate
 from tooltransfer.planner.planning.verdicts.rules import FaceRule, PushRules
@@ -63,13 +63,7 @@ def test_the_slopes_allowed_keep_every_direction_on_the_increasing_side(seed: in
 
 
 def _generated(task_id: str):
-    from tooltransfer.planner.apps.batch.generate import generate_tasks
-    from tooltransfer.planner.apps.batch.spec import load_batch
-    from tooltransfer.problems.task import task_from_dict
-
-    batch = ROOT / "problems" / "batch" / "verdicts_200.yaml"
-    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == task_id)
-    return task_from_dict(data, str(batch))
+    return generated("verdicts_200.yaml", task_id)
 
 
 def _value(inv: dict, base: np.ndarray, mid: float, p: np.ndarray) -> tuple[float, float, float]:

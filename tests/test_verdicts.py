@@ -100,6 +100,17 @@ def lattice_search(setting, start: np.ndarray, target: np.ndarray, *, step: floa
     return best
 
 
+def generated(batch_file: str, task_id: str):
+    """The task ``task_id`` of the committed batch file ``problems/batch/<batch_file>``, as generated."""
+    from tooltransfer.planner.apps.batch.generate import generate_tasks
+    from tooltransfer.planner.apps.batch.spec import load_batch
+    from tooltransfer.problems.task import task_from_dict
+
+    batch = ROOT / "problems" / "batch" / batch_file
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == task_id)
+    return task_from_dict(data, str(batch))
+
+
 @pytest.mark.parametrize("name", CERTIFIED)
 def test_certificate_holds_when_checked_again_and_the_lattice_search_finds_nothing(name: str) -> None:
     task = load_task(ROOT / "problems" / name)
@@ -113,13 +124,7 @@ def test_certificate_holds_when_checked_again_and_the_lattice_search_finds_nothi
 
 def test_a_generated_task_with_an_obstacle_certified_and_the_lattice_search_finds_nothing() -> None:
     """An obstacle case of the execution benchmark's batch: the tool body's zone takes part."""
-    from tooltransfer.planner.apps.batch.generate import generate_tasks
-    from tooltransfer.planner.apps.batch.spec import load_batch
-    from tooltransfer.problems.task import task_from_dict
-
-    batch = ROOT / "problems" / "batch" / "execution_60.yaml"
-    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "exec60-00031")
-    task = task_from_dict(data, str(batch))
+    task = generated("execution_60.yaml", "exec60-00031")
     setting, rules = _rules_of(task)
     cert, why = certify(rules, np.array(task.start), np.array(task.target))
     assert cert is not None and cert.kind == "backward_reachable", why
@@ -132,13 +137,7 @@ def test_a_certificate_on_the_finest_grid_and_the_lattice_search_finds_nothing()
     """An execution-benchmark task (slope tool, one obstacle) whose set reaches the start on 10 mm and
     5 mm cells: on 2.5 mm cells each face's cone turns by less over a block and the set leaves the start
     out; the check replays it block by block and the lattice search stays away from the target."""
-    from tooltransfer.planner.apps.batch.generate import generate_tasks
-    from tooltransfer.planner.apps.batch.spec import load_batch
-    from tooltransfer.problems.task import task_from_dict
-
-    batch = ROOT / "problems" / "batch" / "execution_60.yaml"
-    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "exec60-00016")
-    task = task_from_dict(data, str(batch))
+    task = generated("execution_60.yaml", "exec60-00016")
     setting, rules = _rules_of(task)
     for coarser in ((0.01,), (0.01, 0.005)):
         cert, why = certify(rules, np.array(task.start), np.array(task.target), h=coarser)

@@ -20,7 +20,7 @@ from tooltransfer.planner.planning.verdicts.rules import FaceRule, PushRules
 ARC_PIECES = 256
 
 
-def _polar_ranges(rule: FaceRule) -> tuple[float, float, float, float]:
+def polar_ranges(rule: FaceRule) -> tuple[float, float, float, float]:
     """``(r_lo, r_hi, psi_lo, psi_hi)``: the puck's distance [m] from the Omni's axis and its polar angle
     less the waist angle [rad] (``atan2(o, v)``) over the face's offset and reach ranges."""
     (o_lo, o_hi), (v_lo, v_hi) = rule.offset, rule.reach
@@ -31,10 +31,18 @@ def _polar_ranges(rule: FaceRule) -> tuple[float, float, float, float]:
     return r_lo, r_hi, min(psi), max(psi)
 
 
+def offset_turns(rule: FaceRule, r_lo: float, r_hi: float) -> tuple[float, float]:
+    """``(least, largest)`` of ``asin(o / r)`` [rad] over the face's offsets ``o`` and distances ``r`` in
+    ``[r_lo, r_hi]`` [m] (monotone in both: the extremes are at the corners): how far the face's contact
+    turns the tool's heading from the puck's polar angle (the heading is ``phi - asin(o / r) - pi/2``)."""
+    asins = [math.asin(max(-1.0, min(1.0, o / r))) for o in rule.offset for r in (r_lo, r_hi)]
+    return min(asins), max(asins)
+
+
 def face_region(rules: PushRules, rule: FaceRule) -> shapely.Polygon:
     """A polygon [m] containing every puck position face ``rule`` can push from (an annular sector about
     the Omni's axis: circumscribed outer arc, inscribed inner chords)."""
-    r_lo, r_hi, psi_lo, psi_hi = _polar_ranges(rule)
+    r_lo, r_hi, psi_lo, psi_hi = polar_ranges(rule)
     lo, hi = rules.waist[0] + psi_lo, rules.waist[1] + psi_hi
     n = max(2, math.ceil((hi - lo) / (2 * math.pi) * ARC_PIECES))
     ang = np.linspace(lo, hi, n + 1)
@@ -94,7 +102,7 @@ def face_headings(rules: PushRules, rule: FaceRule, box: tuple[float, float, flo
     if polar is None:
         return None
     d_lo, d_hi, phi_lo, phi_hi = polar
-    r_lo, r_hi, psi_lo, psi_hi = _polar_ranges(rule)
+    r_lo, r_hi, psi_lo, psi_hi = polar_ranges(rule)
     lo_r, hi_r = max(d_lo, r_lo), min(d_hi, r_hi)
     if lo_r > hi_r:
         return False
@@ -102,8 +110,8 @@ def face_headings(rules: PushRules, rule: FaceRule, box: tuple[float, float, flo
     gap = abs(math.remainder(0.5 * (phi_lo + phi_hi) - 0.5 * (f_lo + f_hi), 2 * math.pi))
     if gap > 0.5 * (phi_hi - phi_lo) + 0.5 * (f_hi - f_lo) + 1e-12:
         return False
-    asins = [math.asin(max(-1.0, min(1.0, o / r))) for o in rule.offset for r in (lo_r, hi_r)]
-    return phi_lo - max(asins) - math.pi / 2, phi_hi - min(asins) - math.pi / 2
+    least, largest = offset_turns(rule, lo_r, hi_r)
+    return phi_lo - largest - math.pi / 2, phi_hi - least - math.pi / 2
 
 
 def direction_arcs(rules: PushRules, box: tuple[float, float, float, float]) -> list[tuple[float, float]] | None:

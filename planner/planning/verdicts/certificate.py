@@ -116,7 +116,9 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
                            f"{rules.goal_tol * 1e3:.2g} mm of the target, so no push ends there", **common,
                            time=time.perf_counter() - t0), ""
     sp = invariant(rules, start, target)
-    if sp is not None and sp.v_goal < sp.v_start - V_GAP and not check_spiral(rules, sp, start, target):
+    if sp is not None and check_spiral(rules, sp, start, target, separating=False):
+        sp = None  # (refused by its own check: never seen)
+    if sp is not None and sp.v_goal < sp.v_start - V_GAP:
         return Certificate("polar_invariant", "every admissible push increases the puck's polar angle about the "
                            f"Omni's axis {'less' if sp.sigma > 0 else 'negated, less'} a function of its distance "
                            "from the axis (checked on 1 mm bands of distance, every face's cone at every offset), "
@@ -125,8 +127,6 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
                            region=shapely.intersection(space, start_side(rules, sp, start)),
                            time=time.perf_counter() - t0, extra={"invariant": sp.to_dict()}), ""
     # a quantity no push decreases that does not separate start and target still bounds where a plan goes
-    if sp is not None and check_spiral(rules, sp, start, target, separating=False):
-        sp = None  # (refused by its own check: never seen)
     zone = None if sp is None else restricted_zone(rules, sp, start, space, goal)
     inside = space if zone is None else shapely.difference(space, zone)
     tried, left = [], max_blocks

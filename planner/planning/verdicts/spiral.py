@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 import shapely
 
-from tooltransfer.planner.planning.verdicts.bounds import _polar_ranges
+from tooltransfer.planner.planning.verdicts.bounds import offset_turns, polar_ranges
 from tooltransfer.planner.planning.verdicts.rules import PushRules
 
 #: Width [m] of the distance bands.
@@ -85,12 +85,12 @@ def relative_arcs(rules: PushRules, r_lo: float, r_hi: float) -> list[tuple[floa
     distances meet the band."""
     arcs = []
     for f in rules.faces:
-        f_lo, f_hi, _, _ = _polar_ranges(f)
+        f_lo, f_hi, _, _ = polar_ranges(f)
         lo_r, hi_r = max(r_lo, f_lo), min(r_hi, f_hi)
         if lo_r > hi_r:
             continue
-        asins = [math.asin(max(-1.0, min(1.0, o / r))) for o in f.offset for r in (lo_r, hi_r)]
-        arcs.append((f.cone[0] - math.pi / 2 - max(asins), f.cone[1] - math.pi / 2 - min(asins)))
+        least, largest = offset_turns(f, lo_r, hi_r)
+        arcs.append((f.cone[0] - math.pi / 2 - largest, f.cone[1] - math.pi / 2 - least))
     return arcs
 
 
@@ -140,12 +140,35 @@ def slopes(rules: PushRules, r_lo: float, r_hi: float, sigma: int) -> tuple[floa
     return (m_lo, m_hi) if m_lo <= m_hi else None  # (none within the slopes used)
 
 
+def _mid(rules: PushRules) -> float:
+    """The middle of the waist range [rad]: polar angles are taken within half a turn of it."""
+    return 0.5 * (rules.waist[0] + rules.waist[1])
+
+
+def _span(rules: PushRules, start: np.ndarray, target: np.ndarray) -> tuple[float, float]:
+    """The least and largest distance [m] from the Omni's axis of any face's region, the start and the
+    target: what the bands must cover."""
+    r_s, r_t = _polar(rules, start)[0], _polar(rules, target)[0]
+    ranges = [polar_ranges(f)[:2] for f in rules.faces]
+    return min([r_s, r_t, *(lo for lo, _ in ranges)]), max([r_s, r_t, *(hi for _, hi in ranges)])
+
+
+def _pick(iv: tuple[float, float], toward: float | None) -> float:
+    """A slope of the interval ``iv`` (clipped to :data:`MAX_SLOPE`): its end in the direction of
+    ``toward`` (+1: the largest, -1: the smallest), or with no direction the one nearest 0."""
+    if toward is not None:
+        m = iv[1] if toward > 0 else iv[0]
+    else:
+        m = min(max(0.0, iv[0]), iv[1])
+    return min(MAX_SLOPE, max(-MAX_SLOPE, m))
+
+
 def _one_branch(rules: PushRules) -> bool:
     """Whether every face's polar angles lie within half a turn of the waist range's middle (the branch
     :func:`_values` takes them on is then continuous on the push space)."""
-    mid = 0.5 * (rules.waist[0] + rules.waist[1])
+    mid = _mid(rules)
     for f in rules.faces:
-        _, _, psi_lo, psi_hi = _polar_ranges(f)
+        _, _, psi_lo, psi_hi = polar_ranges(f)
         if rules.waist[0] + psi_lo <= mid - math.pi or rules.waist[1] + psi_hi >= mid + math.pi:
             return False
     return True
@@ -166,7 +189,7 @@ def _g(edges: np.ndarray, m: np.ndarray, r: float) -> float:
 def _values(rules: PushRules, sp: Spiral, start: np.ndarray, target: np.ndarray) -> tuple[float, float]:
     """``(V(start), bound of V on the goal disc)`` [rad] of ``sp`` (the polar angles taken on one
     branch about the middle of the waist range, so that the push space's are continuous)."""
-    mid = 0.5 * (rules.waist[0] + rules.waist[1])
+    mid = _mid(rules)
     r_s, phi_s = _polar(rules, start)
     r_t, phi_t = _polar(rules, target)
     phi_s = mid + math.remainder(phi_s - mid, 2 * math.pi)
@@ -184,38 +207,30 @@ def _values(rules: PushRules, sp: Spiral, start: np.ndarray, target: np.ndarray)
 def invariant(rules: PushRules, start: np.ndarray, target: np.ndarray) -> Spiral | None:
     """The quantity of the module docstring with the slopes that make ``V(target)`` smallest, for the first
     ``sigma`` (+1, then -1) whose every band allows a slope; None where neither does. It proves the task
-    infeasible only when ``v_goal < v_start`` (:func:`spiral_certificate`); otherwise its side of the
-    start (:func:`start_side`) still holds every position a plan reaches."""
-    r_lo = min(_polar_ranges(f)[0] for f in rules.faces) if rules.faces else 0.0
-    r_hi = max(_polar_ranges(f)[1] for f in rules.faces) if rules.faces else 0.0
-    r_s, r_t = _polar(rules, start)[0], _polar(rules, target)[0]
-    lo, hi = min(r_lo, r_s, r_t) - BAND, max(r_hi, r_s, r_t) + BAND
-    if lo <= 0.0 or not _one_branch(rules):
+    infeasible only when ``v_goal < v_start``; otherwise its side of the start (:func:`start_side`) still
+    holds every position a plan reaches."""
+    if not rules.faces or not _one_branch(rules):
+        return None
+    lo, hi = _span(rules, start, target)
+    lo, hi = lo - BAND, hi + BAND
+    if lo <= 0.0:
         return None
     n = max(1, math.ceil((hi - lo) / BAND))
     edges = lo + (hi - lo) * np.arange(n + 1) / n  # bands of at most BAND, increasing, ending at hi
+    r_s, r_t = _polar(rules, start)[0], _polar(rules, target)[0]
+    toward = 1.0 if r_t > r_s else -1.0  # between the two distances, the slope that lowers V(target) most
     for sigma in (1, -1):
         m = []
         for a, b in itertools.pairwise(edges):
             iv = slopes(rules, float(a), float(b), sigma)
             if iv is None:
                 break
-            between = min(r_s, r_t) <= b and a <= max(r_s, r_t)
-            pick = (iv[1] if r_t > r_s else iv[0]) if between else (0.0 if iv[0] <= 0.0 <= iv[1] else iv[0]
-                                                                    if iv[0] > 0.0 else iv[1])
-            m.append(min(MAX_SLOPE, max(-MAX_SLOPE, pick)))
+            m.append(_pick(iv, toward if min(r_s, r_t) <= b and a <= max(r_s, r_t) else None))
         else:
             sp = Spiral(sigma, edges, np.asarray(m), 0.0, 0.0)
             v_s, v_t = _values(rules, sp, start, target)
             return Spiral(sigma, edges, sp.slopes, v_s, v_t)
     return None
-
-
-def spiral_certificate(rules: PushRules, start: np.ndarray, target: np.ndarray) -> Spiral | None:
-    """A :class:`Spiral` showing that no push sequence takes ``start`` (2,) [m] into the goal disc about
-    ``target`` (2,) [m], or None (module docstring)."""
-    sp = invariant(rules, start, target)
-    return sp if sp is not None and sp.v_goal < sp.v_start - V_GAP else None
 
 
 def check_spiral(rules: PushRules, sp: Spiral, start: np.ndarray, target: np.ndarray, *,
@@ -230,10 +245,8 @@ def check_spiral(rules: PushRules, sp: Spiral, start: np.ndarray, target: np.nda
     e = np.asarray(sp.edges)
     if len(e) != len(sp.slopes) + 1 or np.any(np.diff(e) <= 0.0) or e[0] <= 0.0:
         return [*problems, "the bands are not increasing distances"]
-    r_lo = min(_polar_ranges(f)[0] for f in rules.faces) if rules.faces else e[0]
-    r_hi = max(_polar_ranges(f)[1] for f in rules.faces) if rules.faces else e[-1]
-    r_s, r_t = _polar(rules, start)[0], _polar(rules, target)[0]
-    if e[0] > min(r_lo, r_s, r_t) or e[-1] < max(r_hi, r_s, r_t):
+    lo, hi = _span(rules, start, target)
+    if e[0] > lo or e[-1] < hi:
         problems.append("the bands do not cover the push space, the start and the target")
     for k, (a, b) in enumerate(itertools.pairwise(e)):
         iv = slopes(rules, float(a), float(b), sp.sigma)
@@ -257,7 +270,7 @@ def start_side(rules: PushRules, sp: Spiral, start: np.ndarray, *, step: float =
     computed here from ``start`` (2,) [m], not taken from ``sp``): every position a plan from the start
     reaches lies in it. The curve ``V = V(start)`` is drawn through each band edge and at most ``step``
     [rad] of polar angle apart, the polygon grown by :data:`SIDE_GROWTH`."""
-    mid = 0.5 * (rules.waist[0] + rules.waist[1])
+    mid = _mid(rules)
     v_s, _ = _values(rules, sp, start, start)
     e = np.asarray(sp.edges)
     pts = [e[0]]
