@@ -292,12 +292,17 @@ def test_a_start_held_only_toward_one_end_of_a_face_is_pushed_from_with_the_cont
 def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the_start() -> None:
     """The windows' attempt is the costliest (up to five moves per face): it runs where every attempt
     before it closed at the start (verd200-00056: no face holds the puck there with its contact at the
-    middle of the face) and not where they moved and failed later (verd200-00011)."""
+    middle of the face) and not where they moved and failed later (verd200-00011). Where they closed at
+    the start, the fine steps' attempt is left out (which faces hold the puck there does not depend on the
+    step); where they moved, it runs last."""
     stuck = solve(_verdict_task("verd200-00056"))
     assert stuck.verdict != "solved"
     # three attempts closed at once, then the windows' attempt (its path fails later, at the approach)
     assert (stuck.reason or "").count("its space closed after 1 expansions") == 3
     assert "; then " in (stuck.reason or "").split("half steps and new runs")[1]
+    assert " 2 mm steps" not in (stuck.reason or "")
     moved = solve(_verdict_task("verd200-00011"))
     assert moved.verdict != "solved" and "windows" not in (moved.reason or "")
-    assert "half steps and new runs" in (moved.reason or "")
+    attempts = (moved.reason or "").split("the guided search: ")[1].split("; then ")
+    assert "half steps and new runs" in attempts[2] and " 4 mm steps" in attempts[2]
+    assert " 2 mm steps" in attempts[-1] and len(attempts) == 4

@@ -102,7 +102,8 @@ class GuidedMiss:
         if self.exhausted:
             return (f"its space closed after {self.expansions} expansions (no path in {self.step * 1e3:g} mm steps "
                     "under its rules; finer steps or other contact places may still find one)")
-        return f"no path within {self.expansions} expansions (its budget, oe.guided_budget)"
+        return (f"no path within {self.expansions} expansions of {self.step * 1e3:g} mm steps (its budget, "
+                "oe.guided_budget)")
 
 
 @dataclass(frozen=True)
@@ -126,6 +127,14 @@ CONE = 0.98
 
 #: Step [m] of the search's straight pushes.
 STEP = 0.004
+#: Side [m] of the lattice cells the search visits once per face.
+CELL = 0.002
+#: The share of the friction cone's half-angle tried before the widest (``friction_cone_fraction_max``),
+#: where that is wider: plans keep the most margin that lets them exist.
+MIDDLE_SHARE = 0.8
+#: The finer attempt's share of :data:`STEP` and :data:`CELL` (narrow passages between an obstacle's
+#: margin and the edge of a cone, where a whole step leaves the cone or enters the margin).
+FINE = 0.5
 
 #: How near [m] a refused change of face (:class:`Refusal`) the search no longer makes it.
 REFUSED_RADIUS = 2 * STEP
@@ -164,7 +173,7 @@ def _zones(setting: Setting) -> list[Any]:
 
 
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
-                options: QPOptions, step: float = STEP, cell: float = 0.002, switch_price: float = 0.01,
+                options: QPOptions, step: float = STEP, cell: float = CELL, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False,
                 more: bool = False) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
@@ -265,13 +274,16 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
 
 def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
                  target: NDArray[np.float64] | None, options: QPOptions) -> Generator[PushPlan, Any, None]:
-    """The ``qp`` variant's fallback when its scored candidates fail: for each share of the friction
-    cone in turn (``options.friction_cone_fraction``, then ``friction_cone_fraction_max`` where that is
-    wider, then that share with half steps and new runs where the contact rolls off its face, then
-    that with each run's contact kept to one window of ``guided_contact_span`` of its face where that is
-    narrower than ``contact_span`` and no attempt before could push from the start at all: the Omni may
-    hold a face there only with its contact toward one end), the sequence of :func:`guided_path`
-    (``options.guided_budget`` expansions) fitted by
+    """The ``qp`` variant's fallback when its scored candidates fail: a ladder of attempts, each
+    :func:`guided_path` at a share of the friction cone's half-angle: the task's
+    ``options.friction_cone_fraction``; then :data:`MIDDLE_SHARE` (where wider, and at most
+    ``friction_cone_fraction_max``); then that share with half steps and new runs where the contact rolls
+    off its face; then, where no attempt before could push from the start at all (the Omni may hold a face
+    there only with its contact toward one end), that with each run's contact kept to one window of
+    ``guided_contact_span`` of its face (where narrower than ``contact_span``); then that share on
+    :data:`FINE` steps and cells; then ``friction_cone_fraction_max`` (where wider still), on whole and
+    on fine steps. Each attempt's sequence (found within ``options.guided_budget`` expansions, on fine
+    steps ``1 / FINE`` times that: a path takes that many more steps) is fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
     [m]) under that share. Yields each attempt's push plan, ``infeasible`` with the reason when the search
     or the fit fails; the caller stops at the first whose whole plan passes its checks. The share a plan
@@ -284,21 +296,25 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     target = universal[-1] if target is None else target
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
     share = options.friction_cone_fraction
-    tries: list[tuple[dict[str, float], bool, bool]] = [({"friction_cone_fraction": share}, False, False)]
-    if wide > share:
-        tries.append(({"friction_cone_fraction": wide}, False, False))
-    tries.append(({"friction_cone_fraction": max(wide, share)}, False, True))
+    tries: list[tuple[dict[str, float], bool, bool, bool]] = [({"friction_cone_fraction": share}, False, False, False)]
+    middle = max(share, min(wide, MIDDLE_SHARE))  # the rung of the ladder below the widest share
+    if middle > share:
+        tries.append(({"friction_cone_fraction": middle}, False, False, False))
+    tries.append(({"friction_cone_fraction": middle}, False, True, False))
     if span < options.contact_span:
-        tries.append(({"friction_cone_fraction": max(wide, share), "contact_span": span}, True, True))
-    stuck = True  # every attempt so far could not push from the start at all
-    for change, windows, more in tries:
-        if windows and not stuck:
-            break
+        tries.append(({"friction_cone_fraction": middle, "contact_span": span}, True, True, False))
+    tries.append(({"friction_cone_fraction": middle}, False, True, True))
+    if wide > middle:
+        tries += [({"friction_cone_fraction": wide}, False, True, fine) for fine in (False, True)]
+    stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
+    for change, windows, more, fine in tries:
+        if (windows and not stuck) or (stuck and (fine or change["friction_cone_fraction"] > middle)):
+            continue  # (which faces can push at the start does not depend on the step or the share)
         opts = options.model_copy(update=change)
         refused: list[Refusal] = []
         for _ in range(1 + REFUSALS):
-            plan = _attempt(t, setting, target, opts, universal, refused, windows, more)
-            stuck = stuck and plan.metrics.get("guided_expansions") == 1.0
+            plan = _attempt(t, setting, target, opts, universal, refused, windows, more, fine)
+            stuck = stuck and (windows or plan.metrics.get("guided_expansions") == 1.0)
             failed = yield plan
             where = getattr(failed, "where", None)
             if plan.status != "solved" or where is None:
@@ -308,12 +324,14 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
 
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
              universal: NDArray[np.float64], refused: list[Refusal], windows: bool = False,
-             more: bool = False) -> PushPlan:
+             more: bool = False, fine: bool = False) -> PushPlan:
     """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes
-    (``windows``, ``more``: as :func:`guided_path` takes them)."""
+    (``windows``, ``more``: as :func:`guided_path` takes them; ``fine``: steps and cells of a
+    :data:`FINE` share of the usual, and ``1 / FINE`` times the expansions)."""
     share = opts.friction_cone_fraction
-    found = guided_path(setting, universal[0], target, options=opts, budget=opts.guided_budget, refused=refused,
-                        windows=windows, more=more)
+    found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=windows, more=more,
+                        **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(opts.guided_budget / FINE)}
+                           if fine else {"budget": opts.guided_budget}))
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
         but = f" without the {len(refused)} change(s) of face refused," if refused else ""
