@@ -10,8 +10,9 @@ Omni's waist imposes there (the yaw a plant may take as a check only). The first
 never sends a command that has one.
 
 The tool's margin is its own, smaller than the object's ``safety_margin``: the plans keep the object
-that margin from the obstacles and the tool outline only clear of them (``tool_obstacle_clearance_min``
-> 0), and tools pass a few millimetres from an obstacle in plans the loop executes.
+that margin from the obstacles and the tool outline only this one (``tool_obstacle_clearance_min`` and
+``switch_obstacle_clearance_min`` at least :data:`ENVELOPE_MARGIN`, a hard check of every solved plan), and
+tools pass a few millimetres from an obstacle in plans the loop executes.
 """
 
 from __future__ import annotations
@@ -24,14 +25,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.planner.planning.setting import Setting
-from tooltransfer.planner.planning.tool_clearance import tool_obstacle_clearance
+from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN, tool_obstacle_clearance
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Obstacle
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.omni.platform import OmniPlatform
 
-#: Least distance [m] between the tool's outline and any obstacle along a command.
-ENVELOPE_MARGIN = 0.00025
+#: Least distance [m] between the tool's outline and any obstacle along a command (the margin every
+#: solved plan keeps: :data:`~tooltransfer.planner.planning.tool_clearance.TOOL_MARGIN`).
+ENVELOPE_MARGIN = TOOL_MARGIN
 #: Largest spacing [m] of the samples the envelope checks along a command.
 ENVELOPE_STEP = 5e-4
 #: The table's bounds ``(x_min, x_max, y_min, y_max)`` [m] in the world frame: the simulated

@@ -42,7 +42,7 @@ from tooltransfer.planner.planning.plan import Plan, Segment
 from tooltransfer.planner.planning.recontact import recontact_planner
 from tooltransfer.planner.planning.setting import Setting, setting_from_task, task_skills
 from tooltransfer.planner.planning.switches import with_fallback
-from tooltransfer.planner.planning.tool_clearance import tool_obstacle_clearance
+from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN, tool_obstacle_clearance
 from tooltransfer.planner.planning.variant_registry import needs_ss_skill, oe_variant, switch_planner
 from tooltransfer.planner.planning.verdicts.decide import attach_verdict
 from tooltransfer.problems.task import Task, resolve, task_origin
@@ -297,8 +297,8 @@ _HARD_BOUNDS: tuple[tuple[str, str, float, str], ...] = (
     ("contact edge", "contact_edge_margin_min", -1e-6, "min"),
     ("switch penetration", "switch_penetration_max", 1e-5, "max"),
     ("reach", "reach_violation_max", 1e-3, "max"),
-    ("tool-obstacle clearance", "tool_obstacle_clearance_min", 0.0, "min"),
-    ("switch-obstacle clearance", "switch_obstacle_clearance_min", 0.0, "min"),
+    ("tool-obstacle clearance", "tool_obstacle_clearance_min", TOOL_MARGIN, "min"),
+    ("switch-obstacle clearance", "switch_obstacle_clearance_min", TOOL_MARGIN, "min"),
     ("joint limits", "joint_limit_violation_max", 1e-9, "max"),
     ("goal", "goal_error", 1e-4, "max"),
 )

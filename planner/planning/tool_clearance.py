@@ -19,6 +19,12 @@ from numpy.typing import NDArray
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
 
+#: Least distance [m] between the tool's outline and every obstacle that a solved plan keeps, along its
+#: pushes and its switches: the closed loop's safety envelope
+#: (:mod:`tooltransfer.planner.execution.envelope`) refuses any command that comes closer, so a plan
+#: passing nearer could be executed open loop only.
+TOOL_MARGIN = 0.00025
+
 
 @dataclass(frozen=True)
 class ToolClearance:
