@@ -306,3 +306,44 @@ def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the
     attempts = (moved.reason or "").split("the guided search: ")[1].split("; then ")
     assert "half steps and new runs" in attempts[2] and " 4 mm steps" in attempts[2]
     assert " 2 mm steps" in attempts[-1] and len(attempts) == 4
+
+
+def test_a_passage_whole_steps_miss_is_found_on_fine_steps_and_the_plan_executes() -> None:
+    """exec60-00040 (finger, one obstacle): on 4 mm steps the search's space closes at both shares of
+    the friction cone; on 2 mm steps and 1 mm cells it finds a path, and the plan made from it passes
+    every hard check (the tool 0.25 mm or more from the obstacle among them) and ends within 5 mm of the
+    target open loop on the MuJoCo platform."""
+    pytest.importorskip("mujoco")
+    from tooltransfer.planner.execution.simulate import simulate_plan
+    from tooltransfer.planner.planning.oe.guided import CELL, FINE, STEP
+
+    task = _task("exec60-00040")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    start, target = np.array(task.start), np.array(task.target)
+    for share in (0.5, 0.8):
+        options = qp_options(task).model_copy(update={"friction_cone_fraction": share})
+        miss = guided_path(setting, start, target, options=options, budget=4000, more=share > 0.5)
+        assert isinstance(miss, GuidedMiss) and miss.exhausted
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": 0.8})
+    found = guided_path(setting, start, target, options=options, budget=8000, more=True, step=FINE * STEP,
+                        cell=FINE * CELL)
+    assert isinstance(found, GuidedPath)
+    plan = solve(task)
+    assert plan.verdict == "solved" and plan.metrics["guided_step"] == pytest.approx(FINE * STEP)
+    assert hard_check_failures(plan.metrics) == []
+    assert plan.metrics["tool_obstacle_clearance_min"] >= 0.00025
+    assert simulate_plan(plan).final_error < 0.005
+
+
+def test_a_tool_closer_to_an_obstacle_than_the_safety_envelope_allows_breaks_a_hard_check() -> None:
+    """The closed loop's envelope refuses commands within 0.25 mm of an obstacle: a plan passing closer
+    is not solved (its tool or a switch), one at the margin is."""
+    from tooltransfer.planner.execution.envelope import ENVELOPE_MARGIN
+    from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
+
+    assert TOOL_MARGIN == ENVELOPE_MARGIN == 0.00025
+    for key, family in (("tool_obstacle_clearance_min", "tool-obstacle clearance"),
+                        ("switch_obstacle_clearance_min", "switch-obstacle clearance")):
+        close = hard_check_failures({key: 0.0001})
+        assert len(close) == 1 and close[0].startswith(family)
+        assert hard_check_failures({key: TOOL_MARGIN}) == []

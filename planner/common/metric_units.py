@@ -62,6 +62,12 @@ UNITS: dict[str, Unit] = {
     "time_replay": "s",
     "time_total": "s",
     "time_certify": "s",
+    # a plan of the guided search (tooltransfer.planner.planning.oe.guided): the share of the friction
+    # cone's half-angle it kept to, its search's step, its time, the expansions of a search that failed
+    "friction_cone_fraction": "",
+    "guided_step": "m",
+    "time_guided": "s",
+    "guided_expansions": "",
     # the command line's summary of a plan and of its execution (tooltransfer.planner.apps.cli)
     "planning_time": "s",
     "open_loop_final_error": "m",

@@ -352,5 +352,6 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
     if plan.status == "solved":  # measured like every plan of the variant, at the share it used
         frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces
                   if f.name in faces}
-        plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share)
+        plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share,
+                            guided_step=FINE * STEP if fine else STEP)
     return plan
