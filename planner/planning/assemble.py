@@ -29,7 +29,7 @@ from shapely import Polygon
 from tooltransfer.errors import ToolTransferError
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.planning.ss.result import SwitchPath
-from tooltransfer.planner.planning.tool_clearance import tool_obstacle_clearance
+from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN, tool_obstacle_clearance
 from tooltransfer.timing import min_jerk_along, min_jerk_duration, stretch_factor
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
@@ -62,7 +62,8 @@ def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: 
                     ) -> NDArray[np.float64]:
     """Offset (2,) backing off from ``at`` against ``direction`` [rad] by ``distance`` [m], halved
     until the whole straight move stays within the Omni's reach (at least 2 mm) with the ``tool``'s
-    outline clear of the ``obstacles`` (at the heading the Omni imposes); when no length along
+    outline :data:`~tooltransfer.planner.planning.tool_clearance.TOOL_MARGIN` from the ``obstacles`` (at
+    the heading the Omni imposes: the margin of a solved plan); when no length along
     ``direction`` does, directions 20 and 40 degrees to either side are tried (the tool still meets
     the object where the push starts, a little obliquely)."""
     for turn in np.radians([0.0, 20.0, -20.0, 40.0, -40.0]):
@@ -73,7 +74,8 @@ def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: 
             jp = joint_path(platform, line)
             if np.all(jp.violation == 0.0) and (
                     tool is None or not obstacles
-                    or tool_obstacle_clearance(tool, np.column_stack([line, jp.heading]), obstacles).distance > 0.0):
+                    or tool_obstacle_clearance(tool, np.column_stack([line, jp.heading]), obstacles).distance
+                    >= TOOL_MARGIN):
                 return d * u
             d /= 2
     return -0.002 * np.array([np.cos(direction), np.sin(direction)])
