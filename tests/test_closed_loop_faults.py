@@ -263,3 +263,23 @@ def test_a_look_drops_outliers_and_unusable_frames() -> None:
     with pytest.raises(LoopStop, match="unusable camera frames"):
         take_look(lambda: (_ for _ in ()).throw(LoopStop("never")), 5, 0.0015)
     assert PENETRATION > 0.0
+
+
+def test_a_back_off_toward_an_obstacle_turns_aside_instead_of_being_refused() -> None:
+    """exec60-00036 (trapezoid, one disc, the MuJoCo platform): once the loop has adapted mu and c, a
+    re-contact's straight back-off along the face's normal would bring the tool's outline onto the disc.
+    The envelope refused it, the correction led to the same back-off, and the run ended ``unsafe``
+    23 mm from the target. Turned aside (``LoopRun.back_off``) the tool leaves the object with the
+    envelope's margin kept, nothing is refused, and the run ends within 2 mm of the target."""
+    pytest.importorskip("mujoco")
+    from tooltransfer.planner.apps.batch.generate import generate_tasks
+    from tooltransfer.planner.apps.batch.spec import load_batch
+    from tooltransfer.planner.planning.solve import solve
+
+    batch = Path(__file__).resolve().parents[1] / "problems" / "batch" / "execution_60.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "exec60-00036")
+    plan = solve(task_from_dict(data, str(batch)))
+    assert plan.verdict == "solved"
+    rep = execute_closed_loop(plan)
+    assert rep.status != "unsafe" and not any("refused" in line for line in rep.log), rep.log
+    assert rep.final_error <= 0.002

@@ -45,6 +45,10 @@ if TYPE_CHECKING:
 SAME_POSE = 3e-4
 #: How far [m] the tool first backs off along the contact's normal before a switch or a re-contact.
 BACK_OFF = 0.002
+#: Turns [rad] of that back-off from the contact's normal, tried in turn where the straight one would
+#: bring the tool within the safety envelope's margin of an obstacle (each still leaves the object: it
+#: keeps a component along the normal, so the face does not drag it).
+BACK_OFF_TURNS = tuple(float(a) for a in np.radians([0.0, 20.0, -20.0, 40.0, -40.0]))
 #: How far [m] the tool backs off the object along the contact's normal when a fault ends the run
 #: (shorter ones are tried when the envelope refuses it).
 RETREAT = (0.01, 0.005, 0.002)
@@ -211,14 +215,14 @@ class LoopRun:
     # ---------------------------------------------------------------- executing
     def leave(self, o: NDArray[np.float64], pose: NDArray[np.float64], face: str, start: NDArray[np.float64],
               change: bool, lead_in: NDArray[np.float64] | None = None) -> None:
-        """From the contact at ``pose`` to ``face``'s contact pose ``start``: first straight back along
-        the contact's normal from where the tool really is (a path planned from the observed object
+        """From the contact at ``pose`` to ``face``'s contact pose ``start``: first back along the
+        contact's normal from where the tool really is (:meth:`back_off`; a path planned from the observed object
         starts a camera error away, and a tool that moves sideways while touching drags the object
         along), then the switch (``change``) or the re-contact planned at the object observed again,
         joined where that path is clear of the object; with ``lead_in`` (the plan's own path, for an
         object where the plan puts it) that path instead."""
         assert self.face is not None
-        back = pose[:2] - BACK_OFF * (rotation(float(pose[2])) @ self.tool.face(self.face).normal)
+        back = self.back_off(pose)
         self.move(np.vstack([pose[:2], back]))
         o = self.observe()
         if lead_in is not None and len(lead_in) >= 2:
@@ -238,6 +242,23 @@ class LoopRun:
             self.n_switches += 1
         else:
             self.n_recontacts += 1
+
+    def back_off(self, pose: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Where (2,) [m] the tool backs off to from the contact at ``pose`` (3,): :data:`BACK_OFF` along the
+        contact's normal, turned by the first of :data:`BACK_OFF_TURNS` whose move the safety envelope
+        lets through as :meth:`move` commands it (from the reported pose, against the arm's tracking
+        offset); straight back when none does (the envelope then refuses it, as before)."""
+        assert self.face is not None
+        normal = rotation(float(pose[2])) @ self.tool.face(self.face).normal
+        bias = np.zeros(2) if self.health.bias is None else self.health.bias
+        here = self.plant.tool_pose() - np.append(bias, 0.0)
+        for turn in BACK_OFF_TURNS:
+            back = pose[:2] - BACK_OFF * (rotation(turn) @ normal)
+            sent = np.vstack([pose[:2], back]) - bias
+            if self.plant.envelope.violation(here, np.column_stack([sent, joint_path(self.platform, sent).heading])) \
+                    is None:
+                return back
+        return pose[:2] - BACK_OFF * normal
 
     def push(self, p: Push, pp: PushPlan, o: NDArray[np.float64], k0: int, length: float,
              lead_in: NDArray[np.float64] | None = None) -> int:
