@@ -283,3 +283,24 @@ def test_a_back_off_toward_an_obstacle_turns_aside_instead_of_being_refused() ->
     rep = execute_closed_loop(plan)
     assert rep.status != "unsafe" and not any("refused" in line for line in rep.log), rep.log
     assert rep.final_error <= 0.002
+
+
+def test_a_recontact_that_passes_within_the_envelopes_margin_is_not_planned(monkeypatch: pytest.MonkeyPatch) -> None:
+    """choose100-00005 of the tool-choice benchmark (l_shape, one obstacle): once the loop has adapted c,
+    the re-contact it planned passed 0.18 mm from the obstacle; the envelope refused it and the run
+    ended ``unsafe`` 25 mm from the target. Re-contacts keep the envelope's margin now (as a solved plan
+    does): the loop plans around it, nothing is refused and the run ends without a safety stop."""
+    pytest.importorskip("mujoco")
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    import bench_choose  # the benchmark's task family, not a copy of it
+
+    from tooltransfer.planner.apps.batch.generate import generate_task
+    from tooltransfer.planner.planning.solve import solve
+    from tooltransfer.tools.library import library_names
+
+    g = generate_task(bench_choose.batch(100, list(library_names())), 5, str(bench_choose.DATASET))
+    plan = solve(task_from_dict({**g.data, "tool": "l_shape"}, str(bench_choose.DATASET / "bench_choose")))
+    assert plan.verdict == "solved"
+    rep = execute_closed_loop(plan)
+    assert rep.status != "unsafe" and not any("refused" in line for line in rep.log), rep.log
+    assert rep.final_error < 0.005

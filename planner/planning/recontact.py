@@ -6,8 +6,9 @@ and the tool moves, while the object rests, from the contact pose where one piec
 next begins: it backs off along the face's normal by ``back_off``, shifts (the heading following
 the Omni's waist on the way) and approaches along the new normal. The move is checked like a
 switch: within the Omni's reach at every millimetre, the tool clear of the object between the two
-contacts and clear of the obstacles throughout (shapely, on the outline at the heading the Omni
-imposes). The back-off doubles, up to ``4 * back_off``, until the shift clears the object.
+contacts and :data:`~tooltransfer.planner.planning.tool_clearance.TOOL_MARGIN` from the obstacles
+throughout (shapely, on the outline at the heading the Omni imposes; the margin of a solved plan and of
+the closed loop's safety envelope). The back-off doubles, up to ``4 * back_off``, until the shift clears the object.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from tooltransfer.planner.planning.assemble import SwitchPlanner
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.ss.result import SwitchPath
 from tooltransfer.planner.planning.switches import densify
+from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.ik import joint_path
@@ -61,9 +63,11 @@ def recontact_planner(setting: Setting, back_off: float = 0.002) -> SwitchPlanne
                 reason = f"the re-contact of {face_a!r} sweeps into the object (back-off {1e3 * d:.0f} mm)"
                 continue
             near = min((swept_distance(tool, dense, jp.heading, s) for s in shapes), default=np.inf)
-            if near <= 0.0:
+            if near < TOOL_MARGIN:
                 return SwitchPath("recontact", "infeasible", f"the re-contact of {face_a!r} at "
-                                  f"{np.round(obj, 4).tolist()} m sweeps the tool into an obstacle")
+                                  f"{np.round(obj, 4).tolist()} m sweeps the tool into an obstacle"
+                                  + (f" ({1e3 * near:.2f} mm from it; a solved plan keeps {1e3 * TOOL_MARGIN:g} mm)"
+                                     if near > 0.0 else ""))
             return SwitchPath("recontact", "solved", xy=corners, object_clearance=gap, obstacle_clearance=float(near),
                               object_penetration=0.0, obstacle_penetration=0.0, info={"back_off": float(d)})
         return SwitchPath("recontact", "infeasible", reason)
