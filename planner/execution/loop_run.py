@@ -138,15 +138,19 @@ class LoopRun:
         t, path = min_jerk_along(xy, dur, n)
         poses = np.column_stack([path, joint_path(self.platform, path).heading])
         bias = self.health.bias
-        sent = poses
-        if bias is not None:  # an arm that tracks off by a steady offset: commanded against it
-            sent = np.column_stack([path - bias, joint_path(self.platform, path - bias).heading])
+        sent = poses if bias is None else self.commanded(path)
         self.plant.bias = np.zeros(2) if bias is None else bias
         self.plant.move_tool(t, sent)  # refused by the envelope (not sent) when unsafe
         if judge:
             self.health.moved(sent[-1], self.plant.tool_pose())
         if record:
             self.pending = (t, poses)
+
+    def commanded(self, path: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The poses (K, 3) commanded for the tool path ``path`` (K, 2) [m]: an arm that tracks its
+        commands a steady offset off is commanded against it, the heading from the Omni there."""
+        xy = path if self.health.bias is None else path - self.health.bias
+        return np.column_stack([xy, joint_path(self.platform, xy).heading])
 
     # ---------------------------------------------------------------- planning
     def replan_options(self) -> QPOptions | MappingOptions:
@@ -254,9 +258,7 @@ class LoopRun:
         here = self.plant.tool_pose() - np.append(bias, 0.0)
         for turn in BACK_OFF_TURNS:
             back = pose[:2] - BACK_OFF * (rotation(turn) @ normal)
-            sent = np.vstack([pose[:2], back]) - bias
-            if self.plant.envelope.violation(here, np.column_stack([sent, joint_path(self.platform, sent).heading])) \
-                    is None:
+            if self.plant.envelope.violation(here, self.commanded(np.vstack([pose[:2], back]))) is None:
                 return back
         return pose[:2] - BACK_OFF * normal
 
