@@ -8,6 +8,7 @@ import json
 import math
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 import yaml
@@ -206,9 +207,9 @@ def _pools_ended(monkeypatch) -> list:
     seen: list = []
     real = schedule.stop
 
-    def recording_stop(p) -> None:
-        seen.append(list((getattr(p, "_processes", None) or {}).values()))
-        real(p)
+    def recording_stop(*pools) -> None:
+        seen.append([list((getattr(p, "_processes", None) or {}).values()) for p in pools])
+        real(*pools)
 
     monkeypatch.setattr(schedule, "stop", recording_stop)
     return seen
@@ -220,8 +221,8 @@ def _check_ended(ended: list) -> None:
     test process: an earlier test's pool may still be starting or ending one of its own."""
     import multiprocessing
 
-    assert len(ended) == 2 and ended[0], ended  # the planners' pool and the executions'
-    procs = [p for pool in ended for p in pool]
+    assert len(ended) == 1 and len(ended[0]) == 2 and ended[0][0], ended  # the planners' pool and the executions'
+    procs = [p for pool in ended[0] for p in pool]
     alive = {p.pid for p in multiprocessing.active_children()}
     assert all(p.exitcode is not None and p.pid not in alive for p in procs), \
         [(p.pid, p.name, p.exitcode) for p in procs]
@@ -263,3 +264,58 @@ def test_a_stopped_pool_has_every_process_ended_and_waited_for() -> None:
         procs = list(p._processes.values())
         schedule.stop(p)
         assert procs and all(q.exitcode is not None for q in procs), [(q.pid, q.exitcode) for q in procs]
+
+
+def test_a_solved_plan_is_executed_beside_the_candidates_still_planning_once_their_grace_is_over() -> None:
+    """A choice's own pools: the executions have their own slots beside the planners', opened by the grace
+    after the first solved plan or by the last verdict. Before the fix the planning jobs in flight were
+    counted as executions (a tuple compared with ``"plan"``), so that no execution started while two or
+    more candidates were still planning (measured on ``choose100-00003``: the best plan, solved at
+    1.4 s, executed from 5.1 s, once the fifth candidate had its verdict)."""
+    from concurrent.futures import Future
+
+    from tooltransfer.planner.apps.choose.executions import Planned
+    from tooltransfer.planner.apps.choose.schedule import Options, Pools, Work, _next_jobs
+
+    pools = Pools(plan=None, run=None, plan_slots=6, run_slots=2, own=True)  # type: ignore[arg-type]
+    w = Work([f"tool{i}" for i in range(6)], Options())
+    plan = SimpleNamespace(metrics={"duration": 3.0})  # the schedule reads a solved plan's metrics only
+    w.add_plan(5, Planned(plan, "solved", "", 1.4, 0.6))  # type: ignore[arg-type]
+    inflight: dict[Future, tuple[int, str]] = {Future(): (i, "plan") for i in range(5)}
+    start = w.executions_from()
+    assert start is not None and start - time.perf_counter() > 1.3  # the grace: max(1 s, 1.4 s)
+    assert not w.executions_open() and _next_jobs(w, pools, [], inflight) == []
+    w.first_solved_at = time.perf_counter() - 1.5  # the grace over
+    assert _next_jobs(w, pools, [], inflight) == [(5, "closed_loop"), (5, "mismatch_closed_loop")]  # both slots
+    inflight[Future()] = (5, "closed_loop")
+    assert _next_jobs(w, pools, [], inflight) == [(5, "mismatch_closed_loop")]
+    given = Pools(plan=None, run=None, plan_slots=2, run_slots=2, own=False)  # type: ignore[arg-type]
+    assert _next_jobs(w, given, [], {Future(): (0, "plan")}) == [(5, "closed_loop")]  # one pool: 2 jobs in all
+    every = Work(["a", "b"], Options())
+    every.add_plan(0, Planned(plan, "solved", "", 30.0, 0.6))  # type: ignore[arg-type]
+    every.add_plan(1, Planned(None, "infeasible", "certified", 2.0, 2.0))
+    assert every.executions_open()  # every verdict in: no grace to wait for
+
+
+def test_pools_ended_while_a_worker_sent_its_result_stop_at_once() -> None:
+    """A worker ended in the middle of sending its result leaves part of a message in the result pipe (here
+    written by this test: a length of 1 MiB, then 16 bytes); the pool's own thread waits for the rest.
+    ``stop`` closes this process's write end once every process has ended, so that thread sees the
+    pipe's end. Before, ``stop`` waited the 30 s it allows that thread, which then held the interpreter's
+    exit (a benchmark's process still waiting 5 min after its last line)."""
+    import os
+    import struct
+
+    from tooltransfer.planner.apps.choose import schedule
+
+    plan_pool, run_pool = schedule.pool(2), schedule.pool(2)
+    for p in (plan_pool, run_pool):
+        p.submit(_nap, 5.0)
+    time.sleep(0.5)
+    manager = plan_pool._executor_manager_thread
+    os.write(plan_pool._result_queue._writer.fileno(), struct.pack("!i", 1 << 20) + bytes(16))
+    time.sleep(0.3)
+    t0 = time.perf_counter()
+    schedule.stop(plan_pool, run_pool)
+    assert time.perf_counter() - t0 < 15.0
+    assert manager is not None and not manager.is_alive()

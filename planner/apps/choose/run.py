@@ -4,14 +4,14 @@ The work runs on ``workers`` cores (default 2, at most the machine's; BLAS on on
 command line sets it), as :mod:`.schedule` says: a process per candidate (up to
 :data:`.schedule.PROCESSES_PER_WORKER` per core) plans it, so every candidate plans from the start
 and a slow one holds back neither the others nor the best plan's executions; the solved plans are
-executed (:mod:`.executions`) as soon as they are solved, in the order of their plans' margins and
-duration (:func:`.ranking.plan_order`), ``workers`` executions at a time, until one plan passes
-every execution (the best is then known, :mod:`.ranking`; ``execute_all`` executes every solved
-plan). Once a plan has passed every execution, the candidates still planning get a grace period and
-are then stopped, their verdict ``unknown`` (:mod:`.schedule`'s deadline; ``wait_all`` waits for
-every verdict). The processes are forked from this one where the platform allows, after the task's
-skills are learned (or read from the cache) and the jobs' modules imported here, so no process
-learns, loads or imports them again.
+executed (:mod:`.executions`) once every candidate is planned or a grace period after the first
+solved plan, in the order of their plans' margins and duration (:func:`.ranking.plan_order`),
+``workers`` executions at a time, until one plan passes every execution (the best is then known,
+:mod:`.ranking`; ``execute_all`` executes every solved plan). Once a plan has passed every
+execution, the candidates still planning are stopped, their verdict ``unknown`` (:mod:`.schedule`'s
+deadline; ``wait_all`` waits for every verdict). The processes are forked from this one where the
+platform allows, after the task's skills are learned (or read from the cache) and the jobs' modules
+imported here, so no process learns, loads or imports them again.
 """
 
 from __future__ import annotations

@@ -10,32 +10,34 @@ planners keep the normal priority until the first plan is executed, then become 
 nicer, so that the best plan's executions take the cores from the candidates still planning (by then
 mostly the slow ones the deadline stops); not from the start, since a lower priority starves the
 planners behind any other work on the machine (measured: a 0.6 s plan took 15 s at ``nice`` 10
-beside six other processes). The executions (:mod:`.executions`) start as soon as a plan is solved,
-best plan first (:func:`.ranking.plan_order`, ``workers`` at a time), while the slow candidates
-(those left without a plan, whose guided searches and certificates take longest) are still planned;
-with one pool given (``executor``), ``workers`` jobs run in all, plans first. Only the plans that
-may still be the best are executed (:func:`.ranking.needs_execution`: those ahead of the first that
-passed every execution; ``execute_all``: every solved plan).
+beside six other processes). The executions (:mod:`.executions`) start once every candidate has its
+verdict, or :func:`grace` after the first solved plan (the larger of :data:`GRACE_MIN` and the
+planning wall time of the first candidate that solved the task), whichever comes first; best plan
+first (:func:`.ranking.plan_order`, ``workers`` at a time), beside the slow candidates (those left
+without a plan, whose guided searches and certificates take longest) still planning; with one pool
+given (``executor``), ``workers`` jobs run in all, plans first. Only the plans that may still be the
+best are executed (:func:`.ranking.needs_execution`: those ahead of the first that passed every
+execution; ``execute_all``: every solved plan). Why the grace before the executions: a tool that
+solves the task solves it on the first scored push sequences, in about the time the first solved
+candidate took (0.6 s of CPU on the library's tools); the grace lets a candidate that is merely
+slower than the first solve finish with the whole of the cores (executions started beside it slowed
+it down: measured 2026-12-04, 30 tasks of six tools, wall median 3.81 s with the executions at the
+first plan against 3.00 s with the grace before them); the 1 s floor covers a first plan solved in
+less time than a process needs to be scheduled on a loaded machine.
 
 **The deadline.** Once the best plan so far has passed every execution (:func:`.ranking.known_best`:
 every plan ranked above it by margins was executed and failed one), the candidates still planning
-get a grace period of :func:`grace` (the larger of :data:`GRACE_MIN` and the planning wall time of
-the first candidate that solved the task) and are then stopped: their processes are ended with the
-pool's and their verdict is ``unknown``, the reason :func:`stopped_reason` (never ``infeasible`` nor
-``solved``: nothing was decided). Why that grace: a tool that solves the task solves it on the first
-scored push sequences, in about the time the first solved candidate took (0.6 s of CPU on the
-library's tools); a candidate still planning after that, the executions of the best plan and the
-grace is in its guided search or infeasibility certificate (5-40 s of CPU each), which ends mostly
-in ``unknown`` or ``infeasible``: a verdict that cannot change the choice (a candidate without a
-plan ranks below any solved one). Not always: of the 5 candidates stopped on 30 benchmark tasks
-(2026-12-04, ``benchmarks/README.md``) 3 would have been certified infeasible, 1 left unknown and 1
-solved, ranked above the plan chosen instead by margins and duration (which passed every execution
-all the same); ``wait_all`` is for a choice that must rank every tool. The grace lets a candidate
-that is merely slower than the first solve finish; the 1 s floor covers a first plan solved in less
-time than a process needs to be scheduled on a loaded machine. ``wait_all`` waits for every verdict,
-and so does a choice no plan of which passed every execution (nothing is then stopped), one run in
-this process (``workers=1``: the candidates are planned one after the other before any execution)
-and one in a pool it was given (its processes are not this choice's to end).
+are stopped: their processes are ended with the pools' and their verdict is ``unknown``, the
+reason :func:`stopped_reason` (never ``infeasible`` nor ``solved``: nothing was decided). A
+candidate still planning after the grace and the executions of the best plan is in its guided
+search or infeasibility certificate (5-40 s of CPU each), which ends mostly in ``unknown`` or
+``infeasible``: a verdict that cannot change the choice (a candidate without a plan ranks below any
+solved one). Not always: a few of them would have solved the task, and one might rank above the
+plan chosen by margins and duration (which passed every execution all the same); ``wait_all`` is
+for a choice that must rank every tool. ``wait_all`` waits for every verdict, and so does a choice
+no plan of which passed every execution (nothing is then stopped), one run in this process
+(``workers=1``: the candidates are planned one after the other before any execution) and one in a
+pool it was given (its processes are not this choice's to end).
 """
 
 from __future__ import annotations
@@ -135,23 +137,31 @@ class Pools:
                 pass
 
     def stop(self) -> None:
-        """End this choice's own pools (:func:`stop`); a pool given is left open."""
+        """End this choice's own pools, together (:func:`stop`); a pool given is left open."""
         if self.own:
-            for p in (self.plan, self.run):
-                if isinstance(p, ProcessPoolExecutor):
-                    stop(p)
+            stop(*(p for p in (self.plan, self.run) if isinstance(p, ProcessPoolExecutor)))
 
 
-def stop(p: ProcessPoolExecutor) -> None:
-    """End a pool this choice made now: jobs queued are dropped, running ones (executions no longer
+def stop(*pools: ProcessPoolExecutor) -> None:
+    """End pools this choice made now: jobs queued are dropped, running ones (executions no longer
     needed, candidates stopped at the deadline) are ended with their processes, and every process is
-    waited for (none is left behind, and its CPU time is counted: :func:`children_cpu`)."""
-    procs = list((getattr(p, "_processes", None) or {}).values())
-    # the pool's own thread, which also waits for its processes: the first shutdown forgets it, so that the
-    # second would not wait for it; joined here, it has recorded the exit of every process it reaped (a
-    # process it reaped and this thread then polled looks running to this one until it has)
-    manager = getattr(p, "_executor_manager_thread", None)
-    p.shutdown(wait=False, cancel_futures=True)
+    waited for (none is left behind, and its CPU time is counted: :func:`children_cpu`).
+
+    The pools are ended together: a worker ended while it sends its result (a plan is some hundred kB)
+    leaves a part of a message in its pool's result pipe, and the pool's own thread, reading it, waits
+    for the rest for as long as the pipe has a writer. Every process of both pools holds the write
+    ends of both (they are forked once both pools exist), and this process holds one; so every
+    process is ended first, then this process's write ends are closed, and the reading thread gets
+    the pipe's end instead of waiting (measured before: a choice's ``stop`` took the 30 s it waits for
+    that thread, which then held the interpreter's exit for good)."""
+    procs = [proc for p in pools for proc in list((getattr(p, "_processes", None) or {}).values())]
+    # the pools' own threads, which also wait for their processes: the first shutdown forgets them, so that
+    # the second would not wait for them; joined here, each has recorded the exit of every process it reaped
+    # (a process it reaped and this thread then polled looks running to this one until it has)
+    managers = [getattr(p, "_executor_manager_thread", None) for p in pools]
+    writers = [getattr(getattr(p, "_result_queue", None), "_writer", None) for p in pools]
+    for p in pools:
+        p.shutdown(wait=False, cancel_futures=True)
     for proc in procs:
         if proc.is_alive():
             proc.terminate()
@@ -160,9 +170,14 @@ def stop(p: ProcessPoolExecutor) -> None:
         if proc.exitcode is None:  # a process that ignores SIGTERM, or one the pool's thread is reaping
             proc.kill()
             proc.join(5.0)
-    if manager is not None:
-        manager.join(30.0)
-    p.shutdown(wait=True)
+    for writer in writers:
+        if writer is not None:
+            writer.close()
+    for manager in managers:
+        if manager is not None:
+            manager.join(30.0)
+    for p in pools:
+        p.shutdown(wait=True)
 
 
 def children_cpu() -> float | None:
@@ -209,6 +224,7 @@ class Work:
         self.executed: dict[int, Executions] = {}
         self.cpu = 0.0  # of the jobs [s]
         self.first_solved_wall: float | None = None  # planning wall [s] of the first candidate solved
+        self.first_solved_at: float | None = None  # perf_counter [s] at which it was recorded
         self.deadline: float | None = None  # perf_counter [s] at which the candidates still planning stop
         self.stopped: list[int] = []
 
@@ -243,6 +259,21 @@ class Work:
         self.cpu += p.cpu
         if p.verdict == "solved" and self.first_solved_wall is None:
             self.first_solved_wall = p.wall
+            self.first_solved_at = time.perf_counter()
+
+    def executions_from(self) -> float | None:
+        """When [s, perf_counter] the executions may start beside the candidates still planning: the
+        :func:`grace` after the first solved plan (None before one; every candidate planned opens them
+        at once, :meth:`executions_open`)."""
+        if self.first_solved_at is None:
+            return None
+        return self.first_solved_at + grace(self.first_solved_wall or 0.0)
+
+    def executions_open(self) -> bool:
+        """Whether the executions may run (module docstring): every candidate planned, or the grace
+        after the first solved plan over."""
+        start = self.executions_from()
+        return len(self.planned) == self.n or (start is not None and time.perf_counter() >= start)
 
     def add_run(self, i: int, mode: str, result: Executed, cpu: float) -> None:
         self.cpu += cpu
@@ -260,10 +291,9 @@ class Work:
         best = self.best()
         if best is None:
             return
-        g = grace(self.first_solved_wall or 0.0)
-        self.deadline = time.perf_counter() + g
+        self.deadline = time.perf_counter()
         say(f"{self.labels[best]} passed every execution: the {self.n - len(self.planned)} candidates still "
-            f"planning have {g:.1f} s")
+            "planning are stopped")
 
     def stop_planning(self, started: dict[int, float]) -> None:
         """The candidates not yet planned become ``unknown``, stopped (``started``: when each began
@@ -306,7 +336,8 @@ def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say:
                 inflight[pools.run.submit(_timed_execute, w.plan(i), what, options.seed)] = (i, what)
         if not inflight:  # pragma: no cover - done() would hold
             break
-        timeout = None if w.deadline is None else max(0.0, w.deadline - time.perf_counter())
+        wake = w.deadline if w.deadline is not None or w.executions_open() else w.executions_from()
+        timeout = None if wake is None else max(0.0, wake - time.perf_counter())
         finished, _ = wait(list(inflight), timeout=timeout, return_when=_FIRST)
         for f in finished:
             _take(w, cands, inflight.pop(f), f, say)
@@ -329,8 +360,10 @@ def _next_jobs(w: Work, pools: Pools, to_plan: list[int],
     runs = [job for job in w.wanted() if job not in busy]
     if not pools.own:
         return (plans + runs)[:max(0, pools.plan_slots - len(inflight))]
-    n_plans = sum(what == "plan" for what in busy)
+    n_plans = sum(what == "plan" for _, what in busy)
     n_runs = len(busy) - n_plans
+    if not w.executions_open():
+        runs = []
     return plans[:max(0, pools.plan_slots - n_plans)] + runs[:max(0, pools.run_slots - n_runs)]
 
 
