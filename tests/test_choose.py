@@ -230,10 +230,11 @@ def _check_ended(ended: list) -> None:
 
 def test_nothing_is_stopped_without_a_plan_that_passed_every_execution() -> None:
     from tooltransfer.planner.apps.choose.executions import Planned
-    from tooltransfer.planner.apps.choose.schedule import Options, Work, grace, processes, stopped_reason
+    from tooltransfer.planner.apps.choose.schedule import Options, Work, grace, processes, run_processes, stopped_reason
 
     assert grace(0.2) == 1.0 and grace(3.5) == 3.5
-    assert processes(2, 6) == 6 and processes(2, 10) == 8 and processes(2, 1) == 2
+    assert processes(2, 6) == 6 and processes(2, 10) == 10 and processes(2, 12) == 10 and processes(2, 1) == 2
+    assert run_processes(2) == 3 and run_processes(4) == 4  # a plan's three executions at once
     assert "`--wait-all`" in stopped_reason("slope")
     said: list[str] = []
     w = Work(["a", "b", "c"], Options())
@@ -319,3 +320,47 @@ def test_pools_ended_while_a_worker_sent_its_result_stop_at_once() -> None:
     schedule.stop(plan_pool, run_pool)
     assert time.perf_counter() - t0 < 15.0
     assert manager is not None and not manager.is_alive()
+
+
+def test_solve_says_when_its_slower_stages_begin() -> None:
+    """``solve(on_slow=...)`` is called once where the condensing found no plan (before the guided search
+    and the certificate), never for a plan the condensing found: what a choice's deadline goes by."""
+    from tooltransfer.planner.planning.solve import solve
+    from tooltransfer.problems.task import load_task
+
+    calls: list[str] = []
+    out = solve(load_task(ROOT / "problems" / "hard" / "target_out_of_reach.yaml"), on_slow=lambda: calls.append("x"))
+    assert out.verdict == "infeasible" and calls == ["x"]
+    quick: list[str] = []
+    plan = solve(load_task(ROOT / "problems" / "paper" / "transfer_tool2.yaml"), on_slow=lambda: quick.append("x"))
+    assert plan.verdict == "solved" and quick == []
+
+
+def test_the_deadline_stops_only_candidates_in_their_slower_stages() -> None:
+    """With the candidates' stages known: the executions open once fewer candidates are on their quick
+    first stage than cores; once a plan passed every execution, the candidates in their slower stages
+    (and those never started) are stopped, a candidate still on its quick stage is waited for. Where the
+    stages are not known (a pool given, processes spawned) every candidate still planning is stopped."""
+    from tooltransfer.planner.apps.choose.executions import Planned
+    from tooltransfer.planner.apps.choose.schedule import Options, Work
+
+    plan = SimpleNamespace(metrics={"duration": 3.0})
+    w = Work(["a", "b", "c", "d"], Options())
+    w.cores, w.slow, w.started = 2, [0, 0, 0, 0], {0, 1, 2}  # d not started (more candidates than processes)
+    w.add_plan(0, Planned(plan, "solved", "", 0.8, 0.6))  # type: ignore[arg-type]
+    assert w.quick() == 3 and not w.executions_open()  # b, c quick, d not started: no core free of them
+    w.slow[1] = 1
+    assert w.quick() == 2 and not w.executions_open()
+    w.slow[2] = 1
+    assert w.quick() == 1 and w.executions_open()  # only d left on its quick stage: a core is free
+    assert w.due() == []  # no deadline yet
+    w.executed[0] = GOOD
+    w.set_deadline(True, lambda text: None)
+    assert w.deadline is not None and w.due() == [1, 2, 3]  # b, c in their slower stages, d never started
+    w.started.add(3)
+    assert w.due() == [1, 2]  # d on its quick stage: waited for
+    unknown = Work(["a", "b"], Options())
+    unknown.add_plan(0, Planned(plan, "solved", "", 0.8, 0.6))  # type: ignore[arg-type]
+    unknown.executed[0] = GOOD
+    unknown.set_deadline(True, lambda text: None)
+    assert unknown.due() == [1]  # stages not known: stopped at once

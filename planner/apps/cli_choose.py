@@ -20,8 +20,8 @@ if TYPE_CHECKING:
 HELP = ("plan a task with each candidate tool (in parallel), execute the solved plans on the simulated platform "
         "(open and closed loop, and closed loop on a mismatched plant) and rank the tools: executed success, "
         "then margins (friction cone, contact edge, clearance), then duration. Once a plan has passed every "
-        "execution, the tools still planning get a grace period (at least 1 s) and are then stopped, their verdict "
-        "unknown (--wait-all waits for every verdict). Exit codes: 0 a tool solves "
+        "execution, the tools whose quick first stage found no plan (in their guided search or certificate) are "
+        "stopped, their verdict unknown (--wait-all waits for every verdict). Exit codes: 0 a tool solves "
         "the task, 1 every tool certified infeasible, 3 none solves it and some are unknown, 2 bad input "
         "(an unknown tool, a missing or invalid tool file, a bad task or path), 130 Ctrl-C")
 EXAMPLE = ("tooltransfer choose paper/transfer_tool2 --tools finger,slope,trapezoid -o out/best.json --out out/choose\n"
@@ -49,8 +49,7 @@ def add_choose_parser(sub: argparse._SubParsersAction, add: Callable[..., argpar
                    help="execute every solved plan (default: until the best is known)")
     p.add_argument("--wait-all", action="store_true",
                    help="wait for every tool's verdict (default: once a plan has passed every execution, the tools "
-                   "still planning get the larger of 1 s and the first solved tool's planning time, then are stopped "
-                   "and reported unknown)")
+                   "in their slower stages, the guided search or the certificate, are stopped and reported unknown)")
     p.add_argument("--seed", type=int, default=0, help="camera-noise seed of the closed loops")
     return p
 

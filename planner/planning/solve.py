@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Generator
+from collections.abc import Callable, Generator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
@@ -68,7 +68,8 @@ def mapping_options(task: Task) -> MappingOptions:
     return MappingOptions.from_task(task.oe)
 
 
-def solve(task: Task, task_path: str | Path | None = None, *, budget: float = 1.0) -> Plan:
+def solve(task: Task, task_path: str | Path | None = None, *, budget: float = 1.0,
+          on_slow: Callable[[], None] | None = None) -> Plan:
     """Plan ``task`` and give it a verdict (:attr:`Plan.verdict`): ``"solved"`` only when every hard
     check holds (the variant's condensing, then its guided search where it has one and the
     condensing's candidates fail); where no plan is found, ``"infeasible"`` with a certificate that no plan
@@ -80,9 +81,11 @@ def solve(task: Task, task_path: str | Path | None = None, *, budget: float = 1.
     the task was loaded from (:func:`~tooltransfer.problems.task.load_task`; the working folder for a task
     built in code). ``budget`` (>= 1) scales what the search and the certificate may spend (the guided
     search's expansions, ``oe.guided_budget``, and the certificate's block updates): ``batch run --retry
-    unknown --budget K`` gives the undecided tasks more."""
+    unknown --budget K`` gives the undecided tasks more. ``on_slow`` is called (once, without
+    arguments) where the variant's condensing found no plan and the slower stages begin (the guided
+    search, the certificate): a tool choice stops only candidates that have called it."""
     check_budget(budget)
-    plan, setting = _search(task, task_path, budget)
+    plan, setting = _search(task, task_path, budget, on_slow)
     return attach_verdict(plan, setting, np.array(task.start), np.array(task.target), budget=budget)
 
 
@@ -95,7 +98,8 @@ def check_budget(budget: object, field: str = "budget") -> float:
     return float(budget)
 
 
-def _search(task: Task, task_path: str | Path | None, budget: float = 1.0) -> tuple[Plan, Setting]:
+def _search(task: Task, task_path: str | Path | None, budget: float = 1.0,
+            on_slow: Callable[[], None] | None = None) -> tuple[Plan, Setting]:
     """The planner's search (module docstring): the plan, or the best failure, and the world it used."""
     task_path = task_origin(task, task_path)
     stages: dict[str, float] = {}
@@ -128,6 +132,8 @@ def _search(task: Task, task_path: str | Path | None, budget: float = 1.0) -> tu
         plan = Plan(status="infeasible", reason=push_plan.reason, metrics=stages, **base)
     else:
         plan = _candidates(task, setting, push_plan, switch, recontact, stages, base, start)
+    if plan.status != "solved" and on_slow is not None:
+        on_slow()
     if plan.status != "solved" and oe.guided is not None:
         plan = _guided(task, setting, oe.guided(t, x, setting, target, options), plan, switch, recontact, base, start)
     return plan, setting

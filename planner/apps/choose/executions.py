@@ -18,6 +18,7 @@ MuJoCo), since its re-plans and the push model's adaptation, not the physics, ta
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -52,14 +53,14 @@ class Executed:
     wall: float
 
 
-def plan_candidate(task: Task, budget: float = 1.0) -> Planned:
-    """Plan ``task`` (:func:`tooltransfer.planner.planning.solve.solve`; relative paths from the task's
-    file). A planner error is the candidate's ``unknown`` verdict, its message the reason."""
+def plan_candidate(task: Task, budget: float = 1.0, on_slow: Callable[[], None] | None = None) -> Planned:
+    """Plan ``task`` (:func:`tooltransfer.planner.planning.solve.solve`, its ``on_slow``; relative paths
+    from the task's file). A planner error is the candidate's ``unknown`` verdict, its message the reason."""
     from tooltransfer.planner.planning.solve import solve
 
     wall, cpu = time.perf_counter(), time.process_time()
     try:
-        plan = solve(task, budget=budget)
+        plan = solve(task, budget=budget, on_slow=on_slow)
     except Exception as exc:  # one tool's failure is its own verdict, never the choice's
         return Planned(None, "unknown", f"error while planning: {type(exc).__name__}: {exc}",
                        time.perf_counter() - wall, time.process_time() - cpu)

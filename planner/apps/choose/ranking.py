@@ -69,6 +69,11 @@ def _within(error: float | None, tol: float) -> bool:
     return error is not None and math.isfinite(error) and error <= tol
 
 
+def execution_passed(mode: str, error: float | None) -> bool:
+    """Whether an execution of ``mode`` (:data:`EXECUTIONS`) that ended ``error`` [m] from the target passed."""
+    return _within(error, TOLERANCES[mode])
+
+
 def margins(metrics: Mapping[str, Any]) -> dict[str, float]:
     """The plan's three margins from its metrics: ``friction_cone`` [rad], ``contact_edge`` [m] and
     ``clearance`` [m] (the smaller of the object's and the tool's clearance to obstacles; infinite

@@ -4,12 +4,12 @@ The work runs on ``workers`` cores (default 2, at most the machine's; BLAS on on
 command line sets it), as :mod:`.schedule` says: a process per candidate (up to
 :data:`.schedule.PROCESSES_PER_WORKER` per core) plans it, so every candidate plans from the start
 and a slow one holds back neither the others nor the best plan's executions; the solved plans are
-executed (:mod:`.executions`) once every candidate is planned or a grace period after the first
-solved plan, in the order of their plans' margins and duration (:func:`.ranking.plan_order`),
-``workers`` executions at a time, until one plan passes every execution (the best is then known,
+executed (:mod:`.executions`) once a core is free of the candidates on their quick first stage or a
+grace period after the first solved plan, in the order of their plans' margins and duration
+(:func:`.ranking.plan_order`), until one plan passes every execution (the best is then known,
 :mod:`.ranking`; ``execute_all`` executes every solved plan). Once a plan has passed every
-execution, the candidates still planning are stopped, their verdict ``unknown`` (:mod:`.schedule`'s
-deadline; ``wait_all`` waits for every verdict). The processes are forked from this one where the
+execution, the candidates in their slower stages are stopped, their verdict ``unknown``
+(:mod:`.schedule`'s deadline; ``wait_all`` waits for every verdict). The processes are forked from this one where the
 platform allows, after the task's skills are learned (or read from the cache) and the jobs' modules
 imported here, so no process learns, loads or imports them again.
 """
@@ -105,9 +105,9 @@ def choose_tool(task: Task | str | Path, tools: Sequence[str | Path] | None = No
             worker (the cores shared among them); a given ``executor`` runs ``workers`` jobs at a time.
         execute_all: execute every solved plan, not only until the best is known.
         wait_all: wait for every candidate's verdict; default: once a plan passed every execution, the
-            candidates still planning are stopped after a grace period (:mod:`.schedule`) and ranked
-            ``unknown`` with the reason "stopped after <tool> passed every execution; ..." (only in
-            the pool this call makes: with ``workers=1`` or an ``executor`` every verdict is waited for).
+            candidates in their slower stages are stopped (:mod:`.schedule`) and ranked ``unknown``
+            with the reason "stopped after <tool> passed every execution; ..." (only in the pool this
+            call makes: with ``workers=1`` or an ``executor`` every verdict is waited for).
         seed: the closed loops' camera-noise seed.
         budget: the planner's search and certificate budgets multiplied (``solve(budget=)``).
         executor: a pool to use (kept open) instead of one made for this call.

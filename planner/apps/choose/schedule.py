@@ -2,7 +2,7 @@
 
 A choice makes two pools: the planners, a process per candidate (:func:`processes`: at most
 :data:`PROCESSES_PER_WORKER` per worker), all planning from the start while the operating system
-shares the cores among them, and ``workers`` processes that execute the solved plans. A tool that
+shares the cores among them, and :func:`run_processes` that execute the solved plans. A tool that
 solves the task so has its plan (0.6 s of CPU on the library's tools) while the slow candidates are
 still in their searches, instead of waiting for a slot they hold (the planner's budgets count
 expansions and updates, not time, so a verdict does not depend on how the cores are shared). The
@@ -10,32 +10,38 @@ planners keep the normal priority until the first plan is executed, then become 
 nicer, so that the best plan's executions take the cores from the candidates still planning (by then
 mostly the slow ones the deadline stops); not from the start, since a lower priority starves the
 planners behind any other work on the machine (measured: a 0.6 s plan took 15 s at ``nice`` 10
-beside six other processes). The executions (:mod:`.executions`) start once every candidate has its
-verdict, or :func:`grace` after the first solved plan (the larger of :data:`GRACE_MIN` and the
-planning wall time of the first candidate that solved the task), whichever comes first; best plan
-first (:func:`.ranking.plan_order`, ``workers`` at a time), beside the slow candidates (those left
-without a plan, whose guided searches and certificates take longest) still planning; with one pool
-given (``executor``), ``workers`` jobs run in all, plans first. Only the plans that may still be the
-best are executed (:func:`.ranking.needs_execution`: those ahead of the first that passed every
-execution; ``execute_all``: every solved plan). Why the grace before the executions: a tool that
-solves the task solves it on the first scored push sequences, in about the time the first solved
-candidate took (0.6 s of CPU on the library's tools); the grace lets a candidate that is merely
-slower than the first solve finish with the whole of the cores (executions started beside it slowed
-it down: measured 2026-12-04, 30 tasks of six tools, wall median 3.81 s with the executions at the
-first plan against 3.00 s with the grace before them); the 1 s floor covers a first plan solved in
-less time than a process needs to be scheduled on a loaded machine.
+beside six other processes).
+
+**Quick and slower stages.** Each planning process says when its candidate's quick first stage (the
+variant's condensing: the scored push sequences) found no plan and its slower stages begin (the guided
+search, the infeasibility certificate: ``solve``'s ``on_slow``), in flags shared with the processes
+forked after they are made (:func:`slow_flags`). A tool that solves the task mostly solves it on its
+quick stage (0.6 s of CPU on the library's tools); a candidate in its slower stages takes 5-40 s of
+CPU and ends mostly in ``unknown`` or ``infeasible``.
+
+**The executions** (:mod:`.executions`) start once fewer candidates are on their quick stage than
+``workers`` (a core is free of them), or :func:`grace` after the first solved plan (the larger of
+:data:`GRACE_MIN` and the planning wall time of the first candidate that solved the task), whichever
+comes first; best plan first (:func:`.ranking.plan_order`), a plan's three executions at once
+(:func:`run_processes`), the next plan's only once it failed one; with one pool given
+(``executor``), ``workers`` jobs run in all, plans first. Only the plans that may still be the best
+are executed (:func:`.ranking.needs_execution`; ``execute_all``: every solved plan). The executions
+started beside the quick stages slowed them (measured 2026-12-04, 30 tasks of six tools: wall median
+3.81 s with the executions at the first plan, 2.6-3.1 s waiting as here); the 1 s floor covers a first
+plan solved in less time than a process needs to be scheduled on a loaded machine.
 
 **The deadline.** Once the best plan so far has passed every execution (:func:`.ranking.known_best`:
-every plan ranked above it by margins was executed and failed one), the candidates still planning
-are stopped: their processes are ended with the pools' and their verdict is ``unknown``, the
-reason :func:`stopped_reason` (never ``infeasible`` nor ``solved``: nothing was decided). A
-candidate still planning after the grace and the executions of the best plan is in its guided
-search or infeasibility certificate (5-40 s of CPU each), which ends mostly in ``unknown`` or
-``infeasible``: a verdict that cannot change the choice (a candidate without a plan ranks below any
-solved one). Not always: a few of them would have solved the task, and one might rank above the
-plan chosen by margins and duration (which passed every execution all the same); ``wait_all`` is
-for a choice that must rank every tool. ``wait_all`` waits for every verdict, and so does a choice
-no plan of which passed every execution (nothing is then stopped), one run in this process
+every plan ranked above it by margins was executed and failed one), the candidates in their slower
+stages (and any not yet started) are stopped, and a candidate still on its quick stage is waited for;
+where the stages are not known (processes not forked from here) every candidate still planning is
+stopped. A stopped candidate's process is ended with the pools' and its verdict is ``unknown``, the
+reason :func:`stopped_reason` (never ``infeasible`` nor ``solved``: nothing was decided). Its verdict
+mostly cannot change the choice (a candidate without a plan ranks below any solved one), but the
+slower stages solve some tasks, and such a plan might rank above the one chosen by margins and
+duration (which passed every execution all the same): of 40 candidates stopped on 30 tasks of six
+tools, 15 would have been solved and 2 of those chosen instead (``benchmarks/README.md``).
+``wait_all`` is for a choice that must rank every tool: it waits for every verdict, and so does a
+choice no plan of which passed every execution (nothing is then stopped), one run in this process
 (``workers=1``: the candidates are planned one after the other before any execution) and one in a
 pool it was given (its processes are not this choice's to end).
 """
@@ -48,21 +54,56 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED as _FIRST
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass
+from typing import Any
 
 from tooltransfer.planner.apps.choose.candidates import Candidate
 from tooltransfer.planner.apps.choose.executions import MODES, Executed, Planned, execute, plan_candidate
-from tooltransfer.planner.apps.choose.ranking import Executions, known_best, needs_execution, plan_order
+from tooltransfer.planner.apps.choose.ranking import (
+    Executions,
+    execution_passed,
+    known_best,
+    needs_execution,
+    plan_order,
+)
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.problems.task import Task
 
 #: The order in which one plan's executions are handed out (the longest first: two slots finish together).
 _SUBMIT_ORDER = ("closed_loop", "mismatch_closed_loop", "open_loop")
 #: The most processes of a pool per worker (the cores a choice uses).
-PROCESSES_PER_WORKER = 4
+PROCESSES_PER_WORKER = 5
 #: How much nicer the planning processes become once the first plan is executed (module docstring).
 PLAN_NICE = 10
 #: The shortest grace [s] the candidates still planning get once a plan passed every execution.
 GRACE_MIN = 1.0
+
+
+#: Per candidate of the choice being worked, 1 once its planning began its slower stages (``solve``'s
+#: ``on_slow``: no plan from the variant's condensing), in memory shared with the planning processes
+#: forked after it is made (:func:`slow_flags`; None where they are not forked from this process).
+_SLOW: Any = None
+
+
+def slow_flags(n: int) -> Any:
+    """Flags shared with the planning processes forked from now on, one per candidate of ``n``, made
+    the module's :data:`_SLOW`; None (and :data:`_SLOW` None) where processes are not forked here."""
+    import multiprocessing
+
+    global _SLOW
+    _SLOW = multiprocessing.RawArray("b", n) if "fork" in multiprocessing.get_all_start_methods() else None
+    return _SLOW
+
+
+def _plan_job(task: Task, budget: float, index: int) -> Planned:
+    """Plan candidate ``index`` in a planning process (:func:`.executions.plan_candidate`), its flag of
+    :data:`_SLOW` set once the slower stages begin."""
+    flags = _SLOW
+
+    def mark() -> None:
+        if flags is not None:
+            flags[index] = 1
+
+    return plan_candidate(task, budget, mark)
 
 
 def grace(first_solved_wall: float) -> float:
@@ -94,6 +135,15 @@ def processes(workers: int, candidates: int) -> int:
     return max(workers, min(candidates, PROCESSES_PER_WORKER * workers))
 
 
+def run_processes(workers: int) -> int:
+    """The processes of a choice's pool of executions on ``workers`` cores: at least one per execution of
+    a plan (:data:`.executions.MODES`), so that a plan's three executions run at once (on two cores they
+    end together, instead of the open loop waiting for a closed loop's core: measured 2026-12-04 on
+    ``choose100-00016``, 1.0 -> 0.9 s from the first execution's start to the last one's end), and at
+    least ``workers``."""
+    return max(workers, len(MODES))
+
+
 def pool(workers: int) -> ProcessPoolExecutor:
     """A pool of ``workers`` processes, forked from this one where the platform allows."""
     import multiprocessing
@@ -106,7 +156,7 @@ def pool(workers: int) -> ProcessPoolExecutor:
 class Pools:
     """Where a choice's jobs run: the candidates' planning in ``plan``, at most ``plan_slots`` at a time,
     the executions in ``run``, at most ``run_slots``; ``own``: this choice's pools (two: the planners,
-    a process per candidate, and ``workers`` processes executing), which
+    a process per candidate, and :func:`run_processes` executing), which
     :meth:`stop` ends; else one pool the caller gave, ``plan_slots`` jobs in all, plans first."""
 
     plan: Executor
@@ -114,16 +164,17 @@ class Pools:
     plan_slots: int
     run_slots: int
     own: bool
+    cores: int = 1
 
     @classmethod
     def make(cls, workers: int, candidates: int) -> Pools:
         """This choice's pools on ``workers`` cores for ``candidates`` tools (module docstring)."""
-        n = processes(workers, candidates)
-        return cls(pool(n), pool(workers), n, workers, True)
+        n, m = processes(workers, candidates), run_processes(workers)
+        return cls(pool(n), pool(m), n, m, True, workers)
 
     @classmethod
     def given(cls, executor: Executor, workers: int) -> Pools:
-        return cls(executor, executor, workers, workers, False)
+        return cls(executor, executor, workers, workers, False, workers)
 
     def yield_to_executions(self) -> None:
         """Lower the planning processes' priority by :data:`PLAN_NICE` (this choice's own pools, where
@@ -227,6 +278,9 @@ class Work:
         self.first_solved_at: float | None = None  # perf_counter [s] at which it was recorded
         self.deadline: float | None = None  # perf_counter [s] at which the candidates still planning stop
         self.stopped: list[int] = []
+        self.slow: Any = None  # the candidates' shared flags (slow_flags), None where not known
+        self.cores = 1  # the cores the choice's jobs share
+        self.started: set[int] = set()  # the candidates handed to the planners
 
     def order(self) -> list[int]:
         """The solved candidates planned so far, by their plans' margins and duration (best first)."""
@@ -244,12 +298,21 @@ class Work:
         return known_best(self.order(), self.executed)
 
     def wanted(self) -> list[tuple[int, str]]:
-        """The executions still to run, best candidate first (:func:`.ranking.needs_execution`; with
-        ``execute_all`` every solved plan's)."""
+        """The executions still to run, best candidate first (:func:`.ranking.needs_execution`): a plan's
+        only once every plan before it failed one (the first usually passes them all, and executions
+        run on the off chance took its cores: measured on ``choose100-00016``); with ``execute_all``
+        every solved plan's."""
         order = self.order()
-        want = [i for i in order if i not in self.executed] if self.options.execute_all \
-            else needs_execution(order, self.executed)
-        return [(i, m) for i in want for m in _SUBMIT_ORDER if m not in self.runs.get(i, {})]
+        if self.options.execute_all:
+            return [(i, m) for i in order if i not in self.executed for m in _SUBMIT_ORDER
+                    if m not in self.runs.get(i, {})]
+        out: list[tuple[int, str]] = []
+        for i in needs_execution(order, self.executed):
+            runs = self.runs.get(i, {})
+            out += [(i, m) for m in _SUBMIT_ORDER if m not in runs]
+            if all(execution_passed(m, r.error) for m, r in runs.items()):
+                break  # the plans behind it wait until it fails an execution
+        return out
 
     def done(self) -> bool:
         return len(self.planned) == self.n and not self.wanted()
@@ -270,10 +333,35 @@ class Work:
         return self.first_solved_at + grace(self.first_solved_wall or 0.0)
 
     def executions_open(self) -> bool:
-        """Whether the executions may run (module docstring): every candidate planned, or the grace
-        after the first solved plan over."""
+        """Whether the executions may run (module docstring): fewer candidates on their quick first stage
+        than :attr:`cores` (a core free of them), or the grace after the first solved plan over."""
         start = self.executions_from()
-        return len(self.planned) == self.n or (start is not None and time.perf_counter() >= start)
+        if start is None:
+            return len(self.planned) == self.n
+        return self.quick() < self.cores or time.perf_counter() >= start
+
+    def quick(self) -> int:
+        """How many candidates still planning may yet find a plan on their quick first stage (those not
+        started, or not known to be in their slower stages)."""
+        return sum(i not in self.planned and not self.in_slow_stages(i) for i in range(self.n))
+
+    def in_slow_stages(self, i: int) -> bool:
+        """Whether candidate ``i``, still planning, has begun its slower stages (never where not known)."""
+        return self.slow is not None and i in self.started and bool(self.slow[i])
+
+    def fast_pending(self) -> bool:
+        """Whether a candidate still planning may yet find a plan on its quick first stage (:meth:`quick`)."""
+        return self.quick() > 0
+
+    def due(self) -> list[int]:
+        """The candidates to stop now: none before the deadline; after it those still planning in their
+        slower stages and those not started, or every one still planning where the stages are not known."""
+        if self.deadline is None:
+            return []
+        pending = [i for i in range(self.n) if i not in self.planned]
+        if self.slow is None:
+            return pending
+        return [i for i in pending if i not in self.started or self.in_slow_stages(i)]
 
     def add_run(self, i: int, mode: str, result: Executed, cpu: float) -> None:
         self.cpu += cpu
@@ -292,19 +380,18 @@ class Work:
         if best is None:
             return
         self.deadline = time.perf_counter()
-        say(f"{self.labels[best]} passed every execution: the {self.n - len(self.planned)} candidates still "
-            "planning are stopped")
+        say(f"{self.labels[best]} passed every execution: the candidates still planning are stopped "
+            + ("once in their slower stages" if self.slow is not None else "now"))
 
-    def stop_planning(self, started: dict[int, float]) -> None:
-        """The candidates not yet planned become ``unknown``, stopped (``started``: when each began
-        planning, perf_counter [s]); their CPU time is not known here (the choice's counts it)."""
+    def stop_planning(self, which: Sequence[int], started: dict[int, float]) -> None:
+        """The candidates ``which`` (not yet planned) become ``unknown``, stopped (``started``: when each
+        began planning, perf_counter [s]); their CPU time is not known here (the choice's counts it)."""
         best = self.best()
         name = self.labels[best] if best is not None else "the best plan"
         now = time.perf_counter()
-        for i in range(self.n):
-            if i not in self.planned:
-                self.planned[i] = Planned(None, "unknown", stopped_reason(name), now - started.get(i, now), 0.0)
-                self.stopped.append(i)
+        for i in which:
+            self.planned[i] = Planned(None, "unknown", stopped_reason(name), now - started.get(i, now), 0.0)
+            self.stopped.append(i)
 
 
 def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say: Callable[[str], None]) -> Work:
@@ -320,6 +407,9 @@ def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say:
             w.add_run(i, mode, execute(w.plan(i), mode, options.seed), 0.0)  # its CPU time is this process's
         return w
     to_plan = list(range(len(cands)))
+    w.cores = pools.cores
+    if pools.own:  # before any planning process is forked
+        w.slow = slow_flags(len(cands))
     started: dict[int, float] = {}
     inflight: dict[Future, tuple[int, str]] = {}  # (candidate, "plan" or an execution mode)
     yielded = False
@@ -328,7 +418,8 @@ def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say:
             if what == "plan":
                 to_plan.remove(i)
                 started[i] = time.perf_counter()
-                inflight[pools.plan.submit(plan_candidate, cands[i].task, options.budget)] = (i, what)
+                w.started.add(i)
+                inflight[pools.plan.submit(_plan_job, cands[i].task, options.budget, i)] = (i, what)
             else:
                 if not yielded:  # the first execution: the planners make way
                     pools.yield_to_executions()
@@ -336,19 +427,40 @@ def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say:
                 inflight[pools.run.submit(_timed_execute, w.plan(i), what, options.seed)] = (i, what)
         if not inflight:  # pragma: no cover - done() would hold
             break
-        wake = w.deadline if w.deadline is not None or w.executions_open() else w.executions_from()
-        timeout = None if wake is None else max(0.0, wake - time.perf_counter())
-        finished, _ = wait(list(inflight), timeout=timeout, return_when=_FIRST)
+        finished, _ = wait(list(inflight), timeout=_timeout(w), return_when=_FIRST)
         for f in finished:
             _take(w, cands, inflight.pop(f), f, say)
         w.set_deadline(pools.own, say)
-        if w.deadline is not None and time.perf_counter() >= w.deadline and len(w.planned) < w.n:
-            w.stop_planning(started)
-            say(f"stopped {len(w.stopped)} candidates still planning")
-            for f, (_, what) in list(inflight.items()):
-                if what == "plan":  # its process is ended with the pool's (stop)
+        due = w.due()
+        if due:
+            w.stop_planning(due, started)
+            say(f"stopped {len(due)} candidates still planning")
+            for i in due:
+                if i in to_plan:
+                    to_plan.remove(i)
+            for f, (i, what) in list(inflight.items()):
+                if what == "plan" and i in due:  # its process is ended with the pool's (stop)
                     del inflight[f]
     return w
+
+
+#: How often [s] the candidates' stages are looked at while a change of one would start the executions or
+#: stop a candidate.
+POLL = 0.05
+
+
+def _timeout(w: Work) -> float | None:
+    """How long [s] to wait for a job to end before looking again: until the grace after the first solved
+    plan is over (the executions may start), or :data:`POLL` where a candidate entering its slower
+    stages would start them or stop it; None: until a job ends."""
+    polling = w.slow is not None and w.fast_pending() and (w.deadline is not None or not w.executions_open())
+    if w.deadline is not None:
+        return POLL if polling else None
+    waits = [POLL] if polling else []
+    start = w.executions_from()
+    if start is not None and not w.executions_open():
+        waits.append(max(0.0, start - time.perf_counter()))
+    return min(waits) if waits else None
 
 
 def _next_jobs(w: Work, pools: Pools, to_plan: list[int],
