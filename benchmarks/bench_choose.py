@@ -5,7 +5,8 @@ generator of `tooltransfer batch`, seed :data:`SEED`, up to one obstacle, headin
 demonstrations travel) and every library tool (:func:`tooltransfer.tools.library.library_names`, the
 outline-only tools included; ``--tools`` names others, the issue's time target is over the six
 :data:`PAPER_TOOLS`), each task handed to :func:`tooltransfer.choose_tool` (on 2 cores, the default;
-the candidates still planning stopped once a plan passed every execution, as by default). Printed:
+the candidates in their slower stages stopped once a plan passed every execution, as by default).
+Printed:
 
 - on the tasks some tool solves, the share whose chosen plan ends within 2 mm of the target closed loop
   on the nominal MuJoCo platform (target >= 97 %), with its 95 % Wilson interval;
