@@ -207,30 +207,31 @@ class LoopRun:
     def correction(self, o: NDArray[np.float64]) -> PushPlan:
         """A correction from ``o`` once the plan's path is used up: each way of
         :func:`tooltransfer.planner.planning.oe.correction.correction_references` in turn, fitted as its
-        sequence, until one is solved (the last, a new search along the straight way); where none is,
-        the variant's guided search along the straight way (:meth:`guided_correction`)."""
+        sequence, until one is solved (the last, a new search along the straight way)."""
         pp: PushPlan | None = None
         for way in correction_references(self.setting, self.options.friction_cone_fraction, o, self.target):
             pp = self.replan(way.t, way.ref, way.faces, way.switches, o)
             if pp.status == "solved":
                 return pp
         assert pp is not None  # the straight way is always among the references
-        return self.guided_correction(way.t, way.ref, o) or pp
+        return pp
 
-    def guided_correction(self, t: NDArray[np.float64], ref: NDArray[np.float64],
-                          o: NDArray[np.float64]) -> PushPlan | None:
+    def guided_correction(self, o: NDArray[np.float64]) -> PushPlan | None:
         """The first plan of the variant's guided search (the planner's own fallback:
         :func:`tooltransfer.planner.planning.oe.guided.guided_plans`) from the observed object ``o`` (2,)
-        [m] to the target along the reference ``t`` (K,) [s], ``ref`` (K, 2) [m], with the re-plans'
-        options and the loop's obstacle checks; None without one. Where no single push sequence
-        closes the last millimetres (the target against an obstacle or a cone's edge), a path of
-        several faces may: measured on ``choose100-00000``'s t_shape plan, the loop ended ``closest``
-        2.2 mm from the target and reaches it (0.8 mm) with this correction."""
+        [m] to the target along the straight way, with the re-plans' options and the loop's obstacle
+        checks; None without one. Tried where no :meth:`correction` fits and the run would end
+        ``closest`` (only there: it takes 1-2 s of CPU where it finds nothing). Where no single push
+        sequence closes the last millimetres (the target against an obstacle or a cone's edge), a path
+        of several faces may: measured on ``choose100-00000``'s t_shape plan, the loop ended
+        ``closest`` 2.2 mm from the target and reaches it (0.8 mm) with this correction."""
         if self.oe.guided is None:
             return None
+        way = correction_references(self.setting, self.options.friction_cone_fraction, o, self.target)[-1]
         start = time.perf_counter()
         found = None
-        for attempt in self.oe.guided(t, ref, replan_setting(self.setting, o), self.target, self.replan_options()):
+        for attempt in self.oe.guided(way.t, way.ref, replan_setting(self.setting, o), self.target,
+                                      self.replan_options()):
             attempt = self.clear_of_obstacles(attempt)
             if attempt.status == "solved" and attempt.pushes:
                 found = attempt

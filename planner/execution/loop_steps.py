@@ -89,6 +89,8 @@ def plan_done(loop: LoopRun, ref: PlanReference, f: InForce, pace: Pace) -> tupl
     d = float(np.hypot(*(loop.target - o)))
     pp = loop.correction(o)
     if pp.status != "solved":
+        pp = loop.guided_correction(o) or pp
+    if pp.status != "solved":
         return "closest", f"no push brings the object closer from {np.round(o, 4).tolist()} m " \
             f"({1e3 * d:.1f} mm from the target): {pp.reason}"
     f.switch_to(pp, ref.end)
