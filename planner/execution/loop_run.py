@@ -221,7 +221,8 @@ class LoopRun:
         :func:`tooltransfer.planner.planning.oe.guided.guided_plans`) from the observed object ``o`` (2,)
         [m] to the target along the straight way, with the re-plans' options and the loop's obstacle
         checks; None without one. Tried where no :meth:`correction` fits and the run would end
-        ``closest`` (only there: it takes 1-2 s of CPU where it finds nothing). Where no single push
+        ``closest`` more than :data:`~tooltransfer.planner.execution.loop_steps.GUIDED_FROM` times the
+        tolerance from the target (only there: it takes 1-2 s of CPU where it finds nothing). Where no single push
         sequence closes the last millimetres (the target against an obstacle or a cone's edge), a path
         of several faces may: measured on ``choose100-00000``'s t_shape plan, the loop ended
         ``closest`` 2.2 mm from the target and reaches it (0.8 mm) with this correction."""
