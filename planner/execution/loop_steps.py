@@ -76,14 +76,6 @@ def plan_the_rest(loop: LoopRun, ref: PlanReference, f: InForce) -> bool:
     return False
 
 
-#: How many times the run's tolerance the object must be from the target for a correction by the guided
-#: search (:meth:`~tooltransfer.planner.execution.loop_run.LoopRun.guided_correction`) where no correction
-#: way fits: nearer, the run ends ``closest`` within what the benchmarks count as a closed loop's success
-#: (2 mm), and a guided search that finds nothing costs 1-2 s of CPU (measured 2026-12-04: 6 of 30
-#: tool choices took 1-3 s longer when it was tried at any distance).
-GUIDED_FROM = 2.0
-
-
 def plan_done(loop: LoopRun, ref: PlanReference, f: InForce, pace: Pace) -> tuple[str, str] | None:
     """The plan in force is done: is the object there (three observations averaged)? If not, a
     correction round. Returns the run's ``(status, reason)`` when it ends here, None when a
@@ -96,7 +88,7 @@ def plan_done(loop: LoopRun, ref: PlanReference, f: InForce, pace: Pace) -> tupl
         return "rounds", f"{pace.max_rounds} correction rounds did not reach the target"
     d = float(np.hypot(*(loop.target - o)))
     pp = loop.correction(o)
-    if pp.status != "solved" and d > GUIDED_FROM * pace.tolerance:
+    if pp.status != "solved":
         pp = loop.guided_correction(o) or pp
     if pp.status != "solved":
         return "closest", f"no push brings the object closer from {np.round(o, 4).tolist()} m " \
