@@ -192,15 +192,31 @@ class LoopRun:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")
         return pp
 
-    def clear_of_obstacles(self, pp: PushPlan) -> PushPlan:
+    def changes_keep_margin(self, pp: PushPlan) -> bool:
+        """Whether every change of face and re-contact of ``pp`` has a tool path (the loop's own switch
+        and re-contact planners, at the object where the plan has it) that keeps the safety envelope's
+        margin from the obstacles: a correction whose switch the envelope would refuse is not taken
+        (measured: ``choose100-00005``'s l_shape loop ended ``unsafe`` 10.9 mm from the target on one,
+        where it ends ``closest`` 3.6 mm without it)."""
+        margin = self.plant.envelope.margin
+        for a, b in zip(pp.pushes[:-1], pp.pushes[1:], strict=True):
+            planner = self.switch if a.face != b.face else self.recontact
+            sw = planner(pp.object_xy[a.samples[-1]], a.face, a.tool_pose[-1], b.face, b.tool_pose[0])
+            if sw.status != "solved" or (self.setting.obstacles and not sw.obstacle_clearance >= margin):
+                return False
+        return True
+
+    def clear_of_obstacles(self, pp: PushPlan, every_push: bool = False) -> PushPlan:
         """``pp``, or refused when the tool outline overlaps an obstacle along what the loop executes
         next (:func:`tooltransfer.planner.planning.oe.replan.refuse_tool_overlap`) or comes closer to
         one than the safety envelope's margin there (the envelope would refuse the command: another
-        re-plan is tried instead)."""
+        re-plan is tried instead); ``every_push``: along every push of ``pp`` (a plan the loop does not
+        re-plan before its end)."""
         pp = refuse_tool_overlap(self.tool, self.setting.obstacles, pp)
         if pp.status != "solved" or not pp.pushes or not self.setting.obstacles:
             return pp
-        poses = np.vstack([pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
+        poses = np.vstack([p.tool_pose for p in pp.pushes] if every_push
+                          else [pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
         near = tool_obstacle_clearance(self.tool, poses, self.setting.obstacles)
         margin = self.plant.envelope.margin
         if near.distance >= margin:
@@ -239,8 +255,8 @@ class LoopRun:
         found = None
         attempts = self.oe.guided(way.t, way.ref, replan_setting(self.setting, o), self.target, self.replan_options())
         for attempt in itertools.islice(attempts, CORRECTION_ATTEMPTS):
-            attempt = self.clear_of_obstacles(attempt)
-            if attempt.status == "solved" and attempt.pushes:
+            attempt = self.clear_of_obstacles(attempt, every_push=True)
+            if attempt.status == "solved" and attempt.pushes and self.changes_keep_margin(attempt):
                 found = attempt
                 self.log.append(f"correction by the guided search from {np.round(o, 4).tolist()} m: "
                                 f"{' -> '.join(attempt.faces)}")
