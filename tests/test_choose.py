@@ -346,7 +346,8 @@ def test_the_deadline_stops_only_candidates_in_their_slower_stages() -> None:
 
     plan = SimpleNamespace(metrics={"duration": 3.0})
     w = Work(["a", "b", "c", "d"], Options())
-    w.cores, w.slow, w.started = 2, [0, 0, 0, 0], {0, 1, 2}  # d not started (more candidates than processes)
+    w.cores, w.slow = 2, [0, 0, 0, 0]
+    w.started = {0: 0.0, 1: 0.0, 2: 0.0}  # d not started (more candidates than processes)
     w.add_plan(0, Planned(plan, "solved", "", 0.8, 0.6))  # type: ignore[arg-type]
     assert w.quick() == 3 and not w.executions_open()  # b, c quick, d not started: no core free of them
     w.slow[1] = 1
@@ -357,7 +358,7 @@ def test_the_deadline_stops_only_candidates_in_their_slower_stages() -> None:
     w.executed[0] = GOOD
     w.set_deadline(True, lambda text: None)
     assert w.deadline is not None and w.due() == [1, 2, 3]  # b, c in their slower stages, d never started
-    w.started.add(3)
+    w.started[3] = 0.0
     assert w.due() == [1, 2]  # d on its quick stage: waited for
     unknown = Work(["a", "b"], Options())
     unknown.add_plan(0, Planned(plan, "solved", "", 0.8, 0.6))  # type: ignore[arg-type]

@@ -23,6 +23,7 @@ from tooltransfer.planner.execution.guarded_plant import GuardedPlant
 from tooltransfer.planner.execution.health import Health, take_look
 from tooltransfer.planner.execution.loop_stop import LoopStop
 from tooltransfer.planner.execution.plant import Plant
+from tooltransfer.planner.planning.assemble import BACK_OFF_TURNS
 from tooltransfer.planner.planning.oe.correction import correction_references
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
@@ -46,10 +47,6 @@ if TYPE_CHECKING:
 SAME_POSE = 3e-4
 #: How far [m] the tool first backs off along the contact's normal before a switch or a re-contact.
 BACK_OFF = 0.002
-#: Turns [rad] of that back-off from the contact's normal, tried in turn where the straight one would
-#: bring the tool within the safety envelope's margin of an obstacle (each still leaves the object: it
-#: keeps a component along the normal, so the face does not drag it).
-BACK_OFF_TURNS = tuple(float(a) for a in np.radians([0.0, 20.0, -20.0, 40.0, -40.0]))
 #: How far [m] the tool backs off the object along the contact's normal when a fault ends the run
 #: (shorter ones are tried when the envelope refuses it).
 RETREAT = (0.01, 0.005, 0.002)
@@ -297,7 +294,8 @@ class LoopRun:
 
     def back_off(self, pose: NDArray[np.float64]) -> NDArray[np.float64]:
         """Where (2,) [m] the tool backs off to from the contact at ``pose`` (3,): :data:`BACK_OFF` along the
-        contact's normal, turned by the first of :data:`BACK_OFF_TURNS` whose move the safety envelope
+        contact's normal, turned by the first of
+        :data:`~tooltransfer.planner.planning.assemble.BACK_OFF_TURNS` whose move the safety envelope
         lets through as :meth:`move` commands it (from the reported pose, against the arm's tracking
         offset); straight back when none does (the envelope then refuses it, as before)."""
         assert self.face is not None

@@ -57,6 +57,11 @@ class Motion:
     stretch: float
 
 
+#: Turns [rad] from a straight back-off tried in turn where the straight one is not clear (here, and in
+#: the closed loop's back-off from a contact): each keeps a component along the contact's normal.
+BACK_OFF_TURNS = tuple(float(a) for a in np.radians([0.0, 20.0, -20.0, 40.0, -40.0]))
+
+
 def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: float,
                     distance: float, tool: Tool | None = None, obstacles: Sequence[Disc | Polygon] = (),
                     ) -> NDArray[np.float64]:
@@ -66,7 +71,7 @@ def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: 
     the heading the Omni imposes: the margin of a solved plan); when no length along
     ``direction`` does, directions 20 and 40 degrees to either side are tried (the tool still meets
     the object where the push starts, a little obliquely)."""
-    for turn in np.radians([0.0, 20.0, -20.0, 40.0, -40.0]):
+    for turn in BACK_OFF_TURNS:
         u = -np.array([np.cos(direction + turn), np.sin(direction + turn)])
         d = distance
         while d >= 0.002:

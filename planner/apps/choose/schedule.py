@@ -280,7 +280,7 @@ class Work:
         self.stopped: list[int] = []
         self.slow: Any = None  # the candidates' shared flags (slow_flags), None where not known
         self.cores = 1  # the cores the choice's jobs share
-        self.started: set[int] = set()  # the candidates handed to the planners
+        self.started: dict[int, float] = {}  # when each candidate was handed to the planners, perf_counter [s]
 
     def order(self) -> list[int]:
         """The solved candidates planned so far, by their plans' margins and duration (best first)."""
@@ -349,10 +349,6 @@ class Work:
         """Whether candidate ``i``, still planning, has begun its slower stages (never where not known)."""
         return self.slow is not None and i in self.started and bool(self.slow[i])
 
-    def fast_pending(self) -> bool:
-        """Whether a candidate still planning may yet find a plan on its quick first stage (:meth:`quick`)."""
-        return self.quick() > 0
-
     def due(self) -> list[int]:
         """The candidates to stop now: none before the deadline; after it those still planning in their
         slower stages and those not started, or every one still planning where the stages are not known."""
@@ -383,14 +379,14 @@ class Work:
         say(f"{self.labels[best]} passed every execution: the candidates still planning are stopped "
             + ("once in their slower stages" if self.slow is not None else "now"))
 
-    def stop_planning(self, which: Sequence[int], started: dict[int, float]) -> None:
-        """The candidates ``which`` (not yet planned) become ``unknown``, stopped (``started``: when each
-        began planning, perf_counter [s]); their CPU time is not known here (the choice's counts it)."""
+    def stop_planning(self, which: Sequence[int]) -> None:
+        """The candidates ``which`` (not yet planned) become ``unknown``, stopped; their CPU time is not
+        known here (the choice's counts it)."""
         best = self.best()
         name = self.labels[best] if best is not None else "the best plan"
         now = time.perf_counter()
         for i in which:
-            self.planned[i] = Planned(None, "unknown", stopped_reason(name), now - started.get(i, now), 0.0)
+            self.planned[i] = Planned(None, "unknown", stopped_reason(name), now - self.started.get(i, now), 0.0)
             self.stopped.append(i)
 
 
@@ -410,15 +406,13 @@ def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say:
     w.cores = pools.cores
     if pools.own:  # before any planning process is forked
         w.slow = slow_flags(len(cands))
-    started: dict[int, float] = {}
     inflight: dict[Future, tuple[int, str]] = {}  # (candidate, "plan" or an execution mode)
     yielded = False
     while not w.done():
         for i, what in _next_jobs(w, pools, to_plan, inflight):
             if what == "plan":
                 to_plan.remove(i)
-                started[i] = time.perf_counter()
-                w.started.add(i)
+                w.started[i] = time.perf_counter()
                 inflight[pools.plan.submit(_plan_job, cands[i].task, options.budget, i)] = (i, what)
             else:
                 if not yielded:  # the first execution: the planners make way
@@ -433,7 +427,7 @@ def work(cands: Sequence[Candidate], pools: Pools | None, options: Options, say:
         w.set_deadline(pools.own, say)
         due = w.due()
         if due:
-            w.stop_planning(due, started)
+            w.stop_planning(due)
             say(f"stopped {len(due)} candidates still planning")
             for i in due:
                 if i in to_plan:
@@ -453,7 +447,7 @@ def _timeout(w: Work) -> float | None:
     """How long [s] to wait for a job to end before looking again: until the grace after the first solved
     plan is over (the executions may start), or :data:`POLL` where a candidate entering its slower
     stages would start them or stop it; None: until a job ends."""
-    polling = w.slow is not None and w.fast_pending() and (w.deadline is not None or not w.executions_open())
+    polling = w.slow is not None and w.quick() > 0 and (w.deadline is not None or not w.executions_open())
     if w.deadline is not None:
         return POLL if polling else None
     waits = [POLL] if polling else []
