@@ -166,6 +166,16 @@ def report(der: dict[str, Any], rows: list[Row], wall: float) -> None:
                     and by.get((t, "derived"), {}).get("status") == "solved")
     print(f"tasks hand solves and derived does not: {len(lost)} {lost}")
     print(f"tasks derived solves and hand does not: {len(gained)} {gained}")
+    # execution quality compared on the same tasks: the tasks only derived faces solve are often the
+    # harder ones (longer guided plans), so the groups' figures above are not like for like
+    both = sorted(t for t in hand_ids if by[(t, "hand")]["status"] == "solved"
+                  and by.get((t, "derived"), {}).get("status") == "solved")
+    for mode in ("hand", "derived"):
+        print(f"- {mode} faces on the {len(both)} tasks both solve: open loop "
+              f"{_errors([by[(t, mode)] for t in both], 'open_loop_error')}")
+    if gained:
+        print(f"- derived faces on the {len(gained)} tasks only they solve: open loop "
+              f"{_errors([by[(t, 'derived')] for t in gained], 'open_loop_error')}")
     for r in rows:
         if r["status"] != "solved":
             print(f"  unsolved {r['task_id']} {r['tool']} {r['mode']}: {r['status']} {r['reason'][:120]}")
