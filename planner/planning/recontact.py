@@ -25,16 +25,14 @@ from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.ik import joint_path
-from tooltransfer.tools.pose import rotation
+from tooltransfer.tools.pose import placed_outlines, rotation
 
 
 def swept_distance(tool: Tool, xy: NDArray[np.float64], yaw: NDArray[np.float64], shape: shapely.Geometry) -> float:
     """Least distance [m] between the tool outline at poses ``xy`` (K, 2), ``yaw`` (K,) and ``shape``."""
     if len(xy) == 0:
         return float("inf")
-    outline = np.asarray(tool.outline.exterior.coords)
-    polys = [shapely.Polygon(outline @ rotation(a).T + p) for p, a in zip(xy, yaw, strict=True)]
-    return float(shapely.distance(shapely.GeometryCollection(polys), shape))
+    return float(shapely.distance(placed_outlines(tool.outline.exterior.coords, xy, yaw), shape))
 
 
 def recontact_planner(setting: Setting, back_off: float = 0.002) -> SwitchPlanner:

@@ -27,7 +27,7 @@ from tooltransfer.errors import ToolTransferError
 from tooltransfer.planner.planning.oe.push_plan import Push
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
-from tooltransfer.tools.pose import rotation
+from tooltransfer.tools.pose import placed_outlines
 from tooltransfer.tools.pushing.inverse import FaceGeometry, FacePush, push_tool_path
 
 if TYPE_CHECKING:
@@ -90,8 +90,8 @@ def _tool_clearance(tool: Tool, poses: NDArray[np.float64], shapes: list[shapely
     """Least distance [m] of the tool outline at ``poses`` (K, 3) (every 10th and the last) from ``shapes``."""
     ring = np.asarray(tool.outline.exterior.coords)
     pick = np.unique(np.append(np.arange(0, len(poses), 10), len(poses) - 1))
-    polys = [shapely.Polygon(ring @ rotation(float(p[2])).T + p[:2]) for p in poses[pick]]
-    return float(min(shapely.distance(shapely.GeometryCollection(polys), s) for s in shapes))
+    placed = placed_outlines(ring, poses[pick, :2], poses[pick, 2])
+    return float(min(shapely.distance(placed, s) for s in shapes))
 
 
 def _clear_start(setting: Setting, face: str, x: NDArray[np.float64],

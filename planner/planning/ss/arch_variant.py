@@ -20,7 +20,7 @@ from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import OBJECT_RADIUS, Disc
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.omni.platform import OmniPlatform
-from tooltransfer.tools.pose import rotation, wrap_angle
+from tooltransfer.tools.pose import placed_outlines, wrap_angle
 
 
 class NoArch(ToolTransferError):
@@ -33,9 +33,7 @@ def swept_clearance(tool: Tool, platform: OmniPlatform, xy: NDArray[np.float64],
     Omni) and the disc object at ``obj`` (2,); the samples should be dense (<= 1 mm apart)."""
     yaw = joint_path(platform, xy).heading
     puck = shapely.Point(obj).buffer(radius, quad_segs=32)
-    outline = np.asarray(tool.outline.exterior.coords)
-    polys = [shapely.Polygon(outline @ rotation(a).T + p) for p, a in zip(xy, yaw, strict=True)]
-    return float(shapely.distance(shapely.GeometryCollection(polys), puck))
+    return float(shapely.distance(placed_outlines(tool.outline.exterior.coords, xy, yaw), puck))
 
 
 def arch_path(
