@@ -3,7 +3,7 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: demo test typecheck docs figures bench bench-sim bench-ss bench-batch bench-exec bench-verdicts bench-choose lint clean
+.PHONY: demo test typecheck docs figures bench bench-sim bench-ss bench-batch bench-exec bench-verdicts check-certificates bench-choose lint clean
 
 $(PY):
 	python3 -m venv $(VENV)
@@ -131,7 +131,11 @@ bench-exec: $(PY)
 # 60 + 200 generated tasks planned on 2 cores: solved / certified infeasible / unknown, and the planning times
 bench-verdicts: $(PY)
 	$(PY) -m pip install -q -e ".[all]"
-	$(PY) benchmarks/bench_verdicts.py
+	$(PY) benchmarks/bench_verdicts.py --json out/verdicts.json
+
+# every certificate of the last `make bench-verdicts` against the test suite's own lattice search
+check-certificates: $(PY)
+	$(PY) benchmarks/check_certificates.py out/verdicts.json
 
 # 100 generated tasks, each given to `tooltransfer choose` over the library's tools (long: see benchmarks/README.md)
 bench-choose: $(PY)
