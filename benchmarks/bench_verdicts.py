@@ -96,7 +96,7 @@ def run_verdict(job: VerdictJob) -> Row:
 
     row: Row = {"task_id": job.task_id, "kind": job.kind, "batch": Path(job.source).name, "index": job.index,
                 "tool": job.tool, "variant": job.variant, "n_obstacles": job.n_obstacles, "status": None,
-                "verdict": "error", "evidence_kind": None, "reason": "", "not_proved": None,
+                "verdict": "error", "evidence_kind": None, "reason": "", "not_proved": None, "budget_limited": None,
                 "planning_time": None, "time_certify": None, "plan_wall": None, "plan_cpu": None,
                 "n_pushes": None, "open_loop_status": None, "open_loop_error": None, "worker": os.getpid()}
     started, cpu = time.perf_counter(), time.process_time()
@@ -109,6 +109,7 @@ def run_verdict(job: VerdictJob) -> Row:
     m, ev = plan.metrics, plan.evidence
     row.update(status=plan.status, verdict=plan.verdict, evidence_kind=ev.get("kind"), reason=(plan.reason or "")[:500],
                not_proved=(str(ev["not_proved"])[:300] if "not_proved" in ev else None),
+               budget_limited=ev.get("budget_limited"),
                planning_time=planning_time(m), time_certify=finite_or_none(m.get("time_certify")),
                plan_wall=time.perf_counter() - started, plan_cpu=time.process_time() - cpu,
                n_pushes=None if m.get("n_pushes") is None else round(m["n_pushes"]))
@@ -178,6 +179,9 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
             f"{k} {n}" for k, n in Counter(r["evidence_kind"] for r in unknown).most_common()))
         for why, n in Counter(_reason_group(r.get("not_proved") or "")[:160] for r in unknown).most_common(5):
             con.print(f"  not proved x{n}: {why}")
+        spent = [r["task_id"] for r in unknown if r.get("budget_limited")]
+        con.print(f"  stopped on the search's or the certificate's budget: {len(spent)}"
+                  + (f" ({', '.join(spent)}; --budget K may decide them)" if spent else ""))
         failed = [r["task_id"] for r in unknown if "check failed" in (r.get("not_proved") or "")]
         if failed:
             con.print("  certificates built but refused by their own check: " + ", ".join(failed))

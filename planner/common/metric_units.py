@@ -64,10 +64,15 @@ UNITS: dict[str, Unit] = {
     "time_certify": "s",
     # a plan of the guided search (tooltransfer.planner.planning.oe.guided): the share of the friction
     # cone's half-angle it kept to, its search's step, its time, the expansions of a search that failed
+    # and whether it ended on its budget (1) or with its space closed (0); on a plan the search did not
+    # solve, its attempts and how many of them ended on their budget
     "friction_cone_fraction": "",
     "guided_step": "m",
     "time_guided": "s",
     "guided_expansions": "",
+    "guided_on_budget": "",
+    "guided_attempts": "",
+    "guided_attempts_on_budget": "",
     # the command line's summary of a plan and of its execution (tooltransfer.planner.apps.cli)
     "planning_time": "s",
     "open_loop_final_error": "m",

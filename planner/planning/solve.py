@@ -148,6 +148,7 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
     with more room (the closed loop's corrections need some)."""
     clock = time.perf_counter()
     whys: list[str] = []
+    n_tried = n_on_budget = 0  # the attempts, and those whose search ended on its budget (not its space)
     refused: SwitchFailed | None = None  # sent back: the search may avoid that change of face there
     tight: Plan | None = None  # the first solved plan with little room, if no roomier one comes
     while True:
@@ -156,6 +157,8 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
         except StopIteration:
             break
         refused = None
+        n_tried += 1
+        n_on_budget += int(guided.metrics.get("guided_on_budget", 0.0) > 0.0)
         if guided.status == "solved":
             stages = {k: v for k, v in failed.metrics.items() if k in ("time_skills", "time_oe")}
             switches: list[SwitchFailed] = []
@@ -180,7 +183,8 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
         tight.metrics["time_guided"] = time.perf_counter() - clock
         tight.metrics["time_total"] = time.perf_counter() - start
         return tight
-    metrics = {**failed.metrics, "time_guided": time.perf_counter() - clock}
+    metrics = {**failed.metrics, "time_guided": time.perf_counter() - clock, "guided_attempts": float(n_tried),
+               "guided_attempts_on_budget": float(n_on_budget)}
     return replace(failed, metrics=metrics, reason=f"{failed.reason}; the guided search: {'; then '.join(whys)}")
 
 

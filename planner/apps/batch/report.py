@@ -119,6 +119,7 @@ class GroupStats:
     unknown_ci_low: float = float("nan")
     unknown_ci_high: float = float("nan")
     certificates: str = ""
+    unknown_on_budget: int = 0
 
 
 def _pct(a: np.ndarray, q: float) -> float:
@@ -186,6 +187,7 @@ def group_stats(tool: str, variant: str, rows: Sequence[dict[str, Any]]) -> Grou
         len(sim), k, k / len(sim) if sim else float("nan"), slo, shi,
         _agg(_vals(sim, "sim_final_error"), "median"), **execution_stats(rows), violated=c["violated"],
         unknown=c["unknown"] + c["violated"], **_verdict_cis(c, n), certificates=_certificate_kinds(rows),
+        unknown_on_budget=sum(_evidence(r).get("budget_limited") is True for r in rows if r["status"] == "unknown"),
     )
 
 
@@ -196,17 +198,18 @@ def _verdict_cis(c: Counter, n: int) -> dict[str, float]:
     return {"infeasible_ci_low": ilo, "infeasible_ci_high": ihi, "unknown_ci_low": ulo, "unknown_ci_high": uhi}
 
 
+def _evidence(row: dict[str, Any]) -> dict[str, Any]:
+    """A stored row's verdict evidence (empty where it has none or its JSON is unreadable)."""
+    try:
+        evidence = json.loads(row.get("metrics_json") or "{}").get("evidence", {})
+    except (ValueError, AttributeError):
+        return {}
+    return evidence if isinstance(evidence, dict) else {}
+
+
 def _certificate_kinds(rows: Sequence[dict[str, Any]]) -> str:
     """The certificates' kinds of the infeasible rows, counted (``"backward_reachable 3, ..."``)."""
-    kinds: Counter = Counter()
-    for r in rows:
-        if r["status"] != "infeasible":
-            continue
-        try:
-            kind = json.loads(r.get("metrics_json") or "{}").get("evidence", {}).get("kind", "?")
-        except (ValueError, AttributeError):
-            kind = "?"
-        kinds[kind] += 1
+    kinds: Counter = Counter(_evidence(r).get("kind", "?") for r in rows if r["status"] == "infeasible")
     return ", ".join(f"{k} {v}" for k, v in kinds.most_common())
 
 
@@ -302,6 +305,13 @@ def print_report(stats: Sequence[GroupStats], reasons: Sequence[dict[str, Any]],
     for s in stats:
         if s.certificates:
             console.print(f"certificates of {escape(s.tool)} {escape(s.variant)}: {escape(s.certificates)}")
+    for s in stats:
+        plain = s.unknown - s.violated  # violated rows are counted with the unknown ones
+        if plain > 0:
+            console.print(f"unknown of {escape(s.tool)} {escape(s.variant)}: {plain}, {s.unknown_on_budget} of them "
+                          "stopped on the search's or the certificate's budget (`batch run --resume --retry unknown "
+                          "--budget K` may decide those; the others ended within their budgets, where a larger one is "
+                          "unlikely to help)")
     v = Table(title="solved plans: violation maxima, clearance")
     for col in ("tool", "variant", *(label(head, column) for head, _, column, _ in VIOLATION_COLUMNS)):
         v.add_column(escape(col), justify="left" if col in ("tool", "variant") else "right")

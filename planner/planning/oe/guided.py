@@ -339,7 +339,8 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
               f"{', half steps and new runs where it rolls off' if more else ''})")
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
                         reason=f"at {share:g} of the friction cone{on},{but} {found.describe()}",
-                        metrics={"guided_expansions": float(found.expansions)})
+                        metrics={"guided_expansions": float(found.expansions),
+                                 "guided_on_budget": 0.0 if found.exhausted else 1.0})
     tg, ref, faces, switches = found.sequence(float(t[-1] - t[0]))
     kept = found.face_windows()  # None: a face's runs keep to different windows, fitted run by run only
     plan = condense_sequence(tg + t[0], ref, setting, target, faces, tuple(v + t[0] for v in switches),

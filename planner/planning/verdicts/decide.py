@@ -5,7 +5,8 @@ its failure says nothing about the task. :func:`attach_verdict` looks for a cert
 rules of :mod:`~tooltransfer.planner.planning.verdicts.rules` (:func:`certify`) and returns the plan
 with ``status`` ``"infeasible"`` and the certificate as its evidence when one is found, else with
 ``status`` ``"unknown"`` (or ``"violated"`` for a plan that broke its hard checks) and evidence that
-says what was searched and why nothing was proved.
+says what was searched and why nothing was proved (and ``budget_limited``: whether a larger ``budget``
+could change that, :func:`budget_limited`).
 """
 
 from __future__ import annotations
@@ -23,6 +24,16 @@ from tooltransfer.planner.planning.verdicts.rules import setting_rules
 
 #: Block updates the backward-reachable set may make before the verdict is left ``unknown``.
 CERTIFY_BLOCKS = 20000
+
+
+def budget_limited(metrics: dict[str, float], not_proved: str) -> bool:
+    """Whether an ``unknown`` verdict's search or certificate stopped on its budget: an attempt of the
+    guided search ran out of expansions (``guided_attempts_on_budget``) or the backward-reachable set
+    out of block updates (``not_proved``). Where neither did, every attempt searched its whole space
+    under its own rules and every grid's set reached the start: a larger ``budget`` is unlikely to decide
+    the task (benchmarks/README.md: on the verdict benchmark, 4 times the budget decided 6 of 32 unknowns,
+    16 times none more), a wider search or a tighter certificate might."""
+    return metrics.get("guided_attempts_on_budget", 0.0) > 0.0 or "budget:" in not_proved
 
 
 def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.ndarray, *,
@@ -51,5 +62,7 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
     status: Literal["unknown", "violated"] = "violated" if plan.status == "violated" else "unknown"
     evidence = {"verdict": "unknown", "kind": "search_exhausted" if status == "unknown" else "violated",
                 "searched": searched, "not_proved": why, "budget": budget}
+    if status == "unknown":
+        evidence["budget_limited"] = budget_limited(plan.metrics, why)
     return replace(plan, status=status, metrics=metrics, evidence=evidence,
                    reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)

@@ -1,0 +1,55 @@
+"""An ``unknown`` verdict says whether its search or its certificate stopped on a budget (a larger
+``--budget`` may then decide the task) or ended within its budgets (every attempt of the guided search
+closed its space under its own rules, every grid's set reached the start: a larger budget is unlikely to
+help). The two generated tasks are of the verdict benchmark, one of each kind."""
+
+from __future__ import annotations
+
+import json
+
+from test_verdicts import generated
+
+from tooltransfer.planner.apps.batch.report import summarize
+from tooltransfer.planner.apps.batch.store import ResultStore
+from tooltransfer.planner.planning.solve import solve
+from tooltransfer.planner.planning.verdicts.decide import budget_limited
+
+
+def test_budget_limited_reads_the_guided_attempts_and_the_certificates_block_budget() -> None:
+    closed = "backward-reachable set of the target: cells of 10 mm: the set came within the gap of the start"
+    assert not budget_limited({"guided_attempts": 4.0, "guided_attempts_on_budget": 0.0}, closed)
+    assert budget_limited({"guided_attempts": 4.0, "guided_attempts_on_budget": 1.0}, closed)
+    assert budget_limited({}, "backward-reachable set of the target: cells of 10 mm: budget: 20000 block updates")
+    assert not budget_limited({}, "")
+
+
+def test_an_unknown_whose_searches_closed_their_space_is_not_budget_limited() -> None:
+    """exec60-00015 (finger, one obstacle): every attempt expands every lattice cell it can reach."""
+    task = generated("execution_60.yaml", "exec60-00015")
+    plan = solve(task)
+    assert plan.status == "unknown", plan.reason
+    assert plan.metrics["guided_attempts"] >= 4 and plan.metrics["guided_attempts_on_budget"] == 0
+    assert plan.evidence["budget_limited"] is False
+    assert "its space closed" in plan.reason and "its budget" not in plan.reason
+
+
+def test_an_unknown_whose_search_ran_out_of_expansions_is_budget_limited() -> None:
+    """verd200-00011 (slope): the attempt on fine steps spends its expansions."""
+    task = generated("verdicts_200.yaml", "verd200-00011")
+    plan = solve(task)
+    assert plan.status == "unknown", plan.reason
+    assert plan.metrics["guided_attempts_on_budget"] >= 1
+    assert plan.evidence["budget_limited"] is True
+    assert "(its budget, oe.guided_budget)" in plan.reason
+
+
+def test_the_batch_report_counts_the_unknowns_that_stopped_on_a_budget(tmp_path) -> None:
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        store.add_tasks([{"task_id": f"t{i}", "idx": i, "tool": "slope", "n_obstacles": 0} for i in range(4)])
+        for i, spent in enumerate((True, False, True)):
+            store.put({"task_id": f"t{i}", "variant": "qp/opt", "tool": "slope", "status": "unknown",
+                       "metrics_json": json.dumps({"evidence": {"verdict": "unknown", "budget_limited": spent}})})
+        store.put({"task_id": "t3", "variant": "qp/opt", "tool": "slope", "status": "solved"})
+        rows = store.rows()
+    s = {(g.tool, g.variant): g for g in summarize(rows)}[("slope", "qp/opt")]
+    assert (s.unknown, s.unknown_on_budget, s.solved) == (3, 2, 1)
