@@ -7,10 +7,13 @@ from __future__ import annotations
 
 import json
 
-from test_verdicts import generated
+from test_verdicts import ROOT, generated
 
+from tooltransfer.planner.apps.batch.generate import generate_tasks
 from tooltransfer.planner.apps.batch.report import summarize
+from tooltransfer.planner.apps.batch.spec import load_batch
 from tooltransfer.planner.apps.batch.store import ResultStore
+from tooltransfer.planner.apps.cli import main
 from tooltransfer.planner.planning.solve import solve
 from tooltransfer.planner.planning.verdicts.decide import budget_limited
 
@@ -53,3 +56,15 @@ def test_the_batch_report_counts_the_unknowns_that_stopped_on_a_budget(tmp_path)
         rows = store.rows()
     s = {(g.tool, g.variant): g for g in summarize(rows)}[("slope", "qp/opt")]
     assert (s.unknown, s.unknown_on_budget, s.solved) == (3, 2, 1)
+
+
+def test_solve_json_says_whether_an_unknown_stopped_on_a_budget(tmp_path, capsys) -> None:
+    """The command line's summary of an unknown carries the flag (exit code 3: unknown)."""
+    batch = ROOT / "problems" / "batch" / "execution_60.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "exec60-00015")
+    path = tmp_path / "exec60-00015.yaml"
+    path.write_text(json.dumps(data))  # JSON is YAML; the generated task's paths are absolute
+    assert main(["solve", str(path), "--json"]) == 3
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["status"] == "unknown" and summary["evidence"] == "search_exhausted"
+    assert summary["budget_limited"] is False

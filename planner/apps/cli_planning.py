@@ -124,7 +124,9 @@ def cmd_solve(args: argparse.Namespace) -> int:
                                     "joint_limit_violation_max", "duration") if k in m},
                # the solve's wall time; a plan that stopped early has no time_total: the stages it ran
                "planning_time": m.get("time_total", sum(v for k, v in m.items() if k.startswith("time_"))),
-               "evidence": plan.evidence.get("kind")}
+               "evidence": plan.evidence.get("kind"),
+               # an unknown: whether its search or certificate stopped on a budget (--budget may then decide it)
+               **({"budget_limited": plan.evidence["budget_limited"]} if "budget_limited" in plan.evidence else {})}
     executions: dict = {}
     if args.simulate and plan.status == "solved":
         outcome, executions = execute_plan(plan, closed_loop=True, quiet=args.json)
