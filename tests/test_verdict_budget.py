@@ -6,10 +6,12 @@ help). The two generated tasks are of the verdict benchmark, one of each kind.""
 from __future__ import annotations
 
 import json
+import re
 
 from test_verdicts import ROOT, generated
 
 from tooltransfer.planner.apps.batch.generate import generate_tasks
+from tooltransfer.planner.apps.batch.html_report import summary_table
 from tooltransfer.planner.apps.batch.report import summarize
 from tooltransfer.planner.apps.batch.spec import load_batch
 from tooltransfer.planner.apps.batch.store import ResultStore
@@ -54,8 +56,15 @@ def test_the_batch_report_counts_the_unknowns_that_stopped_on_a_budget(tmp_path)
                        "metrics_json": json.dumps({"evidence": {"verdict": "unknown", "budget_limited": spent}})})
         store.put({"task_id": "t3", "variant": "qp/opt", "tool": "slope", "status": "solved"})
         rows = store.rows()
-    s = {(g.tool, g.variant): g for g in summarize(rows)}[("slope", "qp/opt")]
+    stats = summarize(rows)
+    s = {(g.tool, g.variant): g for g in stats}[("slope", "qp/opt")]
     assert (s.unknown, s.unknown_on_budget, s.solved) == (3, 2, 1)
+    page = summary_table(stats)  # the report page's summary: the count in its own column
+    head = re.findall(r"<th[^>]*>([^<]*)</th>", page)
+    first = re.search(r"<tbody><tr>(.*?)</tr>", page)
+    assert first is not None
+    cells = re.findall(r"<td[^>]*>([^<]*)</td>", first.group(1))
+    assert cells[head.index("unknown on a budget")] == "2" and cells[head.index("unknown")] == "3"
 
 
 def test_solve_json_says_whether_an_unknown_stopped_on_a_budget(tmp_path, capsys) -> None:

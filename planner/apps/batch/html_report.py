@@ -100,16 +100,19 @@ def task_table(rows: Sequence[dict[str, Any]]) -> str:
 
 def summary_table(stats: Sequence[Any]) -> str:
     """Per tool and variant (``stats``: :func:`~tooltransfer.planner.apps.batch.report.summarize`'s
-    ``GroupStats``): counts, the rates with their 95% Wilson intervals, planning times."""
+    ``GroupStats``): counts, the rates with their 95% Wilson intervals (and how many unknowns stopped on
+    the search's or the certificate's budget: ``--retry unknown --budget K`` may decide those), planning
+    times."""
     head = ("tool", "variant", "n", "solved", "rate [%]", "95% CI [%]", "infeasible", "95% CI [%]", "unknown",
-            "95% CI [%]", "violated", "error", "timeout", "t50 [ms]", "t90 [ms]", "t99 [ms]")
+            "95% CI [%]", "unknown on a budget", "violated", "error", "timeout", "t50 [ms]", "t90 [ms]", "t99 [ms]")
     out = ['<table class="data" id="summary"><thead><tr>',
            "".join(f'<th class="{"text" if h in ("tool", "variant") else "num"}">{esc(h)}</th>' for h in head),
            "</tr></thead><tbody>"]
     for s in stats:
         vals = (s.tool, s.variant, s.n, s.solved, _pct(s.rate), f"{_pct(s.ci_low)}-{_pct(s.ci_high)}", s.infeasible,
                 f"{_pct(s.infeasible_ci_low)}-{_pct(s.infeasible_ci_high)}", s.unknown,
-                f"{_pct(s.unknown_ci_low)}-{_pct(s.unknown_ci_high)}", s.violated, s.error, s.timeout,
+                f"{_pct(s.unknown_ci_low)}-{_pct(s.unknown_ci_high)}", s.unknown_on_budget, s.violated, s.error,
+                s.timeout,
                 *(("-" if not math.isfinite(t) else f"{1e3 * t:.0f}") for t in (s.time_p50, s.time_p90, s.time_p99)))
         out.append("<tr>" + "".join(f'<td class="{"text" if i < 2 else "num"}">{esc(v)}</td>'
                                     for i, v in enumerate(vals)) + "</tr>")
