@@ -8,7 +8,8 @@ from __future__ import annotations
 import json
 import re
 
-from test_verdicts import ROOT, generated
+import numpy as np
+from test_verdicts import ROOT, _rules_of, generated
 
 from tooltransfer.planner.apps.batch.generate import generate_tasks
 from tooltransfer.planner.apps.batch.html_report import summary_table
@@ -17,6 +18,7 @@ from tooltransfer.planner.apps.batch.spec import load_batch
 from tooltransfer.planner.apps.batch.store import ResultStore
 from tooltransfer.planner.apps.cli import main
 from tooltransfer.planner.planning.solve import solve
+from tooltransfer.planner.planning.verdicts.certificate import certify
 from tooltransfer.planner.planning.verdicts.decide import budget_limited
 
 
@@ -26,6 +28,15 @@ def test_budget_limited_reads_the_guided_attempts_and_the_certificates_block_bud
     assert budget_limited({"guided_attempts": 4.0, "guided_attempts_on_budget": 1.0}, closed)
     assert budget_limited({}, "backward-reachable set of the target: cells of 10 mm: budget: 20000 block updates")
     assert not budget_limited({}, "")
+
+
+def test_a_certificate_out_of_block_updates_makes_the_verdict_budget_limited() -> None:
+    """The certificate's own words when its set runs out of block updates are what the flag reads."""
+    task = generated("execution_60.yaml", "exec60-00015")
+    _, rules = _rules_of(task)
+    cert, why = certify(rules, np.array(task.start), np.array(task.target), max_blocks=3)
+    assert cert is None and "budget" in why
+    assert budget_limited({}, why)
 
 
 def test_an_unknown_whose_searches_closed_their_space_is_not_budget_limited() -> None:

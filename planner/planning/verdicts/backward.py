@@ -43,6 +43,10 @@ WIDEST_CONE = 0.9 * math.pi
 ROUNDING = 1e-9
 
 
+#: How :attr:`BackwardResult.stopped` begins when the work ran out of block updates (a larger budget may
+#: still close the set: :func:`tooltransfer.planner.planning.verdicts.decide.budget_limited` looks for it).
+BUDGET_SPENT = "budget:"
+
 #: Precision grid [m] of the set operations (GEOS's snap-rounding overlay, robust where floating-point
 #: overlay may fail on nearly parallel edges).
 GRID = 1e-10
@@ -281,7 +285,7 @@ def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, ga
     heapq.heapify(heap)
     while heap:
         if done >= max_blocks:
-            return cells, f"budget: {max_blocks} block updates", done
+            return cells, f"{BUDGET_SPENT} {max_blocks} block updates", done
         _, v = heapq.heappop(heap)
         queued.discard(v)
         done += 1

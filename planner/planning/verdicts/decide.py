@@ -19,6 +19,7 @@ import numpy as np
 
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import Setting
+from tooltransfer.planner.planning.verdicts.backward import BUDGET_SPENT
 from tooltransfer.planner.planning.verdicts.certificate import FINE_BLOCKS, certify
 from tooltransfer.planner.planning.verdicts.rules import setting_rules
 
@@ -33,7 +34,7 @@ def budget_limited(metrics: dict[str, float], not_proved: str) -> bool:
     under its own rules and every grid's set reached the start: a larger ``budget`` is unlikely to decide
     the task (benchmarks/README.md: on the verdict benchmark, 4 times the budget decided 6 of 32 unknowns,
     16 times none more), a wider search or a tighter certificate might."""
-    return metrics.get("guided_attempts_on_budget", 0.0) > 0.0 or "budget:" in not_proved
+    return metrics.get("guided_attempts_on_budget", 0.0) > 0.0 or BUDGET_SPENT in not_proved
 
 
 def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.ndarray, *,
