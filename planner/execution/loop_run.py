@@ -24,7 +24,7 @@ from tooltransfer.planner.execution.health import Health, take_look
 from tooltransfer.planner.execution.loop_stop import LoopStop
 from tooltransfer.planner.execution.plant import Plant
 from tooltransfer.planner.planning.assemble import BACK_OFF_TURNS
-from tooltransfer.planner.planning.oe.correction import correction_references
+from tooltransfer.planner.planning.oe.correction import correction_references, straight_reference
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
@@ -247,7 +247,7 @@ class LoopRun:
         ``closest`` 2.2 mm from the target and reaches it (0.8 mm) with this correction."""
         if self.oe.guided is None:
             return None
-        way = correction_references(self.setting, self.options.friction_cone_fraction, o, self.target)[-1]
+        way = straight_reference(o, self.target)
         start = time.perf_counter()
         found = None
         attempts = self.oe.guided(way.t, way.ref, replan_setting(self.setting, o), self.target, self.replan_options())

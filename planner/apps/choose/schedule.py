@@ -447,14 +447,12 @@ def _timeout(w: Work) -> float | None:
     """How long [s] to wait for a job to end before looking again: until the grace after the first solved
     plan is over (the executions may start), or :data:`POLL` where a candidate entering its slower
     stages would start them or stop it; None: until a job ends."""
-    polling = w.slow is not None and w.quick() > 0 and (w.deadline is not None or not w.executions_open())
-    if w.deadline is not None:
-        return POLL if polling else None
-    waits = [POLL] if polling else []
+    closed = w.deadline is None and not w.executions_open()  # the executions may yet start
+    waits = [POLL] if w.slow is not None and w.quick() > 0 and (w.deadline is not None or closed) else []
     start = w.executions_from()
-    if start is not None and not w.executions_open():
+    if closed and start is not None:
         waits.append(max(0.0, start - time.perf_counter()))
-    return min(waits) if waits else None
+    return min(waits, default=None)
 
 
 def _next_jobs(w: Work, pools: Pools, to_plan: list[int],

@@ -73,6 +73,13 @@ def correction_references(setting: Setting, friction_cone_fraction: float, o: ND
         ref = np.column_stack([np.interp(u, s, corners[:, j]) for j in range(2)])
         switches = (float(t[-1] * s[1] / s[-1]),) if len(faces) == 2 else ()
         out.append(CorrectionReference(faces, t, ref, switches))
-    t = np.linspace(0.0, max(1.0, d / 0.01), 30)
-    out.append(CorrectionReference((), t, o + np.linspace(0.0, 1.0, t.size)[:, None] * r, ()))
+    out.append(straight_reference(o, target))
     return out
+
+
+def straight_reference(o: NDArray[np.float64], target: NDArray[np.float64]) -> CorrectionReference:
+    """The straight way from the object at ``o`` (2,) [m] to ``target`` (2,) [m] with no faces, the last
+    of :func:`correction_references` (30 samples, 1 s per cm, at least 1 s)."""
+    r = target - o
+    t = np.linspace(0.0, max(1.0, float(np.hypot(*r)) / 0.01), 30)
+    return CorrectionReference((), t, o + np.linspace(0.0, 1.0, t.size)[:, None] * r, ())
