@@ -63,13 +63,13 @@ def derivation_report() -> dict[str, Any]:
     return {"times": times, "matches": matches}
 
 
-def _solve_and_run(job: tuple[str, str, str, dict[str, Any], bool]) -> Row:
+def _solve_and_run(job: tuple[str, str, str, dict[str, Any], bool, Path]) -> Row:
     """Plan one task in one mode and execute a solved plan; the row of its measures."""
     from tooltransfer.planner.planning.solve import solve
     from tooltransfer.problems.task import task_from_dict
     from tooltransfer.tools import load_tool, tool_to_dict
 
-    task_id, tool, mode, data, closed = job
+    task_id, tool, mode, data, closed, batch = job
     data = dict(data)
     if mode == "derived" and tool in HAND:
         inline = tool_to_dict(load_tool(tool))
@@ -79,7 +79,7 @@ def _solve_and_run(job: tuple[str, str, str, dict[str, Any], bool]) -> Row:
                 "closed_loop_error": None, "plan_wall": None, "faces_used": None}
     t0 = time.perf_counter()
     try:
-        plan = solve(task_from_dict(data, str(BATCH)), str(BATCH))
+        plan = solve(task_from_dict(data, str(batch)), str(batch))
     except Exception as exc:
         row.update(status=f"exception: {type(exc).__name__}: {exc}", plan_wall=time.perf_counter() - t0)
         return row
@@ -199,6 +199,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--closed-loop", action="store_true", help="also execute closed loop")
     ap.add_argument("--tools", default=None, help="only the tasks of these tools (comma-separated)")
     ap.add_argument("--json", type=Path, default=None, help="write every row here")
+    ap.add_argument("--batch", type=Path, default=BATCH,
+                    help="batch file of the tasks (default problems/batch/derive_60.yaml; another seed: held out)")
     args = ap.parse_args(argv)
     from tooltransfer.planner.apps.batch.generate import generate_tasks
     from tooltransfer.planner.apps.batch.spec import load_batch
@@ -206,10 +208,10 @@ def main(argv: list[str] | None = None) -> None:
     started = time.perf_counter()
     der = derivation_report()
     _init()
-    tasks = generate_tasks(load_batch(BATCH), BATCH)[: args.count]
+    tasks = generate_tasks(load_batch(args.batch), args.batch)[: args.count]
     if args.tools:
         tasks = [g for g in tasks if g.tool in args.tools.split(",")]
-    jobs = [(g.task_id, g.tool, mode, g.data, args.closed_loop) for g in tasks
+    jobs = [(g.task_id, g.tool, mode, g.data, args.closed_loop, args.batch) for g in tasks
             for mode in (("hand", "derived") if g.tool in HAND else ("derived",))]
     rows: list[Row] = []
     with ProcessPoolExecutor(args.workers, initializer=_init) as pool:
