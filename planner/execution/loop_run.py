@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from tooltransfer.planner.execution.envelope import ENVELOPE_MARGIN, SafetyEnvelope
 from tooltransfer.planner.execution.guarded_plant import GuardedPlant
 from tooltransfer.planner.execution.health import Health, take_look
-from tooltransfer.planner.execution.loop_stop import LoopStop
+from tooltransfer.planner.execution.loop_stop import LoopStop, NoToolPath
 from tooltransfer.planner.execution.plant import Plant
 from tooltransfer.planner.planning.assemble import BACK_OFF_TURNS
 from tooltransfer.planner.planning.oe.correction import correction_references, straight_reference
@@ -189,6 +189,16 @@ class LoopRun:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")
         return pp
 
+    def change_missing(self, pp: PushPlan) -> str:
+        """Why a change of face of ``pp`` has no tool path at the object where the plan has it (the loop's
+        own switch planner; "" where each has one): :meth:`leave` would stop the run there."""
+        for a, b in zip(pp.pushes[:-1], pp.pushes[1:], strict=True):
+            if a.face != b.face:
+                sw = self.switch(pp.object_xy[a.samples[-1]], a.face, a.tool_pose[-1], b.face, b.tool_pose[0])
+                if sw.status != "solved":
+                    return f"no switch {a.face} -> {b.face} in the correction: {sw.reason}"
+        return ""
+
     def changes_keep_margin(self, pp: PushPlan) -> bool:
         """Whether every change of face and re-contact of ``pp`` has a tool path (the loop's own switch
         and re-contact planners, at the object where the plan has it) that keeps the safety envelope's
@@ -230,9 +240,26 @@ class LoopRun:
         for way in correction_references(self.setting, self.options.friction_cone_fraction, o, self.target):
             pp = self.replan(way.t, way.ref, way.faces, way.switches, o)
             if pp.status == "solved":
-                return pp
+                missing = self.first_change_missing(pp, o) or self.change_missing(pp)
+                if not missing:
+                    return pp
+                pp = replace(pp, status="infeasible", reason=missing)
         assert pp is not None  # the straight way is always among the references
         return pp
+
+    def first_change_missing(self, pp: PushPlan, o: NDArray[np.float64]) -> str:
+        """Why the loop cannot bring ``pp``'s first face to its first contact pose from the face in
+        contact ("" where it can): a change of face needs a tool path there (the loop's switch planner,
+        the object observed at ``o`` (2,) [m], from the tool's reported pose), which :meth:`leave` would
+        otherwise find missing only once the correction is in force, ending the run ``failed`` though the
+        plan in force could go on (measured: ``derh60-00045``, derived i_shape faces, open loop 0.04 mm,
+        whose closed loop staged its last 19 mm on a face the Omni could not reach there). A first push of
+        the face in contact needs no change."""
+        if self.face is None or not pp.pushes or pp.pushes[0].face == self.face:
+            return ""
+        first = pp.pushes[0]
+        sw = self.switch(o, self.face, self.plant.tool_pose(), first.face, first.tool_pose[0])
+        return "" if sw.status == "solved" else f"no switch {self.face} -> {first.face} from here: {sw.reason}"
 
     def guided_correction(self, o: NDArray[np.float64]) -> PushPlan | None:
         """The first plan of the variant's guided search (the planner's own fallback:
@@ -253,7 +280,8 @@ class LoopRun:
         attempts = self.oe.guided(way.t, way.ref, replan_setting(self.setting, o), self.target, self.replan_options())
         for attempt in itertools.islice(attempts, CORRECTION_ATTEMPTS):
             attempt = self.clear_of_obstacles(attempt, every_push=True)
-            if attempt.status == "solved" and attempt.pushes and self.changes_keep_margin(attempt):
+            if (attempt.status == "solved" and attempt.pushes and self.changes_keep_margin(attempt)
+                    and not self.first_change_missing(attempt, o)):
                 found = attempt
                 self.log.append(f"correction by the guided search from {np.round(o, 4).tolist()} m: "
                                 f"{' -> '.join(attempt.faces)}")
@@ -281,7 +309,7 @@ class LoopRun:
             sw = planner(o, self.face, pose, face, start)
             if sw.status != "solved":
                 what = f"switch {self.face} -> {face}" if change else f"re-contact of {face}"
-                raise LoopStop(f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
+                raise NoToolPath(f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
             xy = sw.xy
         # the first pose clear of the object (checked in turn, not all of them: the rest are not used)
         j = next((j for j in range(len(xy)) if swept_clearance(self.tool, self.platform, xy[j:j + 1], o,

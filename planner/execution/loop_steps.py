@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tooltransfer.planner.execution.loop_run import LoopRun
-from tooltransfer.planner.execution.loop_stop import UnsafeCommand
+from tooltransfer.planner.execution.loop_stop import NoToolPath, UnsafeCommand
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
 from tooltransfer.planner.planning.oe.replan import PlanReference
 
@@ -140,7 +140,7 @@ def next_chunk(loop: LoopRun, ref: PlanReference, f: InForce, pace: Pace) -> boo
     lead = ref.lead_ins[f.i] if f.plan is ref.plan and f.k == 0 else None
     try:
         f.k = loop.push(p, f.plan, o, f.k, length, lead)
-    except UnsafeCommand as refused:
+    except (UnsafeCommand, NoToolPath) as refused:
         return _instead(loop, f, refused, ref.end)
     loop.errors.append(loop.true_error())
     if f.k >= len(p.samples) - 1:
@@ -148,10 +148,11 @@ def next_chunk(loop: LoopRun, ref: PlanReference, f: InForce, pace: Pace) -> boo
     return False
 
 
-def _instead(loop: LoopRun, f: InForce, refused: UnsafeCommand, base: float) -> bool:
-    """The envelope refused a command of the next chunk (nothing was sent): a correction from the
-    object seen now is put in force from push-time ``base`` [s] (its contacts and route differ),
-    at most :data:`MAX_REFUSALS` times a run; else the refusal ends the run."""
+def _instead(loop: LoopRun, f: InForce, refused: UnsafeCommand | NoToolPath, base: float) -> bool:
+    """The envelope refused a command of the next chunk, or no switch or re-contact has a tool path to
+    its contact (nothing was sent toward it): a correction from the object seen now is put in force from
+    push-time ``base`` [s] (its contacts and route differ), at most :data:`MAX_REFUSALS` times a run; else
+    the refusal ends the run."""
     loop.refusals += 1
     if loop.refusals > MAX_REFUSALS:
         raise refused

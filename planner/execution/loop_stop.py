@@ -45,6 +45,12 @@ class UnsafeCommand(LoopStop):
     status = "unsafe"
 
 
+class NoToolPath(LoopStop):
+    """No switch or re-contact has a tool path from the contact the tool just left to the next push's
+    contact pose, the object where it is observed (nothing was commanded toward it). The loop corrects
+    from there instead, as after a refused command; the run ends ``failed`` only when that fails too."""
+
+
 class SensorFault(LoopStop):
     """The camera or the encoders give values the loop cannot trust."""
 
