@@ -12,44 +12,17 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from test_closed_loop import _loop_on  # the transfer plan's loop state, a quasi-static plant, nothing executed
 
-from tooltransfer.planner.apps.cli import main
 from tooltransfer.planner.execution.loop_stop import NoToolPath
-from tooltransfer.planner.planning.plan import read_plan
-
-TRANSFER = Path(__file__).resolve().parents[1] / "problems" / "paper" / "transfer_tool2.yaml"
 
 
-@pytest.fixture(scope="module")
-def plan_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("paths") / "plan.json"
-    assert main(["solve", str(TRANSFER), "-o", str(out), "--json"]) == 0
-    return out
-
-
-def _loop_on(plan_file: Path):
-    """A closed-loop run's state on the transfer plan (slope: faces ``left`` and ``inclined``), a
-    quasi-static plant with the plan's mechanics, nothing executed."""
-    from tooltransfer.planner.execution.closed_loop import _Loop
-    from tooltransfer.planner.execution.plant import ModelPlant
-    from tooltransfer.planner.planning.setting import task_mechanics, task_skills
-    from tooltransfer.problems.task import task_from_dict, task_platform, task_tool
-
-    plan = read_plan(plan_file)
-    task = task_from_dict(plan.task)
-    tool = task_tool(task)
-    m = task_mechanics(task, task_skills(task))
-    plant = ModelPlant(tool, task.object.radius, m, task.start, plan.tool_pose[0],
-                       platform=task_platform(task, tool), camera_noise=0.0015, seed=1)
-    return plan, _Loop(plan, task, plant, 10, 0.001)
-
-
-def test_a_push_whose_contact_has_no_tool_path_is_corrected_from_where_the_object_is(plan_file: Path) -> None:
+def test_a_push_whose_contact_has_no_tool_path_is_corrected_from_where_the_object_is(transfer_plan_file: Path) -> None:
     from tooltransfer.planner.execution.closed_loop import _InForce, _next_chunk, _Pace
     from tooltransfer.planner.execution.loop_steps import MAX_REFUSALS
     from tooltransfer.planner.planning.oe.replan import PlanReference
 
-    plan, loop = _loop_on(plan_file)
+    plan, loop = _loop_on(transfer_plan_file)
     ref = PlanReference.of(plan)
     pace = _Pace(0.001, 0.001, 0.015, 0.6, 4)
     here = np.asarray(plan.object["start"], dtype=float)
@@ -75,8 +48,8 @@ def test_a_push_whose_contact_has_no_tool_path_is_corrected_from_where_the_objec
         _next_chunk(loop, ref, f, pace)
 
 
-def test_a_correction_whose_change_of_face_has_no_tool_path_is_not_taken(plan_file: Path) -> None:
-    _, loop = _loop_on(plan_file)
+def test_a_correction_whose_change_of_face_has_no_tool_path_is_not_taken(transfer_plan_file: Path) -> None:
+    _, loop = _loop_on(transfer_plan_file)
     target = loop.target
     o = target + np.array([0.012, -0.006])  # short of the target, off to the side
     loop.face = "left"

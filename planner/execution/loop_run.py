@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import itertools
 import time
+from collections.abc import Iterator
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -32,6 +33,7 @@ from tooltransfer.planner.planning.oe.replan import QP_REPLAN_SIZES, refuse_tool
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.ss.arch_variant import swept_clearance
+from tooltransfer.planner.planning.ss.result import SwitchPath
 from tooltransfer.planner.planning.tool_clearance import tool_obstacle_clearance
 from tooltransfer.planner.planning.variant_registry import needs_ss_skill, oe_variant, switch_planner
 from tooltransfer.problems.task import Task
@@ -189,29 +191,29 @@ class LoopRun:
             return replace(pp, status="infeasible", reason="the re-plan has no push left")
         return pp
 
+    def change_paths(self, pp: PushPlan, recontacts: bool) -> Iterator[tuple[Push, Push, SwitchPath]]:
+        """Each change of face of ``pp`` (with ``recontacts``, each re-contact too) and the loop's own tool
+        path for it (its switch or re-contact planner, at the object where the plan has it), planned one at
+        a time as the caller asks (it may stop at the first it refuses)."""
+        for a, b in zip(pp.pushes[:-1], pp.pushes[1:], strict=True):
+            if a.face != b.face or recontacts:
+                planner = self.switch if a.face != b.face else self.recontact
+                yield a, b, planner(pp.object_xy[a.samples[-1]], a.face, a.tool_pose[-1], b.face, b.tool_pose[0])
+
     def change_missing(self, pp: PushPlan) -> str:
         """Why a change of face of ``pp`` has no tool path at the object where the plan has it (the loop's
         own switch planner; "" where each has one): :meth:`leave` would stop the run there."""
-        for a, b in zip(pp.pushes[:-1], pp.pushes[1:], strict=True):
-            if a.face != b.face:
-                sw = self.switch(pp.object_xy[a.samples[-1]], a.face, a.tool_pose[-1], b.face, b.tool_pose[0])
-                if sw.status != "solved":
-                    return f"no switch {a.face} -> {b.face} in the correction: {sw.reason}"
-        return ""
+        return next((f"no switch {a.face} -> {b.face} in the correction: {sw.reason}"
+                     for a, b, sw in self.change_paths(pp, recontacts=False) if sw.status != "solved"), "")
 
     def changes_keep_margin(self, pp: PushPlan) -> bool:
-        """Whether every change of face and re-contact of ``pp`` has a tool path (the loop's own switch
-        and re-contact planners, at the object where the plan has it) that keeps the safety envelope's
-        margin from the obstacles: a correction whose switch the envelope would refuse is not taken
-        (measured: ``choose100-00005``'s l_shape loop ended ``unsafe`` 10.9 mm from the target on one,
-        where it ends ``closest`` 3.6 mm without it)."""
+        """Whether every change of face and re-contact of ``pp`` has a tool path (:meth:`change_paths`) that
+        keeps the safety envelope's margin from the obstacles: a correction whose switch the envelope would
+        refuse is not taken (measured: ``choose100-00005``'s l_shape loop ended ``unsafe`` 10.9 mm from the
+        target on one, where it ends ``closest`` 3.6 mm without it)."""
         margin = self.plant.envelope.margin
-        for a, b in zip(pp.pushes[:-1], pp.pushes[1:], strict=True):
-            planner = self.switch if a.face != b.face else self.recontact
-            sw = planner(pp.object_xy[a.samples[-1]], a.face, a.tool_pose[-1], b.face, b.tool_pose[0])
-            if sw.status != "solved" or (self.setting.obstacles and not sw.obstacle_clearance >= margin):
-                return False
-        return True
+        return all(sw.status == "solved" and not (self.setting.obstacles and not sw.obstacle_clearance >= margin)
+                   for _, _, sw in self.change_paths(pp, recontacts=True))
 
     def clear_of_obstacles(self, pp: PushPlan, every_push: bool = False) -> PushPlan:
         """``pp``, or refused when the tool outline overlaps an obstacle along what the loop executes
