@@ -3,7 +3,10 @@ brought to from where the object is observed (no switch or re-contact has a path
 from there instead of ending the run, and a correction is taken only where its changes of face have a
 tool path. Measured on a held-out batch of derived faces: ``derh60-00045``'s closed loop had ended
 ``failed`` 6.2 mm from the target (open loop 0.04 mm) on a staged correction's switch to a face the Omni
-could not reach there; it reaches the target (0.96 mm) with these (benchmarks/README.md)."""
+could not reach there; it reaches the target (0.96 mm) with these (benchmarks/README.md). At the edge of
+the Omni's reach the loop backs off a shorter way where the envelope refuses the usual one, and it plans
+a change of face at the look before its back-off where the look after has no path (``derh60-00034`` and
+``derh60-00020`` of that batch)."""
 
 from __future__ import annotations
 
@@ -15,6 +18,7 @@ import pytest
 from test_closed_loop import _loop_on  # the transfer plan's loop state, a quasi-static plant, nothing executed
 
 from tooltransfer.planner.execution.loop_stop import NoToolPath
+from tooltransfer.planner.planning.plan import Plan
 
 
 def test_a_push_whose_contact_has_no_tool_path_is_corrected_from_where_the_object_is(transfer_plan_file: Path) -> None:
@@ -68,3 +72,78 @@ def test_a_correction_whose_change_of_face_has_no_tool_path_is_not_taken(transfe
     faces = [p.face for p in pp.pushes]
     assert pp.status != "solved" or set(faces) == {"left"}  # only a correction that keeps the face
     assert pp.status == "solved" or pp.reason  # else it says why
+
+
+def _at(plan: Plan, t: float) -> int:
+    return int(np.searchsorted(plan.t, t))
+
+
+def test_the_back_off_is_shorter_where_the_omnis_reach_leaves_no_room_for_the_usual_one(
+        transfer_plan_file: Path) -> None:
+    from tooltransfer.planner.execution.loop_run import BACK_OFF, BACK_OFF_LENGTHS
+    from tooltransfer.planner.planning.assemble import BACK_OFF_TURNS
+    from tooltransfer.tools.omni.ik import joint_path
+    from tooltransfer.tools.pose import rotation
+
+    plan, loop = _loop_on(transfer_plan_file)
+    loop.face = "inclined"
+    x0 = np.asarray(plan.tool_pose[_at(plan, plan.pushes[0].t_start) + 2, :2], dtype=float)
+
+    def pose_at(x: np.ndarray) -> np.ndarray:
+        return np.array([*x, joint_path(loop.platform, x[None]).heading[0]])
+
+    def refused(x: np.ndarray) -> bool:
+        return bool(joint_path(loop.platform, x[None]).refused[0])
+
+    back = -(rotation(pose_at(x0)[2]) @ loop.tool.face("inclined").normal)  # the back-off's way
+    lo, hi = 0.0, 0.5  # where the reach ends along it (bisection)
+    assert not refused(x0) and refused(x0 + hi * back)
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if refused(x0 + mid * back) else (mid, hi)
+    pose = pose_at(x0 + (lo - 0.0007) * back)  # 0.7 mm inside the reach
+    loop.plant._plant.pose = pose.copy()  # the tool in contact there (a quasi-static plant)
+    normal = rotation(pose[2]) @ loop.tool.face("inclined").normal
+
+    def lets_through(length: float, turn: float) -> bool:
+        xy = np.vstack([pose[:2], pose[:2] - length * (rotation(turn) @ normal)])
+        return loop.plant.envelope.violation(pose, loop.commanded(xy)) is None
+
+    assert BACK_OFF_LENGTHS[0] == BACK_OFF and len(BACK_OFF_LENGTHS) > 1
+    assert not any(lets_through(BACK_OFF, turn) for turn in BACK_OFF_TURNS)  # no room for the usual one
+    shorter = BACK_OFF_LENGTHS[1]
+    assert any(lets_through(shorter, turn) for turn in BACK_OFF_TURNS)
+    to = loop.back_off(pose)
+    assert np.hypot(*(to - pose[:2])) == pytest.approx(shorter, abs=1e-12)
+    assert float(np.dot(to - pose[:2], normal)) < -0.7 * shorter  # away from the object
+    loop.move(np.vstack([pose[:2], to]))  # and the envelope lets it through
+    assert np.allclose(loop.plant.tool_pose()[:2], to, atol=1e-9)
+
+
+def test_a_change_of_face_is_planned_at_the_look_before_the_back_off_where_the_look_after_has_none(
+        transfer_plan_file: Path) -> None:
+    plan, loop = _loop_on(transfer_plan_file)
+    switch = next(s for s in plan.switches if s.faces == ("inclined", "left"))
+    i, j = _at(plan, switch.t_start), _at(plan, switch.t_end)
+    pose, start, seen = plan.tool_pose[i].copy(), plan.tool_pose[j].copy(), plan.object_xy[i].copy()
+    after = seen + np.array([8e-4, 0.0])  # the next look, a camera error away
+    loop.plant._plant.pose, loop.plant._plant.obj = pose.copy(), seen.copy()
+    loop.face, loop.observe = "inclined", lambda: after.copy()
+    real, asked = loop.switch, []
+
+    def refused_after(o, face_a, pose_a, face_b, pose_b):
+        asked.append(np.asarray(o).copy())
+        if np.allclose(o, after):
+            return SimpleNamespace(status="infeasible", reason="(test) end contact pose unreachable",
+                                   xy=np.zeros((0, 2)), obstacle_clearance=float("inf"))
+        return real(o, face_a, pose_a, face_b, pose_b)
+
+    loop.switch = refused_after
+    loop.leave(seen, pose, "left", start, change=True)
+    assert [a.tolist() for a in asked] == [after.tolist(), seen.tolist()]  # the look after, then the one before
+    assert loop.n_switches == 1 and np.allclose(loop.plant.tool_pose()[:2], start[:2], atol=1e-6)
+    asked.clear()
+    loop.face, loop.plant._plant.pose = "inclined", pose.copy()
+    with pytest.raises(NoToolPath, match="no switch inclined -> left"):  # neither look has a path
+        loop.leave(after, pose, "left", start, change=True)
+    assert len(asked) == 1  # the same look twice is asked once

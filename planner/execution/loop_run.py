@@ -49,6 +49,11 @@ if TYPE_CHECKING:
 SAME_POSE = 3e-4
 #: How far [m] the tool first backs off along the contact's normal before a switch or a re-contact.
 BACK_OFF = 0.002
+#: The back-offs' lengths [m] tried in turn (each with every turn) where the envelope refuses the longer:
+#: at the edge of the Omni's reach a contact may leave no room for :data:`BACK_OFF` in any direction
+#: along the normal (measured: ``derh60-00034``, derived l_shape faces, whose loop ended ``unsafe`` with
+#: each correction's first back-off refused there, where 1 mm is let through).
+BACK_OFF_LENGTHS = (BACK_OFF, 0.5 * BACK_OFF)
 #: How far [m] the tool backs off the object along the contact's normal when a fault ends the run
 #: (shorter ones are tried when the envelope refuses it).
 RETREAT = (0.01, 0.005, 0.002)
@@ -211,9 +216,12 @@ class LoopRun:
         keeps the safety envelope's margin from the obstacles: a correction whose switch the envelope would
         refuse is not taken (measured: ``choose100-00005``'s l_shape loop ended ``unsafe`` 10.9 mm from the
         target on one, where it ends ``closest`` 3.6 mm without it)."""
+        return all(self.keeps_margin(sw) for _, _, sw in self.change_paths(pp, recontacts=True))
+
+    def keeps_margin(self, sw: SwitchPath) -> bool:
+        """Whether ``sw`` is a tool path (solved) that keeps the safety envelope's margin from the obstacles."""
         margin = self.plant.envelope.margin
-        return all(sw.status == "solved" and not (self.setting.obstacles and not sw.obstacle_clearance >= margin)
-                   for _, _, sw in self.change_paths(pp, recontacts=True))
+        return sw.status == "solved" and not (self.setting.obstacles and not sw.obstacle_clearance >= margin)
 
     def clear_of_obstacles(self, pp: PushPlan, every_push: bool = False) -> PushPlan:
         """``pp``, or refused when the tool outline overlaps an obstacle along what the loop executes
@@ -299,16 +307,24 @@ class LoopRun:
         starts a camera error away, and a tool that moves sideways while touching drags the object
         along), then the switch (``change``) or the re-contact planned at the object observed again,
         joined where that path is clear of the object; with ``lead_in`` (the plan's own path, for an
-        object where the plan puts it) that path instead."""
+        object where the plan puts it) that path instead. Where the look after the back-off has no path,
+        the path planned at ``o``, the look before it, is taken if it keeps the envelope's margin from the
+        obstacles: the object rests between the two looks, which differ by the camera's noise (measured on
+        ``derh60-00020``, derived finger faces at the edge of joint 3: its loop ended ``failed`` 11.5 mm from
+        the target on a switch whose contact pose one look put out of the joints and the other did not, and
+        ends ``reached`` 1.1 mm with it). :class:`NoToolPath` where neither has one."""
         assert self.face is not None
         back = self.back_off(pose)
         self.move(np.vstack([pose[:2], back]))
-        o = self.observe()
+        seen, o = o, self.observe()
         if lead_in is not None and len(lead_in) >= 2:
             xy = lead_in
         else:
             planner = self.switch if change else self.recontact
             sw = planner(o, self.face, pose, face, start)
+            if sw.status != "solved" and np.any(seen != o):
+                before = planner(seen, self.face, pose, face, start)
+                sw = before if self.keeps_margin(before) else sw
             if sw.status != "solved":
                 what = f"switch {self.face} -> {face}" if change else f"re-contact of {face}"
                 raise NoToolPath(f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
@@ -323,19 +339,20 @@ class LoopRun:
             self.n_recontacts += 1
 
     def back_off(self, pose: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Where (2,) [m] the tool backs off to from the contact at ``pose`` (3,): :data:`BACK_OFF` along the
-        contact's normal, turned by the first of
-        :data:`~tooltransfer.planner.planning.assemble.BACK_OFF_TURNS` whose move the safety envelope
+        """Where (2,) [m] the tool backs off to from the contact at ``pose`` (3,): the first of
+        :data:`BACK_OFF_LENGTHS` along the contact's normal, turned by the first of
+        :data:`~tooltransfer.planner.planning.assemble.BACK_OFF_TURNS`, whose move the safety envelope
         lets through as :meth:`move` commands it (from the reported pose, against the arm's tracking
-        offset); straight back when none does (the envelope then refuses it, as before)."""
+        offset); :data:`BACK_OFF` straight back when none does (the envelope then refuses it)."""
         assert self.face is not None
         normal = rotation(float(pose[2])) @ self.tool.face(self.face).normal
         bias = np.zeros(2) if self.health.bias is None else self.health.bias
         here = self.plant.tool_pose() - np.append(bias, 0.0)
-        for turn in BACK_OFF_TURNS:
-            back = pose[:2] - BACK_OFF * (rotation(turn) @ normal)
-            if self.plant.envelope.violation(here, self.commanded(np.vstack([pose[:2], back]))) is None:
-                return back
+        for distance in BACK_OFF_LENGTHS:
+            for turn in BACK_OFF_TURNS:
+                back = pose[:2] - distance * (rotation(turn) @ normal)
+                if self.plant.envelope.violation(here, self.commanded(np.vstack([pose[:2], back]))) is None:
+                    return back
         return pose[:2] - BACK_OFF * normal
 
     def push(self, p: Push, pp: PushPlan, o: NDArray[np.float64], k0: int, length: float,
