@@ -4,19 +4,36 @@ is the worst defect a verdict can have, so each one is checked by code the plann
 Run after the verdict benchmark (``make bench-verdicts`` or ``python benchmarks/bench_verdicts.py --json
 RESULTS``)::
 
-    python benchmarks/check_certificates.py RESULTS.json [--budget 15000] [--workers 2]
+    python benchmarks/check_certificates.py RESULTS.json [--budget 15000] [--workers 2] [--dense] [--unknowns]
 
 For every task the run called ``infeasible`` (whatever the certificate's kind) the task is generated
 again from its batch file and the test suite's own lattice search
 (``tests/test_verdicts.py::lattice_search``: straight pushes of 3 mm in five directions across each
-face's whole friction cone cut by its tool-file cone, from every tool yaw at which the Omni holds the
-face with the contact anywhere on its range, the puck kept its clearance from the obstacles; breadth
-first, one visit per 1.5 mm cell) looks for the target. It is looser than the planner's rules where
-it matters for soundness (no tool body, no contact rolling, no switches: any face at any node) and
-coarser where it cannot be exact (its steps and cells), so it proves nothing either way; what it
-shows is how close a search that ignores half the rules comes. The report lists each task's closest
-approach [mm] and flags those within ``--flag`` (3 mm, the test suite's threshold); the exit code is 1
-when any is flagged. Single-threaded BLAS; CPU seconds per task are printed.
+face's whole friction cone cut by its tool-file cone, the cone's edges first, from the tool yaws at
+which the Omni holds the face with the contact at places along its range and the tool outline clear of
+the obstacles, to a position the face still holds, the puck kept its clearance from the obstacles;
+breadth first, one visit per 1.5 mm cell) pushes the puck from the start. It is looser than the
+planner's rules (no contact rolling, no tool sweep between its ends, no switches: any face at any node)
+and coarser where it cannot be exact (its steps and cells), so it proves nothing either way. Two things
+are reported per task:
+
+* the certificate's own test: the certificate is made again, and every position the search reaches is
+  tried against it: for ``backward_reachable``, how deep it lies inside the certificate's set (the set
+  of positions a plan to the target could start from: a position the search reaches there means a push
+  entered a set the certificate says no push enters; flagged beyond :data:`DEPTH_TOL`); for
+  ``polar_invariant``, how far below the start's value the certificate's quantity is there (a quantity
+  no push decreases; flagged where it is as low as the target's goal disc: a straight step along a
+  cone's edge lowers it by a little, about the square of the step, as the cone turns with the heading
+  over the step, and many such steps add up to a milliradian or so). For the kinds without a set (the
+  start or the target where no face holds the puck) the search is flagged where it comes within
+  ``--flag`` of the target;
+* the closest approach to the target [mm], and how many come within ``--flag`` (3 mm, the test suite's
+  threshold): a sound certificate whose set or quantity passes close to the target may be approached
+  this close, so this number is a description, not a test, where the certificate has its own.
+
+The exit code is 1 when any certificate is flagged. Single-threaded BLAS; CPU seconds per task are
+printed. ``--dense`` searches denser (nine directions, every one of 13 contact places, 0.75 mm cells);
+give it a larger ``--budget``.
 
 With ``--unknowns`` the same search runs on the tasks the run left ``unknown`` instead, and the report
 counts how many of them it comes within ``--flag`` of: what the unknowns are made of. Reached by a
@@ -47,18 +64,75 @@ sys.path[:0] = [str(ROOT / "benchmarks"), str(ROOT / "tests")]
 from bench_execution import _task  # noqa: E402
 from bench_verdicts import make_verdict_jobs  # noqa: E402
 
+#: The dense search's settings (``--dense``): nine directions in each cone, every one of 13 contact
+#: places, cells of 0.75 mm (the default search: five directions, every third of 7 places, 1.5 mm).
+DENSE = {"directions": 9, "contacts": 13, "yaw_stride": 1, "cell": 0.00075}
+#: How deep [m] a position the search reaches may lie inside a ``backward_reachable`` certificate's set
+#: before it is flagged: a straight step of 3 mm along a cone's edge leaves the cone by the heading's turn
+#: over the step (under 1 degree), so it may cut a set's boundary by a few hundredths of a millimetre.
+DEPTH_TOL = 5e-4
 
-def _closest(args: tuple[Any, int]) -> tuple[str, float, float]:
-    """``(task_id, closest approach [m], CPU [s])`` of the lattice search on one job's task."""
+
+def _closest(args: tuple[Any, int, bool]) -> tuple[str, float, float, dict[str, Any]]:
+    """``(task_id, closest approach [m], CPU [s], the certificate's own test)`` of the lattice search
+    (``dense``: :data:`DENSE`; steps whose end the face still holds) on one job's task. The test: the
+    task's certificate made again (as the verdict run made it) and every position the search reaches
+    tried against it: ``depth`` [m], the deepest inside a ``backward_reachable`` set; ``v_low`` [rad],
+    the least value of a ``polar_invariant``'s quantity less its value at the start (both None for the
+    other kinds, or where no certificate is made)."""
     import numpy as np
+    import shapely
     from test_verdicts import _rules_of, lattice_search
 
-    job, budget = args
+    from tooltransfer.planner.planning.verdicts.certificate import certify
+    from tooltransfer.planner.planning.verdicts.spiral import Spiral, _values
+
+    job, budget, dense = args
     task = _task(job)
-    setting, _ = _rules_of(task)
+    setting, rules = _rules_of(task)
+    start, target = np.array(task.start), np.array(task.target)
     cpu = time.process_time()
-    d = lattice_search(setting, np.array(task.start), np.array(task.target), budget=budget)
-    return job.task_id, d, time.process_time() - cpu
+    visited: list[Any] = []
+    d = lattice_search(setting, start, target, budget=budget, ends_held=True, visited=visited,
+                       **(DENSE if dense else {}))
+    cpu = time.process_time() - cpu
+    cert, _ = certify(rules, start, target)
+    test: dict[str, Any] = {"kind": None if cert is None else cert.kind, "depth": None, "v_low": None,
+                            "v_goal": None}
+    pts = np.asarray(visited)
+    if cert is not None and cert.kind == "backward_reachable" and cert.region is not None:
+        at = shapely.points(pts)
+        inside = shapely.contains(cert.region, at)
+        test["depth"] = float(shapely.distance(cert.region.boundary, at[inside]).max()) if inside.any() else 0.0
+    elif cert is not None and cert.kind == "polar_invariant":
+        sp = Spiral.from_dict(cert.extra["invariant"])
+        test["v_low"] = min(_values(rules, sp, p, p)[0] for p in pts) - sp.v_start
+        test["v_goal"] = sp.v_goal - sp.v_start
+    return job.task_id, d, cpu, test
+
+
+def _own(test: dict[str, Any]) -> str:
+    """The certificate's own test, printed."""
+    if test["depth"] is not None:
+        return f"; deepest inside its set {test['depth'] * 1e3:.2f} mm"
+    if test["v_low"] is not None:
+        return (f"; its quantity at least {test['v_low'] * 1e3:+.2f} mrad from the start's value "
+                f"(the target's at most {test['v_goal'] * 1e3:+.2f})")
+    return ""
+
+
+def _verdict_of(test: dict[str, Any], kind: str | None, d: float, flag: float) -> str:
+    """"" where the search is consistent with the certificate, else what is wrong (module docstring)."""
+    if test["kind"] != kind:
+        return f"the certificate is not made again ({test['kind']} instead of {kind})"
+    if test["depth"] is not None and test["depth"] > DEPTH_TOL:
+        return f"the search reaches {test['depth'] * 1e3:.2f} mm inside the certificate's set"
+    if test["v_low"] is not None and test["v_low"] <= test["v_goal"]:
+        return (f"the search goes {-test['v_low'] * 1e3:.2f} mrad below the start's value of the invariant, "
+                "as low as the target's")
+    if test["depth"] is None and test["v_low"] is None and d <= flag:
+        return f"the search comes within {flag * 1e3:g} mm of the target"
+    return ""
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -67,6 +141,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--budget", type=int, default=15000, help="the lattice search's expansions per task")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--flag", type=float, default=0.003, help="flag a task the search comes this close to [m]")
+    ap.add_argument("--dense", action="store_true",
+                    help="a denser search (nine directions, every contact place of 13, 0.75 mm cells; slower)")
     ap.add_argument("--unknowns", action="store_true",
                     help="search on the tasks left unknown instead (a description, not a check)")
     args = ap.parse_args(argv)
@@ -83,10 +159,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     kind = {r["task_id"]: r.get("evidence_kind") for r in rows}
     found: list[tuple[str, float, float]] = []
+    wrong: list[str] = []
     with ProcessPoolExecutor(args.workers) as pool:
-        for tid, d, cpu in pool.map(_closest, [(jobs[r["task_id"]], args.budget) for r in rows]):
+        for tid, d, cpu, test in pool.map(_closest, [(jobs[r["task_id"]], args.budget, args.dense) for r in rows]):
             found.append((tid, d, cpu))
-            mark = ("  reached" if args.unknowns else "  FLAGGED") if d <= args.flag else ""
+            if args.unknowns:
+                mark = "  reached" if d <= args.flag else ""
+            else:
+                problem = _verdict_of(test, kind[tid], d, args.flag)
+                wrong += [tid] if problem else []
+                mark = _own(test) + (f"  FLAGGED: {problem}" if problem else "")
             print(f"{tid} {kind[tid] or verdict}: closest {d * 1e3:.2f} mm (CPU {cpu:.1f} s){mark}", flush=True)
     if not found:
         print(f"no {'unknown' if args.unknowns else 'certificate'} in the run")
@@ -98,8 +180,9 @@ def main(argv: Sequence[str] | None = None) -> int:
               f"{[t for t, d, _ in found if d > args.flag]}")
         return 0
     print(f"\n{len(found)} certificates; the lattice search's closest approach: min "
-          f"{min(d for _, d, _ in found) * 1e3:.2f} mm; within {args.flag * 1e3:g} mm: {len(flagged)} {flagged}")
-    return 1 if flagged else 0
+          f"{min(d for _, d, _ in found) * 1e3:.2f} mm; within {args.flag * 1e3:g} mm: {len(flagged)} {flagged}; "
+          f"inconsistent with their own certificate: {len(wrong)} {wrong}")
+    return 1 if wrong else 0
 
 
 if __name__ == "__main__":

@@ -40,15 +40,15 @@ def _rules_of(task):
     return s, setting_rules(s)
 
 
-def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: list,
+def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: list, contacts: int = 7,
            ) -> list[float]:
-    """The tool yaws [rad] at which ``face`` can push the puck at ``p`` (contact sampled along the face's
-    range): waist and reach within the limits, the outline clear of the obstacles."""
+    """The tool yaws [rad] at which ``face`` can push the puck at ``p`` (contact sampled at ``contacts``
+    places along the face's range): waist and reach within the limits, the outline clear of the obstacles."""
     sec = reach_sector(platform)
     d = p - sec.centre
     r = math.hypot(*d)
     yaws = []
-    for s in np.linspace(*face.contact_range, 7):
+    for s in np.linspace(*face.contact_range, contacts):
         c = face.point(s) + radius * face.normal
         o = D_TOOL - c[0]
         if r <= abs(o):
@@ -67,15 +67,31 @@ def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: 
     return yaws
 
 
+def _edges_first(angles: np.ndarray) -> np.ndarray:
+    """``angles`` with the cone's two edges first: a step that ends in a cell already visited is dropped,
+    and of two neighbouring steps ending in one cell the edge's is kept, without which a path along a
+    cone's edge (a shallow way round an obstacle) is lost cell by cell."""
+    return np.concatenate([angles[[0, -1]], angles[1:-1]]) if angles.size >= 3 else angles
+
+
 def lattice_search(setting, start: np.ndarray, target: np.ndarray, *, step: float = 0.003,
-                   cell: float = 0.0015, budget: int = 4000) -> float:
+                   cell: float = 0.0015, budget: int = 4000, directions: int = 5, contacts: int = 7,
+                   yaw_stride: int = 3, ends_held: bool = False, visited: list | None = None) -> float:
     """The closest the puck comes to ``target`` [m] by straight pushes from ``start`` (breadth first,
-    one visit per lattice cell of side ``cell``, at most ``budget`` expansions)."""
-    tool, radius = setting.tool, setting.radius
+    one visit per lattice cell of side ``cell``, at most ``budget`` expansions): steps of ``step`` [m] in
+    ``directions`` directions across each face's cone, from every ``yaw_stride``-th of the yaws at which
+    the face holds the puck with the contact at ``contacts`` places of its range, the cone's edges first
+    (:func:`_edges_first`); with ``ends_held`` only steps whose end the face can still hold (a push holds
+    the puck all along; a step from the edge of a face's reach otherwise ends outside it). A denser search
+    (``benchmarks/check_certificates.py --dense``) takes more of each. ``visited``: a list the positions
+    (2,) [m] the search reaches are appended to, the start first."""
+    tool, radius, obstacles = setting.tool, setting.radius, list(setting.obstacles)
     clear = radius + setting.margin - 1e-5
     mu_half = math.atan(setting.mechanics.mu)
     frontier, seen = [start], {tuple(np.floor(start / cell).astype(int))}
     best, n = float(np.hypot(*(start - target))), 0
+    if visited is not None:
+        visited.append(np.asarray(start, dtype=float))
     while frontier and n < budget:
         p = frontier.pop(0)
         n += 1
@@ -84,18 +100,22 @@ def lattice_search(setting, start: np.ndarray, target: np.ndarray, *, step: floa
             lo, hi = max(-mu_half, off - face.theta_b), min(mu_half, off + face.theta_b)
             if hi < lo:
                 continue
-            for yaw in _holds(tool, face, setting.platform, p, radius, list(setting.obstacles))[::3]:
-                for ang in np.linspace(lo, hi, 5):
+            for yaw in _holds(tool, face, setting.platform, p, radius, obstacles, contacts)[::yaw_stride]:
+                for ang in _edges_first(np.linspace(lo, hi, directions)):
                     w = yaw + face.normal_angle + ang
                     q = p + step * np.array([math.cos(w), math.sin(w)])
                     key = tuple(np.floor(q / cell).astype(int))
                     if key in seen:
                         continue
                     if any(shapely.distance(shapely.Point(q), o.polygon() if isinstance(o, Disc) else o) < clear
-                           for o in setting.obstacles):
+                           for o in obstacles):
+                        continue
+                    if ends_held and not _holds(tool, face, setting.platform, q, radius, obstacles, contacts):
                         continue
                     seen.add(key)
                     frontier.append(q)
+                    if visited is not None:
+                        visited.append(q)
                     best = min(best, float(np.hypot(*(q - target))))
     return best
 
@@ -131,6 +151,14 @@ def test_a_generated_task_with_an_obstacle_certified_and_the_lattice_search_find
     assert check_certificate(cert, rules) == []
     closest = lattice_search(setting, np.array(task.start), np.array(task.target))
     assert closest > 0.003, f"the lattice search came {closest * 1e3:.2f} mm from the target of a certified task"
+    # and no position a search with held ends reaches lies inside the certificate's set (a step of 3 mm
+    # along a cone's edge may cut its boundary by hundredths of a millimetre)
+    visited: list = []
+    lattice_search(setting, np.array(task.start), np.array(task.target), ends_held=True, visited=visited)
+    at = shapely.points(np.asarray(visited))
+    assert len(visited) > 100
+    inside = shapely.contains(cert.region, at)
+    assert not inside.any() or float(shapely.distance(cert.region.boundary, at[inside]).max()) < 5e-4
 
 
 def test_a_certificate_on_the_finest_grid_and_the_lattice_search_finds_nothing() -> None:
