@@ -147,3 +147,30 @@ def test_a_change_of_face_is_planned_at_the_look_before_the_back_off_where_the_l
     with pytest.raises(NoToolPath, match="no switch inclined -> left"):  # neither look has a path
         loop.leave(after, pose, "left", start, change=True)
     assert len(asked) == 1  # the same look twice is asked once
+
+
+def test_a_path_at_the_look_before_the_back_off_is_not_taken_where_it_comes_too_near_an_obstacle(
+        transfer_plan_file: Path) -> None:
+    plan, loop = _loop_on(transfer_plan_file)
+    assert loop.setting.obstacles  # the transfer task has one: the envelope's margin counts
+    switch = next(s for s in plan.switches if s.faces == ("inclined", "left"))
+    i, j = _at(plan, switch.t_start), _at(plan, switch.t_end)
+    pose, start, seen = plan.tool_pose[i].copy(), plan.tool_pose[j].copy(), plan.object_xy[i].copy()
+    after = seen + np.array([8e-4, 0.0])
+    loop.plant._plant.pose, loop.plant._plant.obj = pose.copy(), seen.copy()
+    loop.face, loop.observe = "inclined", lambda: after.copy()
+    margin = loop.plant.envelope.margin
+
+    def near_before(o, face_a, pose_a, face_b, pose_b):
+        if np.allclose(o, after):
+            return SimpleNamespace(status="infeasible", reason="(test) end contact pose unreachable",
+                                   xy=np.zeros((0, 2)), obstacle_clearance=float("inf"))
+        # solved, but nearer an obstacle than the envelope keeps
+        return SimpleNamespace(status="solved", reason="", xy=np.vstack([pose[:2], start[:2]]),
+                               obstacle_clearance=0.5 * margin)
+
+    loop.switch = near_before
+    assert not loop.keeps_margin(near_before(seen, "inclined", pose, "left", start))
+    with pytest.raises(NoToolPath, match="end contact pose unreachable"):  # the look after's reason
+        loop.leave(seen, pose, "left", start, change=True)
+    assert loop.n_switches == 0

@@ -4,9 +4,10 @@ issued where the planner finds a plan, and carried by the plan file and the comm
 The lattice search here is this file's own code, not the project's: from the start it pushes the
 puck in straight steps of a few millimetres in directions sampled in each face's cone, with the face
 held where the Omni can hold it (waist, reach, contact on the face's range, computed from the
-kinematics), the puck clear of the obstacles by the margin and the tool's outline clear of them. It
-finds real push sequences (an under-approximation of what is reachable), so on a task with a
-certificate it must never come near the target.
+kinematics), the puck clear of the obstacles by the margin and the tool's outline clear of them. Its steps
+are pushes where they start (with ``ends_held``, held where they end too: a step from the edge of a
+face's reach may otherwise end where no face holds the puck), so on a task with a certificate it must
+not come near the target, and its positions must not enter the certificate's set.
 """
 
 from __future__ import annotations
@@ -69,8 +70,9 @@ def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: 
 
 def _edges_first(angles: np.ndarray) -> np.ndarray:
     """``angles`` with the cone's two edges first: a step that ends in a cell already visited is dropped,
-    and of two neighbouring steps ending in one cell the edge's is kept, without which a path along a
-    cone's edge (a shallow way round an obstacle) is lost cell by cell."""
+    and of two neighbouring steps of one yaw ending in one cell the edge's is kept (another yaw's or face's
+    step may still take the cell first), without which a path along a cone's edge (a shallow way round an
+    obstacle) is lost cell by cell."""
     return np.concatenate([angles[[0, -1]], angles[1:-1]]) if angles.size >= 3 else angles
 
 

@@ -329,7 +329,8 @@ class LoopRun:
                 what = f"switch {self.face} -> {face}" if change else f"re-contact of {face}"
                 raise NoToolPath(f"no {what} at {np.round(o, 4).tolist()} m: {sw.reason}")
             xy = sw.xy
-        # the first pose clear of the object (checked in turn, not all of them: the rest are not used)
+        # the first pose clear of the object (checked in turn, not all of them: the rest are not used); after a
+        # 1 mm back-off (:data:`BACK_OFF_LENGTHS`) the tool itself may be closer than that to the object
         j = next((j for j in range(len(xy)) if swept_clearance(self.tool, self.platform, xy[j:j + 1], o,
                                                                 self.setting.radius) >= 0.5 * BACK_OFF), 0)
         self.move(np.vstack([back, xy[j:]]))
