@@ -89,8 +89,7 @@ def _closest(args: tuple[Any, int, bool, bool]) -> tuple[str, float, float, dict
     other kinds, where no certificate is made, and for ``unknowns``, where none is made). The CPU time is
     the search's (not the certificate's)."""
     import numpy as np
-    import shapely
-    from test_verdicts import _rules_of, lattice_search
+    from test_verdicts import _rules_of, depth_inside, lattice_search
 
     from tooltransfer.planner.planning.verdicts.certificate import certify
     from tooltransfer.planner.planning.verdicts.spiral import Spiral, _values
@@ -109,9 +108,7 @@ def _closest(args: tuple[Any, int, bool, bool]) -> tuple[str, float, float, dict
                             "v_goal": None}
     pts = np.asarray(visited)
     if cert is not None and cert.kind == "backward_reachable" and cert.region is not None:
-        at = shapely.points(pts)
-        inside = shapely.contains(cert.region, at)
-        test["depth"] = float(shapely.distance(cert.region.boundary, at[inside]).max()) if inside.any() else 0.0
+        test["depth"] = depth_inside(cert.region, pts)
     elif cert is not None and cert.kind == "polar_invariant":
         sp = Spiral.from_dict(cert.extra["invariant"])
         test["v_low"] = min(_values(rules, sp, p, p)[0] for p in pts) - sp.v_start

@@ -63,8 +63,7 @@ def test_a_correction_whose_change_of_face_has_no_tool_path_is_not_taken(transfe
 
     def nowhere(o, face_a, pose_a, face_b, pose_b):
         asked.append((face_a, face_b))
-        return SimpleNamespace(status="infeasible", reason="(test) no path", xy=np.zeros((0, 2)),
-                               obstacle_clearance=float("inf"))
+        return _no_path("(test) no path")
 
     loop.switch = nowhere
     pp = loop.correction(o)
@@ -76,6 +75,24 @@ def test_a_correction_whose_change_of_face_has_no_tool_path_is_not_taken(transfe
 
 def _at(plan: Plan, t: float) -> int:
     return int(np.searchsorted(plan.t, t))
+
+
+def _no_path(reason: str) -> SimpleNamespace:
+    """A switch planner's answer without a path."""
+    return SimpleNamespace(status="infeasible", reason=reason, xy=np.zeros((0, 2)), obstacle_clearance=float("inf"))
+
+
+def _leaving_inclined(plan: Plan, loop) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The loop at the transfer plan's switch ``inclined -> left``: the tool at its contact pose ``pose``, the
+    object at ``seen``; the loop's next look ``after`` 0.8 mm off (a camera error). Returns ``(pose, start,
+    seen, after)``, ``start`` the contact pose of ``left``."""
+    switch = next(s for s in plan.switches if s.faces == ("inclined", "left"))
+    i, j = _at(plan, switch.t_start), _at(plan, switch.t_end)
+    pose, start, seen = plan.tool_pose[i].copy(), plan.tool_pose[j].copy(), plan.object_xy[i].copy()
+    after = seen + np.array([8e-4, 0.0])
+    loop.plant._plant.pose, loop.plant._plant.obj = pose.copy(), seen.copy()
+    loop.face, loop.observe = "inclined", lambda: after.copy()
+    return pose, start, seen, after
 
 
 def test_the_back_off_is_shorter_where_the_omnis_reach_leaves_no_room_for_the_usual_one(
@@ -123,19 +140,13 @@ def test_the_back_off_is_shorter_where_the_omnis_reach_leaves_no_room_for_the_us
 def test_a_change_of_face_is_planned_at_the_look_before_the_back_off_where_the_look_after_has_none(
         transfer_plan_file: Path) -> None:
     plan, loop = _loop_on(transfer_plan_file)
-    switch = next(s for s in plan.switches if s.faces == ("inclined", "left"))
-    i, j = _at(plan, switch.t_start), _at(plan, switch.t_end)
-    pose, start, seen = plan.tool_pose[i].copy(), plan.tool_pose[j].copy(), plan.object_xy[i].copy()
-    after = seen + np.array([8e-4, 0.0])  # the next look, a camera error away
-    loop.plant._plant.pose, loop.plant._plant.obj = pose.copy(), seen.copy()
-    loop.face, loop.observe = "inclined", lambda: after.copy()
+    pose, start, seen, after = _leaving_inclined(plan, loop)
     real, asked = loop.switch, []
 
     def refused_after(o, face_a, pose_a, face_b, pose_b):
         asked.append(np.asarray(o).copy())
         if np.allclose(o, after):
-            return SimpleNamespace(status="infeasible", reason="(test) end contact pose unreachable",
-                                   xy=np.zeros((0, 2)), obstacle_clearance=float("inf"))
+            return _no_path("(test) end contact pose unreachable")
         return real(o, face_a, pose_a, face_b, pose_b)
 
     loop.switch = refused_after
@@ -153,18 +164,12 @@ def test_a_path_at_the_look_before_the_back_off_is_not_taken_where_it_comes_too_
         transfer_plan_file: Path) -> None:
     plan, loop = _loop_on(transfer_plan_file)
     assert loop.setting.obstacles  # the transfer task has one: the envelope's margin counts
-    switch = next(s for s in plan.switches if s.faces == ("inclined", "left"))
-    i, j = _at(plan, switch.t_start), _at(plan, switch.t_end)
-    pose, start, seen = plan.tool_pose[i].copy(), plan.tool_pose[j].copy(), plan.object_xy[i].copy()
-    after = seen + np.array([8e-4, 0.0])
-    loop.plant._plant.pose, loop.plant._plant.obj = pose.copy(), seen.copy()
-    loop.face, loop.observe = "inclined", lambda: after.copy()
+    pose, start, seen, after = _leaving_inclined(plan, loop)
     margin = loop.plant.envelope.margin
 
     def near_before(o, face_a, pose_a, face_b, pose_b):
         if np.allclose(o, after):
-            return SimpleNamespace(status="infeasible", reason="(test) end contact pose unreachable",
-                                   xy=np.zeros((0, 2)), obstacle_clearance=float("inf"))
+            return _no_path("(test) end contact pose unreachable")
         # solved, but nearer an obstacle than the envelope keeps
         return SimpleNamespace(status="solved", reason="", xy=np.vstack([pose[:2], start[:2]]),
                                obstacle_clearance=0.5 * margin)

@@ -221,7 +221,7 @@ class LoopRun:
     def keeps_margin(self, sw: SwitchPath) -> bool:
         """Whether ``sw`` is a tool path (solved) that keeps the safety envelope's margin from the obstacles."""
         margin = self.plant.envelope.margin
-        return sw.status == "solved" and not (self.setting.obstacles and not sw.obstacle_clearance >= margin)
+        return sw.status == "solved" and (not self.setting.obstacles or sw.obstacle_clearance >= margin)
 
     def clear_of_obstacles(self, pp: PushPlan, every_push: bool = False) -> PushPlan:
         """``pp``, or refused when the tool outline overlaps an obstacle along what the loop executes
