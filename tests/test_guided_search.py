@@ -294,18 +294,21 @@ def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the
     before it closed at the start (verd200-00056: no face holds the puck there with its contact at the
     middle of the face) and not where they moved and failed later (verd200-00011). Where they closed at
     the start, the fine steps' attempt is left out (which faces hold the puck there does not depend on the
-    step); where they moved, it runs last."""
+    step); where they moved, it runs after them. The last attempt, the whole faces and their windows
+    where the whole is not held, runs in both cases (on fine steps)."""
     stuck = solve(_verdict_task("verd200-00056"))
     assert stuck.verdict != "solved"
     # three attempts closed at once, then the windows' attempt (its path fails later, at the approach)
     assert (stuck.reason or "").count("its space closed after 1 expansions") == 3
-    assert "; then " in (stuck.reason or "").split("half steps and new runs")[1]
-    assert " 2 mm steps" not in (stuck.reason or "")
+    attempts = (stuck.reason or "").split("the guided search: ")[1].split("; then ")
+    assert len(attempts) == 5 and all(" 2 mm steps" not in a for a in attempts[:4])
     moved = solve(_verdict_task("verd200-00011"))
-    assert moved.verdict != "solved" and "windows" not in (moved.reason or "")
+    assert moved.verdict != "solved" and "windows of each face" not in (moved.reason or "")
     attempts = (moved.reason or "").split("the guided search: ")[1].split("; then ")
     assert "half steps and new runs" in attempts[2] and " 4 mm steps" in attempts[2]
-    assert " 2 mm steps" in attempts[-1] and len(attempts) == 4
+    assert " 2 mm steps" in attempts[3] and "windows" not in attempts[3]
+    assert "where that is not held, on its 4 mm windows" in attempts[4] and " 2 mm steps" in attempts[4]
+    assert len(attempts) == 5
 
 
 def test_a_passage_whole_steps_miss_is_found_on_fine_steps_and_the_plan_executes() -> None:
@@ -347,3 +350,49 @@ def test_a_tool_closer_to_an_obstacle_than_the_safety_envelope_allows_breaks_a_h
         close = hard_check_failures({key: 0.0001})
         assert len(close) == 1 and close[0].startswith(family)
         assert hard_check_failures({key: TOOL_MARGIN}) == []
+
+
+def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not_held() -> None:
+    """verd200-00129 (l_shape, two obstacles): on fine steps at 0.8 of the friction cone the search with
+    the contact on the whole usable range of each face finds no path within the fine attempt's
+    expansions; with each face's 4 mm windows where the whole face is not held (``mixed``), weighted
+    toward the target, it does. Every step keeps the rules at both ends of its window or of the whole
+    range (the Omni's inverse kinematics reaching the tool there, the outline clear of the obstacles), and
+    a window starts only where its face is not held as a whole: the windows add moves where the whole face
+    has none, they do not multiply the lattice where it has."""
+    from tooltransfer.planner.planning.oe.guided import CELL, FINE, GREED, STEP
+
+    task = _verdict_task("verd200-00129")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": 0.8})
+    start, target = np.array(task.start), np.array(task.target)
+    fine = {"step": FINE * STEP, "cell": FINE * CELL, "budget": round(options.guided_budget / FINE), "more": True}
+    assert isinstance(guided_path(setting, start, target, options=options, greed=GREED, **fine), GuidedMiss)
+    found = guided_path(setting, start, target, options=options, greed=GREED, mixed=options.guided_contact_span,
+                        **fine)
+    assert isinstance(found, GuidedPath), found
+    assert len(found.windows) == len(found.faces)
+    assert any(w is not None for w in found.windows)
+
+    def keeps_rules(name: str, lo: float, hi: float, p: np.ndarray) -> bool:
+        face = setting.tool.face(name)
+        for s in (lo, hi):
+            frame = FaceFrame.build(setting, name, s=s / face.length, friction_cone_fraction=0.8)
+            x, y, yaw = frame.tool_pose(p[None])[0]
+            ik = inverse_kinematics(setting.platform, [x, y])
+            if not ik.reachable or ik.heading is None or abs(math.remainder(ik.heading - yaw, 2 * math.pi)) > 1e-6:
+                return False
+            rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
+            body = shapely.Polygon(np.asarray(setting.tool.outline.exterior.coords) @ rot.T + [x, y])
+            if not all(shapely.distance(body, o.polygon() if isinstance(o, Disc) else o) > 0.0
+                       for o in setting.obstacles):
+                return False
+        return True
+
+    for k, (name, window) in enumerate(zip(found.faces, found.windows, strict=True)):
+        whole = usable_range(setting.tool, name, options)
+        lo, hi = window or whole
+        assert hi - lo <= (options.guided_contact_span if window else options.contact_span) + 1e-12
+        assert keeps_rules(name, lo, hi, found.xy[k])
+        if window is not None and (k == 0 or (found.faces[k - 1], found.windows[k - 1]) != (name, window)):
+            assert not keeps_rules(name, *whole, found.xy[k])  # a window begins where the whole face is not held

@@ -142,6 +142,11 @@ REFUSED_RADIUS = 2 * STEP
 #: Searches again per share of the friction cone, each without the changes of face refused so far.
 REFUSALS = 2
 
+#: The weight of the distance to go in the last attempt's order (weighted A*, :func:`guided_path`'s
+#: ``greed``): with the windows of every face its lattice is several times larger, and the shortest
+#: path is not needed, only one the fit can follow.
+GREED = 3.0
+
 
 def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touch: _Contact,
                moves: dict[str, _FaceMoves]) -> GuidedPath:
@@ -175,18 +180,26 @@ def _zones(setting: Setting) -> list[Any]:
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = CELL, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False,
-                more: bool = False) -> GuidedPath | GuidedMiss:
+                more: bool = False, mixed: float | None = None, greed: float = 1.0) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
     ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin,
     span and most contacts per push); ``switch_price`` [m]: a face change's worth in path; ``refused``:
     changes it does not make; ``windows``: each face's runs keep their contact to one of its
     :func:`contact_windows` (a change of window is a re-contact, priced as a change of face); ``more``:
     half steps where a whole one rolls the contact off its face and a new run of a face where one
-    outgrows ``oe.max_contacts`` contacts (:func:`~.guided_moves._step_of`). A lattice
-    cell is visited once per face (and window), with the contacts its first visit had used."""
+    outgrows ``oe.max_contacts`` contacts (:func:`~.guided_moves._step_of`); ``mixed`` [m]: each face
+    as a whole and, where the whole is not held, its :func:`contact_windows` of that span (a way past an
+    obstacle that only a contact toward one end of a face keeps the tool clear on, without multiplying
+    the lattice where the whole face is held); ``greed`` (>= 1): the weight of the distance to go in the
+    search's order (weighted A*: a path at most ``greed`` times the length of the shortest under the
+    rules, found with far fewer expansions). A lattice cell is visited once per face (and window), with
+    the contacts its first visit had used."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     body_zone, centre_zone = _zones(setting)
     faces = _face_moves(setting, options, windows)
+    if mixed is not None:
+        faces += [fm for fm in _face_moves(setting, options.model_copy(update={"contact_span": mixed}), True)
+                  if fm.window is not None]
     by_name = {fm.key: fm for fm in faces}
 
     def touches(fm: _FaceMoves, yaws: list[float], p: NDArray[np.float64], near: float) -> bool:
@@ -200,19 +213,25 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                           for e, y in close])
         return bool(shapely.intersects(body_zone, shapely.polygons(rings)).any())
 
-    def held(p: NDArray[np.float64]) -> list[tuple[str, float, float]]:
+    def held(p: NDArray[np.float64], came: str | None = None) -> list[tuple[str, float, float]]:
         """``(face, direction, half)`` [rad] of the faces that can push the object at ``p``: the middle
         of their admissible directions in the world and the half-width the search uses of them; each
-        held at both ends of its usable contact range with the tool outline clear of the obstacles."""
+        held at both ends of its usable contact range with the tool outline clear of the obstacles. A
+        window of a face held as a whole (``mixed``) is left out unless the node's face ``came`` is it."""
         near = math.inf if body_zone is None else float(shapely.distance(body_zone, shapely.Point(p)))
         out = []
+        whole: set[str] = set()  # the faces held as a whole here
         for fm in faces:
+            if fm.window is not None and fm.name in whole and fm.key != came:
+                continue
             yaws = [_heading(e, p) for e in fm.ends]
             if any(y is None for y in yaws):
                 continue
             if touches(fm, [y for y in yaws if y is not None], p, near):
                 continue
             out.append((fm.key, _pointing(fm, p), CONE * fm.cone.theta_b))
+            if fm.window is None:
+                whole.add(fm.name)
         return out
 
     def free(q: NDArray[np.float64]) -> bool:
@@ -230,7 +249,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         d = target - p
         if float(np.hypot(*d)) > 3 * step:
             return None
-        there = {name: (mid, half) for name, mid, half in held(target)}
+        there = {name: (mid, half) for name, mid, half in held(target, came)}
         way = math.atan2(d[1], d[0])
         for name, mid, half in here:
             if name in there and allowed(came, name, p) and all(abs(math.remainder(way - m, 2 * math.pi)) <= h
@@ -239,7 +258,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         return None
 
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
-    heap: list = [(float(np.hypot(*(target - start))), 0.0, 0, None)]
+    heap: list = [(greed * float(np.hypot(*(target - start))), 0.0, 0, None)]
     nodes: list[tuple[NDArray[np.float64], int, str | None, _Contact]] = [(start, -1, None, _Contact())]
     seen: set = set()
     n = 0
@@ -251,7 +270,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
             continue
         seen.add(key)
         n += 1
-        here = held(p)
+        here = held(p, came)
         last = finish(p, came, here)
         final = None if last is None else _rolled(setting, options, by_name[last], came, touch, p, target, more)
         if last is not None and final is not None:
@@ -268,7 +287,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                     continue  # a re-contact of the face the later stages refused near here
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
                 nodes.append((q, k, name, after))
-                heapq.heappush(heap, (g2 + float(np.hypot(*(target - q))), g2, len(nodes) - 1, name))
+                heapq.heappush(heap, (g2 + greed * float(np.hypot(*(target - q))), g2, len(nodes) - 1, name))
     return GuidedMiss(n, not heap, step)
 
 
@@ -282,7 +301,10 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     there only with its contact toward one end), that with each run's contact kept to one window of
     ``guided_contact_span`` of its face (where narrower than ``contact_span``); then that share on
     :data:`FINE` steps and cells; then ``friction_cone_fraction_max`` (where wider still), on whole and
-    on fine steps. Each attempt's sequence (found within ``options.guided_budget`` expansions, on fine
+    on fine steps; last, at the middle share on fine steps, each face as a whole and, where the whole is
+    not held, on its windows of ``guided_contact_span`` (``mixed``: a contact toward one end of a face
+    where only there the tool clears an obstacle), the search weighted toward the target (:data:`GREED`).
+    Each attempt's sequence (found within ``options.guided_budget`` expansions, on fine
     steps ``1 / FINE`` times that: a path takes that many more steps) is fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
     [m]) under that share. Yields each attempt's push plan, ``infeasible`` with the reason when the search
@@ -296,24 +318,28 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     target = universal[-1] if target is None else target
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
     share = options.friction_cone_fraction
-    tries: list[tuple[dict[str, float], bool, bool, bool]] = [({"friction_cone_fraction": share}, False, False, False)]
+    tries: list[tuple[dict[str, float], bool, bool, bool, float | None]] = [
+        ({"friction_cone_fraction": share}, False, False, False, None)]
     middle = max(share, min(wide, MIDDLE_SHARE))  # the rung of the ladder below the widest share
     if middle > share:
-        tries.append(({"friction_cone_fraction": middle}, False, False, False))
-    tries.append(({"friction_cone_fraction": middle}, False, True, False))
+        tries.append(({"friction_cone_fraction": middle}, False, False, False, None))
+    tries.append(({"friction_cone_fraction": middle}, False, True, False, None))
     if span < options.contact_span:
-        tries.append(({"friction_cone_fraction": middle, "contact_span": span}, True, True, False))
-    tries.append(({"friction_cone_fraction": middle}, False, True, True))
+        tries.append(({"friction_cone_fraction": middle, "contact_span": span}, True, True, False, None))
+    tries.append(({"friction_cone_fraction": middle}, False, True, True, None))
     if wide > middle:
-        tries += [({"friction_cone_fraction": wide}, False, True, fine) for fine in (False, True)]
+        tries += [({"friction_cone_fraction": wide}, False, True, fine, None) for fine in (False, True)]
+    if span < options.contact_span:
+        tries.append(({"friction_cone_fraction": middle}, False, True, True, span))
     stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
-    for change, windows, more, fine in tries:
-        if (windows and not stuck) or (stuck and (fine or change["friction_cone_fraction"] > middle)):
+    for change, windows, more, fine, mixed in tries:
+        if (windows and not stuck) or (stuck and mixed is None
+                                       and (fine or change["friction_cone_fraction"] > middle)):
             continue  # (which faces can push at the start does not depend on the step or the share)
         opts = options.model_copy(update=change)
         refused: list[Refusal] = []
         for _ in range(1 + REFUSALS):
-            plan = _attempt(t, setting, target, opts, universal, refused, windows, more, fine)
+            plan = _attempt(t, setting, target, opts, universal, refused, windows, more, fine, mixed)
             stuck = stuck and (windows or plan.metrics.get("guided_expansions") == 1.0)
             failed = yield plan
             where = getattr(failed, "where", None)
@@ -324,19 +350,23 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
 
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
              universal: NDArray[np.float64], refused: list[Refusal], windows: bool = False,
-             more: bool = False, fine: bool = False) -> PushPlan:
+             more: bool = False, fine: bool = False, mixed: float | None = None) -> PushPlan:
     """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes
-    (``windows``, ``more``: as :func:`guided_path` takes them; ``fine``: steps and cells of a
-    :data:`FINE` share of the usual, and ``1 / FINE`` times the expansions)."""
+    (``windows``, ``more``, ``mixed``: as :func:`guided_path` takes them, ``mixed`` with a weight
+    :data:`GREED` on the distance to go; ``fine``: steps and cells of a :data:`FINE` share of the
+    usual, and ``1 / FINE`` times the expansions)."""
     share = opts.friction_cone_fraction
     found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=windows, more=more,
+                        mixed=mixed, greed=1.0 if mixed is None else GREED,
                         **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(opts.guided_budget / FINE)}
                            if fine else {"budget": opts.guided_budget}))
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
         but = f" without the {len(refused)} change(s) of face refused," if refused else ""
         on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if windows else ''} of each face"
-              f"{', half steps and new runs where it rolls off' if more else ''})")
+              f"{f' or, where that is not held, on its {mixed * 1e3:g} mm windows' if mixed else ''}"
+              f"{', half steps and new runs where it rolls off' if more else ''}"
+              f"{f', the distance to go weighted {GREED:g}' if mixed else ''})")
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
                         reason=f"at {share:g} of the friction cone{on},{but} {found.describe()}",
                         metrics={"guided_expansions": float(found.expansions),
