@@ -357,16 +357,18 @@ def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not
     the contact on the whole usable range of each face finds no path within the fine attempt's
     expansions; with each face's 4 mm windows where the whole face is not held (``mixed``), weighted
     toward the target, it does. Every step keeps the rules at both ends of its window or of the whole
-    range (the Omni's inverse kinematics reaching the tool there, the outline clear of the obstacles), and
+    range (the Omni's inverse kinematics reaching the tool there, the outline the last attempt's room
+    clear of the obstacles), and
     a window starts only where its face is not held as a whole: the windows add moves where the whole face
     has none, they do not multiply the lattice where it has."""
-    from tooltransfer.planner.planning.oe.guided import CELL, FINE, GREED, STEP
+    from tooltransfer.planner.planning.oe.guided import CELL, FINE, GREED, LAST_ROOM, STEP
 
     task = _verdict_task("verd200-00129")
     setting = setting_from_task(task, task_skills(task, need_ss=False))
     options = qp_options(task).model_copy(update={"friction_cone_fraction": 0.8})
     start, target = np.array(task.start), np.array(task.target)
-    fine = {"step": FINE * STEP, "cell": FINE * CELL, "budget": round(options.guided_budget / FINE), "more": True}
+    fine = {"step": FINE * STEP, "cell": FINE * CELL, "budget": round(options.guided_budget / FINE), "more": True,
+            "room": LAST_ROOM}
     assert isinstance(guided_path(setting, start, target, options=options, greed=GREED, **fine), GuidedMiss)
     found = guided_path(setting, start, target, options=options, greed=GREED, mixed=options.guided_contact_span,
                         **fine)
@@ -384,7 +386,7 @@ def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not
                 return False
             rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
             body = shapely.Polygon(np.asarray(setting.tool.outline.exterior.coords) @ rot.T + [x, y])
-            if not all(shapely.distance(body, o.polygon() if isinstance(o, Disc) else o) > 0.0
+            if not all(shapely.distance(body, o.polygon() if isinstance(o, Disc) else o) > LAST_ROOM
                        for o in setting.obstacles):
                 return False
         return True

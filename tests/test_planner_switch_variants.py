@@ -3,6 +3,7 @@ the swept tool outline of every switch against the puck, with shapely."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -42,14 +43,23 @@ def switch_depths(doc: dict) -> list[tuple[np.ndarray, np.ndarray]]:
 
 @pytest.fixture(scope="module")
 def plans(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict]:
+    """The paper's transfer planned with each switch variant (solved: exit code 0), and with the ``dmp``
+    one and the scored candidates alone (the ``qp`` variant without its guided search): no plan, nothing
+    proved (unknown, exit code 3)."""
     import json
+
+    from tooltransfer.planner.planning import solve as solve_module
+    from tooltransfer.planner.planning.variant_registry import oe_variant
 
     folder = tmp_path_factory.mktemp("plans")
     docs = {}
-    for ss, code in (("dmp", 3), ("opt", 0)):  # dmp: no plan, nothing proved (unknown)
-        out = folder / f"{ss}.json"
-        assert main(["solve", str(PAPER / "transfer_tool2.yaml"), "--ss", ss, "-o", str(out), "--json"]) == code
-        docs[ss] = json.loads(out.read_text())
+    for name, ss, code in (("dmp", "dmp", 0), ("opt", "opt", 0), ("dmp_scored", "dmp", 3)):
+        out = folder / f"{name}.json"
+        with pytest.MonkeyPatch.context() as mp:
+            if name == "dmp_scored":
+                mp.setattr(solve_module, "oe_variant", lambda v: replace(oe_variant(v), guided=None))
+            assert main(["solve", str(PAPER / "transfer_tool2.yaml"), "--ss", ss, "-o", str(out), "--json"]) == code
+        docs[name] = json.loads(out.read_text())
         read_plan(out)  # a valid plan file, solved or not
     return docs
 
@@ -73,10 +83,23 @@ def test_opt_switches_never_penetrate_and_keep_the_clearance(plans: dict[str, di
 
 def test_dmp_switch_that_knocks_the_puck_makes_the_plan_infeasible(plans: dict[str, dict]) -> None:
     """The paper's recombined switch penetrates the puck; replayed through the push model it moves
-    the puck off the plan, so the plan is refused with the place (no plan, nothing proved: the verdict
-    unknown), and the penetration is reported."""
-    doc = plans["dmp"]
+    the puck off the plan, so the plan is refused with the place (no plan among the scored candidates,
+    nothing proved: the verdict unknown), and the penetration is reported."""
+    doc = plans["dmp_scored"]
     assert doc["status"] == "unknown" and doc["verdict"] == "unknown"
     assert "self-consistency" in doc["reason"] and "switch" in doc["reason"]
     assert doc["metrics"]["switch_penetration_max"] > 1e-4
     assert doc["metrics"]["self_consistency_max"] > doc["task"]["oe"]["self_consistency_tol"]
+
+
+def test_a_dmp_plan_is_solved_only_with_switches_that_leave_the_puck_where_it_was(plans: dict[str, dict]) -> None:
+    """Where the scored candidates' recombined switch knocks the puck, the guided search finds a plan
+    whose switches do not (its last attempt: one change of face): checked from the plan file, no switch
+    comes into the puck deeper than the hard check allows, and the replay through the push model
+    follows the plan."""
+    doc = plans["dmp"]
+    assert doc["status"] == "solved" and doc["variant"]["ss"] == "dmp"
+    depths = switch_depths(doc)
+    assert depths and all(d.min() >= -1e-5 for d, *_ in depths)
+    assert doc["metrics"]["switch_penetration_max"] <= 1e-5
+    assert doc["metrics"]["self_consistency_max"] <= doc["task"]["oe"]["self_consistency_tol"]

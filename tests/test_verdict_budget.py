@@ -40,8 +40,8 @@ def test_a_certificate_out_of_block_updates_makes_the_verdict_budget_limited() -
 
 
 def test_an_unknown_whose_searches_closed_their_space_is_not_budget_limited() -> None:
-    """exec60-00015 (finger, one obstacle): every attempt expands every lattice cell it can reach."""
-    task = generated("execution_60.yaml", "exec60-00015")
+    """exec60-00022 (trapezoid, one obstacle): every attempt expands every lattice cell it can reach."""
+    task = generated("execution_60.yaml", "exec60-00022")
     plan = solve(task)
     assert plan.status == "unknown", plan.reason
     assert plan.metrics["guided_attempts"] >= 4 and plan.metrics["guided_attempts_on_budget"] == 0
@@ -81,8 +81,8 @@ def test_the_batch_report_counts_the_unknowns_that_stopped_on_a_budget(tmp_path)
 def test_solve_json_says_whether_an_unknown_stopped_on_a_budget(tmp_path, capsys) -> None:
     """The command line's summary of an unknown carries the flag (exit code 3: unknown)."""
     batch = ROOT / "problems" / "batch" / "execution_60.yaml"
-    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "exec60-00015")
-    path = tmp_path / "exec60-00015.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "exec60-00022")
+    path = tmp_path / "exec60-00022.yaml"
     path.write_text(json.dumps(data))  # JSON is YAML; the generated task's paths are absolute
     assert main(["solve", str(path), "--json"]) == 3
     summary = json.loads(capsys.readouterr().out)

@@ -146,6 +146,13 @@ REFUSALS = 2
 #: ``greed``): with the windows of every face its lattice is several times larger, and the shortest
 #: path is not needed, only one the fit can follow.
 GREED = 3.0
+#: Room [m] the last attempt keeps between the tool outline and the obstacles at its nodes: the fit may
+#: place the contact anywhere in a window, and its plans should leave the closed loop's corrections the
+#: room :data:`~tooltransfer.planner.planning.solve.GUIDED_ROOM` asks of a guided plan.
+LAST_ROOM = 0.001
+#: Searches again in the last attempt without the changes of face refused so far (each a cheap search:
+#: a switch with no tool path in reach often recurs a few millimetres further on).
+LAST_REFUSALS = 5
 
 
 def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touch: _Contact,
@@ -165,22 +172,65 @@ def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touc
                       tuple(runs[::-1]))
 
 
-def _zones(setting: Setting) -> list[Any]:
-    """Where the tool outline may not come (the obstacles grown by :data:`REACH_SLACK`) and where the
-    object's centre may not be (grown by its radius and the margin), prepared; None without obstacles."""
+def _zones(setting: Setting, room: float = REACH_SLACK) -> list[Any]:
+    """Where the tool outline may not come (the obstacles grown by ``room`` [m]) and where the object's
+    centre may not be (grown by its radius and the margin), prepared; None without obstacles."""
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
     zones = [shapely.union_all([shapely.buffer(o, d, quad_segs=32) for o in obstacles]) if obstacles else None
-             for d in (REACH_SLACK, setting.radius + max(setting.margin - 1e-5, 0.0) + 1e-4)]
+             for d in (room, setting.radius + max(setting.margin - 1e-5, 0.0) + 1e-4)]
     for z in zones:
         if z is not None:
             shapely.prepare(z)
     return zones
 
 
+@dataclass(frozen=True)
+class _Holds:
+    """Which of the search's ``faces`` hold the object where: each at both ends of its usable contact
+    range (or window), the Omni reaching it there, the tool ``outline`` (M, 2) [m] clear of the
+    ``body_zone`` (:func:`_zones`; None without obstacles)."""
+
+    faces: list[_FaceMoves]
+    outline: NDArray[np.float64]
+    body_zone: Any
+
+    def touches(self, fm: _FaceMoves, yaws: list[float], p: NDArray[np.float64], near: float) -> bool:
+        """Whether the tool outline, holding ``fm``'s contact at each end at the yaws [rad] with the
+        object at ``p``, meets the body zone (``near`` [m]: the zone's distance from ``p``)."""
+        close = [(e, y) for e, y, reach in zip(fm.ends, yaws, fm.spans, strict=True) if reach >= near]
+        if not close:
+            return False
+        rings = np.stack([(self.outline - e.centre_in_tool) @ np.array([[math.cos(y), math.sin(y)],
+                                                                       [-math.sin(y), math.cos(y)]]) + p
+                          for e, y in close])
+        return bool(shapely.intersects(self.body_zone, shapely.polygons(rings)).any())
+
+    def __call__(self, p: NDArray[np.float64], came: str | None = None) -> list[tuple[str, float, float]]:
+        """``(face, direction, half)`` [rad] of the faces that can push the object at ``p``: the middle
+        of their admissible directions in the world and the half-width the search uses of them. A
+        window of a face held as a whole (``mixed``) is left out unless the node's face ``came`` is it."""
+        near = math.inf if self.body_zone is None else float(shapely.distance(self.body_zone, shapely.Point(p)))
+        out = []
+        whole: set[str] = set()  # the faces held as a whole here
+        for fm in self.faces:
+            if fm.window is not None and fm.name in whole and fm.key != came:
+                continue
+            yaws = [_heading(e, p) for e in fm.ends]
+            if any(y is None for y in yaws):
+                continue
+            if self.touches(fm, [y for y in yaws if y is not None], p, near):
+                continue
+            out.append((fm.key, _pointing(fm, p), CONE * fm.cone.theta_b))
+            if fm.window is None:
+                whole.add(fm.name)
+        return out
+
+
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = CELL, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False,
-                more: bool = False, mixed: float | None = None, greed: float = 1.0) -> GuidedPath | GuidedMiss:
+                more: bool = False, mixed: float | None = None, greed: float = 1.0,
+                room: float = REACH_SLACK) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
     ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin,
     span and most contacts per push); ``switch_price`` [m]: a face change's worth in path; ``refused``:
@@ -192,47 +242,18 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     obstacle that only a contact toward one end of a face keeps the tool clear on, without multiplying
     the lattice where the whole face is held); ``greed`` (>= 1): the weight of the distance to go in the
     search's order (weighted A*: a path at most ``greed`` times the length of the shortest under the
-    rules, found with far fewer expansions). A lattice cell is visited once per face (and window), with
-    the contacts its first visit had used."""
+    rules, found with far fewer expansions); ``room`` [m]: how far the tool outline keeps from the
+    obstacles at the search's nodes. A lattice cell is visited once per face (and window), with the
+    contacts its first visit had used."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
-    body_zone, centre_zone = _zones(setting)
+    body_zone, centre_zone = _zones(setting, room)
     faces = _face_moves(setting, options, windows)
     if mixed is not None:
         faces += [fm for fm in _face_moves(setting, options.model_copy(update={"contact_span": mixed}), True)
                   if fm.window is not None]
     by_name = {fm.key: fm for fm in faces}
 
-    def touches(fm: _FaceMoves, yaws: list[float], p: NDArray[np.float64], near: float) -> bool:
-        """Whether the tool outline, holding ``fm``'s contact at each end at the yaws [rad] with the
-        object at ``p``, meets the body zone (``near`` [m]: the zone's distance from ``p``)."""
-        close = [(e, y) for e, y, reach in zip(fm.ends, yaws, fm.spans, strict=True) if reach >= near]
-        if not close:
-            return False
-        rings = np.stack([(outline - e.centre_in_tool) @ np.array([[math.cos(y), math.sin(y)],
-                                                                  [-math.sin(y), math.cos(y)]]) + p
-                          for e, y in close])
-        return bool(shapely.intersects(body_zone, shapely.polygons(rings)).any())
-
-    def held(p: NDArray[np.float64], came: str | None = None) -> list[tuple[str, float, float]]:
-        """``(face, direction, half)`` [rad] of the faces that can push the object at ``p``: the middle
-        of their admissible directions in the world and the half-width the search uses of them; each
-        held at both ends of its usable contact range with the tool outline clear of the obstacles. A
-        window of a face held as a whole (``mixed``) is left out unless the node's face ``came`` is it."""
-        near = math.inf if body_zone is None else float(shapely.distance(body_zone, shapely.Point(p)))
-        out = []
-        whole: set[str] = set()  # the faces held as a whole here
-        for fm in faces:
-            if fm.window is not None and fm.name in whole and fm.key != came:
-                continue
-            yaws = [_heading(e, p) for e in fm.ends]
-            if any(y is None for y in yaws):
-                continue
-            if touches(fm, [y for y in yaws if y is not None], p, near):
-                continue
-            out.append((fm.key, _pointing(fm, p), CONE * fm.cone.theta_b))
-            if fm.window is None:
-                whole.add(fm.name)
-        return out
+    held = _Holds(faces, outline, body_zone)
 
     def free(q: NDArray[np.float64]) -> bool:
         return centre_zone is None or not shapely.intersects_xy(centre_zone, float(q[0]), float(q[1]))
@@ -314,7 +335,8 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     The caller may send back why a solved push plan failed later: a
     :class:`~tooltransfer.planner.planning.assemble.SwitchFailed` with the object's position (a switch
     with no tool path there) makes the search run again without that change of face near there (at
-    most :data:`REFUSALS` times per attempt); anything else, the next attempt."""
+    most :data:`REFUSALS` times per attempt, :data:`LAST_REFUSALS` in the last); anything else, the next
+    attempt."""
     target = universal[-1] if target is None else target
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
     share = options.friction_cone_fraction
@@ -338,7 +360,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
             continue  # (which faces can push at the start does not depend on the step or the share)
         opts = options.model_copy(update=change)
         refused: list[Refusal] = []
-        for _ in range(1 + REFUSALS):
+        for _ in range(1 + (LAST_REFUSALS if mixed else REFUSALS)):
             plan = _attempt(t, setting, target, opts, universal, refused, windows, more, fine, mixed)
             stuck = stuck and (windows or plan.metrics.get("guided_expansions") == 1.0)
             failed = yield plan
@@ -353,11 +375,12 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
              more: bool = False, fine: bool = False, mixed: float | None = None) -> PushPlan:
     """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes
     (``windows``, ``more``, ``mixed``: as :func:`guided_path` takes them, ``mixed`` with a weight
-    :data:`GREED` on the distance to go; ``fine``: steps and cells of a :data:`FINE` share of the
-    usual, and ``1 / FINE`` times the expansions)."""
+    :data:`GREED` on the distance to go and the tool :data:`LAST_ROOM` from the obstacles; ``fine``:
+    steps and cells of a :data:`FINE` share of the usual, and ``1 / FINE`` times the expansions)."""
     share = opts.friction_cone_fraction
     found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=windows, more=more,
                         mixed=mixed, greed=1.0 if mixed is None else GREED,
+                        room=REACH_SLACK if mixed is None else LAST_ROOM,
                         **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(opts.guided_budget / FINE)}
                            if fine else {"budget": opts.guided_budget}))
     if isinstance(found, GuidedMiss):
