@@ -301,7 +301,8 @@ def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the
     # three attempts closed at once, then the windows' attempt (its path fails later, at the approach)
     assert (stuck.reason or "").count("its space closed after 1 expansions") == 3
     attempts = (stuck.reason or "").split("the guided search: ")[1].split("; then ")
-    assert len(attempts) == 5 and all(" 2 mm steps" not in a for a in attempts[:4])
+    assert len(attempts) == 5 and all(" 2 mm steps" not in a and " 2 mm, " not in a for a in attempts[:4])
+    assert "where that is not held, on its 4 mm windows" in attempts[4] and " 2 mm, not fitted" in attempts[4]
     moved = solve(_verdict_task("verd200-00011"))
     assert moved.verdict != "solved" and "windows of each face" not in (moved.reason or "")
     attempts = (moved.reason or "").split("the guided search: ")[1].split("; then ")
@@ -353,15 +354,15 @@ def test_a_tool_closer_to_an_obstacle_than_the_safety_envelope_allows_breaks_a_h
 
 
 def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not_held() -> None:
-    """verd200-00129 (l_shape, two obstacles): on fine steps at 0.8 of the friction cone the search with
-    the contact on the whole usable range of each face finds no path within the fine attempt's
-    expansions; with each face's 4 mm windows where the whole face is not held (``mixed``), weighted
-    toward the target, it does. Every step keeps the rules at both ends of its window or of the whole
-    range (the Omni's inverse kinematics reaching the tool there, the outline the last attempt's room
-    clear of the obstacles), and
-    a window starts only where its face is not held as a whole: the windows add moves where the whole face
-    has none, they do not multiply the lattice where it has."""
-    from tooltransfer.planner.planning.oe.guided import CELL, FINE, GREED, LAST_ROOM, STEP
+    """verd200-00129 (l_shape, two obstacles): on fine steps at 0.8 of the friction cone, weighted toward
+    the target and with the last attempt's room, the search with the contact on the whole usable range of
+    each face finds no path within the last attempt's expansions; with each face's 4 mm windows where the
+    whole face is not held (``mixed``) it does, with steps of both kinds. Every step keeps the rules at both
+    ends of its window or of the whole range (the Omni's inverse kinematics reaching the tool there, the
+    outline the last attempt's room clear of the obstacles), and a window starts only where its face is not
+    held as a whole under the search's rule: the windows add moves where the whole face has none."""
+    from tooltransfer.planner.planning.oe.guided import CELL, FINE, GREED, LAST_ROOM, STEP, _Holds, _zones
+    from tooltransfer.planner.planning.oe.guided_moves import _face_moves
 
     task = _verdict_task("verd200-00129")
     setting = setting_from_task(task, task_skills(task, need_ss=False))
@@ -374,7 +375,9 @@ def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not
                         **fine)
     assert isinstance(found, GuidedPath), found
     assert len(found.windows) == len(found.faces)
-    assert any(w is not None for w in found.windows)
+    assert any(w is not None for w in found.windows) and any(w is None for w in found.windows)
+    whole_held = _Holds(_face_moves(setting, options), np.asarray(setting.tool.outline.exterior.coords),
+                        _zones(setting, LAST_ROOM)[0])
 
     def keeps_rules(name: str, lo: float, hi: float, p: np.ndarray) -> bool:
         face = setting.tool.face(name)
@@ -397,4 +400,4 @@ def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not
         assert hi - lo <= (options.guided_contact_span if window else options.contact_span) + 1e-12
         assert keeps_rules(name, lo, hi, found.xy[k])
         if window is not None and (k == 0 or (found.faces[k - 1], found.windows[k - 1]) != (name, window)):
-            assert not keeps_rules(name, *whole, found.xy[k])  # a window begins where the whole face is not held
+            assert name not in {key for key, *_ in whole_held(found.xy[k])}  # begun where the whole is not held

@@ -100,6 +100,8 @@ def test_a_dmp_plan_is_solved_only_with_switches_that_leave_the_puck_where_it_wa
     doc = plans["dmp"]
     assert doc["status"] == "solved" and doc["variant"]["ss"] == "dmp"
     depths = switch_depths(doc)
+    assert sum(a != b for *_, (a, b) in depths) == 1  # one change of face, the rest re-contacts
+    assert doc["metrics"]["guided_step"] == pytest.approx(0.002)  # the last attempt's fine steps
     assert depths and all(d.min() >= -1e-5 for d, *_ in depths)
     assert doc["metrics"]["switch_penetration_max"] <= 1e-5
     assert doc["metrics"]["self_consistency_max"] <= doc["task"]["oe"]["self_consistency_tol"]

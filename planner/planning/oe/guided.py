@@ -7,7 +7,8 @@ cone intersected with the tool file's cone, turned by the heading the Omni impos
 ends of the step, since it turns as the object moves), the face held
 under the fit's own rows (the Omni reaching the contact at both ends of its usable range, the tool
 outline there clear of the obstacles), the puck the safety margin from them; A* on the path length
-plus a price per face change, ending with a straight step to the target inside a cone. Each step
+plus a price per face change (weighted A* in the last attempt), ending with a straight step to the
+target inside a cone. Each step
 rolls the contact along its face as the inverse push model has it (``1/c^2`` times the step's
 sideways travel, ``R`` per radian the heading turns; :mod:`tooltransfer.tools.pushing.inverse`); a
 run of one face starts a new contact (a re-contact) where the contact's excursion would outgrow the
@@ -146,9 +147,10 @@ REFUSALS = 2
 #: ``greed``): with the windows of every face its lattice is several times larger, and the shortest
 #: path is not needed, only one the fit can follow.
 GREED = 3.0
-#: Room [m] the last attempt keeps between the tool outline and the obstacles at its nodes: the fit may
-#: place the contact anywhere in a window, and its plans should leave the closed loop's corrections the
-#: room :data:`~tooltransfer.planner.planning.solve.GUIDED_ROOM` asks of a guided plan.
+#: Room [m] the last attempt keeps between the tool outline and the obstacles at its nodes (the earlier
+#: attempts :data:`~.guided_moves.REACH_SLACK`): the fit places the contact anywhere in a window and the
+#: tool turns between nodes, so its plans pass nearer (0.4-0.8 mm on the verdict benchmark); with
+#: REACH_SLACK they broke the 0.25 mm hard check or left the closed loop's corrections no room.
 LAST_ROOM = 0.001
 #: Searches again in the last attempt without the changes of face refused so far (each a cheap search:
 #: a switch with no tool path in reach often recurs a few millimetres further on).
@@ -184,7 +186,7 @@ def _zones(setting: Setting, room: float = REACH_SLACK) -> list[Any]:
     return zones
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Holds:
     """Which of the search's ``faces`` hold the object where: each at both ends of its usable contact
     range (or window), the Omni reaching it there, the tool ``outline`` (M, 2) [m] clear of the
@@ -205,15 +207,17 @@ class _Holds:
                           for e, y in close])
         return bool(shapely.intersects(self.body_zone, shapely.polygons(rings)).any())
 
-    def __call__(self, p: NDArray[np.float64], came: str | None = None) -> list[tuple[str, float, float]]:
+    def __call__(self, p: NDArray[np.float64], came: str | None = None, every: bool = False,
+                 ) -> list[tuple[str, float, float]]:
         """``(face, direction, half)`` [rad] of the faces that can push the object at ``p``: the middle
         of their admissible directions in the world and the half-width the search uses of them. A
-        window of a face held as a whole (``mixed``) is left out unless the node's face ``came`` is it."""
+        window of a face held as a whole (``mixed``) is left out unless the node's face ``came`` is it
+        or ``every`` (the target of a last step, which adds no node to the lattice)."""
         near = math.inf if self.body_zone is None else float(shapely.distance(self.body_zone, shapely.Point(p)))
         out = []
         whole: set[str] = set()  # the faces held as a whole here
         for fm in self.faces:
-            if fm.window is not None and fm.name in whole and fm.key != came:
+            if fm.window is not None and fm.name in whole and fm.key != came and not every:
                 continue
             yaws = [_heading(e, p) for e in fm.ends]
             if any(y is None for y in yaws):
@@ -241,10 +245,13 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     as a whole and, where the whole is not held, its :func:`contact_windows` of that span (a way past an
     obstacle that only a contact toward one end of a face keeps the tool clear on, without multiplying
     the lattice where the whole face is held); ``greed`` (>= 1): the weight of the distance to go in the
-    search's order (weighted A*: a path at most ``greed`` times the length of the shortest under the
-    rules, found with far fewer expansions); ``room`` [m]: how far the tool outline keeps from the
-    obstacles at the search's nodes. A lattice cell is visited once per face (and window), with the
+    search's order (weighted A*: a path whose cost, length plus the price of its changes of face, is at
+    most ``greed`` times the least on the lattice, found with far fewer expansions); ``room`` [m]: how far
+    the tool outline keeps from the obstacles at the search's nodes (``mixed`` and ``windows`` are not
+    taken together: their windows would share keys). A lattice cell is visited once per face (and window), with the
     contacts its first visit had used."""
+    if windows and mixed is not None:
+        raise ValueError("guided_path takes windows or mixed, not both")
     outline = np.asarray(setting.tool.outline.exterior.coords)
     body_zone, centre_zone = _zones(setting, room)
     faces = _face_moves(setting, options, windows)
@@ -270,7 +277,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         d = target - p
         if float(np.hypot(*d)) > 3 * step:
             return None
-        there = {name: (mid, half) for name, mid, half in held(target, came)}
+        there = {name: (mid, half) for name, mid, half in held(target, every=True)}
         way = math.atan2(d[1], d[0])
         for name, mid, half in here:
             if name in there and allowed(came, name, p) and all(abs(math.remainder(way - m, 2 * math.pi)) <= h
@@ -322,9 +329,13 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     there only with its contact toward one end), that with each run's contact kept to one window of
     ``guided_contact_span`` of its face (where narrower than ``contact_span``); then that share on
     :data:`FINE` steps and cells; then ``friction_cone_fraction_max`` (where wider still), on whole and
-    on fine steps; last, at the middle share on fine steps, each face as a whole and, where the whole is
-    not held, on its windows of ``guided_contact_span`` (``mixed``: a contact toward one end of a face
-    where only there the tool clears an obstacle), the search weighted toward the target (:data:`GREED`).
+    on fine steps; last (where ``guided_contact_span`` is narrower than ``contact_span``), at the middle
+    share on fine steps with half steps and new runs, each face as a whole and, where the whole is not
+    held, on its windows of ``guided_contact_span`` (``mixed``: a contact toward one end of a face where
+    only there the tool clears an obstacle), the search weighted toward the target (:data:`GREED`), the
+    tool :data:`LAST_ROOM` from the obstacles at its nodes, and :data:`LAST_REFUSALS` searches again. It
+    runs also where the attempts before it could not push from the start (its windows may), and after
+    a plan with little room (the caller's ``GUIDED_ROOM``), which a roomier one of its own may replace.
     Each attempt's sequence (found within ``options.guided_budget`` expansions, on fine
     steps ``1 / FINE`` times that: a path takes that many more steps) is fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
@@ -360,7 +371,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
             continue  # (which faces can push at the start does not depend on the step or the share)
         opts = options.model_copy(update=change)
         refused: list[Refusal] = []
-        for _ in range(1 + (LAST_REFUSALS if mixed else REFUSALS)):
+        for _ in range(1 + (LAST_REFUSALS if mixed is not None else REFUSALS)):
             plan = _attempt(t, setting, target, opts, universal, refused, windows, more, fine, mixed)
             stuck = stuck and (windows or plan.metrics.get("guided_expansions") == 1.0)
             failed = yield plan
@@ -383,13 +394,13 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
                         room=REACH_SLACK if mixed is None else LAST_ROOM,
                         **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(opts.guided_budget / FINE)}
                            if fine else {"budget": opts.guided_budget}))
+    but = f" without the {len(refused)} change(s) of face refused," if refused else ""
+    on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if windows else ''} of each face"
+          f"{f' or, where that is not held, on its {mixed * 1e3:g} mm windows' if mixed is not None else ''}"
+          f"{', half steps and new runs where it rolls off' if more else ''}"
+          f"{f', the distance to go weighted {GREED:g}' if mixed is not None else ''})")
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
-        but = f" without the {len(refused)} change(s) of face refused," if refused else ""
-        on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if windows else ''} of each face"
-              f"{f' or, where that is not held, on its {mixed * 1e3:g} mm windows' if mixed else ''}"
-              f"{', half steps and new runs where it rolls off' if more else ''}"
-              f"{f', the distance to go weighted {GREED:g}' if mixed else ''})")
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
                         reason=f"at {share:g} of the friction cone{on},{but} {found.describe()}",
                         metrics={"guided_expansions": float(found.expansions),
@@ -402,7 +413,9 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
                                           reason="a face's runs keep their contact to different windows")
     if plan.status != "solved":  # one fit per run of a face, the object at rest between them
         runs = fit_runs(found.xy, found.faces, tg + t[0], setting, opts, found.windows, found.runs)
-        plan = runs if runs.status == "solved" else replace(plan, reason=f"{plan.reason}; {runs.reason}")
+        plan = runs if runs.status == "solved" else replace(
+            plan, reason=f"at {share:g} of the friction cone{on},{but} a path of {len(found.faces)} steps of "
+                         f"{(FINE if fine else 1.0) * STEP * 1e3:g} mm, not fitted: {plan.reason}; {runs.reason}")
     if plan.status == "solved":  # measured like every plan of the variant, at the share it used
         frames = {f.name: FaceFrame.build(setting, f.name, friction_cone_fraction=share) for f in setting.tool.faces
                   if f.name in faces}

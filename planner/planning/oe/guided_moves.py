@@ -106,7 +106,8 @@ def _heading(frame: FaceFrame, p: NDArray[np.float64]) -> float | None:
     return a - math.pi / 2
 
 
-#: Room [m] the search keeps inside the Omni's reach and between the tool outline and the obstacles.
+#: Room [m] the search keeps inside the Omni's reach and, but in its last attempt
+#: (:data:`~.guided.LAST_ROOM`), between the tool outline and the obstacles.
 REACH_SLACK = 5e-4
 
 #: Share of a cone's half-width a step turned back inside it aims at (:func:`_stepped`).
