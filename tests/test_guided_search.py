@@ -401,3 +401,24 @@ def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not
         assert keeps_rules(name, lo, hi, found.xy[k])
         if window is not None and (k == 0 or (found.faces[k - 1], found.windows[k - 1]) != (name, window)):
             assert name not in {key for key, *_ in whole_held(found.xy[k])}  # begun where the whole is not held
+
+
+def test_a_task_only_the_last_attempt_solves_gets_a_plan_that_executes() -> None:
+    """verd200-00099 (l_shape, no obstacle): the fine attempt (whole faces, 2 mm steps, 8000 expansions)
+    finds no path within its expansions; the last attempt, weighted toward the target, does, and its plan
+    passes every hard check and ends within 5 mm of the target open loop on the MuJoCo platform."""
+    pytest.importorskip("mujoco")
+    from tooltransfer.planner.execution.simulate import simulate_plan
+    from tooltransfer.planner.planning.oe.guided import CELL, FINE, STEP
+
+    task = _verdict_task("verd200-00099")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": 0.8})
+    miss = guided_path(setting, np.array(task.start), np.array(task.target), options=options, more=True,
+                       step=FINE * STEP, cell=FINE * CELL, budget=round(options.guided_budget / FINE))
+    assert isinstance(miss, GuidedMiss)
+    plan = solve(task)
+    assert plan.verdict == "solved" and plan.metrics["guided_step"] == pytest.approx(FINE * STEP)
+    assert plan.metrics["friction_cone_fraction"] == pytest.approx(0.8)
+    assert hard_check_failures(plan.metrics) == []
+    assert simulate_plan(plan).final_error < 0.005
