@@ -33,6 +33,25 @@ def _task(task_id: str) -> Task:
     return task_from_dict(data, str(BATCH))
 
 
+def _held_at(setting, name: str, s: float, p: np.ndarray, share: float) -> tuple[bool, shapely.Polygon]:
+    """Whether the Omni's inverse kinematics reaches the tool holding face ``name``'s contact ``s`` [m] along
+    it with the puck at ``p`` (2,) [m], at the heading the face's frame imposes there, and the tool outline
+    there [m]."""
+    frame = FaceFrame.build(setting, name, s=s / setting.tool.face(name).length, friction_cone_fraction=share)
+    x, y, yaw = frame.tool_pose(p[None])[0]
+    ik = inverse_kinematics(setting.platform, [x, y])
+    reached = bool(ik.reachable and ik.heading is not None
+                   and abs(math.remainder(ik.heading - yaw, 2 * math.pi)) < 1e-6)
+    rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
+    return reached, shapely.Polygon(np.asarray(setting.tool.outline.exterior.coords) @ rot.T + [x, y])
+
+
+def _room(setting, body: shapely.Polygon) -> float:
+    """How far [m] ``body`` is from the nearest obstacle (infinite without one)."""
+    return min((shapely.distance(body, o.polygon() if isinstance(o, Disc) else o) for o in setting.obstacles),
+               default=math.inf)
+
+
 def test_the_guided_path_keeps_the_rules_it_searches_under() -> None:
     task = _task("exec60-00023")
     setting = setting_from_task(task, task_skills(task, need_ss=False))
@@ -49,19 +68,9 @@ def test_the_guided_path_keeps_the_rules_it_searches_under() -> None:
     options = qp_options(task)
     for k, name in enumerate(found.faces):
         p, d = found.xy[k], found.xy[k + 1] - found.xy[k]
-        face = setting.tool.face(name)
-        lo, hi = usable_range(setting.tool, name, options)
-        for s in (lo, hi):
-            frame = FaceFrame.build(setting, name, s=s / face.length,
-                                    friction_cone_fraction=options.friction_cone_fraction)
-            x, y, yaw = frame.tool_pose(p[None])[0]
-            ik = inverse_kinematics(setting.platform, [x, y])
-            assert ik.reachable and ik.heading is not None
-            assert abs(math.remainder(ik.heading - yaw, 2 * math.pi)) < 1e-6
-            rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
-            body = shapely.Polygon(np.asarray(setting.tool.outline.exterior.coords) @ rot.T + [x, y])
-            assert all(shapely.distance(body, o.polygon() if isinstance(o, Disc) else o) > 0.0
-                       for o in setting.obstacles)
+        for s in usable_range(setting.tool, name, options):
+            reached, body = _held_at(setting, name, s, p, options.friction_cone_fraction)
+            assert reached and _room(setting, body) > 0.0
         mid = FaceFrame.build(setting, name, friction_cone_fraction=options.friction_cone_fraction)
         for end in (p, found.xy[k + 1]):  # the cone turns with the heading: inside it at both ends of the step
             off = math.remainder(math.atan2(d[1], d[0]) - mid.push_direction(end[None])[0], 2 * math.pi)
@@ -280,13 +289,7 @@ def test_a_start_held_only_toward_one_end_of_a_face_is_pushed_from_with_the_cont
     for k, (name, window) in enumerate(zip(found.faces, found.windows, strict=True)):
         lo, hi = window or usable_range(setting.tool, name, options)
         assert hi - lo <= options.contact_span + 1e-12
-        face = setting.tool.face(name)
-        for s in (lo, hi):
-            frame = FaceFrame.build(setting, name, s=s / face.length, friction_cone_fraction=0.8)
-            x, y, yaw = frame.tool_pose(found.xy[k][None])[0]
-            ik = inverse_kinematics(setting.platform, [x, y])
-            assert ik.reachable and ik.heading is not None
-            assert abs(math.remainder(ik.heading - yaw, 2 * math.pi)) < 1e-6
+        assert all(_held_at(setting, name, s, found.xy[k], 0.8)[0] for s in (lo, hi))
 
 
 def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the_start() -> None:
@@ -379,26 +382,13 @@ def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not
     whole_held = _Holds(_face_moves(setting, options), np.asarray(setting.tool.outline.exterior.coords),
                         _zones(setting, LAST_ROOM)[0])
 
-    def keeps_rules(name: str, lo: float, hi: float, p: np.ndarray) -> bool:
-        face = setting.tool.face(name)
-        for s in (lo, hi):
-            frame = FaceFrame.build(setting, name, s=s / face.length, friction_cone_fraction=0.8)
-            x, y, yaw = frame.tool_pose(p[None])[0]
-            ik = inverse_kinematics(setting.platform, [x, y])
-            if not ik.reachable or ik.heading is None or abs(math.remainder(ik.heading - yaw, 2 * math.pi)) > 1e-6:
-                return False
-            rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
-            body = shapely.Polygon(np.asarray(setting.tool.outline.exterior.coords) @ rot.T + [x, y])
-            if not all(shapely.distance(body, o.polygon() if isinstance(o, Disc) else o) > LAST_ROOM
-                       for o in setting.obstacles):
-                return False
-        return True
-
     for k, (name, window) in enumerate(zip(found.faces, found.windows, strict=True)):
         whole = usable_range(setting.tool, name, options)
         lo, hi = window or whole
         assert hi - lo <= (options.guided_contact_span if window else options.contact_span) + 1e-12
-        assert keeps_rules(name, lo, hi, found.xy[k])
+        for s in (lo, hi):
+            reached, body = _held_at(setting, name, s, found.xy[k], 0.8)
+            assert reached and _room(setting, body) > LAST_ROOM
         if window is not None and (k == 0 or (found.faces[k - 1], found.windows[k - 1]) != (name, window)):
             assert name not in {key for key, *_ in whole_held(found.xy[k])}  # begun where the whole is not held
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections import deque
 from pathlib import Path
 
 import numpy as np
@@ -87,32 +88,40 @@ def lattice_search(setting, start: np.ndarray, target: np.ndarray, *, step: floa
     the puck all along; a step from the edge of a face's reach otherwise ends outside it). A denser search
     (``benchmarks/check_certificates.py --dense``) takes more of each. ``visited``: a list the positions
     (2,) [m] the search reaches are appended to, the start first."""
-    tool, radius, obstacles = setting.tool, setting.radius, list(setting.obstacles)
+    tool, radius = setting.tool, setting.radius
+    obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]  # made once, not per step
     clear = radius + setting.margin - 1e-5
     mu_half = math.atan(setting.mechanics.mu)
-    frontier, seen = [start], {tuple(np.floor(start / cell).astype(int))}
+    frontier, seen = deque([start]), {tuple(np.floor(start / cell).astype(int))}
     best, n = float(np.hypot(*(start - target))), 0
+    yaws_at: dict[tuple[str, bytes], list[float]] = {}  # a step's end held (ends_held), then expanded
+
+    def holds(face, p: np.ndarray) -> list[float]:
+        key = (face.name, p.tobytes())
+        if key not in yaws_at:
+            yaws_at[key] = _holds(tool, face, setting.platform, p, radius, obstacles, contacts)
+        return yaws_at[key]
+
     if visited is not None:
         visited.append(np.asarray(start, dtype=float))
     while frontier and n < budget:
-        p = frontier.pop(0)
+        p = frontier.popleft()
         n += 1
         for face in tool.faces:
             off = math.remainder(face.push_angle - face.normal_angle, 2 * math.pi)
             lo, hi = max(-mu_half, off - face.theta_b), min(mu_half, off + face.theta_b)
             if hi < lo:
                 continue
-            for yaw in _holds(tool, face, setting.platform, p, radius, obstacles, contacts)[::yaw_stride]:
+            for yaw in holds(face, p)[::yaw_stride]:
                 for ang in _edges_first(np.linspace(lo, hi, directions)):
                     w = yaw + face.normal_angle + ang
                     q = p + step * np.array([math.cos(w), math.sin(w)])
                     key = tuple(np.floor(q / cell).astype(int))
                     if key in seen:
                         continue
-                    if any(shapely.distance(shapely.Point(q), o.polygon() if isinstance(o, Disc) else o) < clear
-                           for o in obstacles):
+                    if any(shapely.distance(shapely.Point(q), o) < clear for o in obstacles):
                         continue
-                    if ends_held and not _holds(tool, face, setting.platform, q, radius, obstacles, contacts):
+                    if ends_held and not holds(face, q):
                         continue
                     seen.add(key)
                     frontier.append(q)

@@ -27,7 +27,7 @@ import heapq
 import math
 from collections.abc import Generator, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import shapely
@@ -184,6 +184,22 @@ def _zones(setting: Setting, room: float = REACH_SLACK) -> list[Any]:
         if z is not None:
             shapely.prepare(z)
     return zones
+
+
+class _Rung(NamedTuple):
+    """One attempt of :func:`guided_plans`' ladder: the options it changes (``change``: the share of the
+    friction cone, the contact span) and the search's settings (as :func:`guided_path` takes them; ``fine``:
+    steps and cells of a :data:`FINE` share of the usual and ``1 / FINE`` times the expansions;
+    ``refusals``: how many times it searches again without a change of face a later stage refused)."""
+
+    change: dict[str, float]
+    windows: bool = False
+    more: bool = False
+    fine: bool = False
+    mixed: float | None = None
+    greed: float = 1.0
+    room: float = REACH_SLACK
+    refusals: int = REFUSALS
 
 
 @dataclass(frozen=True, eq=False)
@@ -351,29 +367,30 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     target = universal[-1] if target is None else target
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
     share = options.friction_cone_fraction
-    tries: list[tuple[dict[str, float], bool, bool, bool, float | None]] = [
-        ({"friction_cone_fraction": share}, False, False, False, None)]
     middle = max(share, min(wide, MIDDLE_SHARE))  # the rung of the ladder below the widest share
+    at_middle = {"friction_cone_fraction": middle}
+    tries = [_Rung({"friction_cone_fraction": share})]
     if middle > share:
-        tries.append(({"friction_cone_fraction": middle}, False, False, False, None))
-    tries.append(({"friction_cone_fraction": middle}, False, True, False, None))
+        tries.append(_Rung(at_middle))
+    tries.append(_Rung(at_middle, more=True))
     if span < options.contact_span:
-        tries.append(({"friction_cone_fraction": middle, "contact_span": span}, True, True, False, None))
-    tries.append(({"friction_cone_fraction": middle}, False, True, True, None))
+        tries.append(_Rung({**at_middle, "contact_span": span}, windows=True, more=True))
+    tries.append(_Rung(at_middle, more=True, fine=True))
     if wide > middle:
-        tries += [({"friction_cone_fraction": wide}, False, True, fine, None) for fine in (False, True)]
+        tries += [_Rung({"friction_cone_fraction": wide}, more=True, fine=fine) for fine in (False, True)]
     if span < options.contact_span:
-        tries.append(({"friction_cone_fraction": middle}, False, True, True, span))
+        tries.append(_Rung(at_middle, more=True, fine=True, mixed=span, greed=GREED, room=LAST_ROOM,
+                           refusals=LAST_REFUSALS))
     stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
-    for change, windows, more, fine, mixed in tries:
-        if (windows and not stuck) or (stuck and mixed is None
-                                       and (fine or change["friction_cone_fraction"] > middle)):
+    for rung in tries:
+        if (rung.windows and not stuck) or (stuck and rung.mixed is None
+                                            and (rung.fine or rung.change["friction_cone_fraction"] > middle)):
             continue  # (which faces can push at the start does not depend on the step or the share)
-        opts = options.model_copy(update=change)
+        opts = options.model_copy(update=rung.change)
         refused: list[Refusal] = []
-        for _ in range(1 + (LAST_REFUSALS if mixed is not None else REFUSALS)):
-            plan = _attempt(t, setting, target, opts, universal, refused, windows, more, fine, mixed)
-            stuck = stuck and (windows or plan.metrics.get("guided_expansions") == 1.0)
+        for _ in range(1 + rung.refusals):
+            plan = _attempt(t, setting, target, opts, universal, refused, rung)
+            stuck = stuck and (rung.windows or plan.metrics.get("guided_expansions") == 1.0)
             failed = yield plan
             where = getattr(failed, "where", None)
             if plan.status != "solved" or where is None:
@@ -382,23 +399,19 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
 
 
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
-             universal: NDArray[np.float64], refused: list[Refusal], windows: bool = False,
-             more: bool = False, fine: bool = False, mixed: float | None = None) -> PushPlan:
-    """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes
-    (``windows``, ``more``, ``mixed``: as :func:`guided_path` takes them, ``mixed`` with a weight
-    :data:`GREED` on the distance to go and the tool :data:`LAST_ROOM` from the obstacles; ``fine``:
-    steps and cells of a :data:`FINE` share of the usual, and ``1 / FINE`` times the expansions)."""
-    share = opts.friction_cone_fraction
-    found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=windows, more=more,
-                        mixed=mixed, greed=1.0 if mixed is None else GREED,
-                        room=REACH_SLACK if mixed is None else LAST_ROOM,
+             universal: NDArray[np.float64], refused: list[Refusal], rung: _Rung) -> PushPlan:
+    """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes, on
+    the search's settings of ``rung`` (:class:`_Rung`)."""
+    share, fine, mixed = opts.friction_cone_fraction, rung.fine, rung.mixed
+    found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=rung.windows,
+                        more=rung.more, mixed=mixed, greed=rung.greed, room=rung.room,
                         **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(opts.guided_budget / FINE)}
                            if fine else {"budget": opts.guided_budget}))
     but = f" without the {len(refused)} change(s) of face refused," if refused else ""
-    on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if windows else ''} of each face"
+    on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if rung.windows else ''} of each face"
           f"{f' or, where that is not held, on its {mixed * 1e3:g} mm windows' if mixed is not None else ''}"
-          f"{', half steps and new runs where it rolls off' if more else ''}"
-          f"{f', the distance to go weighted {GREED:g}' if mixed is not None else ''})")
+          f"{', half steps and new runs where it rolls off' if rung.more else ''}"
+          f"{f', the distance to go weighted {rung.greed:g}' if rung.greed != 1.0 else ''})")
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
