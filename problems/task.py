@@ -221,10 +221,11 @@ class OEOptions(_Model):
         0.5, gt=0, le=1, allow_inf_nan=False, strict=True,
         description="share of the friction cone's half-angle atan(mu) the planned object directions may use")
     friction_cone_fraction_max: float = Field(
-        0.8, gt=0, le=1, allow_inf_nan=False, strict=True,
+        0.95, gt=0, le=1, allow_inf_nan=False, strict=True,
         description="widest share of the friction cone's half-angle the guided search may use where no plan "
-                    "keeps to friction_cone_fraction (it tries 0.8 first where this is wider; at most "
-                    "friction_cone_fraction: never wider)")
+                    "keeps to friction_cone_fraction (it tries 0.8 first where this is wider, and this share "
+                    "last; at most friction_cone_fraction: never wider). A plan records the share it used "
+                    "(metric friction_cone_fraction): near 1 it has little margin for an error in mu")
     guided_budget: int = Field(
         4000, ge=100, le=1_000_000, strict=True,
         description="expansions of the guided search per attempt (cone share and contact span) "

@@ -292,21 +292,28 @@ def test_a_start_held_only_toward_one_end_of_a_face_is_pushed_from_with_the_cont
         assert all(_held_at(setting, name, s, found.xy[k], 0.8)[0] for s in (lo, hi))
 
 
+def _widest(task: Task, share: float) -> Task:
+    """``task`` with ``oe.friction_cone_fraction_max`` at ``share``."""
+    return task.model_copy(update={"oe": task.oe.model_copy(update={"friction_cone_fraction_max": share})})
+
+
 def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the_start() -> None:
     """The windows' attempt is the costliest (up to five moves per face): it runs where every attempt
     before it closed at the start (verd200-00056: no face holds the puck there with its contact at the
-    middle of the face) and not where they moved and failed later (verd200-00011). Where they closed at
-    the start, the fine steps' attempt is left out (which faces hold the puck there does not depend on the
-    step); where they moved, it runs after them. The last attempt, the whole faces and their windows
-    where the whole is not held, runs in both cases (on fine steps)."""
+    middle of the face) and not where they moved and failed later (verd200-00011, its widest share
+    0.8). Where they closed at the start, the fine steps' attempt is left out (which faces hold the puck
+    there does not depend on the step), and so are the widest share's whole faces; where they moved, it
+    runs after them. The attempt on the whole faces and their windows where the whole is not held runs
+    in both cases (on fine steps), at 0.8 of the cone and, last, at the widest share where that is wider."""
     stuck = solve(_verdict_task("verd200-00056"))
     assert stuck.verdict != "solved"
     # three attempts closed at once, then the windows' attempt (its path fails later, at the approach)
     assert (stuck.reason or "").count("its space closed after 1 expansions") == 3
     attempts = (stuck.reason or "").split("the guided search: ")[1].split("; then ")
-    assert len(attempts) == 5 and all(" 2 mm steps" not in a and " 2 mm, " not in a for a in attempts[:4])
-    assert "where that is not held, on its 4 mm windows" in attempts[4] and " 2 mm, not fitted" in attempts[4]
-    moved = solve(_verdict_task("verd200-00011"))
+    assert len(attempts) == 6 and all(" 2 mm steps" not in a and " 2 mm, " not in a for a in attempts[:4])
+    for a, share in zip(attempts[4:], ("0.8", "0.95"), strict=True):
+        assert a.startswith(f"at {share} of the friction cone") and "where that is not held, on its 4 mm windows" in a
+    moved = solve(_widest(_verdict_task("verd200-00011"), 0.8))
     assert moved.verdict != "solved" and "windows of each face" not in (moved.reason or "")
     attempts = (moved.reason or "").split("the guided search: ")[1].split("; then ")
     assert "half steps and new runs" in attempts[2] and " 4 mm steps" in attempts[2]
@@ -410,5 +417,24 @@ def test_a_task_only_the_last_attempt_solves_gets_a_plan_that_executes() -> None
     plan = solve(task)
     assert plan.verdict == "solved" and plan.metrics["guided_step"] == pytest.approx(FINE * STEP)
     assert plan.metrics["friction_cone_fraction"] == pytest.approx(0.8)
+    assert hard_check_failures(plan.metrics) == []
+    assert simulate_plan(plan).final_error < 0.005
+
+
+def test_a_task_only_the_widest_share_of_the_cone_solves_gets_a_plan_at_that_share_last() -> None:
+    """verd200-00011 (slope, no obstacle): with the widest share at 0.8 no attempt finds a plan (the
+    ladder test above); at the default ``oe.friction_cone_fraction_max`` (0.95) the attempts at that share
+    come after every attempt at 0.8 and one of them finds a plan, which records the share it used, passes
+    every hard check (its cone measured at that share) and ends within 5 mm of the target open loop on
+    the MuJoCo platform."""
+    pytest.importorskip("mujoco")
+    from tooltransfer.planner.execution.simulate import simulate_plan
+
+    task = _verdict_task("verd200-00011")
+    assert task.oe.friction_cone_fraction_max == pytest.approx(0.95)
+    plan = solve(task)
+    assert plan.verdict == "solved", plan.reason
+    assert plan.metrics["friction_cone_fraction"] == pytest.approx(0.95)
+    assert plan.metrics["alternatives_tried"] >= 6  # the scored candidates, then five attempts at 0.5 and 0.8
     assert hard_check_failures(plan.metrics) == []
     assert simulate_plan(plan).final_error < 0.005

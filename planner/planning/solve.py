@@ -145,7 +145,8 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
     every check, where the scored candidates left ``failed``; else ``failed`` with each attempt's reason
     added. A switch that found no tool path is sent back to the search (it may avoid it). A plan whose
     tool comes within :data:`GUIDED_ROOM` of an obstacle is kept only when no later attempt gives one
-    with more room (the closed loop's corrections need some)."""
+    with more room (the closed loop's corrections need some), but for the attempts at the widest share of
+    the friction cone (metric ``guided_widest``), which would spend the margin kept for an error in ``mu``."""
     clock = time.perf_counter()
     whys: list[str] = []
     n_tried = n_on_budget = 0  # the attempts, and those whose search ended on its budget (not its space)
@@ -157,6 +158,8 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
         except StopIteration:
             break
         refused = None
+        if tight is not None and guided.metrics.get("guided_widest"):
+            break  # a plan at the widest share of the friction cone would trade its margin for the room
         n_tried += 1
         n_on_budget += int(guided.metrics.get("guided_on_budget", 0.0) > 0.0)
         if guided.status == "solved":

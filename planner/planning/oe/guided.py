@@ -190,7 +190,8 @@ class _Rung(NamedTuple):
     """One attempt of :func:`guided_plans`' ladder: the options it changes (``change``: the share of the
     friction cone, the contact span) and the search's settings (as :func:`guided_path` takes them; ``fine``:
     steps and cells of a :data:`FINE` share of the usual and ``1 / FINE`` times the expansions;
-    ``refusals``: how many times it searches again without a change of face a later stage refused)."""
+    ``refusals``: how many times it searches again without a change of face a later stage refused;
+    ``widest``: at ``friction_cone_fraction_max`` beyond :data:`MIDDLE_SHARE`, the ladder's last rungs)."""
 
     change: dict[str, float]
     windows: bool = False
@@ -200,6 +201,7 @@ class _Rung(NamedTuple):
     greed: float = 1.0
     room: float = REACH_SLACK
     refusals: int = REFUSALS
+    widest: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -344,14 +346,16 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     off its face; then, where no attempt before could push from the start at all (the Omni may hold a face
     there only with its contact toward one end), that with each run's contact kept to one window of
     ``guided_contact_span`` of its face (where narrower than ``contact_span``); then that share on
-    :data:`FINE` steps and cells; then ``friction_cone_fraction_max`` (where wider still), on whole and
-    on fine steps; last (where ``guided_contact_span`` is narrower than ``contact_span``), at the middle
-    share on fine steps with half steps and new runs, each face as a whole and, where the whole is not
-    held, on its windows of ``guided_contact_span`` (``mixed``: a contact toward one end of a face where
-    only there the tool clears an obstacle), the search weighted toward the target (:data:`GREED`), the
-    tool :data:`LAST_ROOM` from the obstacles at its nodes, and :data:`LAST_REFUSALS` searches again. It
-    runs also where the attempts before it could not push from the start (its windows may), and after
-    a plan with little room (the caller's ``GUIDED_ROOM``), which a roomier one of its own may replace.
+    :data:`FINE` steps and cells; then (where ``guided_contact_span`` is narrower than ``contact_span``)
+    at the middle share on fine steps with half steps and new runs, each face as a whole and, where the
+    whole is not held, on its windows of ``guided_contact_span`` (``mixed``: a contact toward one end of a
+    face where only there the tool clears an obstacle), the search weighted toward the target
+    (:data:`GREED`), the tool :data:`LAST_ROOM` from the obstacles at its nodes, and
+    :data:`LAST_REFUSALS` searches again; last, where ``friction_cone_fraction_max`` is wider still, that
+    share on whole and on fine steps, then as the attempt before (plans at the edge of the cone, where
+    nothing narrower was found: a task the certificate's whole cone cannot rule out). The ``mixed``
+    attempts run also where the attempts before them could not push from the start (their windows may),
+    and after a plan with little room (the caller's ``GUIDED_ROOM``), which a roomier one may replace.
     Each attempt's sequence (found within ``options.guided_budget`` expansions, on fine
     steps ``1 / FINE`` times that: a path takes that many more steps) is fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
@@ -376,11 +380,17 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     if span < options.contact_span:
         tries.append(_Rung({**at_middle, "contact_span": span}, windows=True, more=True))
     tries.append(_Rung(at_middle, more=True, fine=True))
-    if wide > middle:
-        tries += [_Rung({"friction_cone_fraction": wide}, more=True, fine=fine) for fine in (False, True)]
-    if span < options.contact_span:
-        tries.append(_Rung(at_middle, more=True, fine=True, mixed=span, greed=GREED, room=LAST_ROOM,
-                           refusals=LAST_REFUSALS))
+    mixed = span < options.contact_span
+
+    def last(change: dict[str, float], widest: bool = False) -> _Rung:
+        return _Rung(change, more=True, fine=True, mixed=span, greed=GREED, room=LAST_ROOM, refusals=LAST_REFUSALS,
+                     widest=widest)
+
+    tries += [last(at_middle)] if mixed else []
+    if wide > middle:  # the widest share last of all: plans nearer the edge of the cone keep less margin
+        at_wide = {"friction_cone_fraction": wide}
+        tries += [_Rung(at_wide, more=True, fine=fine, widest=True) for fine in (False, True)]
+        tries += [last(at_wide, widest=True)] if mixed else []
     stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
     for rung in tries:
         if (rung.windows and not stuck) or (stuck and rung.mixed is None
@@ -390,7 +400,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
         refused: list[Refusal] = []
         for _ in range(1 + rung.refusals):
             plan = _attempt(t, setting, target, opts, universal, refused, rung)
-            stuck = stuck and (rung.windows or plan.metrics.get("guided_expansions") == 1.0)
+            stuck = stuck and (rung.windows or rung.mixed is not None or plan.metrics.get("guided_expansions") == 1.0)
             failed = yield plan
             where = getattr(failed, "where", None)
             if plan.status != "solved" or where is None:
@@ -434,4 +444,6 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
                   if f.name in faces}
         plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share,
                             guided_step=FINE * STEP if fine else STEP)
+    if rung.widest:  # the caller keeps a plan with little room of a narrower share rather than this
+        plan.metrics["guided_widest"] = 1.0
     return plan
