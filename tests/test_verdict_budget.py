@@ -50,8 +50,8 @@ def test_an_unknown_whose_searches_closed_their_space_is_not_budget_limited() ->
 
 
 def test_an_unknown_whose_search_ran_out_of_expansions_is_budget_limited() -> None:
-    """verd200-00011 (slope): the attempt on fine steps spends its expansions."""
-    task = generated("verdicts_200.yaml", "verd200-00011")
+    """verd200-00120 (finger, one obstacle): attempts on fine steps spend their expansions."""
+    task = generated("verdicts_200.yaml", "verd200-00120")
     plan = solve(task)
     assert plan.status == "unknown", plan.reason
     assert plan.metrics["guided_attempts_on_budget"] >= 1
@@ -88,3 +88,18 @@ def test_solve_json_says_whether_an_unknown_stopped_on_a_budget(tmp_path, capsys
     summary = json.loads(capsys.readouterr().out)
     assert summary["status"] == "unknown" and summary["evidence"] == "search_exhausted"
     assert summary["budget_limited"] is False
+
+
+def test_a_task_the_certificate_proves_infeasible_is_not_searched_further() -> None:
+    """The certificate is looked for before the guided search (a sound one leaves it nothing to find):
+    exec60-00016 (certified) runs no attempt of it, and its time to certify is part of its planning time;
+    exec60-00022 (unknown) runs the guided search after the certificate failed, and keeps that look's
+    account and time."""
+    certified = solve(generated("execution_60.yaml", "exec60-00016"))
+    assert certified.status == "infeasible" and certified.evidence["kind"] == "backward_reachable"
+    assert "guided_attempts" not in certified.metrics and "the guided search" not in certified.reason
+    assert certified.metrics["time_certify"] > 0
+    unknown = solve(generated("execution_60.yaml", "exec60-00022"))
+    assert unknown.status == "unknown" and unknown.metrics["guided_attempts"] >= 4
+    assert unknown.evidence["not_proved"].startswith("backward-reachable set of the target")
+    assert unknown.metrics["time_certify"] > 0

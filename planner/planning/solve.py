@@ -44,7 +44,7 @@ from tooltransfer.planner.planning.setting import Setting, setting_from_task, ta
 from tooltransfer.planner.planning.switches import with_fallback
 from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN, tool_obstacle_clearance
 from tooltransfer.planner.planning.variant_registry import needs_ss_skill, oe_variant, switch_planner
-from tooltransfer.planner.planning.verdicts.decide import attach_verdict
+from tooltransfer.planner.planning.verdicts.decide import Sought, attach_verdict, seek_certificate
 from tooltransfer.problems.task import Task, resolve, task_origin
 from tooltransfer.tools.pushing.forward import simulate
 
@@ -75,7 +75,9 @@ def solve(task: Task, task_path: str | Path | None = None, *, budget: float = 1.
     condensing's candidates fail); where no plan is found, ``"infeasible"`` with a certificate that no plan
     exists under the rules it states (:mod:`tooltransfer.planner.planning.verdicts`), else
     ``"unknown"`` with what was searched (``"violated"`` keeps a plan that breaks a hard check). The
-    plan's ``evidence`` holds the certificate or the search's account.
+    plan's ``evidence`` holds the certificate or the search's account. Where the variant has a guided
+    search, the certificate is looked for before it: a task it proves infeasible is not searched
+    further (its metric ``time_certify`` is that look's, also on a plan the guided search then solves).
 
     Relative paths in the task are relative to ``task_path``'s folder, by default the folder of the file
     the task was loaded from (:func:`~tooltransfer.problems.task.load_task`; the working folder for a task
@@ -85,8 +87,8 @@ def solve(task: Task, task_path: str | Path | None = None, *, budget: float = 1.
     arguments) where the variant's condensing found no plan and the slower stages begin (the guided
     search, the certificate): a tool choice stops only candidates that have called it."""
     check_budget(budget)
-    plan, setting = _search(task, task_path, budget, on_slow)
-    return attach_verdict(plan, setting, np.array(task.start), np.array(task.target), budget=budget)
+    plan, setting, sought = _search(task, task_path, budget, on_slow)
+    return attach_verdict(plan, setting, np.array(task.start), np.array(task.target), budget=budget, sought=sought)
 
 
 def check_budget(budget: object, field: str = "budget") -> float:
@@ -99,8 +101,10 @@ def check_budget(budget: object, field: str = "budget") -> float:
 
 
 def _search(task: Task, task_path: str | Path | None, budget: float = 1.0,
-            on_slow: Callable[[], None] | None = None) -> tuple[Plan, Setting]:
-    """The planner's search (module docstring): the plan, or the best failure, and the world it used."""
+            on_slow: Callable[[], None] | None = None) -> tuple[Plan, Setting, Sought | None]:
+    """The planner's search (module docstring): the plan, or the best failure, the world it used and,
+    where the variant has a guided search, the certificate looked for before it (a task proved
+    infeasible is not searched further; a sound certificate leaves nothing to find)."""
     task_path = task_origin(task, task_path)
     stages: dict[str, float] = {}
     start = clock = time.perf_counter()
@@ -134,9 +138,14 @@ def _search(task: Task, task_path: str | Path | None, budget: float = 1.0,
         plan = _candidates(task, setting, push_plan, switch, recontact, stages, base, start)
     if plan.status != "solved" and on_slow is not None:
         on_slow()
+    sought = None
     if plan.status != "solved" and oe.guided is not None:
-        plan = _guided(task, setting, oe.guided(t, x, setting, target, options), plan, switch, recontact, base, start)
-    return plan, setting
+        sought = seek_certificate(setting, np.array(task.start), target, budget=budget)
+        if sought.cert is None:
+            plan = _guided(task, setting, oe.guided(t, x, setting, target, options), plan, switch, recontact, base,
+                           start)
+            plan.metrics["time_certify"] = sought.spent
+    return plan, setting, sought
 
 
 def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], failed: Plan, switch: Any,

@@ -12,7 +12,7 @@ could change that, :func:`budget_limited`).
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -20,7 +20,7 @@ import numpy as np
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.verdicts.backward import BUDGET_SPENT
-from tooltransfer.planner.planning.verdicts.certificate import FINE_BLOCKS, certify
+from tooltransfer.planner.planning.verdicts.certificate import FINE_BLOCKS, Certificate, certify
 from tooltransfer.planner.planning.verdicts.rules import setting_rules
 
 #: Block updates the backward-reachable set may make before the verdict is left ``unknown``.
@@ -37,20 +37,40 @@ def budget_limited(metrics: dict[str, float], not_proved: str) -> bool:
     return metrics.get("guided_attempts_on_budget", 0.0) > 0.0 or BUDGET_SPENT in not_proved
 
 
+@dataclass(frozen=True)
+class Sought:
+    """A look for a certificate (:func:`seek_certificate`): the certificate, or None with ``why`` nothing
+    was proved, and the seconds [s] it took."""
+
+    cert: Certificate | None
+    why: str
+    spent: float
+
+
+def seek_certificate(setting: Setting, start: np.ndarray, target: np.ndarray, *, max_blocks: int = CERTIFY_BLOCKS,
+                     budget: float = 1.0) -> Sought:
+    """A certificate that the object cannot be pushed from ``start`` to ``target`` (2,) [m] under the rules
+    of ``setting`` (:func:`certify`); ``budget`` scales its block updates (``max_blocks`` and each of
+    :data:`FINE_BLOCKS`)."""
+    t0 = time.perf_counter()
+    cert, why = certify(setting_rules(setting), np.asarray(start, dtype=np.float64),
+                        np.asarray(target, dtype=np.float64), max_blocks=round(max_blocks * budget),
+                        fine_blocks=tuple(round(b * budget) for b in FINE_BLOCKS))
+    return Sought(cert, why, time.perf_counter() - t0)
+
+
 def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.ndarray, *,
-                   max_blocks: int = CERTIFY_BLOCKS, budget: float = 1.0) -> Plan:
+                   max_blocks: int = CERTIFY_BLOCKS, budget: float = 1.0, sought: Sought | None = None) -> Plan:
     """``plan`` (not ``solved``) with its verdict and evidence (module docstring); a solved plan is
-    returned as it is, with the evidence that it is one. ``budget`` scales the certificate's block
-    updates (``max_blocks`` and each of :data:`FINE_BLOCKS`)."""
+    returned as it is, with the evidence that it is one. ``sought``: the certificate already looked for
+    (:func:`seek_certificate`, before the search's costlier stages: a task it proves infeasible needs no
+    more search); else it is looked for here, ``budget`` scaling its block updates."""
     if plan.status == "solved":
         return replace(plan, evidence={"verdict": "solved", "kind": "plan",
                                        "checks": "every hard check holds (metrics)", "budget": budget})
-    t0 = time.perf_counter()
-    rules = setting_rules(setting)
-    cert, why = certify(rules, np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64),
-                        max_blocks=round(max_blocks * budget),
-                        fine_blocks=tuple(round(b * budget) for b in FINE_BLOCKS))
-    spent = time.perf_counter() - t0
+    if sought is None:
+        sought = seek_certificate(setting, start, target, max_blocks=max_blocks, budget=budget)
+    cert, why, spent = sought.cert, sought.why, sought.spent
     metrics = {**plan.metrics, "time_certify": spent}
     if "time_total" in metrics:
         metrics["time_total"] += spent
