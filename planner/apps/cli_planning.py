@@ -121,7 +121,8 @@ def cmd_solve(args: argparse.Namespace) -> int:
                "pushes": " ".join(p.faces[0] for p in plan.pushes), "plan": str(args.out) if args.out else None,
                **{k: m[k] for k in ("goal_error", "cone_violation_max", "reach_violation_max", "obstacle_clearance_min",
                                     "tool_obstacle_clearance_min", "switch_clearance_min", "switch_penetration_max",
-                                    "joint_limit_violation_max", "duration") if k in m},
+                                    "joint_limit_violation_max", "duration",
+                                    "friction_cone_fraction") if k in m},  # a guided plan's share of the cone
                # the solve's wall time; a plan that stopped early has no time_total: the stages it ran
                "planning_time": m.get("time_total", sum(v for k, v in m.items() if k.startswith("time_"))),
                "evidence": plan.evidence.get("kind"),

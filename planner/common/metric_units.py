@@ -65,8 +65,10 @@ UNITS: dict[str, Unit] = {
     # a plan of the guided search (tooltransfer.planner.planning.oe.guided): the share of the friction
     # cone's half-angle it kept to, its search's step, its time, the expansions of a search that failed
     # and whether it ended on its budget (1) or with its space closed (0); on a plan the search did not
-    # solve, its attempts and how many of them ended on their budget
+    # solve, its attempts and how many of them ended on their budget; 1 where the plan came from an
+    # attempt at the widest share (oe.friction_cone_fraction_max, beyond 0.8: little margin for mu)
     "friction_cone_fraction": "",
+    "guided_widest": "",
     "guided_step": "m",
     "time_guided": "s",
     "guided_expansions": "",
