@@ -438,3 +438,24 @@ def test_a_task_only_the_widest_share_of_the_cone_solves_gets_a_plan_at_that_sha
     assert plan.metrics["alternatives_tried"] >= 6  # the scored candidates, then five attempts at 0.5 and 0.8
     assert hard_check_failures(plan.metrics) == []
     assert simulate_plan(plan).final_error < 0.005
+
+
+def test_the_widest_share_is_tried_only_where_it_widens_some_face_s_cone() -> None:
+    """On l_shape every face's push cone of the tool file (``push_angle +- theta_b``) lies inside 0.8 of the
+    friction cone, so an attempt at 0.95 would search and fit the same cones again: exec60-00054 (l_shape,
+    unknown) makes none; the slope's ``inclined`` face's cone does widen (verd200-00011 is solved at 0.95,
+    the test above)."""
+    from tooltransfer.planner.planning.oe.guided import _widens
+
+    task = _task("exec60-00054")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    half = setting.mechanics.friction_angle
+    for f in setting.tool.faces:  # the tool file's cone within 0.8 of the friction cone, either side
+        off = math.remainder(f.push_angle - f.normal_angle, 2 * math.pi)
+        assert abs(off) + f.theta_b <= 0.8 * half
+    assert not _widens(setting, 0.8, 0.95)
+    plan = solve(task)
+    assert plan.verdict == "unknown" and "at 0.95 of the friction cone" not in (plan.reason or "")
+    assert "at 0.8 of the friction cone" in (plan.reason or "")
+    slope = _verdict_task("verd200-00011")
+    assert _widens(setting_from_task(slope, task_skills(slope, need_ss=False)), 0.8, 0.95)

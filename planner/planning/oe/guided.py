@@ -33,7 +33,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.planner.planning.oe.face_frame import FaceFrame
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
 from tooltransfer.planner.planning.oe.guided_moves import (
     REACH_SLACK,
     _Contact,
@@ -351,9 +351,10 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     whole is not held, on its windows of ``guided_contact_span`` (``mixed``: a contact toward one end of a
     face where only there the tool clears an obstacle), the search weighted toward the target
     (:data:`GREED`), the tool :data:`LAST_ROOM` from the obstacles at its nodes, and
-    :data:`LAST_REFUSALS` searches again; last, where ``friction_cone_fraction_max`` is wider still, that
-    share on whole and on fine steps, then as the attempt before (plans at the edge of the cone, where
-    nothing narrower was found: a task the certificate's whole cone cannot rule out). The ``mixed``
+    :data:`LAST_REFUSALS` searches again; last, where ``friction_cone_fraction_max`` is wider still (and
+    widens some face's admissible cone: :func:`_widens`), that share on whole and on fine steps, then as
+    the attempt before (plans at the edge of the cone, where nothing narrower was found: a task the
+    certificate's whole cone cannot rule out). The ``mixed``
     attempts run also where the attempts before them could not push from the start (their windows may),
     and after a plan with little room (the caller's ``GUIDED_ROOM``), which a roomier one may replace.
     Each attempt's sequence (found within ``options.guided_budget`` expansions, on fine
@@ -387,7 +388,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
                      widest=widest)
 
     tries += [last(at_middle)] if mixed else []
-    if wide > middle:  # the widest share last of all: plans nearer the edge of the cone keep less margin
+    if wide > middle and _widens(setting, middle, wide):  # last of all: plans nearer the cone's edge keep less margin
         at_wide = {"friction_cone_fraction": wide}
         tries += [_Rung(at_wide, more=True, fine=fine, widest=True) for fine in (False, True)]
         tries += [last(at_wide, widest=True)] if mixed else []
@@ -406,6 +407,16 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
             if plan.status != "solved" or where is None:
                 break
             refused.append(Refusal(failed.face_a, failed.face_b, where))
+
+
+def _widens(setting: Setting, narrow: float, wide: float) -> bool:
+    """Whether some face's admissible cone is wider at the ``wide`` share of the friction cone's
+    half-angle than at the ``narrow`` one (where the tool file's ``push_angle +- theta_b`` is the narrower at
+    both, every attempt at ``wide`` would repeat one at ``narrow``: the search and the fit see the same
+    cones)."""
+    half = setting.mechanics.friction_angle
+    return any(admissible_cone(f.normal_angle, f.push_angle, f.theta_b, wide * half)
+               != admissible_cone(f.normal_angle, f.push_angle, f.theta_b, narrow * half) for f in setting.tool.faces)
 
 
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
