@@ -223,9 +223,9 @@ class OEOptions(_Model):
     friction_cone_fraction_max: float = Field(
         0.95, gt=0, le=1, allow_inf_nan=False, strict=True,
         description="widest share of the friction cone's half-angle the guided search may use where no plan "
-                    "keeps to friction_cone_fraction (it tries 0.8 first where this is wider, and this share "
-                    "last; at most friction_cone_fraction: never wider). A plan records the share it used "
-                    "(metric friction_cone_fraction): near 1 it has little margin for an error in mu")
+                    "keeps to friction_cone_fraction: after friction_cone_fraction, 0.8 where this is wider, "
+                    "this share last (set it to friction_cone_fraction or lower never to widen). A plan records "
+                    "the share it used (metric friction_cone_fraction); near 1 it has little margin for mu")
     guided_budget: int = Field(
         4000, ge=100, le=1_000_000, strict=True,
         description="expansions of the guided search per attempt (cone share and contact span) "

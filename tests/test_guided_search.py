@@ -434,7 +434,7 @@ def test_a_task_only_the_widest_share_of_the_cone_solves_gets_a_plan_at_that_sha
     assert task.oe.friction_cone_fraction_max == pytest.approx(0.95)
     plan = solve(task)
     assert plan.verdict == "solved", plan.reason
-    assert plan.metrics["friction_cone_fraction"] == pytest.approx(0.95)
+    assert plan.metrics["friction_cone_fraction"] == pytest.approx(0.95) and plan.metrics["guided_widest"] == 1.0
     assert plan.metrics["alternatives_tried"] >= 6  # the scored candidates, then five attempts at 0.5 and 0.8
     assert hard_check_failures(plan.metrics) == []
     assert simulate_plan(plan).final_error < 0.005

@@ -84,8 +84,8 @@ def solve(task: Task, task_path: str | Path | None = None, *, budget: float = 1.
     built in code). ``budget`` (>= 1) scales what the search and the certificate may spend (the guided
     search's expansions, ``oe.guided_budget``, and the certificate's block updates): ``batch run --retry
     unknown --budget K`` gives the undecided tasks more. ``on_slow`` is called (once, without
-    arguments) where the variant's condensing found no plan and the slower stages begin (the guided
-    search, the certificate): a tool choice stops only candidates that have called it."""
+    arguments) where the variant's condensing found no plan and the slower stages begin (the certificate,
+    then the guided search): a tool choice stops only candidates that have called it."""
     check_budget(budget)
     plan, setting, sought = _search(task, task_path, budget, on_slow)
     return attach_verdict(plan, setting, np.array(task.start), np.array(task.target), budget=budget, sought=sought)
@@ -155,7 +155,8 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
     added. A switch that found no tool path is sent back to the search (it may avoid it). A plan whose
     tool comes within :data:`GUIDED_ROOM` of an obstacle is kept only when no later attempt gives one
     with more room (the closed loop's corrections need some), but for the attempts at the widest share of
-    the friction cone (metric ``guided_widest``), which would spend the margin kept for an error in ``mu``."""
+    the friction cone (metric ``guided_widest``) after a plan at a narrower one: they would spend the
+    margin kept for an error in ``mu``."""
     clock = time.perf_counter()
     whys: list[str] = []
     n_tried = n_on_budget = 0  # the attempts, and those whose search ended on its budget (not its space)
@@ -167,7 +168,7 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
         except StopIteration:
             break
         refused = None
-        if tight is not None and guided.metrics.get("guided_widest"):
+        if tight is not None and guided.metrics.get("guided_widest") and not tight.metrics.get("guided_widest"):
             break  # a plan at the widest share of the friction cone would trade its margin for the room
         n_tried += 1
         n_on_budget += int(guided.metrics.get("guided_on_budget", 0.0) > 0.0)
@@ -197,6 +198,8 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
         return tight
     metrics = {**failed.metrics, "time_guided": time.perf_counter() - clock, "guided_attempts": float(n_tried),
                "guided_attempts_on_budget": float(n_on_budget)}
+    if "time_total" in failed.metrics:  # the candidates' (a first one without alternatives, a violated one)
+        metrics["time_total"] = failed.metrics["time_total"] + metrics["time_guided"]
     return replace(failed, metrics=metrics, reason=f"{failed.reason}; the guided search: {'; then '.join(whys)}")
 
 

@@ -7,7 +7,7 @@ cone intersected with the tool file's cone, turned by the heading the Omni impos
 ends of the step, since it turns as the object moves), the face held
 under the fit's own rows (the Omni reaching the contact at both ends of its usable range, the tool
 outline there clear of the obstacles), the puck the safety margin from them; A* on the path length
-plus a price per face change (weighted A* in the last attempt), ending with a straight step to the
+plus a price per face change (weighted A* in the attempts on windows where needed), ending with a straight step to the
 target inside a cone. Each step
 rolls the contact along its face as the inverse push model has it (``1/c^2`` times the step's
 sideways travel, ``R`` per radian the heading turns; :mod:`tooltransfer.tools.pushing.inverse`); a
@@ -143,17 +143,17 @@ REFUSED_RADIUS = 2 * STEP
 #: Searches again per share of the friction cone, each without the changes of face refused so far.
 REFUSALS = 2
 
-#: The weight of the distance to go in the last attempt's order (weighted A*, :func:`guided_path`'s
-#: ``greed``): with the windows of every face its lattice is several times larger, and the shortest
-#: path is not needed, only one the fit can follow.
+#: The weight of the distance to go in the order of the attempts on windows where needed (``mixed``;
+#: weighted A*, :func:`guided_path`'s ``greed``): with the windows of every face its lattice is several
+#: times larger, and the shortest path is not needed, only one the fit can follow.
 GREED = 3.0
-#: Room [m] the last attempt keeps between the tool outline and the obstacles at its nodes (the earlier
-#: attempts :data:`~.guided_moves.REACH_SLACK`): the fit places the contact anywhere in a window and the
-#: tool turns between nodes, so its plans pass nearer (0.4-0.8 mm on the verdict benchmark); with
-#: REACH_SLACK they broke the 0.25 mm hard check or left the closed loop's corrections no room.
+#: Room [m] the attempts on windows where needed keep between the tool outline and the obstacles at
+#: their nodes (the other attempts :data:`~.guided_moves.REACH_SLACK`): the fit places the contact
+#: anywhere in a window and the tool turns between nodes, so its plans pass nearer (0.4-0.8 mm on the
+#: verdict benchmark); with REACH_SLACK they broke the 0.25 mm hard check or left the closed loop's corrections no room.
 LAST_ROOM = 0.001
-#: Searches again in the last attempt without the changes of face refused so far (each a cheap search:
-#: a switch with no tool path in reach often recurs a few millimetres further on).
+#: Searches again in the attempts on windows where needed without the changes of face refused so far
+#: (each a cheap search: a switch with no tool path in reach often recurs a few millimetres further on).
 LAST_REFUSALS = 5
 
 
@@ -191,7 +191,7 @@ class _Rung(NamedTuple):
     friction cone, the contact span) and the search's settings (as :func:`guided_path` takes them; ``fine``:
     steps and cells of a :data:`FINE` share of the usual and ``1 / FINE`` times the expansions;
     ``refusals``: how many times it searches again without a change of face a later stage refused;
-    ``widest``: at ``friction_cone_fraction_max`` beyond :data:`MIDDLE_SHARE`, the ladder's last rungs)."""
+    ``widest``: at ``friction_cone_fraction_max`` beyond the ladder's middle share, its last rungs)."""
 
     change: dict[str, float]
     windows: bool = False
@@ -355,8 +355,10 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     widens some face's admissible cone: :func:`_widens`), that share on whole and on fine steps, then as
     the attempt before (plans at the edge of the cone, where nothing narrower was found: a task the
     certificate's whole cone cannot rule out). The ``mixed``
-    attempts run also where the attempts before them could not push from the start (their windows may),
-    and after a plan with little room (the caller's ``GUIDED_ROOM``), which a roomier one may replace.
+    attempts run also where the attempts before them could not push from the start (their windows may;
+    the widest share's whole-face attempts do not), and after a plan with little room (the caller's
+    ``GUIDED_ROOM``), which a roomier one may replace (the caller takes none at the widest share after a
+    plan at a narrower one).
     Each attempt's sequence (found within ``options.guided_budget`` expansions, on fine
     steps ``1 / FINE`` times that: a path takes that many more steps) is fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)
@@ -367,7 +369,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     The caller may send back why a solved push plan failed later: a
     :class:`~tooltransfer.planner.planning.assemble.SwitchFailed` with the object's position (a switch
     with no tool path there) makes the search run again without that change of face near there (at
-    most :data:`REFUSALS` times per attempt, :data:`LAST_REFUSALS` in the last); anything else, the next
+    most :data:`REFUSALS` times per attempt, :data:`LAST_REFUSALS` in the ``mixed`` ones); anything else, the next
     attempt."""
     target = universal[-1] if target is None else target
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
@@ -381,22 +383,23 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     if span < options.contact_span:
         tries.append(_Rung({**at_middle, "contact_span": span}, windows=True, more=True))
     tries.append(_Rung(at_middle, more=True, fine=True))
-    mixed = span < options.contact_span
+    windowed = span < options.contact_span
 
-    def last(change: dict[str, float], widest: bool = False) -> _Rung:
+    def mixed_rung(change: dict[str, float], widest: bool = False) -> _Rung:
         return _Rung(change, more=True, fine=True, mixed=span, greed=GREED, room=LAST_ROOM, refusals=LAST_REFUSALS,
                      widest=widest)
 
-    tries += [last(at_middle)] if mixed else []
+    tries += [mixed_rung(at_middle)] if windowed else []
     if wide > middle and _widens(setting, middle, wide):  # last of all: plans nearer the cone's edge keep less margin
         at_wide = {"friction_cone_fraction": wide}
         tries += [_Rung(at_wide, more=True, fine=fine, widest=True) for fine in (False, True)]
-        tries += [last(at_wide, widest=True)] if mixed else []
+        tries += [mixed_rung(at_wide, widest=True)] if windowed else []
     stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
     for rung in tries:
         if (rung.windows and not stuck) or (stuck and rung.mixed is None
                                             and (rung.fine or rung.change["friction_cone_fraction"] > middle)):
-            continue  # (which faces can push at the start does not depend on the step or the share)
+            continue  # (which faces hold the puck at the start depends on neither; their steps' directions
+            # do a little on the share, so a face held there but stepping nowhere at 0.8 is not tried wider)
         opts = options.model_copy(update=rung.change)
         refused: list[Refusal] = []
         for _ in range(1 + rung.refusals):
@@ -413,10 +416,14 @@ def _widens(setting: Setting, narrow: float, wide: float) -> bool:
     """Whether some face's admissible cone is wider at the ``wide`` share of the friction cone's
     half-angle than at the ``narrow`` one (where the tool file's ``push_angle +- theta_b`` is the narrower at
     both, every attempt at ``wide`` would repeat one at ``narrow``: the search and the fit see the same
-    cones)."""
+    cones). A face that can push at neither share counts as unchanged."""
     half = setting.mechanics.friction_angle
-    return any(admissible_cone(f.normal_angle, f.push_angle, f.theta_b, wide * half)
-               != admissible_cone(f.normal_angle, f.push_angle, f.theta_b, narrow * half) for f in setting.tool.faces)
+
+    def cone(f: Any, share: float) -> tuple[float, float] | None:
+        lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b, share * half)
+        return (lo, hi) if hi > lo else None
+
+    return any(cone(f, wide) != cone(f, narrow) for f in setting.tool.faces)
 
 
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,

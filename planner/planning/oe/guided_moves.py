@@ -106,7 +106,7 @@ def _heading(frame: FaceFrame, p: NDArray[np.float64]) -> float | None:
     return a - math.pi / 2
 
 
-#: Room [m] the search keeps inside the Omni's reach and, but in its last attempt
+#: Room [m] the search keeps inside the Omni's reach and, but in its attempts on windows where needed
 #: (:data:`~.guided.LAST_ROOM`), between the tool outline and the obstacles.
 REACH_SLACK = 5e-4
 

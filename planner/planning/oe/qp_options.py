@@ -54,8 +54,8 @@ class QPOptions(BaseModel):
         friction_cone_fraction_max: the widest share the guided search may use where no plan keeps to
             ``friction_cone_fraction`` (:func:`tooltransfer.planner.planning.oe.guided.guided_plans`).
         guided_budget: expansions of the guided search per attempt.
-        guided_contact_span: the narrower stretch of a face [m] the guided search's last attempt
-            keeps the contact on (where the Omni cannot hold the tool at both ends of
+        guided_contact_span: the narrower stretch of a face [m] the guided search's attempts on windows
+            keep the contact on (where the Omni cannot hold the tool at both ends of
             ``contact_span``; the contact then re-touches more often).
         contact_margin, contact_span: where on a face the contact may be [m]
             (:func:`tooltransfer.planner.planning.oe.contacts.usable_range`).
