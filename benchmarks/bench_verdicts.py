@@ -82,13 +82,6 @@ class VerdictJob(Job):
     execute: bool = False
 
 
-def planning_time(metrics: dict[str, Any]) -> float:
-    """The solve's time [s] as ``solve --json`` reports it: ``time_total``, else the stages it ran."""
-    if "time_total" in metrics:
-        return float(metrics["time_total"])
-    return float(sum(v for k, v in metrics.items() if k.startswith("time_")))
-
-
 def run_verdict(job: VerdictJob) -> Row:
     """Plan one task: its verdict, the evidence's kind, the times [s] (and, with ``job.execute``, the
     open-loop final error [m] of a solved plan); never raises for the task's own failures."""
@@ -110,7 +103,7 @@ def run_verdict(job: VerdictJob) -> Row:
     row.update(status=plan.status, verdict=plan.verdict, evidence_kind=ev.get("kind"), reason=(plan.reason or "")[:500],
                not_proved=(str(ev["not_proved"])[:300] if "not_proved" in ev else None),
                budget_limited=ev.get("budget_limited"),
-               planning_time=planning_time(m), time_certify=finite_or_none(m.get("time_certify")),
+               planning_time=plan.planning_time, time_certify=finite_or_none(m.get("time_certify")),
                plan_wall=time.perf_counter() - started, plan_cpu=time.process_time() - cpu,
                n_pushes=None if m.get("n_pushes") is None else round(m["n_pushes"]))
     if job.execute and plan.verdict == "solved":

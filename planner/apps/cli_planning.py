@@ -123,8 +123,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
                                     "tool_obstacle_clearance_min", "switch_clearance_min", "switch_penetration_max",
                                     "joint_limit_violation_max", "duration",
                                     "friction_cone_fraction") if k in m},  # a guided plan's share of the cone
-               # the solve's wall time; a plan that stopped early has no time_total: the stages it ran
-               "planning_time": m.get("time_total", sum(v for k, v in m.items() if k.startswith("time_"))),
+               "planning_time": plan.planning_time,  # the solve's wall time
                "evidence": plan.evidence.get("kind"),
                # an unknown: whether its search or certificate stopped on a budget (--budget may then decide it)
                **({"budget_limited": plan.evidence["budget_limited"]} if "budget_limited" in plan.evidence else {})}

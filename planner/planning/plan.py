@@ -126,6 +126,14 @@ class Plan:
             return "unknown"
         return self.status
 
+    @property
+    def planning_time(self) -> float:
+        """The solve's time [s] (``solve --json``'s ``planning_time``): the metric ``time_total``, else the
+        stages' times (``time_*``) summed: a plan that stopped early has no total."""
+        m = self.metrics
+        return float(m["time_total"]) if "time_total" in m else float(sum(v for k, v in m.items()
+                                                                              if k.startswith("time_")))
+
     def __post_init__(self) -> None:
         n = len(self.t)
         if len(self.joint_velocities) != n or len(self.joint_accelerations) != n:

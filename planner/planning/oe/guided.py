@@ -1,24 +1,22 @@
 """A push sequence found by a best-first search over puck positions, for the ``qp`` fit to refine.
 
 Where the scored candidates of :func:`~tooltransfer.planner.planning.oe.qp_variant.condense_qp` hold no
-feasible sequence, the search here looks for one directly: from the start, straight steps of
-``step`` [m] along the edges and the middle of each face's heading cone (the plan's narrowed friction
-cone intersected with the tool file's cone, turned by the heading the Omni imposes; inside it at both
-ends of the step, since it turns as the object moves), the face held
-under the fit's own rows (the Omni reaching the contact at both ends of its usable range, the tool
-outline there clear of the obstacles), the puck the safety margin from them; A* on the path length
-plus a price per face change (weighted A* in the attempts on windows where needed), ending with a straight step to the
-target inside a cone. Each step
-rolls the contact along its face as the inverse push model has it (``1/c^2`` times the step's
-sideways travel, ``R`` per radian the heading turns; :mod:`tooltransfer.tools.pushing.inverse`); a
-run of one face starts a new contact (a re-contact) where the contact's excursion would outgrow the
-face's usable range, and uses at most ``oe.max_contacts`` contacts, as one push of the fit may. Its faces
-and the times of their changes (in proportion to the path's length, over the universal path's
-duration) are then fitted by
-:func:`~tooltransfer.planner.planning.oe.qp_variant.condense_sequence` with the path as reference,
-which imposes every constraint of the ``qp`` variant, or, where that one fit fails, run by run
-(:func:`~tooltransfer.planner.planning.oe.piecewise.fit_runs`, the object at rest at each change of
-face); the search only proposes.
+feasible sequence, the search here looks for one directly: from the start, straight steps of ``step`` [m]
+along the edges and the middle of each face's heading cone (the plan's narrowed friction cone intersected with
+the tool file's cone, turned by the heading the Omni imposes; inside it at both ends of the step, since it
+turns as the object moves), the face held under the fit's own rows (the Omni reaching the contact at both ends
+of its usable range, the tool outline there clear of the obstacles), the puck the safety margin from them; A*
+on the path length plus a price per face change (weighted A* in the attempts on windows where needed), ending
+with a straight step to the target inside a cone. Each step rolls the contact along its face as the inverse
+push model has it (``1/c^2`` times the step's sideways travel, ``R`` per radian the heading turns;
+:mod:`tooltransfer.tools.pushing.inverse`); a run of one face starts a new contact (a re-contact) where the
+contact's excursion would outgrow the face's usable range, and uses at most ``oe.max_contacts`` contacts, as
+one push of the fit may. Its faces and the times of their changes (in proportion to the path's length, over
+the universal path's duration) are then fitted by
+:func:`~tooltransfer.planner.planning.oe.qp_variant.condense_sequence` with the path as reference, which
+imposes every constraint of the ``qp`` variant, or, where that one fit fails, run by run
+(:func:`~tooltransfer.planner.planning.oe.piecewise.fit_runs`, the object at rest at each change of face); the
+search only proposes.
 """
 
 from __future__ import annotations
@@ -33,7 +31,7 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.guided_moves import (
     REACH_SLACK,
     _Contact,
@@ -43,6 +41,7 @@ from tooltransfer.planner.planning.oe.guided_moves import (
     _pointing,
     _rolled,
     _step_of,
+    face_cone,
 )
 from tooltransfer.planner.planning.oe.metrics import plan_metrics
 from tooltransfer.planner.planning.oe.piecewise import fit_runs
@@ -396,8 +395,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
         tries += [mixed_rung(at_wide, widest=True)] if windowed else []
     stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
     for rung in tries:
-        if (rung.windows and not stuck) or (stuck and rung.mixed is None
-                                            and (rung.fine or rung.change["friction_cone_fraction"] > middle)):
+        if (rung.windows and not stuck) or (stuck and rung.mixed is None and (rung.fine or rung.widest)):
             continue  # (which faces hold the puck at the start depends on neither; their steps' directions
             # do a little on the share, so a face held there but stepping nowhere at 0.8 is not tried wider)
         opts = options.model_copy(update=rung.change)
@@ -417,13 +415,7 @@ def _widens(setting: Setting, narrow: float, wide: float) -> bool:
     half-angle than at the ``narrow`` one (where the tool file's ``push_angle +- theta_b`` is the narrower at
     both, every attempt at ``wide`` would repeat one at ``narrow``: the search and the fit see the same
     cones). A face that can push at neither share counts as unchanged."""
-    half = setting.mechanics.friction_angle
-
-    def cone(f: Any, share: float) -> tuple[float, float] | None:
-        lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b, share * half)
-        return (lo, hi) if hi > lo else None
-
-    return any(cone(f, wide) != cone(f, narrow) for f in setting.tool.faces)
+    return any(face_cone(setting, f, wide) != face_cone(setting, f, narrow) for f in setting.tool.faces)
 
 
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,

@@ -20,7 +20,7 @@ from tooltransfer.planner.planning.oe.contacts import usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.setting import Setting
-from tooltransfer.tools.model import Tool
+from tooltransfer.tools.model import Face, Tool
 from tooltransfer.tools.pushing.inverse import FaceGeometry
 
 
@@ -63,15 +63,21 @@ def contact_windows(tool: Tool, face: str, options: QPOptions) -> list[tuple[flo
     return [(float(c - 0.5 * w), float(c + 0.5 * w)) for c in np.linspace(lo + 0.5 * w, hi - 0.5 * w, n)]
 
 
+def face_cone(setting: Setting, face: Face, share: float) -> tuple[float, float] | None:
+    """``face``'s admissible cone ``(lo, hi)`` [rad] in the tool's frame at ``share`` of the friction cone's
+    half-angle (:func:`~.face_frame.admissible_cone`), or None where it cannot push at that share."""
+    lo, hi = admissible_cone(face.normal_angle, face.push_angle, face.theta_b,
+                             share * setting.mechanics.friction_angle)
+    return (lo, hi) if hi > lo else None
+
+
 def _face_moves(setting: Setting, options: QPOptions, windows: bool = False) -> list[_FaceMoves]:
     """One :class:`_FaceMoves` per face that can push under ``options`` (the plan's narrowed cone, its
     contact margin and span), or one per face and contact window (:func:`contact_windows`)."""
     out = []
     cone_share = options.friction_cone_fraction
     for f in setting.tool.faces:
-        lo, hi = admissible_cone(f.normal_angle, f.push_angle, f.theta_b,
-                                 cone_share * setting.mechanics.friction_angle)
-        if hi <= lo:
+        if face_cone(setting, f, cone_share) is None:
             continue
         g = FaceGeometry.of(setting.tool, f.name)
         ranges = (contact_windows(setting.tool, f.name, options) if windows
