@@ -36,7 +36,10 @@ printed. ``--dense`` searches denser (nine directions, every one of 13 contact p
 give it a larger ``--budget``.
 
 With ``--unknowns`` the same search runs on the tasks the run left ``unknown`` instead, and the report
-counts how many of them it comes within ``--flag`` of: what the unknowns are made of. Reached by a
+counts how many of them it comes within ``--flag`` of: what the unknowns are made of. ``--share`` and
+``--room`` narrow its rules there to margins a plan could keep (part of the friction cone, the tool
+outline that far from the obstacles): reached even so, an unknown is feasible by some margin under the
+search's looser rest, and what stops the planner is its own rules or its search. Reached by a
 search that ignores the contact's rolling, the tool's sweep and the switches, an unknown is likely
 feasible with plans this planner's own narrower rules do not make (the contact at a face's tip, pushes
 at the very edge of the cone); not reached, it is a candidate for a tighter certificate. Nothing is
@@ -80,28 +83,29 @@ DEPTH_TOL = 5e-4
 V_TOL = 5e-3
 
 
-def _closest(args: tuple[Any, int, bool, bool]) -> tuple[str, float, float, dict[str, Any]]:
+def _closest(args: tuple[Any, int, bool, bool, float, float]) -> tuple[str, float, float, dict[str, Any]]:
     """``(task_id, closest approach [m], CPU [s], the certificate's own test)`` of the lattice search
     (``dense``: :data:`DENSE`; steps whose end the face still holds) on one job's task. The test: the
     task's certificate made again (as the verdict run made it) and every position the search reaches
     tried against it: ``depth`` [m], the deepest inside a ``backward_reachable`` set; ``v_low`` [rad],
     the least value of a ``polar_invariant``'s quantity less its value at the start (both None for the
     other kinds, where no certificate is made, and for ``unknowns``, where none is made). The CPU time is
-    the search's (not the certificate's)."""
+    the search's (not the certificate's). ``share``, ``room``: :func:`lattice_search`'s (1 and 0 but for
+    ``unknowns``)."""
     import numpy as np
     from test_verdicts import _rules_of, depth_inside, lattice_search
 
     from tooltransfer.planner.planning.verdicts.certificate import certify
     from tooltransfer.planner.planning.verdicts.spiral import Spiral, _values
 
-    job, budget, dense, unknowns = args
+    job, budget, dense, unknowns, share, room = args
     task = _task(job)
     setting, rules = _rules_of(task)
     start, target = np.array(task.start), np.array(task.target)
     cpu = time.process_time()
     visited: list[Any] = []
-    d = lattice_search(setting, start, target, budget=budget, ends_held=True, visited=visited,
-                       **(DENSE if dense else {}))
+    d = lattice_search(setting, start, target, budget=budget, ends_held=True, visited=visited, share=share,
+                       room=room, **(DENSE if dense else {}))
     cpu = time.process_time() - cpu
     cert = None if unknowns else certify(rules, start, target)[0]
     test: dict[str, Any] = {"kind": None if cert is None else cert.kind, "depth": None, "v_low": None,
@@ -151,7 +155,16 @@ def main(argv: Sequence[str] | None = None) -> int:
                     help="a denser search (nine directions, every contact place of 13, 0.75 mm cells; slower)")
     ap.add_argument("--unknowns", action="store_true",
                     help="search on the tasks left unknown instead (a description, not a check)")
+    ap.add_argument("--share", type=float, default=1.0,
+                    help="with --unknowns: the share (0, 1] of the friction cone's half-angle the search pushes in")
+    ap.add_argument("--room", type=float, default=0.0,
+                    help="with --unknowns: how far [m] the tool outline keeps from the obstacles")
     args = ap.parse_args(argv)
+    if (args.share, args.room) != (1.0, 0.0) and not args.unknowns:
+        ap.error("--share and --room narrow the rules: a certificate is checked under its own (use them with "
+                 "--unknowns)")
+    if not 0.0 < args.share <= 1.0 or not args.room >= 0.0:
+        ap.error(f"--share must be in (0, 1] and --room >= 0 [m], got {args.share} and {args.room}")
     data = json.loads(args.results.read_text())
     verdict = "unknown" if args.unknowns else "infeasible"
     rows = [r for r in data["rows"] if r.get("verdict") == verdict]
@@ -167,7 +180,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     found: list[tuple[str, float, float]] = []
     wrong: list[str] = []
     with ProcessPoolExecutor(args.workers) as pool:
-        todo = [(jobs[r["task_id"]], args.budget, args.dense, args.unknowns) for r in rows]
+        todo = [(jobs[r["task_id"]], args.budget, args.dense, args.unknowns, args.share, args.room) for r in rows]
         for tid, d, cpu, test in pool.map(_closest, todo):
             found.append((tid, d, cpu))
             if args.unknowns:
@@ -182,8 +195,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     flagged = [t for t, d, _ in found if d <= args.flag]
     if args.unknowns:
-        print(f"\n{len(found)} unknowns; the lattice search (no rolling, no tool sweep, no switches) comes within "
-              f"{args.flag * 1e3:g} mm of the target on {len(flagged)}; not on {len(found) - len(flagged)}: "
+        rules = "" if (args.share, args.room) == (1.0, 0.0) else \
+            f", at {args.share:g} of the friction cone, the tool {args.room * 1e3:g} mm from the obstacles"
+        print(f"\n{len(found)} unknowns; the lattice search (no rolling, no tool sweep, no switches{rules}) comes "
+              f"within {args.flag * 1e3:g} mm of the target on {len(flagged)}; not on {len(found) - len(flagged)}: "
               f"{[t for t, d, _ in found if d > args.flag]}")
         return 0
     print(f"\n{len(found)} certificates; the lattice search's closest approach: min "

@@ -43,9 +43,10 @@ def _rules_of(task):
 
 
 def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: list, contacts: int = 7,
-           ) -> list[float]:
+           room: float = 0.0) -> list[float]:
     """The tool yaws [rad] at which ``face`` can push the puck at ``p`` (contact sampled at ``contacts``
-    places along the face's range): waist and reach within the limits, the outline clear of the obstacles."""
+    places along the face's range): waist and reach within the limits, the outline clear of the obstacles
+    (farther than ``room`` [m] from them)."""
     sec = reach_sector(platform)
     d = p - sec.centre
     r = math.hypot(*d)
@@ -64,7 +65,7 @@ def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: 
         yaw = a - math.pi / 2
         rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
         outline = shapely.Polygon((np.asarray(tool.outline.exterior.coords) - c) @ rot.T + p)
-        if all(shapely.distance(outline, o.polygon() if isinstance(o, Disc) else o) > 0 for o in obstacles):
+        if all(shapely.distance(outline, o.polygon() if isinstance(o, Disc) else o) > room for o in obstacles):
             yaws.append(yaw)
     return yaws
 
@@ -79,7 +80,8 @@ def _edges_first(angles: np.ndarray) -> np.ndarray:
 
 def lattice_search(setting, start: np.ndarray, target: np.ndarray, *, step: float = 0.003,
                    cell: float = 0.0015, budget: int = 4000, directions: int = 5, contacts: int = 7,
-                   yaw_stride: int = 3, ends_held: bool = False, visited: list | None = None) -> float:
+                   yaw_stride: int = 3, ends_held: bool = False, visited: list | None = None,
+                   share: float = 1.0, room: float = 0.0) -> float:
     """The closest the puck comes to ``target`` [m] by straight pushes from ``start`` (breadth first,
     one visit per lattice cell of side ``cell``, at most ``budget`` expansions): steps of ``step`` [m] in
     ``directions`` directions across each face's cone, from every ``yaw_stride``-th of the yaws at which
@@ -87,11 +89,13 @@ def lattice_search(setting, start: np.ndarray, target: np.ndarray, *, step: floa
     (:func:`_edges_first`); with ``ends_held`` only steps whose end the face can still hold (a push holds
     the puck all along; a step from the edge of a face's reach otherwise ends outside it). A denser search
     (``benchmarks/check_certificates.py --dense``) takes more of each. ``visited``: a list the positions
-    (2,) [m] the search reaches are appended to, the start first."""
+    (2,) [m] the search reaches are appended to, the start first. ``share`` of the friction cone's
+    half-angle and ``room`` [m] kept between the tool outline and the obstacles: 1 and 0 search under the
+    certificates' rules; less and more, under rules with margins a plan could keep (``--unknowns``)."""
     tool, radius = setting.tool, setting.radius
     obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]  # made once, not per step
     clear = radius + setting.margin - 1e-5
-    mu_half = math.atan(setting.mechanics.mu)
+    mu_half = share * math.atan(setting.mechanics.mu)
     frontier, seen = deque([start]), {tuple(np.floor(start / cell).astype(int))}
     best, n = float(np.hypot(*(start - target))), 0
     yaws_at: dict[tuple[str, bytes], list[float]] = {}  # a step's end held (ends_held), then expanded
@@ -99,7 +103,7 @@ def lattice_search(setting, start: np.ndarray, target: np.ndarray, *, step: floa
     def holds(face, p: np.ndarray) -> list[float]:
         key = (face.name, p.tobytes())
         if key not in yaws_at:
-            yaws_at[key] = _holds(tool, face, setting.platform, p, radius, obstacles, contacts)
+            yaws_at[key] = _holds(tool, face, setting.platform, p, radius, obstacles, contacts, room)
         return yaws_at[key]
 
     if visited is not None:
@@ -287,3 +291,32 @@ def test_solve_budget_is_recorded_and_checked(tmp_path: Path, capsys) -> None:
     capsys.readouterr()
     assert main(["solve", "paper/transfer_tool2", "--budget", "0.5"]) == 2
     assert "--budget" in capsys.readouterr().err
+
+
+def test_the_lattice_search_keeps_the_margins_it_is_given() -> None:
+    """``share`` and ``room`` narrow the lattice search's rules (``check_certificates.py --unknowns``): with
+    the tool kept a metre from the obstacles no face holds the puck anywhere near one, and the puck stays at
+    the start; with the whole cone and no room the same task's search moves it."""
+    task = generated("execution_60.yaml", "exec60-00031")
+    setting, _ = _rules_of(task)
+    start, target = np.array(task.start), np.array(task.target)
+    still = float(np.hypot(*(start - target)))
+    visited: list = []
+    assert lattice_search(setting, start, target, budget=300, room=1.0, visited=visited) == still
+    assert len(visited) == 1
+    assert lattice_search(setting, start, target, budget=300) < still - 0.01
+    narrow: list = []
+    lattice_search(setting, start, target, budget=300, share=0.3, visited=narrow)
+    assert 1 < len(narrow)
+
+
+def test_check_certificates_refuses_margins_on_certificates(capsys, monkeypatch) -> None:
+    """A certificate is checked under its own rules: ``--share`` and ``--room`` only describe unknowns."""
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    import check_certificates
+
+    for extra in (["--share", "0.9"], ["--room", "0.001"], ["--unknowns", "--share", "0"]):
+        with pytest.raises(SystemExit) as err:
+            check_certificates.main(["results.json", *extra])
+        assert err.value.code == 2
+    assert "--share" in capsys.readouterr().err
