@@ -38,8 +38,8 @@ give it a larger ``--budget``.
 With ``--unknowns`` the same search runs on the tasks the run left ``unknown`` instead, and the report
 counts how many of them it comes within ``--flag`` of: what the unknowns are made of. ``--share`` and
 ``--room`` narrow its rules there to margins a plan could keep (part of the friction cone, the tool
-outline that far from the obstacles): reached even so, an unknown is feasible by some margin under the
-search's looser rest, and what stops the planner is its own rules or its search. Reached by a
+outline that far from the obstacles): an unknown reached even so is not one that only pushes at the edge
+of the cone or with the tool touching an obstacle could do. Reached by a
 search that ignores the contact's rolling, the tool's sweep and the switches, an unknown is likely
 feasible with plans this planner's own narrower rules do not make (the contact at a face's tip, pushes
 at the very edge of the cone); not reached, it is a candidate for a tighter certificate. Nothing is

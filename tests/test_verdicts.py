@@ -305,9 +305,30 @@ def test_the_lattice_search_keeps_the_margins_it_is_given() -> None:
     assert lattice_search(setting, start, target, budget=300, room=1.0, visited=visited) == still
     assert len(visited) == 1
     assert lattice_search(setting, start, target, budget=300) < still - 0.01
-    narrow: list = []
-    lattice_search(setting, start, target, budget=300, share=0.3, visited=narrow)
-    assert 1 < len(narrow)
+    assert lattice_search(setting, start, target, budget=300, room=0.0005) < still - 0.01
+
+    def steps(share: float) -> np.ndarray:
+        """The directions [rad] of the first steps from the start (one expansion) at ``share``."""
+        out: list = []
+        lattice_search(setting, start, target, budget=1, share=share, visited=out)
+        d = np.asarray(out[1:]) - start
+        return np.arctan2(d[:, 1], d[:, 0])
+
+    def inside(w: float, share: float) -> bool:
+        """Whether direction ``w`` [rad] lies in some face's cone at ``share`` from a yaw that holds the start."""
+        mu = share * math.atan(setting.mechanics.mu)
+        for face in setting.tool.faces:
+            off = math.remainder(face.push_angle - face.normal_angle, 2 * math.pi)
+            lo, hi = max(-mu, off - face.theta_b), min(mu, off + face.theta_b)
+            for yaw in _holds(setting.tool, face, setting.platform, start, setting.radius, list(setting.obstacles)):
+                a = math.remainder(w - yaw - face.normal_angle, 2 * math.pi)
+                if lo - 1e-9 <= a <= hi + 1e-9:
+                    return True
+        return False
+
+    narrow, wide = steps(0.3), steps(1.0)
+    assert len(narrow) > 0 and all(inside(w, 0.3) for w in narrow)
+    assert any(not inside(w, 0.3) for w in wide)  # the whole cone steps where 0.3 of it does not
 
 
 def test_check_certificates_refuses_margins_on_certificates(capsys, monkeypatch) -> None:
@@ -320,3 +341,6 @@ def test_check_certificates_refuses_margins_on_certificates(capsys, monkeypatch)
             check_certificates.main(["results.json", *extra])
         assert err.value.code == 2
     assert "--share" in capsys.readouterr().err
+    # the whole cone and no room are the certificates' own rules: accepted (then the missing file is read)
+    with pytest.raises(FileNotFoundError):
+        check_certificates.main(["no-such-results.json", "--share", "1.0", "--room", "0"])
