@@ -160,7 +160,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--room", type=float, default=0.0,
                     help="with --unknowns: how far [m] the tool outline keeps from the obstacles")
     args = ap.parse_args(argv)
-    if (args.share, args.room) != (1.0, 0.0) and not args.unknowns:
+    narrowed = (args.share, args.room) != (1.0, 0.0)  # the lattice's rules narrower than the certificates'
+    if narrowed and not args.unknowns:
         ap.error("--share and --room narrow the rules: a certificate is checked under its own (use them with "
                  "--unknowns)")
     if not 0.0 < args.share <= 1.0 or not args.room >= 0.0:
@@ -195,8 +196,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     flagged = [t for t, d, _ in found if d <= args.flag]
     if args.unknowns:
-        rules = "" if (args.share, args.room) == (1.0, 0.0) else \
-            f", at {args.share:g} of the friction cone, the tool {args.room * 1e3:g} mm from the obstacles"
+        rules = f", at {args.share:g} of the friction cone, the tool {args.room * 1e3:g} mm from the obstacles" \
+            if narrowed else ""
         print(f"\n{len(found)} unknowns; the lattice search (no rolling, no tool sweep, no switches{rules}) comes "
               f"within {args.flag * 1e3:g} mm of the target on {len(flagged)}; not on {len(found) - len(flagged)}: "
               f"{[t for t, d, _ in found if d > args.flag]}")

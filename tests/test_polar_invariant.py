@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
-from test_verdicts import _holds, _rules_of, generated, lattice_search
+from test_verdicts import _cone, _holds, _rules_of, generated, lattice_search
 
 from tooltransfer.planner.planning.verdicts.certificate import certify, check_certificate
 from tooltransfer.planner.planning.verdicts.rules import FaceRule, PushRules
@@ -105,8 +105,7 @@ def test_a_generated_task_certified_by_the_polar_invariant_and_checked_by_this_f
             p = np.array([x, y])
             _, gx, gy = _value(inv, base, mid, p)
             for face in setting.tool.faces:
-                off = math.remainder(face.push_angle - face.normal_angle, 2 * math.pi)
-                lo, hi = max(-mu_half, off - face.theta_b), min(mu_half, off + face.theta_b)
+                lo, hi = _cone(face, mu_half)
                 if hi < lo:
                     continue
                 for yaw in _holds(setting.tool, face, setting.platform, p, setting.radius, []):

@@ -70,6 +70,13 @@ def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: 
     return yaws
 
 
+def _cone(face, half: float) -> tuple[float, float]:
+    """``(lo, hi)`` [rad]: the directions ``face`` pushes in, about its normal, within the friction cone's
+    ``half``-angle and its tool file's ``push_angle +- theta_b`` (empty where ``hi < lo``)."""
+    off = math.remainder(face.push_angle - face.normal_angle, 2 * math.pi)
+    return max(-half, off - face.theta_b), min(half, off + face.theta_b)
+
+
 def _edges_first(angles: np.ndarray) -> np.ndarray:
     """``angles`` with the cone's two edges first: a step that ends in a cell already visited is dropped,
     and of two neighbouring steps of one yaw ending in one cell the edge's is kept (another yaw's or face's
@@ -112,8 +119,7 @@ def lattice_search(setting, start: np.ndarray, target: np.ndarray, *, step: floa
         p = frontier.popleft()
         n += 1
         for face in tool.faces:
-            off = math.remainder(face.push_angle - face.normal_angle, 2 * math.pi)
-            lo, hi = max(-mu_half, off - face.theta_b), min(mu_half, off + face.theta_b)
+            lo, hi = _cone(face, mu_half)
             if hi < lo:
                 continue
             for yaw in holds(face, p)[::yaw_stride]:
@@ -318,8 +324,7 @@ def test_the_lattice_search_keeps_the_margins_it_is_given() -> None:
         """Whether direction ``w`` [rad] lies in some face's cone at ``share`` from a yaw that holds the start."""
         mu = share * math.atan(setting.mechanics.mu)
         for face in setting.tool.faces:
-            off = math.remainder(face.push_angle - face.normal_angle, 2 * math.pi)
-            lo, hi = max(-mu, off - face.theta_b), min(mu, off + face.theta_b)
+            lo, hi = _cone(face, mu)
             for yaw in _holds(setting.tool, face, setting.platform, start, setting.radius, list(setting.obstacles)):
                 a = math.remainder(w - yaw - face.normal_angle, 2 * math.pi)
                 if lo - 1e-9 <= a <= hi + 1e-9:

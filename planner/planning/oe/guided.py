@@ -379,10 +379,10 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     if middle > share:
         tries.append(_Rung(at_middle))
     tries.append(_Rung(at_middle, more=True))
-    if span < options.contact_span:
+    windowed = span < options.contact_span
+    if windowed:
         tries.append(_Rung({**at_middle, "contact_span": span}, windows=True, more=True))
     tries.append(_Rung(at_middle, more=True, fine=True))
-    windowed = span < options.contact_span
 
     def mixed_rung(change: dict[str, float], widest: bool = False) -> _Rung:
         return _Rung(change, more=True, fine=True, mixed=span, greed=GREED, room=LAST_ROOM, refusals=LAST_REFUSALS,
