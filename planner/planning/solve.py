@@ -156,11 +156,13 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
     tool comes within :data:`GUIDED_ROOM` of an obstacle is kept only when no later attempt gives one
     with more room (the closed loop's corrections need some), but for the attempts at the widest share of
     the friction cone (metric ``guided_widest``) after a plan at a narrower one: they would spend the
-    margin kept for an error in ``mu``."""
+    margin kept for an error in ``mu``. The plan kept is sent back to the search, which then makes none of its
+    last attempts (``guide``, :func:`~tooltransfer.planner.planning.oe.guided.guided_plans`): they come after
+    every other and are there for tasks with no plan at all."""
     clock = time.perf_counter()
     whys: list[str] = []
     n_tried = n_on_budget = 0  # the attempts, and those whose search ended on its budget (not its space)
-    refused: SwitchFailed | None = None  # sent back: the search may avoid that change of face there
+    refused: SwitchFailed | Plan | None = None  # sent back: the search may avoid that change of face there
     tight: Plan | None = None  # the first solved plan with little room, if no roomier one comes
     while True:
         try:
@@ -186,6 +188,7 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
                 if room >= GUIDED_ROOM:
                     return plan
                 tight = plan if tight is None else tight
+                refused = tight  # (a plan is kept: no last attempts for one)
                 whys.append(f"a plan whose tool passes {room * 1e3:.2f} mm from an obstacle (kept unless one "
                             f"with {GUIDED_ROOM * 1e3:g} mm comes)")
                 continue

@@ -32,6 +32,7 @@ import shapely
 from numpy.typing import NDArray
 
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
+from tooltransfer.planner.planning.oe.guided_field import distance_field
 from tooltransfer.planner.planning.oe.guided_moves import (
     REACH_SLACK,
     _Contact,
@@ -48,6 +49,7 @@ from tooltransfer.planner.planning.oe.piecewise import fit_runs
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.qp_variant import condense_sequence
+from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.tools.objects import Disc
 
@@ -190,7 +192,8 @@ class _Rung(NamedTuple):
     friction cone, the contact span) and the search's settings (as :func:`guided_path` takes them; ``fine``:
     steps and cells of a :data:`FINE` share of the usual and ``1 / FINE`` times the expansions;
     ``refusals``: how many times it searches again without a change of face a later stage refused;
-    ``widest``: at ``friction_cone_fraction_max`` beyond the ladder's middle share, its last rungs)."""
+    ``widest``: at ``friction_cone_fraction_max`` beyond the ladder's middle share; ``guide``: ordered by
+    the distance to go of :func:`~.guided_field.distance_field`, the ladder's last rungs)."""
 
     change: dict[str, float]
     windows: bool = False
@@ -201,6 +204,7 @@ class _Rung(NamedTuple):
     room: float = REACH_SLACK
     refusals: int = REFUSALS
     widest: bool = False
+    guide: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -251,7 +255,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 options: QPOptions, step: float = STEP, cell: float = CELL, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False,
                 more: bool = False, mixed: float | None = None, greed: float = 1.0,
-                room: float = REACH_SLACK) -> GuidedPath | GuidedMiss:
+                room: float = REACH_SLACK, guide: bool = False) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
     ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin,
     span and most contacts per push); ``switch_price`` [m]: a face change's worth in path; ``refused``:
@@ -265,8 +269,10 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     search's order (weighted A*: a path whose cost, length plus the price of its changes of face, is at
     most ``greed`` times the least on the lattice, found with far fewer expansions); ``room`` [m]: how far
     the tool outline keeps from the obstacles at the search's nodes (``mixed`` and ``windows`` are not
-    taken together: their windows would share keys). A lattice cell is visited once per face (and window), with the
-    contacts its first visit had used."""
+    taken together: their windows would share keys); ``guide``: the distance to go is the
+    :func:`~.guided_field.distance_field` of the search's faces on cells of :data:`CELL` instead of the
+    straight line (a path round an obstacle that the straight line's order leaves unexpanded). A lattice
+    cell is visited once per face (and window), with the contacts its first visit had used."""
     if windows and mixed is not None:
         raise ValueError("guided_path takes windows or mixed, not both")
     outline = np.asarray(setting.tool.outline.exterior.coords)
@@ -303,7 +309,9 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         return None
 
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
-    heap: list = [(greed * float(np.hypot(*(target - start))), 0.0, 0, None)]
+    to_go = distance_field(held, free, start, target, 3 * step, CELL).to_go if guide else \
+        (lambda q: float(np.hypot(*(target - q))))
+    heap: list = [(greed * to_go(start), 0.0, 0, None)]
     nodes: list[tuple[NDArray[np.float64], int, str | None, _Contact]] = [(start, -1, None, _Contact())]
     seen: set = set()
     n = 0
@@ -332,7 +340,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                     continue  # a re-contact of the face the later stages refused near here
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
                 nodes.append((q, k, name, after))
-                heapq.heappush(heap, (g2 + greed * float(np.hypot(*(target - q))), g2, len(nodes) - 1, name))
+                heapq.heappush(heap, (g2 + greed * to_go(q), g2, len(nodes) - 1, name))
     return GuidedMiss(n, not heap, step)
 
 
@@ -353,7 +361,12 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     :data:`LAST_REFUSALS` searches again; last, where ``friction_cone_fraction_max`` is wider still (and
     widens some face's admissible cone: :func:`_widens`), that share on whole and on fine steps, then as
     the attempt before (plans at the edge of the cone, where nothing narrower was found: a task the
-    certificate's whole cone cannot rule out). The ``mixed``
+    certificate's whole cone cannot rule out); last of all (where ``guided_contact_span`` is narrower),
+    the middle share on fine steps on every face's windows, weighted, roomy and searched again as the
+    ``mixed`` attempts are, but in the order of the distance to go over a grid of the faces' pushes
+    (:mod:`~.guided_field`, ``guide``: a way round an obstacle that the straight line's order left
+    unexpanded), whether or not the attempts before could push from the start (the caller does not make
+    it after a plan with little room). The ``mixed``
     attempts run also where the attempts before them could not push from the start (their windows may;
     the widest share's whole-face attempts do not), and after a plan with little room (the caller's
     ``GUIDED_ROOM``), which a roomier one may replace (the caller takes none at the widest share after a
@@ -368,8 +381,9 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     The caller may send back why a solved push plan failed later: a
     :class:`~tooltransfer.planner.planning.assemble.SwitchFailed` with the object's position (a switch
     with no tool path there) makes the search run again without that change of face near there (at
-    most :data:`REFUSALS` times per attempt, :data:`LAST_REFUSALS` in the ``mixed`` ones); anything else, the next
-    attempt."""
+    most :data:`REFUSALS` times per attempt, :data:`LAST_REFUSALS` in the ``mixed`` ones); a whole plan it keeps
+    (a :class:`~tooltransfer.planner.planning.plan.Plan`: one with little room, kept unless a later attempt gives
+    a roomier one) makes it skip the ``guide`` attempts; anything else, the next attempt."""
     target = universal[-1] if target is None else target
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
     share = options.friction_cone_fraction
@@ -393,9 +407,18 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
         at_wide = {"friction_cone_fraction": wide}
         tries += [_Rung(at_wide, more=True, fine=fine, widest=True) for fine in (False, True)]
         tries += [mixed_rung(at_wide, widest=True)] if windowed else []
+    # last of all, where every attempt failed: the middle share's fine steps on every face's windows in the order
+    # of the distance field (a path the straight line's order left unexpanded)
+    tries += [_Rung({**at_middle, "contact_span": span}, windows=True, more=True, fine=True, greed=GREED,
+                    room=LAST_ROOM, refusals=LAST_REFUSALS, guide=True)] if windowed else []
     stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
+    kept = False  # the caller keeps a whole plan of an attempt before
     for rung in tries:
-        if (rung.windows and not stuck) or (stuck and rung.mixed is None and (rung.fine or rung.widest)):
+        if rung.guide and kept:
+            break
+        if rung.guide and rung.windows:
+            pass  # the windows in the field's order: whether or not the attempts before could push from the start
+        elif (rung.windows and not stuck) or (stuck and rung.mixed is None and (rung.fine or rung.widest)):
             continue  # (which faces hold the puck at the start depends on neither; their steps' directions
             # do a little on the share, so a face held there but stepping nowhere at 0.8 is not tried wider)
         opts = options.model_copy(update=rung.change)
@@ -404,6 +427,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
             plan = _attempt(t, setting, target, opts, universal, refused, rung)
             stuck = stuck and (rung.windows or rung.mixed is not None or plan.metrics.get("guided_expansions") == 1.0)
             failed = yield plan
+            kept = kept or isinstance(failed, Plan)
             where = getattr(failed, "where", None)
             if plan.status != "solved" or where is None:
                 break
@@ -424,14 +448,15 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
     the search's settings of ``rung`` (:class:`_Rung`)."""
     share, fine, mixed = opts.friction_cone_fraction, rung.fine, rung.mixed
     found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=rung.windows,
-                        more=rung.more, mixed=mixed, greed=rung.greed, room=rung.room,
+                        more=rung.more, mixed=mixed, greed=rung.greed, room=rung.room, guide=rung.guide,
                         **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(opts.guided_budget / FINE)}
                            if fine else {"budget": opts.guided_budget}))
     but = f" without the {len(refused)} change(s) of face refused," if refused else ""
     on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if rung.windows else ''} of each face"
           f"{f' or, where that is not held, on its {mixed * 1e3:g} mm windows' if mixed is not None else ''}"
           f"{', half steps and new runs where it rolls off' if rung.more else ''}"
-          f"{f', the distance to go weighted {rung.greed:g}' if rung.greed != 1.0 else ''})")
+          f"{f', the distance to go weighted {rung.greed:g}' if rung.greed != 1.0 else ''}"
+          f"{', that distance over a grid of where the faces push' if rung.guide else ''})")
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
@@ -456,4 +481,6 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
                             guided_step=FINE * STEP if fine else STEP)
     if rung.widest:  # the caller keeps a plan with little room of a narrower share rather than this
         plan.metrics["guided_widest"] = 1.0
+    if rung.guide:  # the caller keeps a plan with little room of the attempts before rather than this
+        plan.metrics["guided_field"] = 1.0
     return plan
