@@ -49,3 +49,26 @@ def test_a_plan_with_little_room_is_replaced_only_at_its_share_or_a_narrower(mon
     plan = solve_module._guided(None, None, _ladder(made, seen), failed, None, None, {}, 0.0)
     assert plan.metrics["k"] == kept
     assert seen == tried
+
+
+def test_the_plan_kept_with_little_room_is_sent_back_to_the_ladder(monkeypatch) -> None:
+    """After a solved plan with little room, ``_guided`` sends that plan back to the ladder (which then
+    skips its last attempt, tests/test_guided_field.py); after a roomy one it stops; after an attempt
+    that failed it sends nothing."""
+    monkeypatch.setattr(solve_module, "_complete", _complete)
+    sent: list[Any] = []
+
+    def ladder(attempts: list[SimpleNamespace]) -> Generator[Any, Any, None]:
+        for a in attempts:
+            sent.append((yield a))
+
+    failed_attempt = SimpleNamespace(status="infeasible", metrics={}, reason="no path")
+    made = [failed_attempt, _attempt(1, TIGHT, False), _attempt(2, TIGHT, False)]
+    failed = SimpleNamespace(metrics={}, reason="")
+    plan = solve_module._guided(None, None, ladder(made), failed, None, None, {}, 0.0)
+    assert plan.metrics["k"] == 1
+    assert sent[0] is None and sent[1] is plan and sent[2] is plan
+    sent.clear()
+    plan = solve_module._guided(None, None, ladder([_attempt(0, ROOMY, False), _attempt(1, ROOMY, False)]), failed,
+                                None, None, {}, 0.0)
+    assert plan.metrics["k"] == 0 and sent == []

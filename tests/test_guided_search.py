@@ -99,7 +99,7 @@ def test_steps_along_either_edge_of_a_turning_cone_are_taken_and_stay_inside_it(
     itself, which the cone had again left by the step's end: every step along that edge was dropped and
     the search lost one side of each cone (here the slope's inclined face could not push up-left
     steeply enough to reach the target, which a search with both edges reaches)."""
-    from tooltransfer.planner.planning.oe.guided import CONE
+    from tooltransfer.planner.planning.oe.guided_holds import CONE
     from tooltransfer.planner.planning.oe.guided_moves import _face_moves, _pointing, _stepped
 
     batch = ROOT / "problems" / "batch" / "verdicts_200.yaml"
@@ -307,9 +307,16 @@ def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the
     in both cases (on fine steps), at 0.8 of the cone and, last, at the widest share where that is wider;
     after them all, in both cases, the attempt on every face's windows in the distance field's order
     (tests/test_guided_field.py), which solves verd200-00056."""
-    stuck = solve(_verdict_task("verd200-00056"))
+    from guided_ladder import ladder_reasons
+
     # three attempts closed at once, the windows' (its path fails later, at the approach), the two on
     # whole faces and windows where not held: six attempts failed; the seventh, the field's, solves it
+    ladder = ladder_reasons(_verdict_task("verd200-00056"))
+    assert len(ladder) == 7 and all("its space closed after 1 expansions" in a for a in ladder[:3])
+    assert all(" 2 mm steps" not in a and " 2 mm, " not in a for a in ladder[:4])
+    for a, share in zip(ladder[4:6], ("0.8", "0.95"), strict=True):
+        assert a.startswith(f"at {share} of the friction cone") and "where that is not held, on its 4 mm windows" in a
+    stuck = solve(_verdict_task("verd200-00056"))
     assert stuck.verdict == "solved" and stuck.metrics["guided_field"] == 1.0
     assert stuck.metrics["alternatives_tried"] == 7
     moved = solve(_widest(_verdict_task("verd200-00011"), 0.8))
@@ -372,7 +379,8 @@ def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not
     ends of its window or of the whole range (the Omni's inverse kinematics reaching the tool there, the
     outline the last attempt's room clear of the obstacles), and a window starts only where its face is not
     held as a whole under the search's rule: the windows add moves where the whole face has none."""
-    from tooltransfer.planner.planning.oe.guided import CELL, FINE, GREED, LAST_ROOM, STEP, _Holds, _zones
+    from tooltransfer.planner.planning.oe.guided import CELL, FINE, GREED, LAST_ROOM, STEP
+    from tooltransfer.planner.planning.oe.guided_holds import _Holds, _zones
     from tooltransfer.planner.planning.oe.guided_moves import _face_moves
 
     task = _verdict_task("verd200-00129")

@@ -66,9 +66,11 @@ UNITS: dict[str, Unit] = {
     # cone's half-angle it kept to, its search's step, its time, the expansions of a search that failed
     # and whether it ended on its budget (1) or with its space closed (0); on a plan the search did not
     # solve, its attempts and how many of them ended on their budget; 1 where the plan came from an
-    # attempt at the widest share (oe.friction_cone_fraction_max, beyond 0.8: little margin for mu)
+    # attempt at the widest share (oe.friction_cone_fraction_max, beyond 0.8: little margin for mu), or
+    # from the last attempt, in the order of a distance field (oe.guided_field)
     "friction_cone_fraction": "",
     "guided_widest": "",
+    "guided_field": "",
     "guided_step": "m",
     "time_guided": "s",
     "guided_expansions": "",

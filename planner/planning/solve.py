@@ -162,7 +162,8 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
     clock = time.perf_counter()
     whys: list[str] = []
     n_tried = n_on_budget = 0  # the attempts, and those whose search ended on its budget (not its space)
-    refused: SwitchFailed | Plan | None = None  # sent back: the search may avoid that change of face there
+    # sent back: a switch refused (the search may avoid that change of face there), or the plan kept
+    refused: SwitchFailed | Plan | None = None
     tight: Plan | None = None  # the first solved plan with little room, if no roomier one comes
     while True:
         try:

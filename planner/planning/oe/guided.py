@@ -28,18 +28,15 @@ from dataclasses import dataclass, replace
 from typing import Any, NamedTuple
 
 import numpy as np
-import shapely
 from numpy.typing import NDArray
 
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
-from tooltransfer.planner.planning.oe.guided_field import distance_field
+from tooltransfer.planner.planning.oe.guided_field import DistanceField, distance_field
+from tooltransfer.planner.planning.oe.guided_holds import lattice_rules
 from tooltransfer.planner.planning.oe.guided_moves import (
     REACH_SLACK,
     _Contact,
-    _face_moves,
     _FaceMoves,
-    _heading,
-    _pointing,
     _rolled,
     _step_of,
     face_cone,
@@ -51,7 +48,6 @@ from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.qp_variant import condense_sequence
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import Setting
-from tooltransfer.tools.objects import Disc
 
 
 @dataclass(frozen=True)
@@ -124,9 +120,6 @@ class Refusal:
                 and math.hypot(float(p[0] - self.where[0]), float(p[1] - self.where[1])) < REFUSED_RADIUS)
 
 
-#: Share of a face's narrowed cone the search's steps use (the fit's cone rows are linearised).
-CONE = 0.98
-
 #: Step [m] of the search's straight pushes.
 STEP = 0.004
 #: Side [m] of the lattice cells the search visits once per face.
@@ -175,25 +168,13 @@ def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touc
                       tuple(runs[::-1]))
 
 
-def _zones(setting: Setting, room: float = REACH_SLACK) -> list[Any]:
-    """Where the tool outline may not come (the obstacles grown by ``room`` [m]) and where the object's
-    centre may not be (grown by its radius and the margin), prepared; None without obstacles."""
-    obstacles = [o.polygon() if isinstance(o, Disc) else o for o in setting.obstacles]
-    zones = [shapely.union_all([shapely.buffer(o, d, quad_segs=32) for o in obstacles]) if obstacles else None
-             for d in (room, setting.radius + max(setting.margin - 1e-5, 0.0) + 1e-4)]
-    for z in zones:
-        if z is not None:
-            shapely.prepare(z)
-    return zones
-
-
 class _Rung(NamedTuple):
     """One attempt of :func:`guided_plans`' ladder: the options it changes (``change``: the share of the
     friction cone, the contact span) and the search's settings (as :func:`guided_path` takes them; ``fine``:
     steps and cells of a :data:`FINE` share of the usual and ``1 / FINE`` times the expansions;
     ``refusals``: how many times it searches again without a change of face a later stage refused;
     ``widest``: at ``friction_cone_fraction_max`` beyond the ladder's middle share; ``guide``: ordered by
-    the distance to go of :func:`~.guided_field.distance_field`, the ladder's last rungs)."""
+    the distance to go of :func:`guide_field`, the ladder's last rung)."""
 
     change: dict[str, float]
     windows: bool = False
@@ -207,55 +188,11 @@ class _Rung(NamedTuple):
     guide: bool = False
 
 
-@dataclass(frozen=True, eq=False)
-class _Holds:
-    """Which of the search's ``faces`` hold the object where: each at both ends of its usable contact
-    range (or window), the Omni reaching it there, the tool ``outline`` (M, 2) [m] clear of the
-    ``body_zone`` (:func:`_zones`; None without obstacles)."""
-
-    faces: list[_FaceMoves]
-    outline: NDArray[np.float64]
-    body_zone: Any
-
-    def touches(self, fm: _FaceMoves, yaws: list[float], p: NDArray[np.float64], near: float) -> bool:
-        """Whether the tool outline, holding ``fm``'s contact at each end at the yaws [rad] with the
-        object at ``p``, meets the body zone (``near`` [m]: the zone's distance from ``p``)."""
-        close = [(e, y) for e, y, reach in zip(fm.ends, yaws, fm.spans, strict=True) if reach >= near]
-        if not close:
-            return False
-        rings = np.stack([(self.outline - e.centre_in_tool) @ np.array([[math.cos(y), math.sin(y)],
-                                                                       [-math.sin(y), math.cos(y)]]) + p
-                          for e, y in close])
-        return bool(shapely.intersects(self.body_zone, shapely.polygons(rings)).any())
-
-    def __call__(self, p: NDArray[np.float64], came: str | None = None, every: bool = False,
-                 ) -> list[tuple[str, float, float]]:
-        """``(face, direction, half)`` [rad] of the faces that can push the object at ``p``: the middle
-        of their admissible directions in the world and the half-width the search uses of them. A
-        window of a face held as a whole (``mixed``) is left out unless the node's face ``came`` is it
-        or ``every`` (the target of a last step, which adds no node to the lattice)."""
-        near = math.inf if self.body_zone is None else float(shapely.distance(self.body_zone, shapely.Point(p)))
-        out = []
-        whole: set[str] = set()  # the faces held as a whole here
-        for fm in self.faces:
-            if fm.window is not None and fm.name in whole and fm.key != came and not every:
-                continue
-            yaws = [_heading(e, p) for e in fm.ends]
-            if any(y is None for y in yaws):
-                continue
-            if self.touches(fm, [y for y in yaws if y is not None], p, near):
-                continue
-            out.append((fm.key, _pointing(fm, p), CONE * fm.cone.theta_b))
-            if fm.window is None:
-                whole.add(fm.name)
-        return out
-
-
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = CELL, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False,
                 more: bool = False, mixed: float | None = None, greed: float = 1.0,
-                room: float = REACH_SLACK, guide: bool = False) -> GuidedPath | GuidedMiss:
+                room: float = REACH_SLACK, guide: DistanceField | None = None) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
     ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin,
     span and most contacts per push); ``switch_price`` [m]: a face change's worth in path; ``refused``:
@@ -269,24 +206,13 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     search's order (weighted A*: a path whose cost, length plus the price of its changes of face, is at
     most ``greed`` times the least on the lattice, found with far fewer expansions); ``room`` [m]: how far
     the tool outline keeps from the obstacles at the search's nodes (``mixed`` and ``windows`` are not
-    taken together: their windows would share keys); ``guide``: the distance to go is the
-    :func:`~.guided_field.distance_field` of the search's faces on cells of :data:`CELL` instead of the
-    straight line (a path round an obstacle that the straight line's order leaves unexpanded). A lattice
-    cell is visited once per face (and window), with the contacts its first visit had used."""
+    taken together: their windows would share keys); ``guide``: the distance to go, instead of the
+    straight line, a field of these faces and holds (:func:`guide_field`: a path round an obstacle that
+    the straight line's order leaves unexpanded). A lattice cell is visited once per face (and window),
+    with the contacts its first visit had used."""
     if windows and mixed is not None:
         raise ValueError("guided_path takes windows or mixed, not both")
-    outline = np.asarray(setting.tool.outline.exterior.coords)
-    body_zone, centre_zone = _zones(setting, room)
-    faces = _face_moves(setting, options, windows)
-    if mixed is not None:
-        faces += [fm for fm in _face_moves(setting, options.model_copy(update={"contact_span": mixed}), True)
-                  if fm.window is not None]
-    by_name = {fm.key: fm for fm in faces}
-
-    held = _Holds(faces, outline, body_zone)
-
-    def free(q: NDArray[np.float64]) -> bool:
-        return centre_zone is None or not shapely.intersects_xy(centre_zone, float(q[0]), float(q[1]))
+    held, free, by_name = lattice_rules(setting, options, windows, mixed, room)
 
     def allowed(came: str | None, face: str, p: NDArray[np.float64]) -> bool:
         """Whether the change from ``came`` to ``face`` at ``p`` was not refused (``face`` "": a re-contact
@@ -309,8 +235,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         return None
 
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
-    to_go = distance_field(held, free, start, target, 3 * step, CELL).to_go if guide else \
-        (lambda q: float(np.hypot(*(target - q))))
+    to_go = guide.to_go if guide is not None else (lambda q: float(np.hypot(*(target - q))))
     heap: list = [(greed * to_go(start), 0.0, 0, None)]
     nodes: list[tuple[NDArray[np.float64], int, str | None, _Contact]] = [(start, -1, None, _Contact())]
     seen: set = set()
@@ -342,6 +267,17 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 nodes.append((q, k, name, after))
                 heapq.heappush(heap, (g2 + greed * to_go(q), g2, len(nodes) - 1, name))
     return GuidedMiss(n, not heap, step)
+
+
+def guide_field(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *, options: QPOptions,
+                step: float = STEP, windows: bool = False, mixed: float | None = None,
+                room: float = REACH_SLACK) -> DistanceField:
+    """The :func:`~.guided_field.distance_field` (cells of :data:`CELL`) of :func:`guided_path`'s faces and
+    holds under these settings, its funnel the reach of its last straight push (``3 step`` [m]) from
+    ``start`` to ``target`` (2,) [m]: its ``guide``, built once for the searches again after a refusal."""
+    held, free, _ = lattice_rules(setting, options, windows, mixed, room)
+    return distance_field(held, free, np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64),
+                          3 * step, CELL)
 
 
 def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
@@ -383,7 +319,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     with no tool path there) makes the search run again without that change of face near there (at
     most :data:`REFUSALS` times per attempt, :data:`LAST_REFUSALS` in the ``mixed`` ones); a whole plan it keeps
     (a :class:`~tooltransfer.planner.planning.plan.Plan`: one with little room, kept unless a later attempt gives
-    a roomier one) makes it skip the ``guide`` attempts; anything else, the next attempt."""
+    a roomier one) makes it skip the ``guide`` attempt; anything else, the next attempt."""
     target = universal[-1] if target is None else target
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
     share = options.friction_cone_fraction
@@ -415,16 +351,18 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     kept = False  # the caller keeps a whole plan of an attempt before
     for rung in tries:
         if rung.guide and kept:
-            break
-        if rung.guide and rung.windows:
-            pass  # the windows in the field's order: whether or not the attempts before could push from the start
+            continue  # after a plan kept with little room: the field's order is for tasks with no plan at all
+        if rung.guide:
+            pass  # every face's windows in the field's order: whether or not those before could push from the start
         elif (rung.windows and not stuck) or (stuck and rung.mixed is None and (rung.fine or rung.widest)):
             continue  # (which faces hold the puck at the start depends on neither; their steps' directions
             # do a little on the share, so a face held there but stepping nowhere at 0.8 is not tried wider)
         opts = options.model_copy(update=rung.change)
+        order = guide_field(setting, universal[0], target, options=opts, step=FINE * STEP if rung.fine else STEP,
+                            windows=rung.windows, mixed=rung.mixed, room=rung.room) if rung.guide else None
         refused: list[Refusal] = []
         for _ in range(1 + rung.refusals):
-            plan = _attempt(t, setting, target, opts, universal, refused, rung)
+            plan = _attempt(t, setting, target, opts, universal, refused, rung, order)
             stuck = stuck and (rung.windows or rung.mixed is not None or plan.metrics.get("guided_expansions") == 1.0)
             failed = yield plan
             kept = kept or isinstance(failed, Plan)
@@ -443,12 +381,13 @@ def _widens(setting: Setting, narrow: float, wide: float) -> bool:
 
 
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
-             universal: NDArray[np.float64], refused: list[Refusal], rung: _Rung) -> PushPlan:
+             universal: NDArray[np.float64], refused: list[Refusal], rung: _Rung,
+             order: DistanceField | None = None) -> PushPlan:
     """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes, on
-    the search's settings of ``rung`` (:class:`_Rung`)."""
+    the search's settings of ``rung`` (:class:`_Rung`), in the order of ``order`` where given."""
     share, fine, mixed = opts.friction_cone_fraction, rung.fine, rung.mixed
     found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=rung.windows,
-                        more=rung.more, mixed=mixed, greed=rung.greed, room=rung.room, guide=rung.guide,
+                        more=rung.more, mixed=mixed, greed=rung.greed, room=rung.room, guide=order,
                         **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(opts.guided_budget / FINE)}
                            if fine else {"budget": opts.guided_budget}))
     but = f" without the {len(refused)} change(s) of face refused," if refused else ""
@@ -481,6 +420,6 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
                             guided_step=FINE * STEP if fine else STEP)
     if rung.widest:  # the caller keeps a plan with little room of a narrower share rather than this
         plan.metrics["guided_widest"] = 1.0
-    if rung.guide:  # the caller keeps a plan with little room of the attempts before rather than this
+    if rung.guide:  # a plan in the distance field's order
         plan.metrics["guided_field"] = 1.0
     return plan

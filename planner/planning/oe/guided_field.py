@@ -8,7 +8,8 @@ while a path round the other side stays unexpanded (on the verdict benchmark's u
 attempts ran out of 8000 expansions 1-10 mm from the target or far from it). :func:`distance_field` gives
 a better guess: the length of the shortest path on a grid of cells of side ``cell`` [m], backward from
 the *funnel* (the cells within ``funnel`` [m] of the target from whose centre a face held there and at
-the target pushes the puck straight to the target, within its cone at both ends), along moves from a
+the target pushes the puck straight to the target, within its cone at both ends, and the cell nearest
+the target whatever the faces), along moves from a
 cell to one at most :data:`RING` cells away in a direction some face held at the first cell's centre
 pushes in (within its cone widened by the angle the cell subtends over the move), both cells' centres
 clear of the obstacles' zone. Rolling, re-contacts, the step's own turning cone and the rest of the
@@ -27,11 +28,12 @@ from numpy.typing import NDArray
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-#: Farthest move [cells] of the grid's paths along each axis (the moves' directions then lie at most
-#: about 10 degrees apart, against cones 20-60 degrees wide).
+#: Farthest move [cells] of the grid's paths along each axis (the moves' directions then lie 7-18
+#: degrees apart, against cones 20-60 degrees wide).
 RING = 3
-#: Distance [m] added for a cell from which the field reaches no funnel cell (beyond any path's length
-#: in the Omni's workspace: such cells come last, but they still come).
+#: Distance [m] of a cell from which the field reaches no funnel cell (beyond any path's length in the
+#: Omni's workspace: such cells come last, but they still come); outside the grid, this plus the
+#: distance from the grid.
 UNREACHED = 1.0
 #: Room [m] round the start and the target that the grid covers.
 PAD = 0.05
@@ -39,7 +41,7 @@ PAD = 0.05
 CELL_RADIUS = 0.7
 
 #: ``held(p, every=True)``: the faces that can push the puck at ``p`` (2,) [m], each ``(key, direction,
-#: half-width)`` [rad] (:class:`~tooltransfer.planner.planning.oe.guided._Holds`).
+#: half-width)`` [rad] (:class:`~tooltransfer.planner.planning.oe.guided_holds._Holds`).
 Held = Callable[..., list[tuple[str, float, float]]]
 
 
@@ -85,8 +87,8 @@ def distance_field(held: Held, free: Callable[[NDArray[np.float64]], bool], star
     nx, ny = (int(v) + 1 for v in np.ceil((np.maximum(start, target) + PAD - lo) / cell))
     ii, jj = np.divmod(np.arange(nx * ny), ny)
     centres = lo + cell * np.column_stack([ii, jj])
-    cones: list[list[tuple[str, float, float]]] = [held(c, every=True) if free(c) else [] for c in centres]
     clear = np.array([free(c) for c in centres])
+    cones = [held(c, every=True) if ok else [] for c, ok in zip(centres, clear, strict=True)]
     width = max(1, max(len(c) for c in cones))
     mid, half = np.zeros((len(cones), width)), np.full((len(cones), width), -1.0)
     for k, c in enumerate(cones):
