@@ -126,3 +126,24 @@ def test_the_field_s_attempts_come_last_and_not_after_a_plan_is_kept() -> None:
     assert field == [len(every) - 1] and "4 mm windows of each face" in every[-1]
     kept = ladder_reasons(task, keep_after_first=True)
     assert kept == every[:-1]
+
+
+def test_a_miss_says_where_the_field_found_no_way_either() -> None:
+    """verd200-00049 (l_shape, one obstacle, unknown), searched as the ladder's last attempt (every face
+    on its 4 mm windows, 0.8 of the cone, fine steps, the tool LAST_ROOM from the obstacle): the search
+    finds no path, and its field connects no way from the start to the target's funnel either, which the
+    miss says; a search in the straight line's order says nothing of a field."""
+    task = generated("verdicts_200.yaml", "verd200-00049")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": 0.8,
+                                                  "contact_span": qp_options(task).guided_contact_span})
+    kw = dict(options=options, windows=True, more=True, step=FINE * STEP, cell=FINE * CELL, greed=GREED,
+              room=LAST_ROOM, budget=round(options.guided_budget / FINE))
+    start, target = np.array(task.start), np.array(task.target)
+    order = guide_field(setting, start, target, options=options, step=FINE * STEP, windows=True, room=LAST_ROOM)
+    assert order.to_go(start) == UNREACHED
+    miss = guided_path(setting, start, target, guide=order, **kw)
+    assert isinstance(miss, GuidedMiss) and miss.unguided
+    assert "its distance field found no way from the start to the target either" in miss.describe()
+    plain = guided_path(setting, start, target, **kw)
+    assert isinstance(plain, GuidedMiss) and not plain.unguided and "distance field" not in plain.describe()

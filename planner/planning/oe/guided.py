@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
-from tooltransfer.planner.planning.oe.guided_field import DistanceField, distance_field
+from tooltransfer.planner.planning.oe.guided_field import UNREACHED, DistanceField, distance_field
 from tooltransfer.planner.planning.oe.guided_holds import lattice_rules
 from tooltransfer.planner.planning.oe.guided_moves import (
     REACH_SLACK,
@@ -89,19 +89,23 @@ class GuidedPath:
 class GuidedMiss:
     """The search found no path: after ``expansions`` expansions of ``step`` [m], with every reachable
     lattice cell expanded (``exhausted``: no path under its rules at its resolution) or with its budget
-    spent."""
+    spent; ``unguided``: in the order of a distance field (:func:`guide_field`) that connects no way from
+    the start to the target's funnel either."""
 
     expansions: int
     exhausted: bool
     step: float
+    unguided: bool = False
 
     def describe(self) -> str:
         """One clause: what was searched and what remains."""
+        field = (f"; its distance field found no way from the start to the target either (the search's faces and "
+                 f"holds on {CELL * 1e3:g} mm cells, the contact's rolling left out)") if self.unguided else ""
         if self.exhausted:
             return (f"its space closed after {self.expansions} expansions (no path in {self.step * 1e3:g} mm steps "
-                    "under its rules; finer steps or other contact places may still find one)")
+                    f"under its rules; finer steps or other contact places may still find one{field})")
         return (f"no path within {self.expansions} expansions of {self.step * 1e3:g} mm steps (its budget, "
-                "oe.guided_budget)")
+                f"oe.guided_budget{field})")
 
 
 @dataclass(frozen=True)
@@ -266,7 +270,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
                 g2 = g + step + (switch_price if came is not None and name != came else 0.0)
                 nodes.append((q, k, name, after))
                 heapq.heappush(heap, (g2 + greed * to_go(q), g2, len(nodes) - 1, name))
-    return GuidedMiss(n, not heap, step)
+    return GuidedMiss(n, not heap, step, guide is not None and guide.to_go(start) >= UNREACHED)
 
 
 def guide_field(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *, options: QPOptions,
