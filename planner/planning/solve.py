@@ -163,14 +163,14 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
     whys: list[str] = []
     n_tried = n_on_budget = 0  # the attempts, and those whose search ended on its budget (not its space)
     # sent back: a switch refused (the search may avoid that change of face there), or the plan kept
-    refused: SwitchFailed | Plan | None = None
+    sent: SwitchFailed | Plan | None = None
     tight: Plan | None = None  # the first solved plan with little room, if no roomier one comes
     while True:
         try:
-            guided = attempts.send(refused)
+            guided = attempts.send(sent)
         except StopIteration:
             break
-        refused = None
+        sent = None
         if tight is not None and guided.metrics.get("guided_widest") and not tight.metrics.get("guided_widest"):
             break  # a plan at the widest share of the friction cone would trade its margin for the room
         n_tried += 1
@@ -179,7 +179,7 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
             stages = {k: v for k, v in failed.metrics.items() if k in ("time_skills", "time_oe")}
             switches: list[SwitchFailed] = []
             plan = _complete(task, setting, guided, switch, recontact, stages, base, switches)
-            refused = switches[0] if switches else None
+            sent = switches[0] if switches else None
             if plan.status == "solved":
                 plan.metrics["time_guided"] = time.perf_counter() - clock
                 plan.metrics["time_total"] = time.perf_counter() - start
@@ -189,7 +189,7 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
                 if room >= GUIDED_ROOM:
                     return plan
                 tight = plan if tight is None else tight
-                refused = tight  # (a plan is kept: no last attempts for one)
+                sent = tight  # (a plan is kept: no last attempts for one)
                 whys.append(f"a plan whose tool passes {room * 1e3:.2f} mm from an obstacle (kept unless one "
                             f"with {GUIDED_ROOM * 1e3:g} mm comes)")
                 continue

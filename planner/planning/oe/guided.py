@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.guided_field import UNREACHED, DistanceField, distance_field
-from tooltransfer.planner.planning.oe.guided_holds import lattice_rules
+from tooltransfer.planner.planning.oe.guided_holds import lattice_rules, straight_to
 from tooltransfer.planner.planning.oe.guided_moves import (
     REACH_SLACK,
     _Contact,
@@ -230,13 +230,8 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         d = target - p
         if float(np.hypot(*d)) > 3 * step:
             return None
-        there = {name: (mid, half) for name, mid, half in held(target, every=True)}
-        way = math.atan2(d[1], d[0])
-        for name, mid, half in here:
-            if name in there and allowed(came, name, p) and all(abs(math.remainder(way - m, 2 * math.pi)) <= h
-                                     for m, h in ((mid, half), there[name])):
-                return name
-        return None
+        return next((name for name in straight_to(math.atan2(d[1], d[0]), here, held(target, every=True))
+                     if allowed(came, name, p)), None)
 
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
     to_go = guide.to_go if guide is not None else (lambda q: float(np.hypot(*(target - q))))
@@ -356,11 +351,11 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     for rung in tries:
         if rung.guide and kept:
             continue  # after a plan kept with little room: the field's order is for tasks with no plan at all
-        if rung.guide:
-            pass  # every face's windows in the field's order: whether or not those before could push from the start
-        elif (rung.windows and not stuck) or (stuck and rung.mixed is None and (rung.fine or rung.widest)):
+        if not rung.guide and ((rung.windows and not stuck)
+                               or (stuck and rung.mixed is None and (rung.fine or rung.widest))):
             continue  # (which faces hold the puck at the start depends on neither; their steps' directions
-            # do a little on the share, so a face held there but stepping nowhere at 0.8 is not tried wider)
+            # do a little on the share, so a face held there but stepping nowhere at 0.8 is not tried wider;
+            # the field's order runs on every face's windows whether or not those before could push from it)
         opts = options.model_copy(update=rung.change)
         order = guide_field(setting, universal[0], target, options=opts, step=FINE * STEP if rung.fine else STEP,
                             windows=rung.windows, mixed=rung.mixed, room=rung.room) if rung.guide else None

@@ -28,6 +28,8 @@ from numpy.typing import NDArray
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from tooltransfer.planner.planning.oe.guided_holds import straight_to
+
 #: Farthest move [cells] of the grid's paths along each axis (the moves' directions then lie 7-18
 #: degrees apart, against cones 20-60 degrees wide).
 RING = 3
@@ -107,14 +109,11 @@ def distance_field(held: Held, free: Callable[[NDArray[np.float64]], bool], star
         cols.append(moved)
         lengths.append(np.full(len(moved), length))
     sink = len(cones)  # the funnel, one node: its edges are the straight last pushes' lengths
-    at_target = {key: (m, h) for key, m, h in held(target, every=True)}
+    at_target = held(target, every=True)
     for k in np.nonzero(clear & (np.hypot(*(target - centres).T) <= funnel))[0]:
         d = target - centres[k]
-        way, gap = math.atan2(d[1], d[0]), float(np.hypot(*d))
-        if gap < CELL_RADIUS * cell or any(
-                key in at_target and abs(math.remainder(way - m, 2 * math.pi)) <= h
-                and abs(math.remainder(way - at_target[key][0], 2 * math.pi)) <= at_target[key][1]
-                for key, m, h in cones[k]):
+        gap = float(np.hypot(*d))
+        if gap < CELL_RADIUS * cell or straight_to(math.atan2(d[1], d[0]), cones[k], at_target):
             rows.append(np.array([sink]))
             cols.append(np.array([k]))
             lengths.append(np.array([gap + 1e-9]))  # an edge of length 0 would be no edge

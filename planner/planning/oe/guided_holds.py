@@ -82,6 +82,16 @@ class _Holds:
         return out
 
 
+def straight_to(way: float, here: list[tuple[str, float, float]], there: list[tuple[str, float, float]]
+                ) -> list[str]:
+    """The keys of the faces of ``here`` (held at a point, as :class:`_Holds` gives them) also held in
+    ``there`` (at another point) whose cones at both hold direction ``way`` [rad]: the faces that push the
+    puck straight from the one point to the other, in ``here``'s order."""
+    at = {key: (m, h) for key, m, h in there}
+    return [key for key, m, h in here if key in at and all(abs(math.remainder(way - mm, 2 * math.pi)) <= hh
+                                                            for mm, hh in ((m, h), at[key]))]
+
+
 def lattice_rules(setting: Setting, options: QPOptions, windows: bool = False, mixed: float | None = None,
                   room: float = REACH_SLACK) -> tuple[_Holds, Callable[[NDArray[np.float64]], bool],
                                                       dict[str, _FaceMoves]]:
