@@ -19,6 +19,30 @@ if TYPE_CHECKING:
     from tooltransfer.planner.planning.setting import Setting
 
 
+def contact_reach_distance(setting: Setting, face: str, x: NDArray[np.float64],
+                           s: NDArray[np.float64]) -> NDArray[np.float64]:
+    """How far [m] (K,) each object position of ``x`` (K, 2) [m] is outside where the Omni holds ``face``
+    with its contact at arc length ``s`` (K,) [m] along the face: the largest residual of the exact reach
+    region of the frame with its contact there (outer arc, inner circle, the waist's two limits; the fit's
+    :func:`~.constraints.reach_constraints` draw the outer arc with chords inside it). The contact's place
+    matters: with the contact toward one end of a long face the region moves by millimetres. A frame's
+    ``offset`` and arm-plane ``reach`` are affine in the contact's place along the (straight) face, so the
+    frames at the ends of its contact range give them everywhere."""
+    f = setting.tool.face(face)
+    q0, q1 = f.contact_range
+    lo, hi = FaceFrame.build(setting, face, s=q0), FaceFrame.build(setting, face, s=q1)
+    w = (np.asarray(s, dtype=np.float64) / f.length - q0) / (q1 - q0) if q1 > q0 else np.zeros(len(x))
+    offset = lo.offset + w * (hi.offset - lo.offset)
+    u_in = lo.reach[0] + w * (hi.reach[0] - lo.reach[0])
+    u_out = lo.reach[1] + w * (hi.reach[1] - lo.reach[1])
+    d = np.asarray(x, dtype=np.float64) - lo.base
+    r = np.hypot(d[:, 0], d[:, 1])
+    out = [r - np.hypot(u_out, offset), np.hypot(u_in, offset) - r]
+    for a, sign in ((lo.waist[0], -1.0), (lo.waist[1], 1.0)):  # the arm's plane at each waist limit
+        out.append(sign * (d @ np.array([-np.sin(a), np.cos(a)]) - offset))
+    return np.maximum(np.max(out, axis=0), 0.0)
+
+
 def _deviation(x: NDArray[np.float64], t: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:
     """Distance [m] from each point of ``x`` (T, 2) to the universal path ``ref`` (R, 2) at the same
     phase (``ref`` resampled on ``t``)."""
@@ -46,8 +70,9 @@ def plan_metrics(
     the ends of its face's usable range: negative means it leaves the face); ``n_recontacts``;
     ``obstacle_clearance_min`` [m] (object edge to obstacle edge, inf without obstacles; below
     ``margin`` means the safety margin is not kept); ``reach_violation_max`` [m] (distance outside
-    the active face's exact reach region); ``goal_error`` [m]; ``deviation_mean``,
-    ``deviation_max`` [m] (from the universal path at the same phase); ``n_pushes``;
+    the active face's exact reach region with its contact where it is, :func:`contact_reach_distance`);
+    ``goal_error`` [m]; ``deviation_mean``, ``deviation_max`` [m] (from the universal path at the same
+    phase); ``n_pushes``;
     ``path_length`` [m].
     """
     x, v, t = plan.object_xy, plan.object_v, plan.t
@@ -55,7 +80,11 @@ def plan_metrics(
     for p in plan.pushes:
         fr = frames[p.face]
         cone = max(cone, HeadingCone(fr).angle_violation(x[p.samples], v[p.samples], speed_tol))
-        reach = max(reach, float(reach_distance(fr, x[p.samples]).max(initial=0.0)))
+        if len(p.contact_s) == len(p.samples):
+            off = contact_reach_distance(setting, p.face, x[p.samples], p.contact_s)
+        else:  # a push without its contact's place: the frame's (the middle of the face's contact range)
+            off = reach_distance(fr, x[p.samples])
+        reach = max(reach, float(off.max(initial=0.0)))
     clear = np.inf
     for o in setting.obstacles:
         if isinstance(o, Disc):
