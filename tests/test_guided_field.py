@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 import shapely
-from guided_ladder import ladder_reasons
+from guided_ladder import ladder_plans
 from test_verdicts import generated
 
 from tooltransfer.planner.planning.oe.guided import (
@@ -117,15 +117,18 @@ def test_a_task_only_the_field_s_order_solves_gets_a_plan_that_executes() -> Non
 
 
 def test_the_field_s_attempts_come_last_and_not_after_a_plan_is_kept() -> None:
-    """exec60-00054 (l_shape, one obstacle, unknown): the ladder ends with the attempt in the field's
-    order, on every face's windows; where the caller keeps a plan of an attempt before (one with little
+    """exec60-00054 (l_shape, one obstacle, unknown: the push plans of its attempts on windows fit, the
+    switches between their faces do not): the ladder ends with the attempt in the field's order, on
+    every face's windows; where the caller keeps a plan of an attempt before (one with little
     room), it does not make it: it is there for tasks with no plan at all."""
     task = generated("execution_60.yaml", "exec60-00054")
-    every = ladder_reasons(task, keep_after_first=False)
-    field = [k for k, r in enumerate(every) if "over a grid of where the faces push" in r]
-    assert field == [len(every) - 1] and "4 mm windows of each face" in every[-1]
-    kept = ladder_reasons(task, keep_after_first=True)
-    assert kept == every[:-1]
+    every = ladder_plans(task, keep_after_first=False)
+    field = [k for k, p in enumerate(every) if p.metrics.get("guided_field")
+             or "over a grid of where the faces push" in p.reason]
+    assert field == [len(every) - 1]
+    assert every[-1].status == "solved" or "4 mm windows of each face" in every[-1].reason
+    kept = ladder_plans(task, keep_after_first=True)
+    assert [(p.status, p.reason) for p in kept] == [(p.status, p.reason) for p in every[:-1]]
 
 
 def test_a_miss_says_where_the_field_found_no_way_either() -> None:

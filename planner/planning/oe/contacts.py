@@ -127,6 +127,7 @@ def realise_span(setting: Setting, face: str, t: NDArray[np.float64], x: NDArray
     """
     lo, hi = usable_range(setting.tool, face, limits)
     width, mid = hi - lo, 0.5 * (lo + hi)
+    framed = mid if face in (getattr(limits, "contact_windows", None) or {}) else float("nan")
     out: list[Push] = []
     a = 0
     while True:
@@ -145,7 +146,8 @@ def realise_span(setting: Setting, face: str, t: NDArray[np.float64], x: NDArray
                 v = np.diff(x[part], axis=0).sum(axis=0)
                 out.append(Push(face, float(t[part[0]]), float(t[part[-1]]), float(np.arctan2(v[1], v[0])), part,
                                 fp.tool_pose, contact_s=fp.s, recontact=False,
-                                cone_margin=float(fp.cone_margin.min(initial=np.pi)), edge_margin=fp.edge_margin))
+                                cone_margin=float(fp.cone_margin.min(initial=np.pi)), edge_margin=fp.edge_margin,
+                                frame_s=framed))
                 if part[-1] == idx[-1]:
                     return out
                 a += part.size - 1
@@ -184,7 +186,8 @@ def realise_span(setting: Setting, face: str, t: NDArray[np.float64], x: NDArray
         v = np.diff(x[part], axis=0).sum(axis=0)
         out.append(Push(face, float(t[part[0]]), float(t[part[-1]]), float(np.arctan2(v[1], v[0])), part,
                         fp.tool_pose, contact_s=fp.s, recontact=bool(out),
-                        cone_margin=float(fp.cone_margin.min(initial=np.pi)), edge_margin=fp.edge_margin))
+                        cone_margin=float(fp.cone_margin.min(initial=np.pi)), edge_margin=fp.edge_margin,
+                        frame_s=framed))
         if last:
             return out
         a += part.size - 1

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -43,6 +44,13 @@ def contact_reach_distance(setting: Setting, face: str, x: NDArray[np.float64],
     return np.maximum(np.max(out, axis=0), 0.0)
 
 
+def window_frame(frame: FaceFrame, setting: Setting, s: float) -> FaceFrame:
+    """``frame`` (its face and share of the friction cone) with its contact at arc length ``s`` [m] along the
+    face: the frame a push on a window of the face was fitted in (:attr:`~.push_plan.Push.frame_s`)."""
+    at = FaceFrame.build(setting, frame.face, s=s / setting.tool.face(frame.face).length)
+    return replace(frame, centre_in_tool=at.centre_in_tool, reach=at.reach, offset=at.offset, s=at.s)
+
+
 def _deviation(x: NDArray[np.float64], t: NDArray[np.float64], ref: NDArray[np.float64]) -> NDArray[np.float64]:
     """Distance [m] from each point of ``x`` (T, 2) to the universal path ``ref`` (R, 2) at the same
     phase (``ref`` resampled on ``t``)."""
@@ -78,7 +86,7 @@ def plan_metrics(
     x, v, t = plan.object_xy, plan.object_v, plan.t
     cone, reach = 0.0, 0.0
     for p in plan.pushes:
-        fr = frames[p.face]
+        fr = frames[p.face] if np.isnan(p.frame_s) else window_frame(frames[p.face], setting, p.frame_s)
         cone = max(cone, HeadingCone(fr).angle_violation(x[p.samples], v[p.samples], speed_tol))
         if len(p.contact_s) == len(p.samples):
             off = contact_reach_distance(setting, p.face, x[p.samples], p.contact_s)

@@ -28,6 +28,8 @@ class Push:
         cone_margin: least ``atan(mu) - |phi_c|`` [rad] over the push (how far inside the friction
             cone the object's motion stays).
         edge_margin: least distance [m] of the contact from the ends of the face's usable range.
+        frame_s: arc length [m] of the contact the fit's cone rows were written at, where the contact
+            kept to a window of the face (:func:`~.sequence_fit.fit_frame`); NaN: the face's middle.
     """
 
     face: str
@@ -40,6 +42,7 @@ class Push:
     recontact: bool = False
     cone_margin: float = float("nan")
     edge_margin: float = float("nan")
+    frame_s: float = float("nan")
 
 
 @dataclass(frozen=True)

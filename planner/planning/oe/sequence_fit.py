@@ -61,6 +61,20 @@ class ScoredSequence:
         return r.status == "solved" or (r.status == "inaccurate" and max(r.violations.values()) <= self.accept)
 
 
+def fit_frame(setting: Setting, face: str, opts: QPOptions) -> FaceFrame:
+    """The frame ``face``'s cone rows are written in (at ``opts``' share of the friction cone): with its
+    contact at the middle of the face's contact range or, where ``opts.contact_windows`` keeps the
+    contact to a window of the face, at the middle of that window. The tool's heading, hence the
+    admissible directions in the world, follows the contact's place: toward one end of a long face it
+    turns by degrees (the guided search's steps on a window are inside that window's cone)."""
+    cone = opts.friction_cone_fraction
+    if face not in (opts.contact_windows or {}):
+        return FaceFrame.build(setting, face, friction_cone_fraction=cone)
+    lo, hi = usable_range(setting.tool, face, opts)
+    return FaceFrame.build(setting, face, s=0.5 * (lo + hi) / setting.tool.face(face).length,
+                           friction_cone_fraction=cone)
+
+
 class SequenceFit:
     """Everything fixed while candidates are scored."""
 
@@ -73,7 +87,7 @@ class SequenceFit:
         tool = self.tool = setting.tool
         self.platform = setting.platform
         cone = opts.friction_cone_fraction
-        self.frames = {f: FaceFrame.build(setting, f, friction_cone_fraction=cone) for f in tool.face_names}
+        self.frames = {f: fit_frame(setting, f, opts) for f in tool.face_names}
         self._face_rows: dict[str, tuple[FaceGeometry, tuple[float, float], list[FaceFrame]]] = {}
         for f in tool.face_names:
             g = FaceGeometry.of(tool, f)

@@ -1,0 +1,81 @@
+"""A fit whose contact keeps to a window of a face writes its cone rows, and is measured, in the frame of
+that window: the tool's heading follows where the contact is, by degrees along a long face."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tooltransfer.planner.apps.batch.generate import generate_tasks
+from tooltransfer.planner.apps.batch.spec import load_batch
+from tooltransfer.planner.planning.oe.contacts import realise_span, usable_range
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame
+from tooltransfer.planner.planning.oe.guided_moves import contact_windows
+from tooltransfer.planner.planning.oe.metrics import window_frame
+from tooltransfer.planner.planning.oe.sequence_fit import fit_frame
+from tooltransfer.planner.planning.setting import setting_from_task, task_skills
+from tooltransfer.planner.planning.solve import qp_options
+from tooltransfer.problems.task import Task, task_from_dict
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _task(task_id: str) -> Task:
+    batch = ROOT / "problems" / "batch" / "verdicts_200.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == task_id)
+    return task_from_dict(data, str(batch))
+
+
+@pytest.fixture(scope="module")
+def world():
+    task = _task("verd200-00059")  # an L-shaped tool: foot_top is 34 mm long
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    return task, setting, qp_options(task).model_copy(update={"contact_span": 0.004})
+
+
+def test_without_a_window_the_fit_s_frame_is_the_face_s_middle(world) -> None:
+    task, setting, _ = world
+    plain = qp_options(task)
+    for face in setting.tool.face_names:
+        got = fit_frame(setting, face, plain)
+        want = FaceFrame.build(setting, face, friction_cone_fraction=plain.friction_cone_fraction)
+        assert np.array_equal(got.centre_in_tool, want.centre_in_tool) and np.array_equal(got.base, want.base)
+        assert {k: v for k, v in vars(got).items() if k not in ("centre_in_tool", "base")} == {
+            k: v for k, v in vars(want).items() if k not in ("centre_in_tool", "base")}
+
+
+def test_a_window_toward_one_end_turns_the_frame_by_more_than_the_cone_check_allows(world) -> None:
+    """foot_top's last window: the frame's contact is at the window's middle; with the puck in the same
+    place the tool's heading differs from the face middle's by more than the cone check's 0.01 rad, and
+    :func:`window_frame` gives the same frame from the middle one."""
+    task, setting, options = world
+    face = "foot_top"
+    lo, hi = contact_windows(setting.tool, face, options)[-1]
+    windowed = options.model_copy(update={"contact_windows": {face: (lo, hi)}})
+    frame, middle = fit_frame(setting, face, windowed), fit_frame(setting, face, options)
+    assert frame.s == pytest.approx(0.5 * (lo + hi))
+    assert (frame.push_angle, frame.theta_b) == (middle.push_angle, middle.theta_b)  # the same cone on the tool
+    p = np.array(task.start)[None]
+    assert abs(float(frame.heading(p)[0] - middle.heading(p)[0])) > 0.01
+    again = window_frame(middle, setting, frame.s)
+    assert np.allclose(again.centre_in_tool, frame.centre_in_tool) and again.offset == pytest.approx(frame.offset)
+    assert again.reach == pytest.approx(frame.reach) and again.theta_b == middle.theta_b
+
+
+def test_a_push_on_a_window_says_which_frame_it_was_fitted_in(world) -> None:
+    task, setting, options = world
+    face = "foot_top"
+    window = contact_windows(setting.tool, face, options)[-1]
+    windowed = options.model_copy(update={"contact_windows": {face: window}})
+    frame = fit_frame(setting, face, windowed)
+    t = np.linspace(0.0, 1.0, 41)
+    way = frame.push_direction(np.array(task.start)[None])[0]
+    x = np.array(task.start) + np.outer(t * 0.004, [np.cos(way), np.sin(way)])
+    pushes = realise_span(setting, face, t, x, np.arange(t.size), windowed)
+    assert pushes and all(p.frame_s == pytest.approx(frame.s) for p in pushes)
+    lo, hi = usable_range(setting.tool, face, windowed)
+    assert all(lo - 1e-6 <= p.contact_s.min() and p.contact_s.max() <= hi + 1e-6 for p in pushes)
+    plain = realise_span(setting, face, t, x, np.arange(t.size), options)
+    assert all(np.isnan(p.frame_s) for p in plain)
