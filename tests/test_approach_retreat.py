@@ -46,3 +46,41 @@ def test_the_back_off_turns_aside_where_the_straight_one_would_hit_an_obstacle()
     assert np.linalg.norm(aside) >= 0.002 and not np.allclose(aside / np.linalg.norm(aside), -normal)
     centre = shapely.Point(obstacle.centre)
     assert all(shapely.distance(b, centre) > obstacle.radius for b in _bodies(setting, at, aside))
+
+
+def test_at_the_edge_of_the_workspace_the_back_off_comes_in_along_the_face() -> None:
+    """A contact pose 1.2 mm inside the Omni's outer reach, its face's normal pointing at the Omni's axis
+    (backing off straight leaves the reach): no back-off of 2 mm turned up to 40 degrees stays within the
+    joint limits, one turned 60 degrees does, and that is the one taken."""
+    from tooltransfer.planner.planning.assemble import BACK_OFF_TURNS, WIDE_TURNS
+
+    task = load_task("paper/transfer_tool2")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    base = FaceFrame.build(setting, setting.tool.faces[0].name).base
+    out = np.array(task.start) - base
+    out /= np.linalg.norm(out)
+
+    def inside(r: float) -> bool:
+        return bool(joint_path(setting.platform, (base + r * out)[None]).violation[0] == 0.0)
+
+    lo, hi = np.linalg.norm(np.array(task.start) - base), 1.0
+    assert inside(lo) and not inside(hi)
+    for _ in range(60):  # the outer reach along the ray, by bisection
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if inside(mid) else (lo, mid)
+    at = base + (lo - 0.0012) * out
+    direction = math.atan2(-out[1], -out[0])  # backing off straight goes out
+
+    def fits(turn: float) -> bool:
+        u = -np.array([math.cos(direction + turn), math.sin(direction + turn)])
+        line = at + np.linspace(0.0, 0.002, 20)[:, None] * u
+        return bool(np.all(joint_path(setting.platform, line).violation == 0.0))
+
+    assert not any(fits(turn) for turn in BACK_OFF_TURNS)
+    assert any(fits(turn) for turn in WIDE_TURNS)
+    back = _reachable_back(setting.platform, at, direction, 0.01)
+    assert np.linalg.norm(back) >= 0.002 - 1e-12
+    line = at + np.linspace(0.0, 1.0, 40)[:, None] * back
+    assert np.all(joint_path(setting.platform, line).violation == 0.0)
+    turned = math.degrees(math.acos(float(back @ out) / float(np.linalg.norm(back))))
+    assert 59.0 <= turned <= 76.0  # away from the contact's normal by a wide turn, still backing off

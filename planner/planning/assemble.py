@@ -4,7 +4,8 @@ Timeline (docs/design.md section 1; the object stands still outside the pushes):
 
 1. approach: from ``approach_distance`` behind the first contact pose (along the face's normal
    there, so the tool meets the object where the push starts; halved until the move is within the
-   Omni's reach) to it, a minimum-jerk straight move;
+   Omni's reach, turned up to 75 degrees from the normal where no length is) to it, a minimum-jerk
+   straight move;
 2. pushes: the condensed object motion with the tool poses of the inverse push model (each push's
    ``tool_pose``: the contact rolling along the face, heading as the Omni imposes it), timed by the
    OE motion stretched by one factor so that the tool keeps within the maximum speed and
@@ -60,6 +61,12 @@ class Motion:
 #: Turns [rad] from a straight back-off tried in turn where the straight one is not clear (here, and in
 #: the closed loop's back-off from a contact): each keeps a component along the contact's normal.
 BACK_OFF_TURNS = tuple(float(a) for a in np.radians([0.0, 20.0, -20.0, 40.0, -40.0]))
+#: Turns [rad] a plan's approach and retreat try after :data:`BACK_OFF_TURNS` where none of those keeps the
+#: move within the Omni's reach (a contact pose at the edge of its workspace, the limit across the face's
+#: normal): the tool comes in mostly along the face, 1 mm and 0.5 mm toward the object per 2 mm of move.
+#: The plan's replay through the push model (``self_consistency_max``) checks that it does not touch the
+#: object before the contact.
+WIDE_TURNS = tuple(float(a) for a in np.radians([60.0, -60.0, 75.0, -75.0]))
 
 
 def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: float,
@@ -70,8 +77,8 @@ def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: 
     outline :data:`~tooltransfer.planner.planning.tool_clearance.TOOL_MARGIN` from the ``obstacles`` (at
     the heading the Omni imposes: the margin of a solved plan); when no length along
     ``direction`` does, directions 20 and 40 degrees to either side are tried (the tool still meets
-    the object where the push starts, a little obliquely)."""
-    for turn in BACK_OFF_TURNS:
+    the object where the push starts, a little obliquely), then :data:`WIDE_TURNS`."""
+    for turn in BACK_OFF_TURNS + WIDE_TURNS:
         u = -np.array([np.cos(direction + turn), np.sin(direction + turn)])
         d = distance
         while d >= 0.002:
