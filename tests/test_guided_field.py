@@ -101,15 +101,14 @@ def test_in_the_field_s_order_the_search_finds_a_path_the_straight_line_s_order_
 
 
 def test_a_task_only_the_field_s_order_solves_gets_a_plan_that_executes() -> None:
-    """verd200-00056 (slope, no obstacle): no face holds the puck at the start with its contact at the
-    middle of the face, and every attempt of the ladder before the last fails (the task was ``unknown``);
-    the last, on every face's windows in the field's order, gives a plan that passes every hard check,
-    records that it came from there, and ends within 5 mm of the target open loop on the MuJoCo
-    platform."""
+    """verd200-00002 (trapezoid, one obstacle): every attempt of the ladder before the last fails (the
+    task was ``unknown``); the last, on every face's windows in the field's order, gives a plan that
+    passes every hard check, records that it came from there, and ends within 5 mm of the target open
+    loop on the MuJoCo platform."""
     pytest.importorskip("mujoco")
     from tooltransfer.planner.execution.simulate import simulate_plan
 
-    plan = solve(generated("verdicts_200.yaml", "verd200-00056"))
+    plan = solve(generated("verdicts_200.yaml", "verd200-00002"))
     assert plan.verdict == "solved", plan.reason
     assert plan.metrics["guided_field"] == 1.0 and plan.metrics["friction_cone_fraction"] == pytest.approx(0.8)
     assert hard_check_failures(plan.metrics) == []
