@@ -20,18 +20,19 @@ if TYPE_CHECKING:
     from tooltransfer.planner.planning.setting import Setting
 
 
-def contact_reach_distance(setting: Setting, face: str, x: NDArray[np.float64],
-                           s: NDArray[np.float64]) -> NDArray[np.float64]:
+def contact_reach_distance(setting: Setting, face: str, x: NDArray[np.float64], s: NDArray[np.float64],
+                           ends: tuple[FaceFrame, FaceFrame] | None = None) -> NDArray[np.float64]:
     """How far [m] (K,) each object position of ``x`` (K, 2) [m] is outside where the Omni holds ``face``
     with its contact at arc length ``s`` (K,) [m] along the face: the largest residual of the exact reach
     region of the frame with its contact there (outer arc, inner circle, the waist's two limits; the fit's
     :func:`~.constraints.reach_constraints` draw the outer arc with chords inside it). The contact's place
     matters: with the contact toward one end of a long face the region moves by millimetres. A frame's
     ``offset`` and arm-plane ``reach`` are affine in the contact's place along the (straight) face, so the
-    frames at the ends of its contact range give them everywhere."""
+    frames at the ends of its contact range give them everywhere (``ends``: those two frames, when the
+    caller has them, :func:`contact_range_ends`)."""
     f = setting.tool.face(face)
     q0, q1 = f.contact_range
-    lo, hi = FaceFrame.build(setting, face, s=q0), FaceFrame.build(setting, face, s=q1)
+    lo, hi = ends if ends is not None else contact_range_ends(setting, face)
     w = (np.asarray(s, dtype=np.float64) / f.length - q0) / (q1 - q0) if q1 > q0 else np.zeros(len(x))
     offset = lo.offset + w * (hi.offset - lo.offset)
     u_in = lo.reach[0] + w * (hi.reach[0] - lo.reach[0])
@@ -42,6 +43,12 @@ def contact_reach_distance(setting: Setting, face: str, x: NDArray[np.float64],
     for a, sign in ((lo.waist[0], -1.0), (lo.waist[1], 1.0)):  # the arm's plane at each waist limit
         out.append(sign * (d @ np.array([-np.sin(a), np.cos(a)]) - offset))
     return np.maximum(np.max(out, axis=0), 0.0)
+
+
+def contact_range_ends(setting: Setting, face: str) -> tuple[FaceFrame, FaceFrame]:
+    """``face``'s frames with its contact at either end of its contact range."""
+    q0, q1 = setting.tool.face(face).contact_range
+    return FaceFrame.build(setting, face, s=q0), FaceFrame.build(setting, face, s=q1)
 
 
 def window_frame(frame: FaceFrame, setting: Setting, s: float) -> FaceFrame:
@@ -85,11 +92,14 @@ def plan_metrics(
     """
     x, v, t = plan.object_xy, plan.object_v, plan.t
     cone, reach = 0.0, 0.0
+    ends: dict[str, tuple[FaceFrame, FaceFrame]] = {}  # each face's frames at the ends of its contact range
     for p in plan.pushes:
         fr = frames[p.face] if np.isnan(p.frame_s) else window_frame(frames[p.face], setting, p.frame_s)
         cone = max(cone, HeadingCone(fr).angle_violation(x[p.samples], v[p.samples], speed_tol))
         if len(p.contact_s) == len(p.samples):
-            off = contact_reach_distance(setting, p.face, x[p.samples], p.contact_s)
+            if p.face not in ends:
+                ends[p.face] = contact_range_ends(setting, p.face)
+            off = contact_reach_distance(setting, p.face, x[p.samples], p.contact_s, ends[p.face])
         else:  # a push without its contact's place: the frame's (the middle of the face's contact range)
             off = reach_distance(fr, x[p.samples])
         reach = max(reach, float(off.max(initial=0.0)))
