@@ -51,7 +51,8 @@ def test_the_back_off_turns_aside_where_the_straight_one_would_hit_an_obstacle()
 def test_at_the_edge_of_the_workspace_the_back_off_comes_in_along_the_face() -> None:
     """A contact pose 1.2 mm inside the Omni's outer reach, its face's normal pointing at the Omni's axis
     (backing off straight leaves the reach): no back-off of 2 mm turned up to 40 degrees stays within the
-    joint limits, one turned 60 degrees does, and that is the one taken."""
+    joint limits, one turned 60 degrees does, and that is the one taken (a wide turn needs the tool and
+    the resting puck, to keep the one off the other)."""
     from tooltransfer.planner.planning.assemble import BACK_OFF_TURNS, WIDE_TURNS
 
     task = load_task("paper/transfer_tool2")
@@ -78,9 +79,42 @@ def test_at_the_edge_of_the_workspace_the_back_off_comes_in_along_the_face() -> 
 
     assert not any(fits(turn) for turn in BACK_OFF_TURNS)
     assert any(fits(turn) for turn in WIDE_TURNS)
-    back = _reachable_back(setting.platform, at, direction, 0.01)
+    assert np.allclose(_reachable_back(setting.platform, at, direction, 0.01), -0.002 * np.array(
+        [math.cos(direction), math.sin(direction)]))  # without the tool and the puck: no wide turn, the last resort
+    far = Disc(tuple(at + 0.5 * out), 0.0175)  # a puck well away: this is about the reach
+    back = _reachable_back(setting.platform, at, direction, 0.01, setting.tool, puck=far)
     assert np.linalg.norm(back) >= 0.002 - 1e-12
     line = at + np.linspace(0.0, 1.0, 40)[:, None] * back
     assert np.all(joint_path(setting.platform, line).violation == 0.0)
     turned = math.degrees(math.acos(float(back @ out) / float(np.linalg.norm(back))))
     assert 59.0 <= turned <= 76.0  # away from the contact's normal by a wide turn, still backing off
+
+
+def test_a_plan_whose_approach_is_turned_wide_keeps_the_tool_off_the_resting_puck() -> None:
+    """verd200-00056 (slope, no obstacle): its first contact lies at the edge of the Omni's workspace, where
+    only a wide turn keeps the approach within the joint limits; along the approach the tool's outline
+    keeps off the resting puck until the contact, and the plan passes every hard check."""
+    from pathlib import Path
+
+    from tooltransfer.planner.apps.batch.generate import generate_tasks
+    from tooltransfer.planner.apps.batch.spec import load_batch
+    from tooltransfer.planner.planning.solve import hard_check_failures, solve
+    from tooltransfer.problems.task import task_from_dict
+
+    batch = Path(__file__).resolve().parents[1] / "problems" / "batch" / "verdicts_200.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "verd200-00056")
+    task = task_from_dict(data, str(batch))
+    plan = solve(task)
+    assert plan.status == "solved" and hard_check_failures(plan.metrics) == []
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    k = np.flatnonzero(np.array(plan.phase) == "approach")
+    pose, puck = plan.tool_pose[k], plan.object_xy[k[0]]
+    move = pose[-1, :2] - pose[0, :2]
+    face = setting.tool.face(plan.face[k[-1] + 1])
+    normal = rotation(float(pose[-1, 2])) @ face.normal
+    turned = math.degrees(math.acos(float(move @ normal) / float(np.linalg.norm(move))))
+    assert turned >= 59.0  # not along the normal, nor 20 or 40 degrees from it: those leave the joint limits
+    ring = np.asarray(setting.tool.outline.exterior.coords)
+    gaps = [shapely.distance(shapely.Polygon(ring @ rotation(float(h)).T + xy), shapely.Point(puck)) - setting.radius
+            for xy, h in zip(pose[:-1, :2], pose[:-1, 2], strict=True)]
+    assert min(gaps) >= -1e-6

@@ -14,8 +14,9 @@ from tooltransfer.planner.planning.oe.contacts import realise_span, usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.guided_moves import contact_windows
 from tooltransfer.planner.planning.oe.metrics import window_frame
+from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.sequence_fit import fit_frame
-from tooltransfer.planner.planning.setting import setting_from_task, task_skills
+from tooltransfer.planner.planning.setting import Setting, setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import qp_options
 from tooltransfer.problems.task import Task, task_from_dict
 
@@ -29,7 +30,7 @@ def _task(task_id: str) -> Task:
 
 
 @pytest.fixture(scope="module")
-def world():
+def world() -> tuple[Task, Setting, QPOptions]:
     task = _task("verd200-00059")  # an L-shaped tool: foot_top is 34 mm long
     setting = setting_from_task(task, task_skills(task, need_ss=False))
     return task, setting, qp_options(task).model_copy(update={"contact_span": 0.004})
@@ -79,3 +80,34 @@ def test_a_push_on_a_window_says_which_frame_it_was_fitted_in(world) -> None:
     assert all(lo - 1e-6 <= p.contact_s.min() and p.contact_s.max() <= hi + 1e-6 for p in pushes)
     plain = realise_span(setting, face, t, x, np.arange(t.size), options)
     assert all(np.isnan(p.frame_s) for p in plain)
+
+
+def test_a_push_on_a_window_is_measured_in_its_window_s_cone(world) -> None:
+    """A push along the edge of foot_top's last window's cone: inside that cone (no cone violation measured
+    with the push's ``frame_s``), outside the face middle's by more than the check's 0.01 rad."""
+    from dataclasses import replace as changed
+
+    from tooltransfer.planner.planning.oe.metrics import plan_metrics
+    from tooltransfer.planner.planning.oe.push_plan import PushPlan
+
+    task, setting, options = world
+    face = "foot_top"
+    window = contact_windows(setting.tool, face, options)[-1]
+    windowed = options.model_copy(update={"contact_windows": {face: window}})
+    frame, middle = fit_frame(setting, face, windowed), fit_frame(setting, face, options)
+    start = np.array(task.start)
+    t = np.linspace(0.0, 1.0, 41)
+    measured = []
+    for side in (-1.0, 1.0):  # the edge where the middle's cone is narrower
+        way = float(frame.push_direction(start[None])[0]) + side * 0.98 * frame.theta_b
+        x = start + np.outer(t * 0.002, [np.cos(way), np.sin(way)])
+        v = np.tile(0.002 * np.array([np.cos(way), np.sin(way)]), (t.size, 1))
+        pushes = realise_span(setting, face, t, x, np.arange(t.size), windowed)
+        plan = PushPlan("qp", "solved", t, x, v, x, pushes=tuple(pushes))
+        frames = {face: middle}
+        at_window = plan_metrics(plan, frames, x[-1], setting)["cone_violation_max"]
+        at_middle = plan_metrics(changed(plan, pushes=tuple(changed(p, frame_s=float("nan")) for p in pushes)),
+                                 frames, x[-1], setting)["cone_violation_max"]
+        measured.append((at_window, at_middle))
+    assert all(w <= 1e-3 for w, _ in measured)  # inside the window's cone (its heading turns a little as x moves)
+    assert max(m for _, m in measured) > 0.01

@@ -24,6 +24,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
 from numpy.typing import NDArray
 from shapely import Polygon
 
@@ -63,34 +64,48 @@ class Motion:
 BACK_OFF_TURNS = tuple(float(a) for a in np.radians([0.0, 20.0, -20.0, 40.0, -40.0]))
 #: Turns [rad] a plan's approach and retreat try after :data:`BACK_OFF_TURNS` where none of those keeps the
 #: move within the Omni's reach (a contact pose at the edge of its workspace, the limit across the face's
-#: normal): the tool comes in mostly along the face, 1 mm and 0.5 mm toward the object per 2 mm of move.
-#: The plan's replay through the push model (``self_consistency_max``) checks that it does not touch the
-#: object before the contact.
+#: normal): the tool comes in mostly along the face, 1 mm and 0.5 mm toward the object per 2 mm of move,
+#: taken only where its outline keeps off the resting object everywhere but at the contact (a concave
+#: tool's other leg may sweep it).
 WIDE_TURNS = tuple(float(a) for a in np.radians([60.0, -60.0, 75.0, -75.0]))
 
 
 def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: float,
                     distance: float, tool: Tool | None = None, obstacles: Sequence[Disc | Polygon] = (),
-                    ) -> NDArray[np.float64]:
+                    puck: Disc | None = None) -> NDArray[np.float64]:
     """Offset (2,) backing off from ``at`` against ``direction`` [rad] by ``distance`` [m], halved
     until the whole straight move stays within the Omni's reach (at least 2 mm) with the ``tool``'s
     outline :data:`~tooltransfer.planner.planning.tool_clearance.TOOL_MARGIN` from the ``obstacles`` (at
     the heading the Omni imposes: the margin of a solved plan); when no length along
     ``direction`` does, directions 20 and 40 degrees to either side are tried (the tool still meets
-    the object where the push starts, a little obliquely), then :data:`WIDE_TURNS`."""
+    the object where the push starts, a little obliquely), then :data:`WIDE_TURNS` (with the ``tool`` and
+    the resting ``puck``, where its outline keeps off the puck but at the contact)."""
     for turn in BACK_OFF_TURNS + WIDE_TURNS:
+        if turn in WIDE_TURNS and (tool is None or puck is None):
+            break
         u = -np.array([np.cos(direction + turn), np.sin(direction + turn)])
         d = distance
         while d >= 0.002:
             line = at + np.linspace(0.0, d, 20)[:, None] * u
             jp = joint_path(platform, line)
+            poses = np.column_stack([line, jp.heading])
             if np.all(jp.violation == 0.0) and (
-                    tool is None or not obstacles
-                    or tool_obstacle_clearance(tool, np.column_stack([line, jp.heading]), obstacles).distance
-                    >= TOOL_MARGIN):
+                    tool is None or not obstacles or tool_obstacle_clearance(tool, poses, obstacles).distance
+                    >= TOOL_MARGIN) and (turn not in WIDE_TURNS or _off_puck(tool, poses[1:], puck)):
                 return d * u
             d /= 2
     return -0.002 * np.array([np.cos(direction), np.sin(direction)])
+
+
+def _off_puck(tool: Tool | None, poses: NDArray[np.float64], puck: Disc | None) -> bool:
+    """Whether the ``tool``'s outline at ``poses`` (K, 3) keeps off the disc ``puck`` (its centre at least
+    the radius from the outline, within 1 um)."""
+    if tool is None or puck is None:
+        return True
+    ring = np.asarray(tool.outline.exterior.coords)
+    centre = shapely.Point(puck.centre)
+    return all(shapely.distance(shapely.Polygon(ring @ rotation(float(h)).T + xy), centre) >= puck.radius - 1e-6
+               for xy, h in zip(poses[:, :2], poses[:, 2], strict=True))
 
 
 def _line(a: NDArray[np.float64], b: NDArray[np.float64], v_max: float, a_max: float,
@@ -98,6 +113,11 @@ def _line(a: NDArray[np.float64], b: NDArray[np.float64], v_max: float, a_max: f
     dur = min_jerk_duration(float(np.linalg.norm(b - a)), v_max, a_max)
     n = max(2, int(np.ceil(dur / dt)) + 1)
     return min_jerk_along(np.vstack([a, b]), dur, n)
+
+
+def _resting(plan: PushPlan, k: int, radius: float | None) -> Disc | None:
+    """The object resting at ``plan``'s sample ``k``, a disc of ``radius`` [m] (None without one)."""
+    return None if radius is None else Disc(tuple(float(v) for v in plan.object_xy[k]), radius)
 
 
 def _normal_angle(tool: Tool, push: Push, at: int) -> float:
@@ -118,6 +138,7 @@ def assemble(
     approach_distance: float,
     dt: float = 0.01,
     obstacles: Sequence[Disc | Polygon] = (),
+    puck_radius: float | None = None,
 ) -> Motion:
     """Assemble the timed tool motion of a solved push plan (see the module docstring).
 
@@ -128,6 +149,8 @@ def assemble(
         dt: sample spacing [s] of approach, switches and retreat (pushes keep the plan's samples).
         obstacles: what the approach and the retreat keep the tool's outline clear of, where a
             direction of theirs allows it.
+        puck_radius: the object's radius [m]; with it, an approach or retreat turned by
+            :data:`WIDE_TURNS` keeps the outline off the resting object (without it none is).
     """
     pushes = plan.pushes
     poses = [p.tool_pose for p in pushes]
@@ -154,7 +177,7 @@ def assemble(
 
     first, last = pushes[0], pushes[-1]
     back0 = _reachable_back(platform, poses[0][0, :2], _normal_angle(tool, first, 0), approach_distance, tool,
-                            obstacles)
+                            obstacles, _resting(plan, first.samples[0], puck_radius))
     tt, xy = _line(poses[0][0, :2] + back0, poses[0][0, :2], v_max, a_max, dt)
     add(tt, np.repeat(plan.object_xy[first.samples[:1]], len(tt), axis=0), xy, "approach", None)
     for i, p in enumerate(pushes):
@@ -176,7 +199,8 @@ def assemble(
             add(tt, np.repeat(obj[None], n, axis=0), xy, "switch", None)
             switch_spans.append((p.face, nxt.face, start, now, sw))
     end = poses[-1][-1, :2]
-    back1 = _reachable_back(platform, end, _normal_angle(tool, last, -1), approach_distance, tool, obstacles)
+    back1 = _reachable_back(platform, end, _normal_angle(tool, last, -1), approach_distance, tool, obstacles,
+                            _resting(plan, last.samples[-1], puck_radius))
     tt, xy = _line(end, end + back1, v_max, a_max, dt)
     add(tt, np.repeat(plan.object_xy[last.samples[-1:]], len(tt), axis=0), xy, "retreat", None)
     t = np.concatenate(t_parts)

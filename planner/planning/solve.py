@@ -254,7 +254,7 @@ def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, reconta
     try:
         motion = assemble(push_plan, tool, platform, switch, recontact, v_max=task.timing.max_tool_speed,
                           a_max=task.timing.max_tool_accel, approach_distance=task.timing.approach_distance,
-                          obstacles=obstacles)
+                          obstacles=obstacles, puck_radius=radius)
     except SwitchFailed as exc:
         if failed_switches is not None:
             failed_switches.append(exc)

@@ -46,15 +46,19 @@ def contact_reach_distance(setting: Setting, face: str, x: NDArray[np.float64], 
 
 
 def contact_range_ends(setting: Setting, face: str) -> tuple[FaceFrame, FaceFrame]:
-    """``face``'s frames with its contact at either end of its contact range."""
+    """``face``'s frames with its contact at either end of its contact range (their geometry only is used:
+    built at the whole friction cone, where any face that can push at all has a cone)."""
     q0, q1 = setting.tool.face(face).contact_range
-    return FaceFrame.build(setting, face, s=q0), FaceFrame.build(setting, face, s=q1)
+    return (FaceFrame.build(setting, face, s=q0, friction_cone_fraction=1.0),
+            FaceFrame.build(setting, face, s=q1, friction_cone_fraction=1.0))
 
 
 def window_frame(frame: FaceFrame, setting: Setting, s: float) -> FaceFrame:
-    """``frame`` (its face and share of the friction cone) with its contact at arc length ``s`` [m] along the
-    face: the frame a push on a window of the face was fitted in (:attr:`~.push_plan.Push.frame_s`)."""
-    at = FaceFrame.build(setting, frame.face, s=s / setting.tool.face(frame.face).length)
+    """``frame`` (its face and its share of the friction cone: ``push_angle`` and ``theta_b`` kept) with its
+    contact at arc length ``s`` [m] along the face (the object's centre in the tool, the arm-plane reach
+    [m] and the offset [m] there): the frame a push on a window of the face was fitted in
+    (:attr:`~.push_plan.Push.frame_s`)."""
+    at = FaceFrame.build(setting, frame.face, s=s / setting.tool.face(frame.face).length, friction_cone_fraction=1.0)
     return replace(frame, centre_in_tool=at.centre_in_tool, reach=at.reach, offset=at.offset, s=at.s)
 
 
@@ -93,14 +97,19 @@ def plan_metrics(
     x, v, t = plan.object_xy, plan.object_v, plan.t
     cone, reach = 0.0, 0.0
     ends: dict[str, tuple[FaceFrame, FaceFrame]] = {}  # each face's frames at the ends of its contact range
+    windows: dict[tuple[str, float], FaceFrame] = {}  # the frames of the windows pushes were fitted in
     for p in plan.pushes:
-        fr = frames[p.face] if np.isnan(p.frame_s) else window_frame(frames[p.face], setting, p.frame_s)
+        fr = frames[p.face]
+        if not np.isnan(p.frame_s):
+            if (p.face, p.frame_s) not in windows:
+                windows[p.face, p.frame_s] = window_frame(fr, setting, p.frame_s)
+            fr = windows[p.face, p.frame_s]
         cone = max(cone, HeadingCone(fr).angle_violation(x[p.samples], v[p.samples], speed_tol))
         if len(p.contact_s) == len(p.samples):
             if p.face not in ends:
                 ends[p.face] = contact_range_ends(setting, p.face)
             off = contact_reach_distance(setting, p.face, x[p.samples], p.contact_s, ends[p.face])
-        else:  # a push without its contact's place: the frame's (the middle of the face's contact range)
+        else:  # a push without its contact's place: the frame's it was fitted in
             off = reach_distance(fr, x[p.samples])
         reach = max(reach, float(off.max(initial=0.0)))
     clear = np.inf

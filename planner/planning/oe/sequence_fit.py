@@ -66,7 +66,8 @@ def fit_frame(setting: Setting, face: str, opts: QPOptions) -> FaceFrame:
     contact at the middle of the face's contact range or, where ``opts.contact_windows`` keeps the
     contact to a window of the face, at the middle of that window. The tool's heading, hence the
     admissible directions in the world, follows the contact's place: toward one end of a long face it
-    turns by degrees (the guided search's steps on a window are inside that window's cone)."""
+    turns by degrees (the guided search's steps on a window are inside that window's cone). The frame's
+    ``s`` is that contact's arc length [m] (:attr:`~.push_plan.Push.frame_s` of the pushes fitted in it)."""
     cone = opts.friction_cone_fraction
     if face not in (opts.contact_windows or {}):
         return FaceFrame.build(setting, face, friction_cone_fraction=cone)
