@@ -94,16 +94,11 @@ def test_a_plan_whose_approach_is_turned_wide_keeps_the_tool_off_the_resting_puc
     """verd200-00056 (slope, no obstacle): its first contact lies at the edge of the Omni's workspace, where
     only a wide turn keeps the approach within the joint limits; along the approach the tool's outline
     keeps off the resting puck until the contact, and the plan passes every hard check."""
-    from pathlib import Path
+    from test_verdicts import generated
 
-    from tooltransfer.planner.apps.batch.generate import generate_tasks
-    from tooltransfer.planner.apps.batch.spec import load_batch
     from tooltransfer.planner.planning.solve import hard_check_failures, solve
-    from tooltransfer.problems.task import task_from_dict
 
-    batch = Path(__file__).resolve().parents[1] / "problems" / "batch" / "verdicts_200.yaml"
-    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "verd200-00056")
-    task = task_from_dict(data, str(batch))
+    task = generated("verdicts_200.yaml", "verd200-00056")
     plan = solve(task)
     assert plan.status == "solved" and hard_check_failures(plan.metrics) == []
     setting = setting_from_task(task, task_skills(task, need_ss=False))

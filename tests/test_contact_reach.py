@@ -7,29 +7,18 @@ search's) broke the reach check where every sample was reachable."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from test_verdicts import generated
 
-from tooltransfer.planner.apps.batch.generate import generate_tasks
-from tooltransfer.planner.apps.batch.spec import load_batch
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.metrics import contact_reach_distance
 from tooltransfer.planner.planning.oe.sequence_proxy import reach_distance
 from tooltransfer.planner.planning.setting import Setting, setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import solve
 from tooltransfer.planner.planning.switches import contact_fraction
-from tooltransfer.problems.task import Task, task_from_dict
 from tooltransfer.tools.omni.ik import inverse_kinematics
-
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _task(batch_name: str, task_id: str) -> Task:
-    batch = ROOT / "problems" / "batch" / batch_name
-    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == task_id)
-    return task_from_dict(data, str(batch))
 
 
 def _reached(setting: Setting, face: str, s: float, p: np.ndarray) -> bool:
@@ -48,7 +37,7 @@ def test_the_reach_distance_at_a_contact_is_zero_exactly_where_the_inverse_kinem
     """Puck positions across the Omni's workspace and contacts anywhere on each face's range: the measure
     is zero where the inverse kinematics holds the tool there and positive where it does not (points
     within 10 um of the region's boundary left out: rounding decides them)."""
-    task = _task(batch, task_id)
+    task = generated(batch, task_id)
     setting = setting_from_task(task, task_skills(task, need_ss=False))
     rng = np.random.default_rng(5)
     base = FaceFrame.build(setting, setting.tool.face_names[0]).base
@@ -76,7 +65,7 @@ def test_at_the_face_s_middle_the_measure_is_the_frame_s_within_its_chords() -> 
     """With the contact at the middle of the face's range the measure agrees with the frame's own
     (:func:`reach_distance`, whose outer arc is drawn with chords up to 0.2 mm inside it): what the frame
     holds it holds, and what it holds lies within 0.2 mm of what the frame holds."""
-    task = _task("execution_60.yaml", "exec60-00023")
+    task = generated("execution_60.yaml", "exec60-00023")
     setting = setting_from_task(task, task_skills(task, need_ss=False))
     rng = np.random.default_rng(11)
     for face in setting.tool.face_names:
@@ -96,7 +85,7 @@ def test_a_plan_kept_toward_one_end_of_a_face_is_measured_at_its_contact_and_sol
     window. Measured at the face's middle, its puck left the region by 3.5 mm and the task stayed
     ``unknown``; at the contact where it is every sample is held (the inverse kinematics agrees, at the
     contact found from the plan's tool poses and puck) and the plan is solved."""
-    task = _task("verdicts_200.yaml", "verd200-00059")
+    task = generated("verdicts_200.yaml", "verd200-00059")
     plan = solve(task)
     assert plan.status == "solved", plan.reason
     assert plan.metrics["reach_violation_max"] <= 1e-3

@@ -3,13 +3,10 @@ that window: the tool's heading follows where the contact is, by degrees along a
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from test_verdicts import generated
 
-from tooltransfer.planner.apps.batch.generate import generate_tasks
-from tooltransfer.planner.apps.batch.spec import load_batch
 from tooltransfer.planner.planning.oe.contacts import realise_span, usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.guided_moves import contact_windows
@@ -18,20 +15,12 @@ from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.sequence_fit import fit_frame
 from tooltransfer.planner.planning.setting import Setting, setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import qp_options
-from tooltransfer.problems.task import Task, task_from_dict
-
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _task(task_id: str) -> Task:
-    batch = ROOT / "problems" / "batch" / "verdicts_200.yaml"
-    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == task_id)
-    return task_from_dict(data, str(batch))
+from tooltransfer.problems.task import Task
 
 
 @pytest.fixture(scope="module")
 def world() -> tuple[Task, Setting, QPOptions]:
-    task = _task("verd200-00059")  # an L-shaped tool: foot_top is 34 mm long
+    task = generated("verdicts_200.yaml", "verd200-00059")  # an L-shaped tool: foot_top is 34 mm long
     setting = setting_from_task(task, task_skills(task, need_ss=False))
     return task, setting, qp_options(task).model_copy(update={"contact_span": 0.004})
 

@@ -24,7 +24,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 from numpy.typing import NDArray
 from shapely import Polygon
 
@@ -80,9 +79,10 @@ def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: 
     ``direction`` does, directions 20 and 40 degrees to either side are tried (the tool still meets
     the object where the push starts, a little obliquely), then :data:`WIDE_TURNS` (with the ``tool`` and
     the resting ``puck``, where its outline keeps off the puck but at the contact)."""
-    for turn in BACK_OFF_TURNS + WIDE_TURNS:
-        if turn in WIDE_TURNS and (tool is None or puck is None):
-            break
+    wide = WIDE_TURNS if tool is not None and puck is not None else ()
+    # the puck less 1 um: the outline at a wide turn's poses but the contact keeps off it
+    off = [] if puck is None else [Disc(puck.centre, puck.radius - 1e-6)]
+    for turn in BACK_OFF_TURNS + wide:
         u = -np.array([np.cos(direction + turn), np.sin(direction + turn)])
         d = distance
         while d >= 0.002:
@@ -91,21 +91,11 @@ def _reachable_back(platform: OmniPlatform, at: NDArray[np.float64], direction: 
             poses = np.column_stack([line, jp.heading])
             if np.all(jp.violation == 0.0) and (
                     tool is None or not obstacles or tool_obstacle_clearance(tool, poses, obstacles).distance
-                    >= TOOL_MARGIN) and (turn not in WIDE_TURNS or _off_puck(tool, poses[1:], puck)):
+                    >= TOOL_MARGIN) and (turn not in wide or tool_obstacle_clearance(tool, poses[1:], off).distance
+                                         > 0.0):
                 return d * u
             d /= 2
     return -0.002 * np.array([np.cos(direction), np.sin(direction)])
-
-
-def _off_puck(tool: Tool | None, poses: NDArray[np.float64], puck: Disc | None) -> bool:
-    """Whether the ``tool``'s outline at ``poses`` (K, 3) keeps off the disc ``puck`` (its centre at least
-    the radius from the outline, within 1 um)."""
-    if tool is None or puck is None:
-        return True
-    ring = np.asarray(tool.outline.exterior.coords)
-    centre = shapely.Point(puck.centre)
-    return all(shapely.distance(shapely.Polygon(ring @ rotation(float(h)).T + xy), centre) >= puck.radius - 1e-6
-               for xy, h in zip(poses[:, :2], poses[:, 2], strict=True))
 
 
 def _line(a: NDArray[np.float64], b: NDArray[np.float64], v_max: float, a_max: float,
