@@ -9,11 +9,12 @@ from tooltransfer.dmp.qp.constraints.base import Coefficients, Constraint
 from tooltransfer.errors import InputError
 
 
-def cone_rows(direction: float | NDArray[np.float64], theta_b: float) -> NDArray[np.float64]:
+def cone_rows(direction: float | NDArray[np.float64], theta_b: float | NDArray[np.float64]) -> NDArray[np.float64]:
     """Rows ``A`` of ``A v <= 0`` keeping a planar velocity in the cone of half-angle ``theta_b`` [rad]
     about ``direction`` [rad]: the negated inward unit normals of the edges at ``direction +- theta_b``.
 
-    Shape (2, 2) for one direction, (K, 2, 2) for directions of shape (K,) (one cone per sample).
+    Shape (2, 2) for one direction, (K, 2, 2) for directions of shape (K,) (one cone per sample; ``theta_b``
+    one for all or (K,)).
     """
     hi, lo = direction + theta_b, direction - theta_b
     n1 = np.stack([np.sin(hi), -np.cos(hi)], axis=-1)  # inward normals of the two edges

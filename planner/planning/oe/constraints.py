@@ -15,6 +15,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -26,6 +28,9 @@ from tooltransfer.tools.pose import wrap_angle
 from tooltransfer.tools.pushing.inverse import FaceGeometry
 from tooltransfer.tools.pushing.mechanics import PushMechanics
 
+OffsetSeries = tuple[NDArray[np.float64], NDArray[np.float64]]
+"""A realised push's times (M,) [s] and the object's offsets (M,) [m] from the arm's plane then."""
+
 
 class HeadingCone(Constraint):
     """Velocity in the cone of half-angle ``theta_b`` about the face's world push direction, which
@@ -33,19 +38,47 @@ class HeadingCone(Constraint):
 
     The rows at each sample use the direction at the linearisation path; evaluated on the path
     itself they measure the true violation [m/s].
+
+    The heading depends on where the contact is on the face too, through the object's ``offset``
+    from the arm's plane (:class:`~.face_frame.FaceFrame`): the frame's is that of its own contact.
+    ``offsets``: for realised pushes (their contacts where they were, :func:`realised_offsets`), the
+    times (M,) [s] and the object's offsets (M,) [m], interpolated on the samples' times; the rows then
+    keep the velocity inside the cones at every one of those headings (their intersection: a fit
+    that moves the contacts again keeps the cones of the contacts it had).
     """
 
     linearised = True
     conservative = False
 
-    def __init__(self, frame: FaceFrame, *, family: str = "cone", window: tuple[float, float] | None = None) -> None:
+    def __init__(self, frame: FaceFrame, *, family: str = "cone", window: tuple[float, float] | None = None,
+                 offsets: Sequence[OffsetSeries] = ()) -> None:
         super().__init__(family, window)
         self.frame = frame
+        self.offsets = tuple(offsets)
+
+    def cone(self, t: NDArray[np.float64], x: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The cone's world middle direction [rad] (K,) and half-width [rad] (K,) with the object at ``x``
+        (K, 2) [m] at times ``t`` (K,) [s] (an empty cone has a negative half-width)."""
+        x = np.atleast_2d(x)
+        if not self.offsets:
+            return self.frame.push_direction(x), np.full(len(x), self.frame.theta_b)
+        d = x - self.frame.base
+        r2 = np.einsum("ij,ij->i", d, d)
+        polar = np.arctan2(d[:, 1], d[:, 0])
+        turns = []
+        for times, values in self.offsets:
+            off = np.interp(t, times, values)
+            turns.append(-np.arctan2(off, np.sqrt(np.maximum(r2 - off**2, 1e-18))))
+        first = turns[0]
+        rel = np.stack([first + wrap_angle(a - first) for a in turns])  # the headings' turns, unwrapped together
+        lo, hi = rel.max(axis=0) - self.frame.theta_b, rel.min(axis=0) + self.frame.theta_b
+        return polar - np.pi / 2 + self.frame.push_angle + 0.5 * (lo + hi), 0.5 * (hi - lo)
 
     def _coefficients(self, k: NDArray[np.intp], t: NDArray[np.float64], x_lin: NDArray[np.float64]) -> Coefficients:
         if x_lin.shape[1] != 2:
             raise InputError("HeadingCone", "a planar (2-D) motion", f"{x_lin.shape[1]}-D")
-        a_vel = cone_rows(self.frame.push_direction(x_lin[k]), self.frame.theta_b)  # (K, 2, 2)
+        middle, half = self.cone(t[k], x_lin[k])
+        a_vel = cone_rows(middle, half)  # (K, 2, 2)
         return Coefficients(k, None, a_vel, np.zeros((k.size, 2)))
 
     def angle_violation(self, x: NDArray[np.float64], v: NDArray[np.float64], speed_tol: float = 1e-6) -> float:
@@ -58,6 +91,19 @@ class HeadingCone(Constraint):
         ang = np.arctan2(v[moving, 1], v[moving, 0]) - self.frame.push_direction(x[moving])
         off = np.abs(wrap_angle(ang))
         return float(max(0.0, (off - self.frame.theta_b).max()))
+
+
+def realised_offsets(base: NDArray[np.float64], t: NDArray[np.float64], x: NDArray[np.float64],
+                     yaw: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The object's offsets [m] (K,) from the arm's plane with the object at ``x`` (K, 2) [m] and the
+    tool at yaw ``yaw`` (K,) [rad] (a realised push's poses), the joint-1 axis at ``base`` (2,) [m]:
+    ``p_o = b + R(a) (u, offset)`` with ``a = yaw + pi/2`` (:mod:`~.face_frame`), so ``offset`` is
+    ``p_o - b`` along ``(-sin a, cos a) = -(cos yaw, sin yaw)``. ``t`` (K,) [s] is only checked
+    against ``x``."""
+    if len(t) != len(x) or len(yaw) != len(x):
+        raise InputError("realised_offsets", "t, x and yaw of one length", f"{len(t)}, {len(x)}, {len(yaw)}")
+    d = np.asarray(x, dtype=np.float64) - base
+    return -(d[:, 0] * np.cos(yaw) + d[:, 1] * np.sin(yaw))
 
 
 def _chords(frame: FaceFrame, tol: float,

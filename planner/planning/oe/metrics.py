@@ -12,9 +12,10 @@ from numpy.typing import NDArray
 
 from tooltransfer.planner.planning.oe.constraints import HeadingCone
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
-from tooltransfer.planner.planning.oe.push_plan import PushPlan
+from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.planning.oe.sequence_proxy import reach_distance
 from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.pose import wrap_angle
 
 if TYPE_CHECKING:
     from tooltransfer.planner.planning.setting import Setting
@@ -43,6 +44,24 @@ def contact_reach_distance(setting: Setting, face: str, x: NDArray[np.float64], 
     for a, sign in ((lo.waist[0], -1.0), (lo.waist[1], 1.0)):  # the arm's plane at each waist limit
         out.append(sign * (d @ np.array([-np.sin(a), np.cos(a)]) - offset))
     return np.maximum(np.max(out, axis=0), 0.0)
+
+
+def heading_cone_violation(frame: FaceFrame, push: Push, x: NDArray[np.float64], v: NDArray[np.float64],
+                           speed_tol: float) -> float:
+    """Largest angle [rad] by which the object's velocity ``v`` (K, 2) [m/s] over ``push``'s samples
+    leaves ``frame``'s admissible cone (``push_angle +- theta_b`` in the tool frame) at the tool's real
+    heading: the yaw of the push's own poses (the inverse push model's, with the contact where it is on
+    the face; the frame's heading is that of its own contact, which a contact elsewhere on a long face
+    turns by up to degrees), over samples moving faster than ``speed_tol`` [m/s]. A push without poses
+    for its samples is measured at the frame's heading at the object's places ``x`` (K, 2) [m]."""
+    if len(push.tool_pose) != len(v):
+        return HeadingCone(frame).angle_violation(x, v, speed_tol)
+    speed = np.linalg.norm(v, axis=1)
+    moving = speed > speed_tol
+    if not np.any(moving):
+        return 0.0
+    ang = np.arctan2(v[moving, 1], v[moving, 0]) - push.tool_pose[moving, 2] - frame.push_angle
+    return float(max(0.0, (np.abs(wrap_angle(ang)) - frame.theta_b).max()))
 
 
 def contact_range_ends(setting: Setting, face: str) -> tuple[FaceFrame, FaceFrame]:
@@ -81,9 +100,9 @@ def plan_metrics(
     """The shared metrics of a solved plan.
 
     Returns a dict with: ``cone_violation_max`` [rad] (largest angle by which the object's motion
-    leaves the active face's admissible cone, over samples moving faster than ``speed_tol`` [m/s]:
-    1 mm/s by default, where the fit's tolerance of 1e-6 m/s bounds the angle by 1e-3 rad; slower,
-    a path coming to a stop points anywhere);
+    leaves the active face's admissible cone at the tool's real heading, :func:`heading_cone_violation`,
+    over samples moving faster than ``speed_tol`` [m/s]: 1 mm/s by default, where the fit's tolerance of
+    1e-6 m/s bounds the angle by 1e-3 rad; slower, a path coming to a stop points anywhere);
     ``friction_cone_margin_min`` [rad] (least ``atan(mu) - |phi_c|`` over the pushes: negative means
     a contact that would slide); ``contact_edge_margin_min`` [m] (least distance of the contact from
     the ends of its face's usable range: negative means it leaves the face); ``n_recontacts``;
@@ -104,7 +123,7 @@ def plan_metrics(
             if (p.face, p.frame_s) not in windows:
                 windows[p.face, p.frame_s] = window_frame(fr, setting, p.frame_s)
             fr = windows[p.face, p.frame_s]
-        cone = max(cone, HeadingCone(fr).angle_violation(x[p.samples], v[p.samples], speed_tol))
+        cone = max(cone, heading_cone_violation(fr, p, x[p.samples], v[p.samples], speed_tol))
         if len(p.contact_s) == len(p.samples):
             if p.face not in ends:
                 ends[p.face] = contact_range_ends(setting, p.face)

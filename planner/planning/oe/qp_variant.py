@@ -45,7 +45,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
+from tooltransfer.planner.planning.oe.constraints import OffsetSeries, realised_offsets
 from tooltransfer.planner.planning.oe.contacts import PushRefused, realise_pushes
+from tooltransfer.planner.planning.oe.metrics import heading_cone_violation
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.sequence_fit import ScoredSequence, SequenceFit
@@ -55,6 +57,19 @@ from tooltransfer.validation import check_array
 
 FINAL_TRIES = 3
 """Screened candidates solved on the full grid, in order of cost, before the search gives up."""
+
+HEADING_TOL = 0.005
+"""Angle [rad] by which a realised push may leave its cone at the tool's real heading before the fit is
+written again at the realised contacts (:func:`_realised`); half the plan's hard bound."""
+
+HEADING_ROUNDS = 3
+"""Fits with the cone at the realised contacts before a path still outside it is refused."""
+
+CONE_BOUND = 0.01
+"""The plan's hard bound [rad] on ``cone_violation_max`` (:data:`tooltransfer.planner.planning.solve.HARD_CHECKS`)."""
+
+SPEED_TOL = 1e-3
+"""Speed [m/s] below which a sample's direction is not measured (:func:`~.metrics.plan_metrics`' default)."""
 
 SCREEN_RTOL = 1e-3
 """Relative objective change at which a screening fit stops re-linearising (the ranking is not
@@ -92,6 +107,61 @@ def _pushes(fit: SequenceFit, best: ScoredSequence, t: NDArray[np.float64], x: N
     return pushes
 
 
+def _span_offsets(fit: SequenceFit, best: ScoredSequence, pushes: tuple[Push, ...], t: NDArray[np.float64],
+                  x: NDArray[np.float64]) -> dict[int, OffsetSeries]:
+    """For each face span of ``best`` (by index), the times [s] and the object's offsets [m] from the
+    arm's plane of its realised ``pushes`` (their contacts where they were, re-contacts included) on
+    the path ``x`` (T, 2) [m] at times ``t`` (T,) [s]."""
+    edges = (t[0], *best.switches, t[-1])
+    out: dict[int, OffsetSeries] = {}
+    for n, (face, lo, hi) in enumerate(zip(best.faces, edges[:-1], edges[1:], strict=True)):
+        mine = [p for p in pushes if p.face == face and p.t_start >= lo - 1e-9 and p.t_end <= hi + 1e-9]
+        if not mine:
+            continue
+        base = fit.frames[face].base
+        tt = np.concatenate([t[p.samples] for p in mine])
+        off = np.concatenate([realised_offsets(base, t[p.samples], x[p.samples], p.tool_pose[:, 2]) for p in mine])
+        order = np.argsort(tt, kind="stable")
+        out[n] = (tt[order], off[order])
+    return out
+
+
+def _realised(fit: SequenceFit, best: ScoredSequence, s_first: float | None = None,
+              spans_wanted: int | None = None) -> tuple[ScoredSequence, tuple[Push, ...]]:
+    """``best``'s fitted path realised (:func:`_pushes`), with the cone rows re-written at the tool's
+    real heading until the path keeps its cones there.
+
+    The fit writes each face's cone in the frame of one contact place; the realised contact rolls
+    along the face, and where it is moves the object's offset from the arm's plane, hence the tool's
+    heading, by up to degrees on a long face. Where a push leaves its cone at the realised heading by
+    more than :data:`HEADING_TOL`, the sequence is fitted again, warm-started at the path, with the
+    rows inside the cones at the headings of every realisation so far
+    (:class:`~.constraints.HeadingCone` ``offsets``), and realised again: at most
+    :data:`HEADING_ROUNDS` times. Raises :class:`PushRefused` when such a fit fails or the cone is
+    still left by more than the plan's hard bound (:data:`CONE_BOUND`)."""
+    assert best.result.rollout is not None
+    roll = best.result.rollout
+    pushes = _pushes(fit, best, roll.t, roll.x, s_first, spans_wanted)
+    seen: dict[int, list[OffsetSeries]] = {}
+    for n in range(HEADING_ROUNDS + 1):
+        worst = max((heading_cone_violation(fit.frames[p.face], p, roll.x[p.samples], roll.v[p.samples], SPEED_TOL)
+                     for p in pushes), default=0.0)
+        if worst <= HEADING_TOL or n == HEADING_ROUNDS:
+            break
+        for k, series in _span_offsets(fit, best, pushes, roll.t, roll.x).items():
+            seen.setdefault(k, []).append(series)
+        again = fit.score(best.faces, best.switches, offsets=seen, start=(roll.t, roll.x))
+        if not again.feasible or again.result.rollout is None:
+            raise PushRefused(f"the path leaves its cone by {worst:.3f} rad at the tool's real heading, and its fit "
+                              "with the cone at the realised contacts is infeasible")
+        best, roll = again, again.result.rollout
+        pushes = _pushes(fit, best, roll.t, roll.x, s_first, spans_wanted)
+    if worst > CONE_BOUND:
+        raise PushRefused(f"the path leaves its cone by {worst:.3f} rad at the tool's real heading after "
+                          f"{HEADING_ROUNDS} fits with the cone at the realised contacts")
+    return best, pushes
+
+
 def condense_sequence(
     t: NDArray[np.float64], universal: NDArray[np.float64], setting: Setting,
     target: NDArray[np.float64], faces: tuple[str, ...], switches: tuple[float, ...],
@@ -123,14 +193,14 @@ def condense_sequence(
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, n_qp=s.result.scp_iterations,
                         reason=f"the sequence {' -> '.join(faces)} is infeasible from here ({fams or 'unknown'})",
                         metrics={"compute_time": time.perf_counter() - start_time})
-    roll = s.result.rollout
-    dense_t, x, v = roll.t, roll.x, roll.v  # the rollout keeps the grid's own times
     try:
-        pushes = _pushes(fine, s, dense_t, x, s_first, 1 if first_face_only else None)
+        s, pushes = _realised(fine, s, s_first, 1 if first_face_only else None)
     except PushRefused as exc:
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=str(exc),
                         metrics={"compute_time": time.perf_counter() - start_time})
-    return PushPlan("qp", "solved", dense_t, x, v, ref, pushes=pushes, n_qp=s.result.scp_iterations,
+    roll = s.result.rollout
+    assert roll is not None
+    return PushPlan("qp", "solved", roll.t, roll.x, roll.v, ref, pushes=pushes, n_qp=s.result.scp_iterations,
                     metrics={"compute_time": time.perf_counter() - start_time})
 
 
@@ -207,14 +277,17 @@ class _Finals:
             self.scored.append(final)
             if not final.feasible or final.result.rollout is None:
                 continue
-            roll = final.result.rollout
-            dense_t, x, v = roll.t, roll.x, roll.v
             try:
-                pushes = _pushes(self.fine, final, dense_t, x)
+                realised, pushes = _realised(self.fine, final)
             except PushRefused as exc:
                 why = f"the push sequence {' -> '.join(final.faces)} cannot be realised: {exc}"
                 continue
-            return self._solved(final, dense_t, x, v, pushes, i + 1, tried + i + 1 - start)
+            if realised is not final:  # fitted again with the cone at the realised contacts
+                final = realised
+                self.scored.append(final)
+            roll = final.result.rollout
+            assert roll is not None
+            return self._solved(final, roll.t, roll.x, roll.v, pushes, i + 1, tried + i + 1 - start)
         n_qp, cands = self._spent()
         if why:
             return _infeasible(self.ref, self.start_time, why, n_qp, cands)

@@ -10,6 +10,7 @@ conditions and the obstacles. :meth:`SequenceFit.score` fits it (first without t
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -28,7 +29,13 @@ from tooltransfer.dmp.qp import (
     solve_fit,
 )
 from tooltransfer.dmp.qp.constraints.base import Constraint
-from tooltransfer.planner.planning.oe.constraints import ContactOnFace, HeadingCone, reach_constraints, reach_entry
+from tooltransfer.planner.planning.oe.constraints import (
+    ContactOnFace,
+    HeadingCone,
+    OffsetSeries,
+    reach_constraints,
+    reach_entry,
+)
 from tooltransfer.planner.planning.oe.contacts import usable_range
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.objectives import RollingPenalty
@@ -106,13 +113,17 @@ class SequenceFit:
                 self.fixed.append(OutsidePolygon(ring, grow, family="obstacle"))
         self._const: float | None = None
 
-    def problem(self, faces: tuple[str, ...], switches: tuple[float, ...]) -> FitProblem:
+    def problem(self, faces: tuple[str, ...], switches: tuple[float, ...],
+                offsets: Mapping[int, Sequence[OffsetSeries]] | None = None) -> FitProblem:
+        """The candidate's fit problem; ``offsets``: for the pushes (by index) whose cone rows follow
+        realised contacts, the times [s] and the object's offsets [m] from the arm's plane of each
+        (:class:`~.constraints.HeadingCone`)."""
         edges = (self.t[0], *switches, self.t[-1])
         cons = list(self.fixed)
         for n, (face, lo, hi) in enumerate(zip(faces, edges[:-1], edges[1:], strict=True)):
             fr = self.frames[face]
             g, (s_lo, s_hi), ends = self._face_rows[face]
-            cons.append(HeadingCone(fr, window=(lo, hi)))
+            cons.append(HeadingCone(fr, window=(lo, hi), offsets=(offsets or {}).get(n, ())))
             ref = self.universal[(self.t >= lo - 1e-12) & (self.t <= hi + 1e-12)] - fr.base
             ang = np.arctan2(ref[:, 1], ref[:, 0])
             near = (float(ang.min()), float(ang.max())) if ang.size else None
@@ -148,8 +159,14 @@ class SequenceFit:
         return lo if k == 0 or k >= inside.size else float(self.t[inside[k]])
 
     def score(self, faces: tuple[str, ...], switches: tuple[float, ...], *, contact_rows: bool = True,
-              warm: bool = False) -> ScoredSequence:
+              warm: bool = False,
+              offsets: Mapping[int, Sequence[OffsetSeries]] | None = None,
+              start: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None) -> ScoredSequence:
         """The candidate's fit: first without the contact rows (cone, reach, obstacles and the ends).
+
+        ``warm``: the first linearisation at the universal path instead of the free DMP's; ``start``:
+        at this path instead (its times [s] (T,) and positions (T, 2) [m]); ``offsets``: see
+        :meth:`problem`.
 
         Without ``contact_rows`` (screening) the contacts that path needs and the excess contact
         travel beyond ``max_contacts`` contacts per push are only measured, for the cost. With them
@@ -159,14 +176,15 @@ class SequenceFit:
         of contacts is priced, not only bounded. A candidate the first stage finds infeasible is so for
         the second.
         """
-        problem = self.problem(faces, switches)
+        problem = self.problem(faces, switches, offsets)
         kw = {"tol": self.opts.tol, "max_scp": self.opts.max_scp, "scp_rtol": self.opts.scp_rtol}
         contact = [c for c in problem.constraints if isinstance(c, ContactOnFace)]
         first = replace(problem, constraints=[c for c in problem.constraints if not isinstance(c, ContactOnFace)])
         x_start = None
-        if warm:
+        if warm or start is not None:
             td = first.t_dense
-            x_start = np.column_stack([np.interp(td, self.t, self.universal[:, j]) for j in range(2)])
+            tt, xx = (self.t, self.universal) if start is None else start
+            x_start = np.column_stack([np.interp(td, tt, xx[:, j]) for j in range(2)])
         res = solve_fit(first, x_start=x_start, **kw)
         scored = ScoredSequence(faces, switches, res, self.opts.accept)
         if not contact or res.rollout is None or not scored.feasible:
