@@ -9,11 +9,12 @@ import pytest
 from test_verdicts import generated
 
 from tooltransfer.planner.planning.oe.constraints import HeadingCone, realised_offsets
+from tooltransfer.planner.planning.oe.contacts import realise_span
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
 from tooltransfer.planner.planning.oe.metrics import heading_cone_violation
 from tooltransfer.planner.planning.oe.push_plan import Push
 from tooltransfer.planner.planning.setting import Setting, setting_from_task, task_skills
-from tooltransfer.planner.planning.solve import solve
+from tooltransfer.planner.planning.solve import qp_options, solve
 from tooltransfer.tools.pose import wrap_angle
 
 
@@ -32,13 +33,25 @@ def _points(frame: FaceFrame, n: int = 40) -> np.ndarray:
                                          u * np.sin(a) + frame.offset * np.cos(a)])
 
 
-def test_the_offsets_of_a_realised_pose_are_those_of_its_contact(setting: Setting) -> None:
-    for q in (0.55, 0.75, 0.98):
-        at = FaceFrame.build(setting, "foot_top", s=q)
-        x = _points(at)
-        pose = at.tool_pose(x)
-        got = realised_offsets(at.base, np.arange(len(x), dtype=float), x, pose[:, 2])
-        assert np.allclose(got, at.offset, atol=1e-12)
+def test_the_offsets_of_a_realised_push_are_those_of_its_contact(setting: Setting) -> None:
+    """The inverse push model's poses of a push whose contact rolls along the face give, at every sample,
+    the offset of the frame with the contact where the model put it."""
+    face = "foot_top"
+    opts = qp_options(generated("verdicts_200.yaml", "verd200-00059"))
+    mid = FaceFrame.build(setting, face)
+    start = _points(mid, 1)[0]
+    way = float(mid.push_direction(start[None])[0]) + 0.9 * mid.theta_b  # sideways: the contact rolls
+    t = np.linspace(0.0, 1.0, 61)
+    x = start + np.outer(t * 0.006, [np.cos(way), np.sin(way)])
+    pushes = realise_span(setting, face, t, x, np.arange(t.size), opts)
+    length = setting.tool.face(face).length
+    rolled = 0.0
+    for p in pushes:
+        got = realised_offsets(mid.base, t[p.samples], x[p.samples], p.tool_pose[:, 2])
+        want = [FaceFrame.build(setting, face, s=s / length).offset for s in p.contact_s]
+        assert np.allclose(got, want, atol=1e-9)
+        rolled = max(rolled, float(np.ptp(p.contact_s)))
+    assert rolled > 1e-3  # the contact moved along the face, so the offsets did
 
 
 def test_cone_rows_at_a_realised_contact_turn_with_it(setting: Setting) -> None:
@@ -60,6 +73,27 @@ def test_cone_rows_at_a_realised_contact_turn_with_it(setting: Setting) -> None:
         edge = both[0] + d * both[1]
         for fr in (mid, end):
             assert (np.abs(wrap_angle(edge - fr.push_direction(x))) <= fr.theta_b + 1e-12).all()
+
+
+def test_each_realised_push_holds_the_cone_within_its_own_times_only(setting: Setting) -> None:
+    """Two pushes (a re-contact) share one sample: each turns the cone only over its own samples, the
+    shared sample keeps both cones, a sample neither covers the frame's; cones that do not overlap are
+    reported empty."""
+    mid = FaceFrame.build(setting, "foot_top")
+    end = FaceFrame.build(setting, "foot_top", s=0.98)
+    x = _points(end, 21)
+    t = np.linspace(0.0, 2.0, 21)
+    first = (t[:11], np.full(11, end.offset))  # samples 0-10
+    second = (t[10:16], np.full(6, mid.offset))  # samples 10-15; 16-20 uncovered
+    middle, half = HeadingCone(mid, offsets=[first, second]).cone(t, x)
+    assert np.allclose(wrap_angle(middle[:10] - end.push_direction(x[:10])), 0.0, atol=1e-12)
+    assert np.allclose(wrap_angle(middle[11:] - mid.push_direction(x[11:])), 0.0, atol=1e-12)
+    spread = abs(float(wrap_angle(end.push_direction(x[10:11]) - mid.push_direction(x[10:11]))[0]))
+    assert half[10] == pytest.approx(mid.theta_b - 0.5 * spread, abs=1e-12) and spread > 0.01
+    assert np.allclose(np.delete(half, 10), mid.theta_b)
+    narrow = FaceFrame(**{**vars(mid), "theta_b": 0.25 * spread})
+    assert HeadingCone(narrow, offsets=[first, second]).empty(t, x)
+    assert not HeadingCone(narrow, offsets=[first]).empty(t, x)
 
 
 def test_the_metric_measures_the_push_at_its_own_poses(setting: Setting) -> None:

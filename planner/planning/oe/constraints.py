@@ -58,21 +58,35 @@ class HeadingCone(Constraint):
 
     def cone(self, t: NDArray[np.float64], x: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The cone's world middle direction [rad] (K,) and half-width [rad] (K,) with the object at ``x``
-        (K, 2) [m] at times ``t`` (K,) [s] (an empty cone has a negative half-width)."""
+        (K, 2) [m] at times ``t`` (K,) [s]. Each realised push's offsets apply within its own times (a
+        sample two pushes share, at a re-contact, keeps both cones); a sample no push covers keeps the
+        frame's heading. Where the cones do not overlap the half-width is negative (the rows would then
+        admit the reversed cone: :meth:`empty` tells the caller)."""
         x = np.atleast_2d(x)
         if not self.offsets:
             return self.frame.push_direction(x), np.full(len(x), self.frame.theta_b)
         d = x - self.frame.base
         r2 = np.einsum("ij,ij->i", d, d)
         polar = np.arctan2(d[:, 1], d[:, 0])
-        turns = []
-        for times, values in self.offsets:
-            off = np.interp(t, times, values)
-            turns.append(-np.arctan2(off, np.sqrt(np.maximum(r2 - off**2, 1e-18))))
-        first = turns[0]
-        rel = np.stack([first + wrap_angle(a - first) for a in turns])  # the headings' turns, unwrapped together
-        lo, hi = rel.max(axis=0) - self.frame.theta_b, rel.min(axis=0) + self.frame.theta_b
+
+        def turn(off: NDArray[np.float64] | float) -> NDArray[np.float64]:
+            return -np.arctan2(off, np.sqrt(np.maximum(r2 - np.square(off), 1e-18)))
+
+        own = turn(self.frame.offset)
+        rel = np.full((len(self.offsets), len(x)), np.nan)
+        for i, (times, values) in enumerate(self.offsets):
+            inside = (t >= times[0] - 1e-9) & (t <= times[-1] + 1e-9)
+            rel[i, inside] = (own + wrap_angle(turn(np.interp(t, times, values)) - own))[inside]
+        none = np.isnan(rel).all(axis=0)
+        rel[:, none] = own[none]
+        lo, hi = np.nanmax(rel, axis=0) - self.frame.theta_b, np.nanmin(rel, axis=0) + self.frame.theta_b
         return polar - np.pi / 2 + self.frame.push_angle + 0.5 * (lo + hi), 0.5 * (hi - lo)
+
+    def empty(self, t: NDArray[np.float64], x: NDArray[np.float64]) -> bool:
+        """Whether the cones of the realised pushes fail to overlap at some sample of its window among
+        times ``t`` (T,) [s] with the object at ``x`` (T, 2) [m]."""
+        k = self.samples(t)
+        return bool(k.size) and bool((self.cone(t[k], x[k])[1] < 0.0).any())
 
     def _coefficients(self, k: NDArray[np.intp], t: NDArray[np.float64], x_lin: NDArray[np.float64]) -> Coefficients:
         if x_lin.shape[1] != 2:

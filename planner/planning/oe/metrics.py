@@ -101,8 +101,8 @@ def plan_metrics(
 
     Returns a dict with: ``cone_violation_max`` [rad] (largest angle by which the object's motion
     leaves the active face's admissible cone at the tool's real heading, :func:`heading_cone_violation`,
-    over samples moving faster than ``speed_tol`` [m/s]: 1 mm/s by default, where the fit's tolerance of
-    1e-6 m/s bounds the angle by 1e-3 rad; slower, a path coming to a stop points anywhere);
+    over samples moving faster than ``speed_tol`` [m/s]: 1 mm/s by default (slower, a path coming to a stop
+    points anywhere); the ``qp`` variant fits again at the realised contacts above 5 mrad);
     ``friction_cone_margin_min`` [rad] (least ``atan(mu) - |phi_c|`` over the pushes: negative means
     a contact that would slide); ``contact_edge_margin_min`` [m] (least distance of the contact from
     the ends of its face's usable range: negative means it leaves the face); ``n_recontacts``;
@@ -119,8 +119,8 @@ def plan_metrics(
     windows: dict[tuple[str, float], FaceFrame] = {}  # the frames of the windows pushes were fitted in
     for p in plan.pushes:
         fr = frames[p.face]
-        if not np.isnan(p.frame_s):
-            if (p.face, p.frame_s) not in windows:
+        if not np.isnan(p.frame_s) and (len(p.tool_pose) != len(p.samples) or len(p.contact_s) != len(p.samples)):
+            if (p.face, p.frame_s) not in windows:  # a push without its poses: the frame it was fitted in
                 windows[p.face, p.frame_s] = window_frame(fr, setting, p.frame_s)
             fr = windows[p.face, p.frame_s]
         cone = max(cone, heading_cone_violation(fr, p, x[p.samples], v[p.samples], speed_tol))

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.errors import InputError
-from tooltransfer.planner.planning.oe.constraints import OffsetSeries, realised_offsets
+from tooltransfer.planner.planning.oe.constraints import HeadingCone, OffsetSeries, realised_offsets
 from tooltransfer.planner.planning.oe.contacts import PushRefused, realise_pushes
 from tooltransfer.planner.planning.oe.metrics import heading_cone_violation
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
@@ -107,27 +107,31 @@ def _pushes(fit: SequenceFit, best: ScoredSequence, t: NDArray[np.float64], x: N
     return pushes
 
 
-def _span_offsets(fit: SequenceFit, best: ScoredSequence, pushes: tuple[Push, ...], t: NDArray[np.float64],
-                  x: NDArray[np.float64]) -> dict[int, OffsetSeries]:
-    """For each face span of ``best`` (by index), the times [s] and the object's offsets [m] from the
-    arm's plane of its realised ``pushes`` (their contacts where they were, re-contacts included) on
-    the path ``x`` (T, 2) [m] at times ``t`` (T,) [s]."""
+def _span_offsets(best: ScoredSequence, pushes: tuple[Push, ...], t: NDArray[np.float64], x: NDArray[np.float64],
+                  base: dict[str, NDArray[np.float64]]) -> dict[int, list[OffsetSeries]]:
+    """For each face span of ``best`` (by index), one series per realised push in it (re-contacts their
+    own): its times [s] and the object's offsets [m] from the arm's plane, its contact where it was, on
+    the path ``x`` (T, 2) [m] at times ``t`` (T,) [s]; ``base``: each face's joint-1 axis [m]."""
     edges = (t[0], *best.switches, t[-1])
-    out: dict[int, OffsetSeries] = {}
+    out: dict[int, list[OffsetSeries]] = {}
     for n, (face, lo, hi) in enumerate(zip(best.faces, edges[:-1], edges[1:], strict=True)):
-        mine = [p for p in pushes if p.face == face and p.t_start >= lo - 1e-9 and p.t_end <= hi + 1e-9]
-        if not mine:
-            continue
-        base = fit.frames[face].base
-        tt = np.concatenate([t[p.samples] for p in mine])
-        off = np.concatenate([realised_offsets(base, t[p.samples], x[p.samples], p.tool_pose[:, 2]) for p in mine])
-        order = np.argsort(tt, kind="stable")
-        out[n] = (tt[order], off[order])
+        for p in pushes:
+            if p.face == face and p.t_start >= lo - 1e-9 and p.t_end <= hi + 1e-9 and len(p.samples) >= 2:
+                tt = t[p.samples]
+                out.setdefault(n, []).append((tt, realised_offsets(base[face], tt, x[p.samples], p.tool_pose[:, 2])))
     return out
 
 
+def _cone_worst(fit: SequenceFit, best: ScoredSequence, pushes: tuple[Push, ...]) -> float:
+    """The largest angle [rad] by which ``pushes`` leave their cones at their own poses' heading."""
+    roll = best.result.rollout
+    assert roll is not None
+    return max((heading_cone_violation(fit.frames[p.face], p, roll.x[p.samples], roll.v[p.samples], SPEED_TOL)
+                for p in pushes), default=0.0)
+
+
 def _realised(fit: SequenceFit, best: ScoredSequence, s_first: float | None = None,
-              spans_wanted: int | None = None) -> tuple[ScoredSequence, tuple[Push, ...]]:
+              spans_wanted: int | None = None) -> tuple[ScoredSequence, tuple[Push, ...], list[ScoredSequence]]:
     """``best``'s fitted path realised (:func:`_pushes`), with the cone rows re-written at the tool's
     real heading until the path keeps its cones there.
 
@@ -135,31 +139,50 @@ def _realised(fit: SequenceFit, best: ScoredSequence, s_first: float | None = No
     along the face, and where it is moves the object's offset from the arm's plane, hence the tool's
     heading, by up to degrees on a long face. Where a push leaves its cone at the realised heading by
     more than :data:`HEADING_TOL`, the sequence is fitted again, warm-started at the path, with the
-    rows inside the cones at the headings of every realisation so far
+    rows inside the cones at the headings of every realised push so far
     (:class:`~.constraints.HeadingCone` ``offsets``), and realised again: at most
-    :data:`HEADING_ROUNDS` times. Raises :class:`PushRefused` when such a fit fails or the cone is
-    still left by more than the plan's hard bound (:data:`CONE_BOUND`)."""
+    :data:`HEADING_ROUNDS` times. The realisation that leaves its cones least is kept.
+
+    Returns:
+        the kept fit, its pushes, and the fits made again (for the count of fits).
+    Raises:
+        PushRefused: no realisation keeps its cones within the plan's hard bound (:data:`CONE_BOUND`).
+    """
     assert best.result.rollout is not None
-    roll = best.result.rollout
-    pushes = _pushes(fit, best, roll.t, roll.x, s_first, spans_wanted)
+    pushes = _pushes(fit, best, best.result.rollout.t, best.result.rollout.x, s_first, spans_wanted)
+    worst = _cone_worst(fit, best, pushes)
+    kept, again_fits, why = (worst, best, pushes), [], ""
     seen: dict[int, list[OffsetSeries]] = {}
-    for n in range(HEADING_ROUNDS + 1):
-        worst = max((heading_cone_violation(fit.frames[p.face], p, roll.x[p.samples], roll.v[p.samples], SPEED_TOL)
-                     for p in pushes), default=0.0)
-        if worst <= HEADING_TOL or n == HEADING_ROUNDS:
+    base = {f: fr.base for f, fr in fit.frames.items()}
+    for _ in range(HEADING_ROUNDS):
+        if kept[0] <= HEADING_TOL:
             break
-        for k, series in _span_offsets(fit, best, pushes, roll.t, roll.x).items():
-            seen.setdefault(k, []).append(series)
+        roll = best.result.rollout
+        for k, series in _span_offsets(best, pushes, roll.t, roll.x, base).items():
+            seen.setdefault(k, []).extend(series)
+        problem = fit.problem(best.faces, best.switches, seen)
+        if any(c.empty(roll.t, roll.x) for c in problem.constraints if isinstance(c, HeadingCone)):
+            why = "the cones at the realised contacts do not overlap"
+            break
         again = fit.score(best.faces, best.switches, offsets=seen, start=(roll.t, roll.x))
+        again_fits.append(again)
         if not again.feasible or again.result.rollout is None:
-            raise PushRefused(f"the path leaves its cone by {worst:.3f} rad at the tool's real heading, and its fit "
-                              "with the cone at the realised contacts is infeasible")
-        best, roll = again, again.result.rollout
-        pushes = _pushes(fit, best, roll.t, roll.x, s_first, spans_wanted)
-    if worst > CONE_BOUND:
-        raise PushRefused(f"the path leaves its cone by {worst:.3f} rad at the tool's real heading after "
-                          f"{HEADING_ROUNDS} fits with the cone at the realised contacts")
-    return best, pushes
+            why = "its fit with the cone at the realised contacts is infeasible"
+            break
+        try:
+            pushes = _pushes(fit, again, again.result.rollout.t, again.result.rollout.x, s_first, spans_wanted)
+        except PushRefused as exc:
+            why = f"its fit with the cone at the realised contacts cannot be realised ({exc})"
+            break
+        best = again
+        worst = _cone_worst(fit, best, pushes)
+        if worst < kept[0]:
+            kept = (worst, best, pushes)
+    if kept[0] > CONE_BOUND:
+        tail = f"; {why}" if why else ""
+        raise PushRefused(f"the path leaves its cone by {kept[0]:.3f} rad at the tool's real heading after "
+                          f"{len(again_fits)} fit(s) with the cone at the realised contacts{tail}")
+    return kept[1], kept[2], again_fits
 
 
 def condense_sequence(
@@ -194,13 +217,14 @@ def condense_sequence(
                         reason=f"the sequence {' -> '.join(faces)} is infeasible from here ({fams or 'unknown'})",
                         metrics={"compute_time": time.perf_counter() - start_time})
     try:
-        s, pushes = _realised(fine, s, s_first, 1 if first_face_only else None)
+        first, (s, pushes, again) = s, _realised(fine, s, s_first, 1 if first_face_only else None)
     except PushRefused as exc:
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=str(exc),
                         metrics={"compute_time": time.perf_counter() - start_time})
     roll = s.result.rollout
     assert roll is not None
-    return PushPlan("qp", "solved", roll.t, roll.x, roll.v, ref, pushes=pushes, n_qp=s.result.scp_iterations,
+    n_qp = first.result.scp_iterations + sum(a.result.scp_iterations for a in again)
+    return PushPlan("qp", "solved", roll.t, roll.x, roll.v, ref, pushes=pushes, n_qp=n_qp,
                     metrics={"compute_time": time.perf_counter() - start_time})
 
 
@@ -278,13 +302,11 @@ class _Finals:
             if not final.feasible or final.result.rollout is None:
                 continue
             try:
-                realised, pushes = _realised(self.fine, final)
+                final, pushes, again = _realised(self.fine, final)
             except PushRefused as exc:
                 why = f"the push sequence {' -> '.join(final.faces)} cannot be realised: {exc}"
                 continue
-            if realised is not final:  # fitted again with the cone at the realised contacts
-                final = realised
-                self.scored.append(final)
+            self.scored += again  # fitted again with the cone at the realised contacts
             roll = final.result.rollout
             assert roll is not None
             return self._solved(final, roll.t, roll.x, roll.v, pushes, i + 1, tried + i + 1 - start)
