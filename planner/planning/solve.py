@@ -46,6 +46,7 @@ from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN, tool_obsta
 from tooltransfer.planner.planning.variant_registry import needs_ss_skill, oe_variant, switch_planner
 from tooltransfer.planner.planning.verdicts.decide import Sought, attach_verdict, seek_certificate
 from tooltransfer.problems.task import Task, resolve, task_origin
+from tooltransfer.tools.model import Tool
 from tooltransfer.tools.pushing.forward import simulate
 
 
@@ -239,6 +240,18 @@ def _candidates(task: Task, setting: Setting, push_plan: Any, switch: Any, recon
     return plan
 
 
+def _push_collision(tool: Tool, push_plan: Any, obstacles: list) -> str:
+    """Where the tool outline, at the poses of ``push_plan``'s pushes (before any switch is planned),
+    first overlaps an obstacle, as a reason; empty where it overlaps none."""
+    for p in push_plan.pushes:
+        near = tool_obstacle_clearance(tool, p.tool_pose, obstacles)
+        if near.distance <= 0.0:
+            return (f"tool-obstacle collision: the tool outline overlaps obstacles[{near.obstacle}] at "
+                    f"t = {push_plan.t[p.samples[near.sample]]:.2f} s (push of {p.face!r}; tool at "
+                    f"{np.round(p.tool_pose[near.sample, :2], 4).tolist()} m)")
+    return ""
+
+
 def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, recontact: Any,
               stages: dict[str, float], base: dict[str, Any],
               failed_switches: list[SwitchFailed] | None = None) -> Plan:
@@ -258,7 +271,9 @@ def _complete(task: Task, setting: Setting, push_plan: Any, switch: Any, reconta
     except SwitchFailed as exc:
         if failed_switches is not None:
             failed_switches.append(exc)
-        return Plan(status="infeasible", reason=str(exc), metrics={**push_plan.metrics, **stages}, **base)
+        hit = _push_collision(tool, push_plan, obstacles)  # a push that cannot be made is the first cause
+        why = f"{hit}; its switch {exc.face_a} -> {exc.face_b} failed too: {exc.reason}" if hit else str(exc)
+        return Plan(status="infeasible", reason=why, metrics={**push_plan.metrics, **stages}, **base)
     stages = {**stages, "time_switches_and_timing": time.perf_counter() - clock}
     metrics = {**push_plan.metrics, **stages, "safety_margin_used": setting.margin,
                "mechanics_mu": setting.mechanics.mu, "mechanics_c": setting.mechanics.c}
