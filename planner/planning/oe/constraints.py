@@ -69,14 +69,14 @@ class HeadingCone(Constraint):
         r2 = np.einsum("ij,ij->i", d, d)
         polar = np.arctan2(d[:, 1], d[:, 0])
 
-        def turn(off: NDArray[np.float64] | float) -> NDArray[np.float64]:
-            return -np.arctan2(off, np.sqrt(np.maximum(r2 - np.square(off), 1e-18)))
+        def turn(off: NDArray[np.float64] | float, rr: NDArray[np.float64]) -> NDArray[np.float64]:
+            return -np.arctan2(off, np.sqrt(np.maximum(rr - np.square(off), 1e-18)))
 
-        own = turn(self.frame.offset)
+        own = turn(self.frame.offset, r2)
         rel = np.full((len(self.offsets), len(x)), np.nan)
         for i, (times, values) in enumerate(self.offsets):
-            inside = (t >= times[0] - 1e-9) & (t <= times[-1] + 1e-9)
-            rel[i, inside] = (own + wrap_angle(turn(np.interp(t, times, values)) - own))[inside]
+            k = np.flatnonzero((t >= times[0] - 1e-9) & (t <= times[-1] + 1e-9))
+            rel[i, k] = own[k] + wrap_angle(turn(np.interp(t[k], times, values), r2[k]) - own[k])
         none = np.isnan(rel).all(axis=0)
         rel[:, none] = own[none]
         lo, hi = np.nanmax(rel, axis=0) - self.frame.theta_b, np.nanmin(rel, axis=0) + self.frame.theta_b
