@@ -117,7 +117,7 @@ def _cone_at_real_heading(task, plan) -> float:
     against the pushing face's admissible cone (its share of the friction cone and the tool file's cone)
     turned by the plan's tool yaw."""
     setting = setting_from_task(task, task_skills(task, need_ss=False))
-    share = task.oe.friction_cone_fraction
+    share = plan.metrics.get("friction_cone_fraction", task.oe.friction_cone_fraction)  # a guided plan's own
     phase, face = np.asarray(plan.phase), np.asarray(plan.face, dtype=object)
     worst = 0.0
     for seg in plan.pushes:
@@ -146,3 +146,53 @@ def test_a_solved_plan_keeps_its_cone_at_the_tool_s_real_heading(batch: str, tas
     assert plan.status == "solved", plan.reason
     assert plan.metrics["cone_violation_max"] <= 0.01
     assert _cone_at_real_heading(task, plan) <= 0.01
+
+
+def _outside(pushes, roll, share_frame) -> float:
+    """Independent measure on a realised fit: the rollout's velocity at each push's samples against the
+    face's cone (``share_frame``: its frame, for ``push_angle`` and ``theta_b`` only) turned by the push's
+    own tool yaw, over samples faster than 1 mm/s."""
+    worst = 0.0
+    for p in pushes:
+        v = roll.v[p.samples]
+        fast = np.hypot(v[:, 0], v[:, 1]) > 1e-3
+        fr = share_frame[p.face]
+        off = np.abs(wrap_angle(np.arctan2(v[fast, 1], v[fast, 0]) - p.tool_pose[fast, 2] - fr.push_angle))
+        worst = max(worst, float((off - fr.theta_b).max(initial=0.0)))
+    return worst
+
+
+def test_the_fit_is_written_again_at_the_realised_contacts_until_it_keeps_its_cone(monkeypatch) -> None:
+    """The paper's transfer (tool 2): its final sequence, fitted with the cone at the faces' middles,
+    leaves the cone at the real heading by more than the hard bound once realised. Without re-fits it is
+    refused (and says so); with them the kept realisation is within ``HEADING_TOL``, and every re-fit is
+    handed back for the count of fits."""
+    from tooltransfer.planner.planning.oe import qp_variant
+    from tooltransfer.planner.planning.oe.contacts import PushRefused
+    from tooltransfer.planner.planning.oe.qp_options import QPOptions
+    from tooltransfer.planner.planning.oe.sequence_fit import SequenceFit
+    from tooltransfer.planner.planning.ss.paper_cases import transfer_case
+    from tooltransfer.tools.objects import DiscObject
+
+    case = transfer_case()
+    world = Setting(case.tool, case.platform, DiscObject(0.0175), obstacles=case.obstacles)
+    opts = QPOptions()
+    grid = np.linspace(case.t[0], case.t[-1], opts.n_samples)
+    ref = np.column_stack([np.interp(grid, case.t, case.x[:, j]) for j in range(2)])
+    fine = SequenceFit(grid, ref, world, case.target, opts)
+    faces, switches = ("inclined", "left", "inclined", "left"), (3.921, 9.149, 11.763)
+    first = fine.score(faces, switches)
+    assert first.feasible and first.result.rollout is not None
+    plain = qp_variant._pushes(fine, first, first.result.rollout.t, first.result.rollout.x)
+    assert _outside(plain, first.result.rollout, fine.frames) > qp_variant.CONE_BOUND
+
+    monkeypatch.setattr(qp_variant, "HEADING_ROUNDS", 0)
+    with pytest.raises(PushRefused, match=r"leaves its cone by .* rad at the tool.s real heading after 0 fit"):
+        qp_variant._realised(fine, first)
+    monkeypatch.undo()
+
+    kept, pushes, again = qp_variant._realised(fine, first)
+    assert 1 <= len(again) <= qp_variant.HEADING_ROUNDS and any(kept is a for a in again)
+    assert kept.faces == faces and kept.switches == switches
+    assert kept.result.rollout is not None
+    assert _outside(pushes, kept.result.rollout, fine.frames) <= qp_variant.HEADING_TOL

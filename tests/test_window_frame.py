@@ -107,3 +107,36 @@ def test_a_push_on_a_window_is_measured_at_its_own_poses(world) -> None:
         assert got <= 0.01
         at_middle.append(HeadingCone(middle).angle_violation(x, v, 1e-3))
     assert max(at_middle) > 0.01
+
+
+def test_a_push_without_poses_is_measured_in_the_frame_it_was_fitted_in(world) -> None:
+    """The fallback of the cone check: a push that carries no tool poses for its samples is measured at
+    the heading of its window's frame (``frame_s``), where a velocity along that frame's cone edge is
+    inside, and the face middle's frame would see it outside."""
+    from dataclasses import replace as changed
+
+    from tooltransfer.planner.planning.oe.constraints import HeadingCone
+    from tooltransfer.planner.planning.oe.metrics import plan_metrics, window_frame
+    from tooltransfer.planner.planning.oe.push_plan import PushPlan
+
+    task, setting, options = world
+    face = "foot_top"
+    window = contact_windows(setting.tool, face, options)[-1]
+    windowed = options.model_copy(update={"contact_windows": {face: window}})
+    frame, middle = fit_frame(setting, face, windowed), fit_frame(setting, face, options)
+    start = np.array(task.start)
+    t = np.linspace(0.0, 1.0, 41)
+    at_middle = []
+    for side in (-1.0, 1.0):
+        way = float(frame.push_direction(start[None])[0]) + side * 0.98 * frame.theta_b
+        x = start + np.outer(t * 0.002, [np.cos(way), np.sin(way)])
+        v = np.tile(0.002 * np.array([np.cos(way), np.sin(way)]), (t.size, 1))
+        pushes = realise_span(setting, face, t, x, np.arange(t.size), windowed)
+        bare = tuple(changed(p, tool_pose=np.zeros((0, 3))) for p in pushes)
+        plan = PushPlan("qp", "solved", t, x, v, x, pushes=bare)
+        got = plan_metrics(plan, {face: middle}, x[-1], setting)["cone_violation_max"]
+        at = window_frame(middle, setting, pushes[0].frame_s)
+        assert got == pytest.approx(HeadingCone(at).angle_violation(x, v, 1e-3), abs=1e-12)
+        assert got <= 1e-3
+        at_middle.append(HeadingCone(middle).angle_violation(x, v, 1e-3))
+    assert max(at_middle) > 0.01

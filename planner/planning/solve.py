@@ -25,18 +25,20 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Generator
+from collections.abc import Callable, Generator, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
+import shapely
 
 from tooltransfer.errors import InputError
 from tooltransfer.planner.common.metric_units import UNITS
 from tooltransfer.planner.planning.assemble import SwitchFailed, assemble
 from tooltransfer.planner.planning.oe.generalize import generalize
 from tooltransfer.planner.planning.oe.mapping_variant import MappingOptions
+from tooltransfer.planner.planning.oe.metrics import CONE_BOUND
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.plan import Plan, Segment
 from tooltransfer.planner.planning.recontact import recontact_planner
@@ -47,6 +49,7 @@ from tooltransfer.planner.planning.variant_registry import needs_ss_skill, oe_va
 from tooltransfer.planner.planning.verdicts.decide import Sought, attach_verdict, seek_certificate
 from tooltransfer.problems.task import Task, resolve, task_origin
 from tooltransfer.tools.model import Tool
+from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.pushing.forward import simulate
 
 
@@ -240,9 +243,10 @@ def _candidates(task: Task, setting: Setting, push_plan: Any, switch: Any, recon
     return plan
 
 
-def _push_collision(tool: Tool, push_plan: Any, obstacles: list) -> str:
+def _push_collision(tool: Tool, push_plan: Any, obstacles: Sequence[Disc | shapely.Polygon]) -> str:
     """Where the tool outline, at the poses of ``push_plan``'s pushes (before any switch is planned),
-    first overlaps an obstacle, as a reason; empty where it overlaps none."""
+    overlaps an obstacle in the first push where it does (its first sample there with the lowest-numbered
+    obstacle it overlaps), as a reason; empty where it overlaps none."""
     for p in push_plan.pushes:
         near = tool_obstacle_clearance(tool, p.tool_pose, obstacles)
         if near.distance <= 0.0:
@@ -336,7 +340,7 @@ PUSH_PLAN_MEASURES = ("cone_violation_max", "friction_cone_margin_min", "contact
 #: (:data:`tooltransfer.planner.common.metric_units.UNITS`). A plan that breaks one is ``violated`` (the paper's
 #: mapping variant guarantees none of them), still written and compared.
 _HARD_BOUNDS: tuple[tuple[str, str, float, str], ...] = (
-    ("cone", "cone_violation_max", 0.01, "max"),
+    ("cone", "cone_violation_max", CONE_BOUND, "max"),
     ("friction cone", "friction_cone_margin_min", -1e-6, "min"),
     ("contact edge", "contact_edge_margin_min", -1e-6, "min"),
     ("switch penetration", "switch_penetration_max", 1e-5, "max"),

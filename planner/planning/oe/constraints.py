@@ -92,12 +92,15 @@ class HeadingCone(Constraint):
         if x_lin.shape[1] != 2:
             raise InputError("HeadingCone", "a planar (2-D) motion", f"{x_lin.shape[1]}-D")
         middle, half = self.cone(t[k], x_lin[k])
-        a_vel = cone_rows(middle, half)  # (K, 2, 2)
+        # where the realised cones do not overlap (the path moved since :meth:`empty` was asked), a hairline
+        # cone: negative half-widths would make the rows admit the reversed cone
+        a_vel = cone_rows(middle, np.maximum(half, 1e-6))  # (K, 2, 2)
         return Coefficients(k, None, a_vel, np.zeros((k.size, 2)))
 
     def angle_violation(self, x: NDArray[np.float64], v: NDArray[np.float64], speed_tol: float = 1e-6) -> float:
-        """Largest angle [rad] by which the velocity leaves the cone, over samples moving faster
-        than ``speed_tol`` [m/s] (x, v of shape (K, 2) at the constraint's samples)."""
+        """Largest angle [rad] by which the velocity leaves the frame's cone at the frame's own heading
+        (without the realised ``offsets``), over samples moving faster than ``speed_tol`` [m/s] (x, v of
+        shape (K, 2) at the constraint's samples)."""
         speed = np.linalg.norm(v, axis=1)
         moving = speed > speed_tol
         if not np.any(moving):

@@ -21,6 +21,14 @@ if TYPE_CHECKING:
     from tooltransfer.planner.planning.setting import Setting
 
 
+CONE_BOUND: float = 0.01
+"""The hard bound [rad] on a plan's ``cone_violation_max`` (:data:`tooltransfer.planner.planning.solve.HARD_CHECKS`)."""
+
+SPEED_TOL: float = 1e-3
+"""Speed [m/s] below which a sample's direction is not measured (:func:`plan_metrics`' default): a path
+coming to a stop points anywhere."""
+
+
 def contact_reach_distance(setting: Setting, face: str, x: NDArray[np.float64], s: NDArray[np.float64],
                            ends: tuple[FaceFrame, FaceFrame] | None = None) -> NDArray[np.float64]:
     """How far [m] (K,) each object position of ``x`` (K, 2) [m] is outside where the Omni holds ``face``
@@ -95,7 +103,7 @@ def plan_metrics(
     target: NDArray[np.float64],
     setting: Setting,
     *,
-    speed_tol: float = 1e-3,
+    speed_tol: float = SPEED_TOL,
 ) -> dict[str, float]:
     """The shared metrics of a solved plan.
 

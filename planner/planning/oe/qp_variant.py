@@ -47,7 +47,7 @@ from numpy.typing import NDArray
 from tooltransfer.errors import InputError
 from tooltransfer.planner.planning.oe.constraints import HeadingCone, OffsetSeries, realised_offsets
 from tooltransfer.planner.planning.oe.contacts import PushRefused, realise_pushes
-from tooltransfer.planner.planning.oe.metrics import heading_cone_violation
+from tooltransfer.planner.planning.oe.metrics import CONE_BOUND, SPEED_TOL, heading_cone_violation
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.sequence_fit import ScoredSequence, SequenceFit
@@ -63,13 +63,17 @@ HEADING_TOL = 0.005
 written again at the realised contacts (:func:`_realised`); half the plan's hard bound."""
 
 HEADING_ROUNDS = 3
-"""Fits with the cone at the realised contacts before a path still outside it is refused."""
+"""Fits with the cone at the realised contacts at most (:func:`_realised`: the realisation that leaves its
+cones least is kept, and refused when that is by more than :data:`~.metrics.CONE_BOUND`)."""
 
-CONE_BOUND = 0.01
-"""The plan's hard bound [rad] on ``cone_violation_max`` (:data:`tooltransfer.planner.planning.solve.HARD_CHECKS`)."""
 
-SPEED_TOL = 1e-3
-"""Speed [m/s] below which a sample's direction is not measured (:func:`~.metrics.plan_metrics`' default)."""
+class ConeRefused(PushRefused):
+    """A path whose every realisation leaves its cones at the tool's real heading by more than the hard
+    bound; ``fits``: the fits made again at the realised contacts (they count among the fits spent)."""
+
+    def __init__(self, message: str, fits: list[ScoredSequence]) -> None:
+        super().__init__(message)
+        self.fits = fits
 
 SCREEN_RTOL = 1e-3
 """Relative objective change at which a screening fit stops re-linearising (the ranking is not
@@ -146,7 +150,9 @@ def _realised(fit: SequenceFit, best: ScoredSequence, s_first: float | None = No
     Returns:
         the kept fit, its pushes, and the fits made again (for the count of fits).
     Raises:
-        PushRefused: no realisation keeps its cones within the plan's hard bound (:data:`CONE_BOUND`).
+        ConeRefused: no realisation keeps its cones within the plan's hard bound
+            (:data:`~.metrics.CONE_BOUND`); it carries the fits made again.
+        PushRefused: the first realisation fails (:func:`_pushes`).
     """
     assert best.result.rollout is not None
     pushes = _pushes(fit, best, best.result.rollout.t, best.result.rollout.x, s_first, spans_wanted)
@@ -180,8 +186,8 @@ def _realised(fit: SequenceFit, best: ScoredSequence, s_first: float | None = No
             kept = (worst, best, pushes)
     if kept[0] > CONE_BOUND:
         tail = f"; {why}" if why else ""
-        raise PushRefused(f"the path leaves its cone by {kept[0]:.3f} rad at the tool's real heading after "
-                          f"{len(again_fits)} fit(s) with the cone at the realised contacts{tail}")
+        raise ConeRefused(f"the path leaves its cone by {kept[0]:.3f} rad at the tool's real heading after "
+                          f"{len(again_fits)} fit(s) with the cone at the realised contacts{tail}", again_fits)
     return kept[1], kept[2], again_fits
 
 
@@ -219,7 +225,8 @@ def condense_sequence(
     try:
         first, (s, pushes, again) = s, _realised(fine, s, s_first, 1 if first_face_only else None)
     except PushRefused as exc:
-        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=str(exc),
+        spent = s.result.scp_iterations + sum(a.result.scp_iterations for a in getattr(exc, "fits", []))
+        return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=str(exc), n_qp=spent,
                         metrics={"compute_time": time.perf_counter() - start_time})
     roll = s.result.rollout
     assert roll is not None
@@ -304,6 +311,7 @@ class _Finals:
             try:
                 final, pushes, again = _realised(self.fine, final)
             except PushRefused as exc:
+                self.scored += getattr(exc, "fits", [])  # the fits made again at the realised contacts
                 why = f"the push sequence {' -> '.join(final.faces)} cannot be realised: {exc}"
                 continue
             self.scored += again  # fitted again with the cone at the realised contacts
