@@ -47,7 +47,7 @@ def test_the_offsets_of_a_realised_push_are_those_of_its_contact(setting: Settin
     length = setting.tool.face(face).length
     rolled = 0.0
     for p in pushes:
-        got = realised_offsets(mid.base, t[p.samples], x[p.samples], p.tool_pose[:, 2])
+        got = realised_offsets(mid.base, x[p.samples], p.tool_pose[:, 2])
         want = [FaceFrame.build(setting, face, s=s / length).offset for s in p.contact_s]
         assert np.allclose(got, want, atol=1e-9)
         rolled = max(rolled, float(np.ptp(p.contact_s)))

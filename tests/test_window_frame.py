@@ -72,6 +72,26 @@ def test_a_push_on_a_window_says_which_frame_it_was_fitted_in(world) -> None:
     assert all(np.isnan(p.frame_s) for p in plain)
 
 
+def _edge_pushes(world):
+    """Pushes of foot_top on its last window along either edge of that window's cone (2 mm from the
+    task's start, 41 samples over 1 s): for each side, the way [rad], the path ``x`` and velocity ``v``
+    (41, 2) and the realised pushes; with the sample times and the face middle's frame."""
+    task, setting, options = world
+    face = "foot_top"
+    window = contact_windows(setting.tool, face, options)[-1]
+    windowed = options.model_copy(update={"contact_windows": {face: window}})
+    frame, middle = fit_frame(setting, face, windowed), fit_frame(setting, face, options)
+    start = np.array(task.start)
+    t = np.linspace(0.0, 1.0, 41)
+    sides = []
+    for side in (-1.0, 1.0):  # the edge where the middle's cone is narrower is one of them
+        way = float(frame.push_direction(start[None])[0]) + side * 0.98 * frame.theta_b
+        x = start + np.outer(t * 0.002, [np.cos(way), np.sin(way)])
+        v = np.tile(0.002 * np.array([np.cos(way), np.sin(way)]), (t.size, 1))
+        sides.append((way, x, v, realise_span(setting, face, t, x, np.arange(t.size), windowed)))
+    return t, middle, sides
+
+
 def test_a_push_on_a_window_is_measured_at_its_own_poses(world) -> None:
     """A push along the edge of foot_top's last window's cone: measured at the tool's yaw of its own
     poses (the frame it was fitted in, ``frame_s``, no longer matters), inside the cone to within the
@@ -83,21 +103,12 @@ def test_a_push_on_a_window_is_measured_at_its_own_poses(world) -> None:
     from tooltransfer.planner.planning.oe.push_plan import PushPlan
     from tooltransfer.tools.pose import wrap_angle
 
-    task, setting, options = world
-    face = "foot_top"
-    window = contact_windows(setting.tool, face, options)[-1]
-    windowed = options.model_copy(update={"contact_windows": {face: window}})
-    frame, middle = fit_frame(setting, face, windowed), fit_frame(setting, face, options)
-    start = np.array(task.start)
-    t = np.linspace(0.0, 1.0, 41)
+    setting = world[1]
+    t, middle, sides = _edge_pushes(world)
     at_middle = []
-    for side in (-1.0, 1.0):  # the edge where the middle's cone is narrower
-        way = float(frame.push_direction(start[None])[0]) + side * 0.98 * frame.theta_b
-        x = start + np.outer(t * 0.002, [np.cos(way), np.sin(way)])
-        v = np.tile(0.002 * np.array([np.cos(way), np.sin(way)]), (t.size, 1))
-        pushes = realise_span(setting, face, t, x, np.arange(t.size), windowed)
+    for way, x, v, pushes in sides:
         plan = PushPlan("qp", "solved", t, x, v, x, pushes=tuple(pushes))
-        frames = {face: middle}
+        frames = {"foot_top": middle}
         got = plan_metrics(plan, frames, x[-1], setting)["cone_violation_max"]
         plain = plan_metrics(changed(plan, pushes=tuple(changed(p, frame_s=float("nan")) for p in pushes)),
                              frames, x[-1], setting)["cone_violation_max"]
@@ -119,22 +130,13 @@ def test_a_push_without_poses_is_measured_in_the_frame_it_was_fitted_in(world) -
     from tooltransfer.planner.planning.oe.metrics import plan_metrics, window_frame
     from tooltransfer.planner.planning.oe.push_plan import PushPlan
 
-    task, setting, options = world
-    face = "foot_top"
-    window = contact_windows(setting.tool, face, options)[-1]
-    windowed = options.model_copy(update={"contact_windows": {face: window}})
-    frame, middle = fit_frame(setting, face, windowed), fit_frame(setting, face, options)
-    start = np.array(task.start)
-    t = np.linspace(0.0, 1.0, 41)
+    setting = world[1]
+    t, middle, sides = _edge_pushes(world)
     at_middle = []
-    for side in (-1.0, 1.0):
-        way = float(frame.push_direction(start[None])[0]) + side * 0.98 * frame.theta_b
-        x = start + np.outer(t * 0.002, [np.cos(way), np.sin(way)])
-        v = np.tile(0.002 * np.array([np.cos(way), np.sin(way)]), (t.size, 1))
-        pushes = realise_span(setting, face, t, x, np.arange(t.size), windowed)
+    for _, x, v, pushes in sides:
         bare = tuple(changed(p, tool_pose=np.zeros((0, 3))) for p in pushes)
         plan = PushPlan("qp", "solved", t, x, v, x, pushes=bare)
-        got = plan_metrics(plan, {face: middle}, x[-1], setting)["cone_violation_max"]
+        got = plan_metrics(plan, {"foot_top": middle}, x[-1], setting)["cone_violation_max"]
         at = window_frame(middle, setting, pushes[0].frame_s)
         assert got == pytest.approx(HeadingCone(at).angle_violation(x, v, 1e-3), abs=1e-12)
         assert got <= 1e-3

@@ -15,7 +15,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -101,24 +101,29 @@ class HeadingCone(Constraint):
         """Largest angle [rad] by which the velocity leaves the frame's cone at the frame's own heading
         (without the realised ``offsets``), over samples moving faster than ``speed_tol`` [m/s] (x, v of
         shape (K, 2) at the constraint's samples)."""
-        speed = np.linalg.norm(v, axis=1)
-        moving = speed > speed_tol
-        if not np.any(moving):
-            return 0.0
-        ang = np.arctan2(v[moving, 1], v[moving, 0]) - self.frame.push_direction(x[moving])
-        off = np.abs(wrap_angle(ang))
-        return float(max(0.0, (off - self.frame.theta_b).max()))
+        return cone_excess(v, lambda moving: self.frame.push_direction(x[moving]), self.frame.theta_b, speed_tol)
 
 
-def realised_offsets(base: NDArray[np.float64], t: NDArray[np.float64], x: NDArray[np.float64],
+def cone_excess(v: NDArray[np.float64], middle: Callable[[NDArray[np.bool_]], NDArray[np.float64]],
+                theta_b: float, speed_tol: float) -> float:
+    """Largest angle [rad] by which the velocities ``v`` (K, 2) [m/s] faster than ``speed_tol`` [m/s]
+    leave the cone of half-width ``theta_b`` [rad] about the world directions ``middle(moving)`` [rad]
+    (one per moving sample, ``moving`` the (K,) mask of those samples); 0 where none moves."""
+    moving = np.linalg.norm(v, axis=1) > speed_tol
+    if not np.any(moving):
+        return 0.0
+    ang = np.arctan2(v[moving, 1], v[moving, 0]) - middle(moving)
+    return float(max(0.0, (np.abs(wrap_angle(ang)) - theta_b).max()))
+
+
+def realised_offsets(base: NDArray[np.float64], x: NDArray[np.float64],
                      yaw: NDArray[np.float64]) -> NDArray[np.float64]:
     """The object's offsets [m] (K,) from the arm's plane with the object at ``x`` (K, 2) [m] and the
     tool at yaw ``yaw`` (K,) [rad] (a realised push's poses), the joint-1 axis at ``base`` (2,) [m]:
     ``p_o = b + R(a) (u, offset)`` with ``a = yaw + pi/2`` (:mod:`~.face_frame`), so ``offset`` is
-    ``p_o - b`` along ``(-sin a, cos a) = -(cos yaw, sin yaw)``. ``t`` (K,) [s] is only checked
-    against ``x``."""
-    if len(t) != len(x) or len(yaw) != len(x):
-        raise InputError("realised_offsets", "t, x and yaw of one length", f"{len(t)}, {len(x)}, {len(yaw)}")
+    ``p_o - b`` along ``(-sin a, cos a) = -(cos yaw, sin yaw)``."""
+    if len(yaw) != len(x):
+        raise InputError("realised_offsets", "x and yaw of one length", f"{len(x)}, {len(yaw)}")
     d = np.asarray(x, dtype=np.float64) - base
     return -(d[:, 0] * np.cos(yaw) + d[:, 1] * np.sin(yaw))
 

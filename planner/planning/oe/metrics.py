@@ -10,12 +10,11 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.planner.planning.oe.constraints import HeadingCone
+from tooltransfer.planner.planning.oe.constraints import HeadingCone, cone_excess
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.planning.oe.sequence_proxy import reach_distance
 from tooltransfer.tools.objects import Disc
-from tooltransfer.tools.pose import wrap_angle
 
 if TYPE_CHECKING:
     from tooltransfer.planner.planning.setting import Setting
@@ -64,12 +63,7 @@ def heading_cone_violation(frame: FaceFrame, push: Push, x: NDArray[np.float64],
     for its samples is measured at the frame's heading at the object's places ``x`` (K, 2) [m]."""
     if len(push.tool_pose) != len(v):
         return HeadingCone(frame).angle_violation(x, v, speed_tol)
-    speed = np.linalg.norm(v, axis=1)
-    moving = speed > speed_tol
-    if not np.any(moving):
-        return 0.0
-    ang = np.arctan2(v[moving, 1], v[moving, 0]) - push.tool_pose[moving, 2] - frame.push_angle
-    return float(max(0.0, (np.abs(wrap_angle(ang)) - frame.theta_b).max()))
+    return cone_excess(v, lambda moving: push.tool_pose[moving, 2] + frame.push_angle, frame.theta_b, speed_tol)
 
 
 def contact_range_ends(setting: Setting, face: str) -> tuple[FaceFrame, FaceFrame]:

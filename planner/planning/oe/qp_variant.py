@@ -111,18 +111,19 @@ def _pushes(fit: SequenceFit, best: ScoredSequence, t: NDArray[np.float64], x: N
     return pushes
 
 
-def _span_offsets(best: ScoredSequence, pushes: tuple[Push, ...], t: NDArray[np.float64], x: NDArray[np.float64],
-                  base: dict[str, NDArray[np.float64]]) -> dict[int, list[OffsetSeries]]:
+def _span_offsets(fit: SequenceFit, best: ScoredSequence, pushes: tuple[Push, ...]) -> dict[int, list[OffsetSeries]]:
     """For each face span of ``best`` (by index), one series per realised push in it (re-contacts their
-    own): its times [s] and the object's offsets [m] from the arm's plane, its contact where it was, on
-    the path ``x`` (T, 2) [m] at times ``t`` (T,) [s]; ``base``: each face's joint-1 axis [m]."""
-    edges = (t[0], *best.switches, t[-1])
+    own): its times [s] and the object's offsets [m] from the arm's plane, its contact where it was on
+    ``best``'s path."""
+    roll = best.result.rollout
+    assert roll is not None
+    edges = (roll.t[0], *best.switches, roll.t[-1])
     out: dict[int, list[OffsetSeries]] = {}
     for n, (face, lo, hi) in enumerate(zip(best.faces, edges[:-1], edges[1:], strict=True)):
         for p in pushes:
             if p.face == face and p.t_start >= lo - 1e-9 and p.t_end <= hi + 1e-9 and len(p.samples) >= 2:
-                tt = t[p.samples]
-                out.setdefault(n, []).append((tt, realised_offsets(base[face], tt, x[p.samples], p.tool_pose[:, 2])))
+                off = realised_offsets(fit.frames[face].base, roll.x[p.samples], p.tool_pose[:, 2])
+                out.setdefault(n, []).append((roll.t[p.samples], off))
     return out
 
 
@@ -159,12 +160,11 @@ def _realised(fit: SequenceFit, best: ScoredSequence, s_first: float | None = No
     worst = _cone_worst(fit, best, pushes)
     kept, again_fits, why = (worst, best, pushes), [], ""
     seen: dict[int, list[OffsetSeries]] = {}
-    base = {f: fr.base for f, fr in fit.frames.items()}
     for _ in range(HEADING_ROUNDS):
         if kept[0] <= HEADING_TOL:
             break
         roll = best.result.rollout
-        for k, series in _span_offsets(best, pushes, roll.t, roll.x, base).items():
+        for k, series in _span_offsets(fit, best, pushes).items():
             seen.setdefault(k, []).extend(series)
         problem = fit.problem(best.faces, best.switches, seen)
         if any(c.empty(roll.t, roll.x) for c in problem.constraints if isinstance(c, HeadingCone)):
@@ -189,6 +189,11 @@ def _realised(fit: SequenceFit, best: ScoredSequence, s_first: float | None = No
         raise ConeRefused(f"the path leaves its cone by {kept[0]:.3f} rad at the tool's real heading after "
                           f"{len(again_fits)} fit(s) with the cone at the realised contacts{tail}", again_fits)
     return kept[1], kept[2], again_fits
+
+
+def _refits(exc: PushRefused) -> list[ScoredSequence]:
+    """The fits a refused realisation made again at the realised contacts (they count among the fits spent)."""
+    return exc.fits if isinstance(exc, ConeRefused) else []
 
 
 def condense_sequence(
@@ -223,14 +228,14 @@ def condense_sequence(
                         reason=f"the sequence {' -> '.join(faces)} is infeasible from here ({fams or 'unknown'})",
                         metrics={"compute_time": time.perf_counter() - start_time})
     try:
-        first, (s, pushes, again) = s, _realised(fine, s, s_first, 1 if first_face_only else None)
+        kept, pushes, again = _realised(fine, s, s_first, 1 if first_face_only else None)
     except PushRefused as exc:
-        spent = s.result.scp_iterations + sum(a.result.scp_iterations for a in getattr(exc, "fits", []))
+        spent = s.result.scp_iterations + sum(a.result.scp_iterations for a in _refits(exc))
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, ref, reason=str(exc), n_qp=spent,
                         metrics={"compute_time": time.perf_counter() - start_time})
-    roll = s.result.rollout
+    roll = kept.result.rollout
     assert roll is not None
-    n_qp = first.result.scp_iterations + sum(a.result.scp_iterations for a in again)
+    n_qp = s.result.scp_iterations + sum(a.result.scp_iterations for a in again)
     return PushPlan("qp", "solved", roll.t, roll.x, roll.v, ref, pushes=pushes, n_qp=n_qp,
                     metrics={"compute_time": time.perf_counter() - start_time})
 
@@ -311,7 +316,7 @@ class _Finals:
             try:
                 final, pushes, again = _realised(self.fine, final)
             except PushRefused as exc:
-                self.scored += getattr(exc, "fits", [])  # the fits made again at the realised contacts
+                self.scored += _refits(exc)
                 why = f"the push sequence {' -> '.join(final.faces)} cannot be realised: {exc}"
                 continue
             self.scored += again  # fitted again with the cone at the realised contacts
