@@ -24,7 +24,12 @@ are reported per task:
   ``polar_invariant``, how far below the start's value the certificate's quantity is there (a quantity
   no push decreases; flagged beyond :data:`V_TOL` or half the way to the target's goal disc: a straight
   step along a cone's edge lowers it by a little, about the square of the step, as the cone turns with
-  the heading over the step, and many such steps add up to a milliradian or so). For the kinds without a set (the
+  the heading over the step, and many such steps add up to a milliradian or so); for ``switch_separated``
+  (sets of the positions each face could push the puck to from the start, switches only where the tool
+  gets round the puck), the search is ``tests/test_switch_forward.py::switch_lattice_search`` instead (the
+  same steps on states of a cell and a face, the face changed only where a brute-force grid of the tool's
+  placements finds a way round the puck), and how far outside the sets it reaches is flagged beyond
+  :data:`DEPTH_TOL`. For the kinds without a set (the
   start or the target where no face holds the puck) the search is flagged where it comes within
   ``--flag`` of the target;
 * the closest approach to the target [mm], and how many come within ``--flag`` (3 mm, the test suite's
@@ -83,7 +88,32 @@ DEPTH_TOL = 5e-4
 V_TOL = 5e-3
 
 
-def _closest(args: tuple[Any, int, bool, bool, float, float]) -> tuple[str, float, float, dict[str, Any]]:
+def _switches(setting: Any, rules: Any, start: Any, target: Any, budget: int) -> tuple[float, float, dict[str, Any]]:
+    """For a ``switch_separated`` certificate: the test suite's lattice search on states of a cell and a face,
+    changing faces only where a brute-force grid of the tool's placements finds a way round the puck
+    (``tests/test_switch_forward.py::switch_lattice_search``), and how far outside the certificate's sets
+    (made again) any position it reaches lies (``depth``, flagged as a set's depth is)."""
+    import numpy as np
+    import shapely
+    from test_switch_forward import switch_lattice_search
+
+    from tooltransfer.planner.planning.verdicts.certificate import certify_switches
+    from tooltransfer.planner.planning.verdicts.switch_space import placement_space
+
+    cpu = time.process_time()
+    visited: list[Any] = []
+    d, _, _ = switch_lattice_search(setting, start, target, budget=budget, visited=visited)
+    cpu = time.process_time() - cpu
+    cert = certify_switches(rules, placement_space(setting), start, target)[0]
+    test: dict[str, Any] = {"kind": None if cert is None else cert.kind, "depth": None, "v_low": None,
+                            "v_goal": None}
+    if cert is not None and cert.region is not None and visited:
+        test["depth"] = float(shapely.distance(cert.region, shapely.points(np.asarray(visited))).max())
+    return d, cpu, test
+
+
+def _closest(args: tuple[Any, int, bool, bool, float, float, str | None]
+             ) -> tuple[str, float, float, dict[str, Any]]:
     """``(task_id, closest approach [m], CPU [s], the certificate's own test)`` of the lattice search
     (``dense``: :data:`DENSE`; steps whose end the face still holds) on one job's task. The test: the
     task's certificate made again (as the verdict run made it) and every position the search reaches
@@ -98,10 +128,12 @@ def _closest(args: tuple[Any, int, bool, bool, float, float]) -> tuple[str, floa
     from tooltransfer.planner.planning.verdicts.certificate import certify
     from tooltransfer.planner.planning.verdicts.spiral import Spiral, _values
 
-    job, budget, dense, unknowns, share, room = args
+    job, budget, dense, unknowns, share, room, kind = args
     task = _task(job)
     setting, rules = _rules_of(task)
     start, target = np.array(task.start), np.array(task.target)
+    if kind == "switch_separated":
+        return (job.task_id, *_switches(setting, rules, start, target, budget))
     cpu = time.process_time()
     visited: list[Any] = []
     d = lattice_search(setting, start, target, budget=budget, ends_held=True, visited=visited, share=share,
@@ -123,7 +155,7 @@ def _closest(args: tuple[Any, int, bool, bool, float, float]) -> tuple[str, floa
 def _own(test: dict[str, Any]) -> str:
     """The certificate's own test, printed."""
     if test["depth"] is not None:
-        return f"; deepest inside its set {test['depth'] * 1e3:.2f} mm"
+        return f"; deepest inside (or outside: switch_separated) its set {test['depth'] * 1e3:.2f} mm"
     if test["v_low"] is not None:
         return (f"; its quantity at least {test['v_low'] * 1e3:+.2f} mrad from the start's value "
                 f"(the target's at most {test['v_goal'] * 1e3:+.2f})")
@@ -135,7 +167,9 @@ def _verdict_of(test: dict[str, Any], kind: str | None, d: float, flag: float) -
     if test["kind"] != kind:
         return f"the certificate is not made again ({test['kind']} instead of {kind})"
     if test["depth"] is not None and not test["depth"] <= DEPTH_TOL:  # NaN flagged too
-        return f"the search reaches {test['depth'] * 1e3:.2f} mm inside the certificate's set"
+        where = "outside the certificate's sets from the start" if kind == "switch_separated" else \
+            "inside the certificate's set"
+        return f"the search reaches {test['depth'] * 1e3:.2f} mm {where}"
     if test["v_low"] is not None and not test["v_low"] >= -min(V_TOL, -0.5 * test["v_goal"]):
         low = "as low as the target's" if test["v_low"] <= test["v_goal"] else f"more than {V_TOL * 1e3:g} mrad " \
             "or half the way to the target's"
@@ -181,7 +215,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     found: list[tuple[str, float, float]] = []
     wrong: list[str] = []
     with ProcessPoolExecutor(args.workers) as pool:
-        todo = [(jobs[r["task_id"]], args.budget, args.dense, args.unknowns, args.share, args.room) for r in rows]
+        todo = [(jobs[r["task_id"]], args.budget, args.dense, args.unknowns, args.share, args.room, kind[r["task_id"]])
+                for r in rows]
         for tid, d, cpu, test in pool.map(_closest, todo):
             found.append((tid, d, cpu))
             if args.unknowns:

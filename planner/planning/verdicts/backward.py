@@ -34,7 +34,7 @@ import shapely
 import shapely.errors
 
 from tooltransfer.planner.planning.verdicts.bounds import body_zone, face_headings, face_region, obstacle_zone
-from tooltransfer.planner.planning.verdicts.rules import PushRules
+from tooltransfer.planner.planning.verdicts.rules import FaceRule, PushRules
 
 #: Cones wider than this [rad] are taken as the whole plane (the swept triangle would be too long).
 WIDEST_CONE = 0.9 * math.pi
@@ -91,27 +91,31 @@ def grid_over(area: shapely.Geometry, h: float) -> BlockGrid:
 def block_faces(rules: PushRules, box: tuple[float, float, float, float], zone: shapely.Geometry,
                 regions: list[shapely.Geometry]
                 ) -> list[tuple[tuple[float, float] | None, shapely.Geometry, shapely.Geometry]]:
-    """For each face that can push somewhere in the block ``box`` [m]: its directions there (an arc
-    ``(lo, hi)`` [rad], None for every direction), where in the box it can hold the puck (its
-    region less the obstacles' ``zone`` and less where its tool body overlaps an obstacle), and that
-    set grown by :data:`ROUNDING` (prepared: the set's pieces it touches are taken from it)."""
-    out = []
+    """For each face that can push somewhere in the block ``box`` [m], its :func:`block_face`."""
+    out = [block_face(rules, rule, region, box, zone) for rule, region in zip(rules.faces, regions, strict=True)]
+    return [m for m in out if m is not None]
+
+
+def block_face(rules: PushRules, rule: FaceRule, region: shapely.Geometry, box: tuple[float, float, float, float],
+               zone: shapely.Geometry) -> tuple[tuple[float, float] | None, shapely.Geometry, shapely.Geometry] | None:
+    """Face ``rule`` (its ``region``) in the block ``box`` [m]: its directions there (an arc ``(lo, hi)``
+    [rad], None for every direction), where in the box it can hold the puck (its region less the obstacles'
+    ``zone`` and less where its tool body overlaps an obstacle), and that set grown by :data:`ROUNDING`
+    (prepared: the set's pieces it touches are taken from it); None where it cannot push in the box."""
     rect = shapely.box(*box)
-    for rule, region in zip(rules.faces, regions, strict=True):
-        hd = face_headings(rules, rule, box)
-        if hd is False:
-            continue
-        sp = shapely.difference(shapely.intersection(region, rect), zone)
-        if hd is not None:
-            sp = shapely.difference(sp, body_zone(rules, rule, hd))
-        sp = polygonal(sp)
-        if sp.is_empty:
-            continue
-        arc = None if hd is None else (hd[0] + rule.cone[0], hd[1] + rule.cone[1])
-        near = shapely.buffer(sp, ROUNDING)
-        shapely.prepare(near)
-        out.append((None if arc is None or arc[1] - arc[0] > WIDEST_CONE else arc, sp, near))
-    return out
+    hd = face_headings(rules, rule, box)
+    if hd is False:
+        return None
+    sp = shapely.difference(shapely.intersection(region, rect), zone)
+    if hd is not None:
+        sp = shapely.difference(sp, body_zone(rules, rule, hd))
+    sp = polygonal(sp)
+    if sp.is_empty:
+        return None
+    arc = None if hd is None else (hd[0] + rule.cone[0], hd[1] + rule.cone[1])
+    near = shapely.buffer(sp, ROUNDING)
+    shapely.prepare(near)
+    return None if arc is None or arc[1] - arc[0] > WIDEST_CONE else arc, sp, near
 
 
 def face_regions(rules: PushRules) -> list[shapely.Geometry]:

@@ -11,7 +11,11 @@ Kinds, cheapest first:
   Omni's axis less a function of its distance from it, :mod:`.spiral`) is lower everywhere on the
   target's goal disc than at the start;
 - ``backward_reachable``: a closed set holding the target's goal disc (:mod:`.backward`) leaves the
-  start out by at least ``gap``.
+  start out by at least ``gap``;
+- ``switch_separated``: closed sets of the positions each face may push the puck to from the start, a
+  face's set passed to another only where the tool can get from one's contact to the other's round the
+  resting puck (:mod:`.switch_forward`, :mod:`.switch_space`), leave the target out by at least ``gap``
+  (:func:`certify_switches`: tried last, after the search).
 
 A certificate stores its kind, the rules' parameters, the sets as polygons and the grid; anyone can
 replay it with :func:`check_certificate`, which recomputes the cones from the rules and checks the
@@ -27,10 +31,20 @@ from typing import Any
 import numpy as np
 import shapely
 
-from tooltransfer.planner.planning.verdicts.backward import BlockGrid, backward_set, block_faces, face_regions, grow
+from tooltransfer.planner.planning.verdicts.backward import (
+    BlockGrid,
+    backward_set,
+    block_face,
+    block_faces,
+    face_regions,
+    grid_over,
+    grow,
+)
 from tooltransfer.planner.planning.verdicts.bounds import obstacle_zone, push_space
 from tooltransfer.planner.planning.verdicts.rules import PushRules
 from tooltransfer.planner.planning.verdicts.spiral import V_GAP, Spiral, check_spiral, invariant, start_side
+from tooltransfer.planner.planning.verdicts.switch_forward import check_forward, forward_sets
+from tooltransfer.planner.planning.verdicts.switch_space import PlacementSpace
 
 #: The start's least distance [m] from a certificate's set (far above the polygons' rounding).
 START_GAP = 5e-4
@@ -163,10 +177,11 @@ def restricted_zone(rules: PushRules, sp: Spiral, start: np.ndarray, space: shap
     return shapely.union(obstacle_zone(rules), shapely.difference(around, start_side(rules, sp, start)))
 
 
-def check_certificate(cert: Certificate, rules: PushRules) -> list[str]:
+def check_certificate(cert: Certificate, rules: PushRules, placements: PlacementSpace | None = None) -> list[str]:
     """What is wrong with ``cert`` under ``rules`` (empty: it holds): the rules it was made for, the
     start's and the goal's place, and for ``backward_reachable`` the closure of its set on every block,
-    with the cones recomputed from ``rules``."""
+    with the cones recomputed from ``rules``; for ``switch_separated`` the closure of each face's set with
+    the tool's ``placements`` (of the same tool, Omni and obstacles) made anew."""
     problems: list[str] = []
     if cert.rules != rules.to_dict():
         problems.append("the certificate was made for other rules")
@@ -213,6 +228,77 @@ def check_certificate(cert: Certificate, rules: PushRules) -> list[str]:
             if missing.area > 1e-14:
                 problems.append(f"block {(i, j)} is not closed ({missing.area * 1e6:.3g} mm^2 outside the set)")
                 break
+    elif cert.kind == "switch_separated":
+        problems += _check_switches(cert, rules, placements, start, goal)
     else:
         problems.append(f"unknown kind {cert.kind!r}")
     return problems
+
+
+#: Cell side [m] of the ``switch_separated`` sets (a block's puck may be anywhere in it: the finest grid
+#: of :data:`CELL_SIDES`).
+SWITCH_CELL = 0.0025
+#: Block updates the ``switch_separated`` sets may make (benchmarks/README.md: 1357 where they closed on the
+#: verdict benchmark, some 10 s of CPU).
+SWITCH_BLOCKS = 3000
+
+
+def start_faces(rules: PushRules, start: np.ndarray) -> list[str]:
+    """The faces that may hold the puck at ``start`` (2,) [m]: their hold set in a box of 2 um about it
+    (:func:`~.backward.block_face`, an over-approximation) comes within 0.1 um of it."""
+    box = (start[0] - 1e-6, start[1] - 1e-6, start[0] + 1e-6, start[1] + 1e-6)
+    zone, point = obstacle_zone(rules), shapely.Point(start)
+    out = []
+    for rule, region in zip(rules.faces, face_regions(rules), strict=True):
+        m = block_face(rules, rule, region, box, zone)
+        if m is not None and shapely.distance(m[1], point) <= 1e-7:
+            out.append(rule.name)
+    return out
+
+
+def certify_switches(rules: PushRules, space: PlacementSpace, start: np.ndarray, target: np.ndarray, *,
+                     max_blocks: int = SWITCH_BLOCKS) -> tuple[Certificate | None, str]:
+    """A ``switch_separated`` certificate (module docstring) that ``start`` (2,) [m] cannot reach ``target``
+    (2,) [m] under ``rules`` with switches only where the tool's placements ``space`` join the faces'
+    contacts, or None with what was tried; at most ``max_blocks`` block updates."""
+    t0 = time.perf_counter()
+    start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
+    pushes, goal, zone = push_space(rules), _goal(rules, target), obstacle_zone(rules)
+    holders = start_faces(rules, start)
+    grid = grid_over(shapely.union_all([pushes, goal, shapely.Point(start).buffer(START_GAP)]), SWITCH_CELL)
+    res = forward_sets(rules, space, space.tool, grid, start, goal, holders, gap=START_GAP, max_blocks=max_blocks,
+                       zone=zone)
+    tried = (f"the faces' sets from the start with switches only where the tool gets round the puck (cells of "
+             f"{SWITCH_CELL * 1e3:g} mm): {res.stopped} (after {res.blocks_processed} blocks)")
+    if res.regions is None:
+        return None, tried
+    union = shapely.union_all(list(res.regions.values()))
+    cert = Certificate("switch_separated", "the positions each face could push the puck to from the start (over-"
+                       "approximated as for the backward-reachable set), a face's passed to another only where the "
+                       "tool can get from the one's contact to the other's round the resting puck within the Omni's "
+                       f"joints, leave the target out by {shapely.distance(union, goal) * 1e3:.1f} mm",
+                       start=(float(start[0]), float(start[1])), target=(float(target[0]), float(target[1])),
+                       rules=rules.to_dict(), space=pushes, region=union, grid=grid,
+                       extra={"holders": holders, "blocks_processed": res.blocks_processed,
+                              "regions_wkt": {f: shapely.to_wkt(g, rounding_precision=-1)
+                                              for f, g in res.regions.items()}})
+    problems = check_certificate(cert, rules, placements=space)
+    if problems:
+        return None, "switch-separated sets: their check failed: " + "; ".join(problems)
+    cert.time = time.perf_counter() - t0
+    return cert, ""
+
+
+def _check_switches(cert: Certificate, rules: PushRules, space: PlacementSpace | None, start: np.ndarray,
+                    goal: shapely.Geometry) -> list[str]:
+    """The ``switch_separated`` part of :func:`check_certificate`."""
+    if space is None:
+        return ["the tool's placement space is needed to check a switch_separated certificate"]
+    regions, grid = cert.extra.get("regions_wkt"), cert.grid
+    if not isinstance(regions, dict) or grid is None:
+        return ["no sets or grid stored"]
+    holders = start_faces(rules, start)
+    if sorted(holders) != sorted(cert.extra.get("holders", [])):
+        return ["the faces that may hold the puck at the start differ"]
+    return check_forward(rules, space, space.tool, grid, {f: shapely.from_wkt(w) for f, w in regions.items()},
+                         start, goal, holders, START_GAP, obstacle_zone(rules))

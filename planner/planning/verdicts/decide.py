@@ -2,7 +2,8 @@
 
 The planner's search is bounded (a few scored push sequences, at most ``oe.max_pushes`` pushes), so
 its failure says nothing about the task. :func:`attach_verdict` looks for a certificate under the
-rules of :mod:`~tooltransfer.planner.planning.verdicts.rules` (:func:`certify`) and returns the plan
+rules of :mod:`~tooltransfer.planner.planning.verdicts.rules` (:func:`certify`; once the search has failed, also
+:func:`certify_switches`, the switches the tool cannot make) and returns the plan
 with ``status`` ``"infeasible"`` and the certificate as its evidence when one is found, else with
 ``status`` ``"unknown"`` (or ``"violated"`` for a plan that broke its hard checks) and evidence that
 says what was searched and why nothing was proved (and ``budget_limited``: whether a larger ``budget``
@@ -20,8 +21,15 @@ import numpy as np
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.verdicts.backward import BUDGET_SPENT
-from tooltransfer.planner.planning.verdicts.certificate import FINE_BLOCKS, Certificate, certify
+from tooltransfer.planner.planning.verdicts.certificate import (
+    FINE_BLOCKS,
+    SWITCH_BLOCKS,
+    Certificate,
+    certify,
+    certify_switches,
+)
 from tooltransfer.planner.planning.verdicts.rules import setting_rules
+from tooltransfer.planner.planning.verdicts.switch_space import placement_space
 
 #: Block updates the backward-reachable set may make before the verdict is left ``unknown``.
 CERTIFY_BLOCKS = 20000
@@ -70,6 +78,8 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                                        "checks": "every hard check holds (metrics)", "budget": budget})
     if sought is None:
         sought = seek_certificate(setting, start, target, max_blocks=max_blocks, budget=budget)
+    if sought.cert is None and plan.status != "violated":  # last: the switches the tool cannot make
+        sought = _with_switches(sought, setting, start, target, budget)
     cert, why, spent = sought.cert, sought.why, sought.spent
     metrics = {**plan.metrics, "time_certify": spent}
     if "time_total" in metrics:
@@ -87,3 +97,15 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
         evidence["budget_limited"] = budget_limited(plan.metrics, why)
     return replace(plan, status=status, metrics=metrics, evidence=evidence,
                    reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)
+
+
+def _with_switches(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float) -> Sought:
+    """``sought`` (no certificate found), or the ``switch_separated`` certificate where the faces' sets from
+    the start, passed from face to face only where the tool can get round the puck, leave the target out
+    (:func:`certify_switches`, ``budget`` scaling its block updates): tried only once the search has failed,
+    its sets cost some seconds where they close and where they do not."""
+    t0 = time.perf_counter()
+    cert, why = certify_switches(setting_rules(setting), placement_space(setting), np.asarray(start, dtype=np.float64),
+                                 np.asarray(target, dtype=np.float64), max_blocks=round(SWITCH_BLOCKS * budget))
+    spent = sought.spent + time.perf_counter() - t0
+    return Sought(cert, f"{sought.why}; {why}" if cert is None else "", spent)

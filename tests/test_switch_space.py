@@ -1,0 +1,168 @@
+"""The tool's free placements on the Omni (verdicts/switch_space.py) against brute force and solved plans.
+
+The brute force here places the outline with shapely on a grid of waist angles and reaches, with none of
+the module's arithmetic (no rows of blocked intervals, no Minkowski differences): a placement is free
+unless the outline shrunk by the most any tool point moves between neighbouring grid points meets an
+obstacle or the puck. That grid's free points, joined to their eight neighbours, hold every path of the
+true free space, so where it finds two contact poses in different pieces no move of the tool joins them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+import pytest
+import shapely
+from test_verdicts import generated
+
+from tooltransfer.planner.planning.setting import setting_from_task, task_skills
+from tooltransfer.planner.planning.solve import solve
+from tooltransfer.planner.planning.verdicts.switch_space import PlacementSpace, components, placement_space
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.dh import D_TOOL
+
+
+def _world(task_id: str):
+    task = generated("execution_60.yaml", task_id)
+    return task, setting_from_task(task, task_skills(task, need_ss=False))
+
+
+def _outline_at(ps: PlacementSpace, a: float, u: float, ring: np.ndarray) -> shapely.Polygon:
+    """The tool ``ring`` (V, 2) [tool frame] placed with waist angle ``a`` and reach ``u``: origin
+    ``b + R(a) (u, d_t)``, heading ``a - pi/2``."""
+    yaw = a - math.pi / 2
+    rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
+    origin = ps.base + np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]]) @ np.array([u, D_TOOL])
+    return shapely.Polygon(ring @ rot.T + origin)
+
+
+def _shapes(setting, centre: np.ndarray) -> shapely.Geometry:
+    """The obstacles and the puck's open disc (inscribed polygons: a shape met is met by the true one)."""
+    parts = [o.polygon(256) if isinstance(o, Disc) else o for o in setting.obstacles]
+    return shapely.union_all([*parts, shapely.Point(centre).buffer(setting.radius - 1e-7, quad_segs=256)])
+
+
+def test_a_blocked_placement_meets_an_obstacle_or_the_puck_at_every_angle_of_its_row() -> None:
+    task, setting = _world("exec60-00054")
+    ps = placement_space(setting)
+    centre = np.array(task.start)
+    rows = ps.free_rows(centre, setting.radius)
+    shapes = _shapes(setting, centre)
+    ring = np.asarray(setting.tool.outline.exterior.coords)
+    rng = np.random.default_rng(3)
+    checked = free_checked = 0
+    for k in rng.choice(ps.n_rows, 400, replace=False):
+        u = float(rng.uniform(*ps.u_range))
+        free = any(lo <= u <= hi for lo, hi in rows[k])
+        a_mid = ps.row_angle(int(k))
+        if free:  # the over-approximation is not loose: a free placement is free at the row's middle but rarely
+            free_checked += 1
+            continue
+        for a in (a_mid - 0.5 * ps.dq, a_mid, a_mid + 0.5 * ps.dq):
+            assert _outline_at(ps, a, u, ring).intersects(shapes), (k, u, a)
+        checked += 1
+    assert checked > 20 and free_checked > 20
+
+
+def test_the_switch_paths_of_a_solved_plan_lie_in_one_component_with_their_contact_poses() -> None:
+    task, setting = _world("exec60-00001")
+    plan = solve(task)
+    assert plan.status == "solved" and plan.switches
+    ps = placement_space(setting)
+    for sw in plan.switches:
+        i0, i1 = np.searchsorted(plan.t, [sw.t_start, sw.t_end])
+        centre = plan.object_xy[i0]
+        rows = ps.free_rows(centre, setting.radius)
+        labels = components(rows)
+        on_path = set()
+        for x, y, yaw in plan.tool_pose[i0:i1 + 1]:
+            a = yaw + math.pi / 2
+            q1 = math.remainder(a - ps.base_yaw, 2 * math.pi)
+            u = (x - ps.base[0]) * math.cos(a) + (y - ps.base[1]) * math.sin(a)
+            k = min(max(math.floor((q1 - ps.q1_range[0]) / ps.dq), 0), ps.n_rows - 1)
+            hit = {lab for (lo, hi), lab in zip(rows[k], labels[k], strict=True) if lo - 1e-9 <= u <= hi + 1e-9}
+            assert hit, f"a pose of the switch {sw.faces} is in no free interval"
+            on_path |= hit
+        assert len(on_path) == 1
+        for face in sw.faces:
+            assert on_path <= ps.contact_components(setting.tool.face(face), centre, setting.radius, rows, labels)
+        assert not ps.separated(setting.tool.face(sw.faces[0]), setting.tool.face(sw.faces[1]), centre,
+                                setting.radius)
+
+
+def _grid_pieces(ps: PlacementSpace, setting, centre: np.ndarray, move: float):
+    """Brute force (module docstring): labels of the free points of a grid of waist angles and reaches
+    whose neighbours are at most ``move`` [m] apart at any tool point, and the grid's axes."""
+    reach = float(np.hypot(*np.asarray(setting.tool.outline.exterior.coords).T).max())
+    r_max = math.hypot(ps.u_range[1] + reach, D_TOOL + reach)
+    qs = np.arange(ps.q1_range[0], ps.q1_range[1] + 1e-12, move / r_max)
+    us = np.arange(ps.u_range[0], ps.u_range[1] + 1e-12, move)
+    shrunk = setting.tool.outline.buffer(-1.5 * move, join_style="mitre")
+    ring = np.asarray(shrunk.exterior.coords)
+    shapes = _shapes(setting, centre)
+    shapely.prepare(shapes)
+    free = np.zeros((qs.size, us.size), dtype=bool)
+    for i, q in enumerate(qs):
+        polys = [_outline_at(ps, ps.base_yaw + q, u, ring) for u in us]
+        free[i] = ~shapely.intersects(shapes, np.array(polys, dtype=object))
+    label = -np.ones(free.shape, dtype=int)
+    n = 0
+    for start in zip(*np.nonzero(free), strict=True):
+        if label[start] >= 0:
+            continue
+        label[start] = n
+        todo = deque([start])
+        while todo:
+            i, j = todo.popleft()
+            for di in (-1, 0, 1):
+                for dj in (-1, 0, 1):
+                    a, b = i + di, j + dj
+                    if 0 <= a < qs.size and 0 <= b < us.size and free[a, b] and label[a, b] < 0:
+                        label[a, b] = n
+                        todo.append((a, b))
+        n += 1
+    return label, qs, us
+
+
+def _grid_contacts(ps, label, qs, us, face, centre, radius) -> set[int]:
+    """The brute-force grid's labels at the free points next to any contact pose of ``face``."""
+    out = set()
+    for q1, u, _, _ in ps.contact_places(face, centre, radius, n=200):
+        i, j = np.searchsorted(qs, q1), np.searchsorted(us, u)
+        for a in (i - 1, i):
+            for b in (j - 1, j):
+                if 0 <= a < qs.size and 0 <= b < us.size and label[a, b] >= 0:
+                    out.add(int(label[a, b]))
+    return out
+
+
+def grid_separated(setting, face_a, face_b, centre: np.ndarray, move: float = 6e-4) -> bool:
+    """Brute force (module docstring): whether the grid's free points next to the contact poses of
+    ``face_a`` and of ``face_b`` with the puck at ``centre`` lie in different pieces (False where either
+    face has none: nothing to separate)."""
+    ps = placement_space(setting)
+    label, qs, us = _grid_pieces(ps, setting, centre, move)
+    a = _grid_contacts(ps, label, qs, us, face_a, centre, setting.radius)
+    b = _grid_contacts(ps, label, qs, us, face_b, centre, setting.radius)
+    return bool(a) and bool(b) and not (a & b)
+
+
+@pytest.mark.parametrize(("where", "faces", "apart"), [
+    ((-0.016, 0.008), ("foot_top", "left"), True),   # the l_shape's foot cannot get round the puck to its left face
+    ((0.0, 0.0), ("top", "left"), False),
+])
+def test_separated_agrees_with_a_brute_force_grid(where, faces, apart) -> None:
+    task, setting = _world("exec60-00054")
+    ps = placement_space(setting)
+    centre = np.array(task.start) + np.array(where)
+    fa, fb = (setting.tool.face(f) for f in faces)
+    if not apart:  # the puck at the target: both faces reach it
+        centre = np.array(task.target)
+    assert ps.separated(fa, fb, centre, setting.radius) is apart
+    label, qs, us = _grid_pieces(ps, setting, centre, 6e-4)
+    a = _grid_contacts(ps, label, qs, us, fa, centre, setting.radius)
+    b = _grid_contacts(ps, label, qs, us, fb, centre, setting.radius)
+    assert a and b
+    assert (not (a & b)) is apart
