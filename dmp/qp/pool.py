@@ -66,6 +66,8 @@ class RowPool:
 
     constraints: Sequence[Constraint]
     coeffs: list[Coefficients]
+    samples_of: list[NDArray[np.intp]]
+    """each constraint's samples of the dense grid (:meth:`Constraint.samples`)."""
     aff: AffineRollout
     offset: NDArray[np.intp]
     first_series: NDArray[np.intp]
@@ -92,15 +94,24 @@ class RowPool:
         and grid, given up by the caller) its arrays are reused and only linearised constraints
         are refreshed."""
         before: list[Coefficients | None] = list(previous.coeffs) if previous else [None] * len(constraints)
-        coeffs: list[Coefficients] = [c.coefficients(aff.t, x_lin) if (co is None or c.linearised) else co
-                                      for c, co in zip(constraints, before, strict=True)]
+        # each constraint's samples of the grid, found once per pool: ``c.coefficients`` is ``c._coefficients``
+        # at ``c.samples(aff.t)``
+        ks = previous.samples_of if previous else [c.samples(aff.t) for c in constraints]
+        coeffs: list[Coefficients] = [c._coefficients(k, aff.t, x_lin) if (co is None or c.linearised) else co
+                                      for c, k, co in zip(constraints, ks, before, strict=True)]
         if previous is not None:
             pool = previous
             pool.coeffs = coeffs
+            moved = False  # whether a refilled constraint's samples or rows changed (its row tables are rewritten)
             for ci, c in enumerate(constraints):
                 if c.linearised and not c.equality:
-                    pool._fill(ci)
-            if pool._arrays is not None:
+                    old = before[ci]
+                    new = coeffs[ci]
+                    same = old is not None and old.bound.shape == new.bound.shape and (
+                        old.k is new.k or np.array_equal(old.k, new.k))
+                    pool._fill(ci, tables=not same)
+                    moved |= not same
+            if moved and pool._arrays is not None:
                 pool._arrays.check_tables()  # the refill rewrote the row tables the core reads
             return pool
         ineq = [not c.equality for c in constraints]
@@ -119,7 +130,7 @@ class RowPool:
                     n_kind[want] += coeffs[ci].bound.shape[1]
         s = sum(n_kind)
         pool = cls(
-            constraints, coeffs, aff,
+            constraints, coeffs, ks, aff,
             offset=np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp),
             first_series=first,
             k_start=np.concatenate([[0], np.cumsum([co.k.size for co in coeffs])]).astype(np.intp),
@@ -136,7 +147,9 @@ class RowPool:
                 pool._fill(ci)
         return pool
 
-    def _fill(self, ci: int) -> None:
+    def _fill(self, ci: int, tables: bool = True) -> None:
+        """Write constraint ``ci``'s coefficients into the series, and with ``tables`` its row ids'
+        tables (``id_of``, ``series_of``, ``sample_of``: they depend on its samples and row count only)."""
         co, s0 = self.coeffs[ci], int(self.first_series[ci])
         m = co.bound.shape[1]
         kk = co.k.size
@@ -149,6 +162,8 @@ class RowPool:
         if co.a_vel is not None:
             v0 = s0 - self.vel_from
             self.a_vel[v0:v0 + m, :, k] = co.a_vel.transpose(1, 2, 0)
+        if not tables:
+            return
         self.id_of[s0:s0 + m, k] = self.offset[ci] + np.arange(m)[:, None] * kk + np.arange(kk)
         ids = slice(int(self.offset[ci]), int(self.offset[ci + 1]))
         self.series_of[ids] = np.repeat(np.arange(s0, s0 + m), kk)

@@ -258,13 +258,18 @@ def _full(
 
 
 def _settled(problem: FitProblem, aff: AffineRollout, w: NDArray[np.float64], x: NDArray[np.float64],
-             tol: float) -> bool:
-    """Whether every linearised constraint that is not conservative holds within ``tol`` at ``w``."""
-    exact_only_on_path = [c for c in problem.constraints if c.linearised and not c.conservative]
-    if not exact_only_on_path:
-        return True
-    v = aff.velocities(w)
-    return all(c.violation(aff.t, x, v) <= tol for c in exact_only_on_path)
+             tol: float) -> dict[int, float] | None:
+    """The true violations [m or m/s] of the linearised constraints that are not conservative (by their
+    index in ``problem.constraints``) at ``w`` (positions ``x``), when each is within ``tol``; else None."""
+    measured: dict[int, float] = {}
+    v: NDArray[np.float64] | None = None
+    for i, c in enumerate(problem.constraints):
+        if c.linearised and not c.conservative:
+            v = aff.velocities(w) if v is None else v
+            measured[i] = c.violation(aff.t, x, v)
+            if not measured[i] <= tol:  # NaN included
+                return None
+    return measured
 
 
 def _dense_levels(problem: FitProblem, aff_d: AffineRollout, pool: RowPool) -> _Levels:
@@ -313,12 +318,14 @@ def _rollout(problem: FitProblem, aff_d: AffineRollout, w: NDArray[np.float64], 
     return Rollout(aff_d.t, x, v, acc)
 
 
-def _dense_violations(problem: FitProblem, rollout: Rollout) -> dict[str, float]:
+def _dense_violations(problem: FitProblem, rollout: Rollout, measured: dict[int, float]) -> dict[str, float]:
     """The true violation [m or m/s] of every constraint family on the dense grid (the largest
-    over its constraints): what the fit's status is judged by, whatever grid the solver saw."""
+    over its constraints): what the fit's status is judged by, whatever grid the solver saw.
+    ``measured``: the violations of some constraints (by index) on this rollout already (:func:`_settled`)."""
     violations: dict[str, float] = {}
-    for c in problem.constraints:
-        violations[c.family] = max(violations.get(c.family, 0.0), c.violation(rollout.t, rollout.x, rollout.v))
+    for i, c in enumerate(problem.constraints):
+        value = measured[i] if i in measured else c.violation(rollout.t, rollout.x, rollout.v)
+        violations[c.family] = max(violations.get(c.family, 0.0), value)
     return violations
 
 
@@ -388,6 +395,7 @@ def solve_fit(
     run = _ExactRun(solver, options, tol, max(1, round(np.asarray(problem.t).size / n_coarse)), seed_with_backend)
     exact = _Relinearised(problem, aff_d, tw, -tw.T @ q, run, cnt) if tw is not None else None
     scp = 0
+    measured: dict[int, float] | None = None  # the violations the settled test measured at the final w
     try:
         for scp in range(1, max_scp + 1):
             if exact is not None:
@@ -404,10 +412,10 @@ def solve_fit(
             # violation within tol.
             if not nonconvex:
                 break
-            if (moved < scp_tol or abs(obj_prev - obj) <= scp_rtol * abs(obj)) and _settled(
-                problem, aff_d, w, x_new, tol
-            ):
-                break
+            if moved < scp_tol or abs(obj_prev - obj) <= scp_rtol * abs(obj):
+                measured = _settled(problem, aff_d, w, x_new, tol)
+                if measured is not None:
+                    break
             obj_prev = obj
     except _Infeasible as inf:
         return FitResult(
@@ -417,7 +425,7 @@ def solve_fit(
         )
     solve_time = time.perf_counter() - start
     rollout = _rollout(problem, aff_d, w, x_lin)  # x_lin: the positions of the final w
-    violations = _dense_violations(problem, rollout)
+    violations = _dense_violations(problem, rollout, measured or {})
     n_rows = exact.active.size if exact is not None else _n_grid_rows(problem, x_lin)
     status: Literal["solved", "inaccurate"] = "solved" if max(violations.values(), default=0.0) <= tol else "inaccurate"
     return FitResult(

@@ -58,49 +58,65 @@ def centre_path(
     """Inverse of :func:`point_path`: tool centre points (K, 2) [m] whose tool-frame point ``p`` (2,)
     (or one point per sample, (K, 2)) is at ``x`` (K, 2): Newton's method on
     ``c + R(heading(c)) p - x = 0`` per point (the 2 x 2 Jacobian ``I + R'(h) p grad(h)^T`` in closed
-    form), from ``c = x - p``, or from ``guess`` (K, 2) when given. Newton's method rather than the
-    fixed-point iteration on the heading, which contracts only by about ``|p| / |x - b|`` per step."""
+    form), from ``c = x - p``, or from ``guess`` (K, 2) when given (:func:`newton_centres`). Newton's
+    method rather than the fixed-point iteration on the heading, which contracts only by about
+    ``|p| / |x - b|`` per step."""
     x = np.atleast_2d(np.asarray(x, dtype=np.float64))
     pa = np.asarray(p, dtype=np.float64)
     if pa.ndim == 1:
         px, py = (float(v) for v in pa)
     else:
         px, py = pa[:, 0], pa[:, 1]
-    bx, by = (float(v) for v in np.asarray(platform.base_xy, dtype=np.float64))
-    c = x - pa if guess is None else np.array(guess, dtype=np.float64)
+    c = x - pa if guess is None else np.asarray(guess, dtype=np.float64)
+    cx, cy, _ = newton_centres(platform, x[:, 0], x[:, 1], px, py, c[:, 0], c[:, 1], iters, tol)
+    return np.column_stack([cx, cy])
 
-    def residual(c: NDArray[np.float64]) -> tuple:
-        dx, dy = c[:, 0] - bx, c[:, 1] - by
+
+def newton_centres(
+    platform: OmniPlatform, x0: NDArray[np.float64], x1: NDArray[np.float64],
+    px: float | NDArray[np.float64], py: float | NDArray[np.float64],
+    cx: NDArray[np.float64], cy: NDArray[np.float64], iters: int = 30, tol: float = 1e-13,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`centre_path` on coordinates, each (K,): the points ``x0, x1`` [m], the tool-frame point
+    ``px, py`` [m] (or floats, one for all) and the centres ``cx, cy`` [m] Newton starts from; returns
+    the centres' coordinates (K,) [m] and the tool yaw there (K,) [rad] (:func:`heading` of those
+    points, the last residual's). The same arithmetic as on (K, 2) arrays, fewer operations (the
+    inverse push model runs it often)."""
+    bx, by = (float(v) for v in np.asarray(platform.base_xy, dtype=np.float64))
+
+    def residual(cx: NDArray[np.float64], cy: NDArray[np.float64]) -> tuple:
+        dx, dy = cx - bx, cy - by
         r2 = dx * dx + dy * dy
         u = np.sqrt(np.maximum(r2 - D_TOOL**2, 1e-18))
         h = np.arctan2(dy, dx) - np.arctan2(D_TOOL, u) - np.pi / 2
         ch, sh = np.cos(h), np.sin(h)
         qx, qy = ch * px - sh * py, sh * px + ch * py  # R(h) p
-        return c[:, 0] + qx - x[:, 0], c[:, 1] + qy - x[:, 1], dx, dy, r2, u, qx, qy
+        return cx + qx - x0, cy + qy - x1, dx, dy, r2, u, qx, qy, h
 
-    fx, fy, dx, dy, r2, u, qx, qy = residual(c)
+    fx, fy, dx, dy, r2, u, qx, qy, h = residual(cx, cy)
+    size = np.abs(fx) + np.abs(fy)
     for _ in range(iters):
-        size = np.abs(fx) + np.abs(fy)
-        if np.max(size) < tol:
+        if size.max() < tol:
             break
         gx = (-dy + D_TOOL * dx / u) / r2  # grad of the heading
         gy = (dx + D_TOOL * dy / u) / r2
         # J = I + (-qy, qx)^T (gx, gy)
         j11, j12, j21, j22 = 1.0 - qy * gx, -qy * gy, qx * gx, 1.0 + qx * gy
         det = j11 * j22 - j12 * j21
-        step = np.column_stack([(j22 * fx - j12 * fy) / det, (j11 * fy - j21 * fx) / det])
+        sx, sy = (j22 * fx - j12 * fy) / det, (j11 * fy - j21 * fx) / det
         # damped: a point whose full step would not shrink its residual takes half steps (near the
         # base, where the heading turns fast, a full step from c = x - p can jump past the root)
-        alpha = np.ones(len(c))
+        alpha = None  # a full step for every point until one needs less
         for _ in range(30):
-            trial = c - alpha[:, None] * step
-            fx, fy, dx, dy, r2, u, qx, qy = residual(trial)  # the accepted trial's residual is the next one
-            worse = (np.abs(fx) + np.abs(fy) >= size) & (size >= tol)
+            tx, ty = (cx - sx, cy - sy) if alpha is None else (cx - alpha * sx, cy - alpha * sy)
+            fx, fy, dx, dy, r2, u, qx, qy, h = residual(tx, ty)  # the accepted trial's residual is the next one
+            new_size = np.abs(fx) + np.abs(fy)
+            worse = (new_size >= size) & (size >= tol)
             if not worse.any():
                 break
-            alpha = np.where(worse, 0.5 * alpha, alpha)
-        c = trial
-    return c
+            alpha = np.where(worse, 0.5, 1.0) if alpha is None else np.where(worse, 0.5 * alpha, alpha)
+        cx, cy, size = tx, ty, new_size
+    return cx, cy, h
 
 
 def heading_scalar(platform: OmniPlatform, x: float, y: float) -> float:

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from tooltransfer.errors import InputError
 from tooltransfer.tools.model import Tool
-from tooltransfer.tools.omni.heading import centre_path, heading
+from tooltransfer.tools.omni.heading import newton_centres
 from tooltransfer.tools.omni.platform import OmniPlatform
 from tooltransfer.tools.pushing.mechanics import PushMechanics, cone_margin, perp
 from tooltransfer.validation import check_array, check_positive
@@ -38,6 +38,9 @@ from tooltransfer.validation import check_array, check_positive
 #: Steps of the object shorter than this [m] are not judged against the friction cone (a path
 #: standing still at a switch has steps of nanometres in arbitrary directions).
 STILL = 1e-7
+
+Coords = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+"""Tool poses as their coordinates ``x, y`` [m] and ``yaw`` [rad], each (K,)."""
 
 
 @dataclass(frozen=True)
@@ -105,18 +108,61 @@ class FacePush:
 
 
 def _poses(face: FaceGeometry, c: NDArray[np.float64], s: NDArray[np.float64], radius: float,
-           platform: OmniPlatform | None, yaw: NDArray[np.float64] | None,
-           guess: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+           platform: OmniPlatform | None, yaw: NDArray[np.float64] | None, guess: Coords | None = None) -> Coords:
+    """The tool poses with the puck at ``c`` (K, 2) [m] and the contact at ``s`` (K,) [m] along ``face``;
+    ``guess``: poses near them (the tool's centres Newton starts from)."""
     ct = face.centre_in_tool(s, radius)
     if platform is not None:
-        xy = centre_path(platform, c, ct, guess=guess)
-        psi = heading(platform, xy)
-    else:
-        assert yaw is not None
-        psi = yaw
-        co, si = np.cos(psi), np.sin(psi)
-        xy = c - np.column_stack([co * ct[:, 0] - si * ct[:, 1], si * ct[:, 0] + co * ct[:, 1]])
-    return np.column_stack([xy, psi])
+        if guess is None:
+            start = c - ct
+            return newton_centres(platform, c[:, 0], c[:, 1], ct[:, 0], ct[:, 1], start[:, 0], start[:, 1])
+        return newton_centres(platform, c[:, 0], c[:, 1], ct[:, 0], ct[:, 1], guess[0], guess[1])
+    assert yaw is not None
+    co, si = np.cos(yaw), np.sin(yaw)
+    xy = c - np.column_stack([co * ct[:, 0] - si * ct[:, 1], si * ct[:, 0] + co * ct[:, 1]])
+    return xy[:, 0], xy[:, 1], yaw
+
+
+def _inputs(tool: Tool, face: str, object_xy: ArrayLike, radius: float, platform: OmniPlatform | None,
+            yaw: ArrayLike | None) -> tuple[FaceGeometry, NDArray[np.float64], float, NDArray[np.float64] | None]:
+    """The checked arguments of :func:`push_tool_path`: the face, the object's path (K, 2) [m], the
+    radius [m] and the yaws (K,) [rad] or None."""
+    if (platform is None) == (yaw is None):
+        raise InputError("platform", "exactly one of platform and yaw")
+    g = FaceGeometry.of(tool, face)
+    c = check_array(object_xy, "object_xy", shape=(None, 2))
+    if c.shape[0] < 2:
+        raise InputError("object_xy", "at least 2 samples", f"{c.shape[0]}")
+    r = check_positive(radius, "radius")
+    return g, c, r, None if yaw is None else check_array(yaw, "yaw", shape=(c.shape[0],))
+
+
+def _roll(g: FaceGeometry, c: NDArray[np.float64], r: float, mech: PushMechanics, s0: float,
+          platform: OmniPlatform | None, yaw: NDArray[np.float64] | None,
+          iters: int) -> tuple[NDArray[np.float64], Coords | None]:
+    """The contact's arc lengths (K,) [m] along ``g`` as the object follows ``c`` (K, 2) [m] from
+    ``s0`` [m]: the rolling law integrated at the tool's headings with the contact at the previous arc
+    lengths, again until they move less than 1 nm (at most ``iters`` times); and the tool poses the
+    last integration was made at, where Newton starts for the poses at the returned arc lengths (None
+    when ``iters`` is 0)."""
+    dc = np.diff(c, axis=0)
+    s = np.full(c.shape[0], float(s0))
+    pose = None
+    rolled = np.zeros(c.shape[0])  # the contact's travel from s0 [m]
+    for _ in range(iters):
+        pose = _poses(g, c, s, r, platform, yaw, pose)
+        psi = pose[2]
+        mid = 0.5 * (psi[:-1] + psi[1:])
+        cm, sm = np.cos(mid), np.sin(mid)
+        e_w = np.column_stack([cm * g.direction[0] - sm * g.direction[1], sm * g.direction[0] + cm * g.direction[1]])
+        step = -mech.rolling * np.einsum("ij,ij->i", dc, e_w) - g.sigma * r * np.diff(psi)
+        np.cumsum(step, out=rolled[1:])
+        new = float(s0) + rolled
+        done = float(np.abs(new - s).max()) < 1e-9
+        s = new
+        if done:
+            break
+    return s, pose
 
 
 def push_tool_path(
@@ -129,35 +175,25 @@ def push_tool_path(
     The heading comes from ``platform`` (the Omni's, a function of the tool's position) or is given
     as ``yaw`` (K,) [rad]; exactly one of them.
     """
-    if (platform is None) == (yaw is None):
-        raise InputError("platform", "exactly one of platform and yaw")
-    g = FaceGeometry.of(tool, face)
-    c = check_array(object_xy, "object_xy", shape=(None, 2))
-    if c.shape[0] < 2:
-        raise InputError("object_xy", "at least 2 samples", f"{c.shape[0]}")
-    r = check_positive(radius, "radius")
-    yaw_a = None if yaw is None else check_array(yaw, "yaw", shape=(c.shape[0],))
-    dc = np.diff(c, axis=0)
-    s = np.full(c.shape[0], float(s0))
-    pose = None
-    for _ in range(iters):
-        pose = _poses(g, c, s, r, platform, yaw_a, None if pose is None else pose[:, :2])
-        psi = pose[:, 2]
-        mid = 0.5 * (psi[:-1] + psi[1:])
-        e_w = np.column_stack([np.cos(mid) * g.direction[0] - np.sin(mid) * g.direction[1],
-                               np.sin(mid) * g.direction[0] + np.cos(mid) * g.direction[1]])
-        step = -mech.rolling * np.einsum("ij,ij->i", dc, e_w) - g.sigma * r * np.diff(psi)
-        new = float(s0) + np.concatenate([[0.0], np.cumsum(step)])
-        done = float(np.max(np.abs(new - s))) < 1e-9
-        s = new
-        if done:
-            break
-    pose = _poses(g, c, s, r, platform, yaw_a, None if pose is None else pose[:, :2])
+    g, c, r, yaw_a = _inputs(tool, face, object_xy, radius, platform, yaw)
+    s, guess = _roll(g, c, r, mech, s0, platform, yaw_a, iters)
+    pose = np.column_stack(_poses(g, c, s, r, platform, yaw_a, guess))
     psi = pose[:, 2]
-    n_w = np.column_stack([np.cos(psi) * g.normal[0] - np.sin(psi) * g.normal[1],
-                           np.sin(psi) * g.normal[0] + np.cos(psi) * g.normal[1]])
+    cp, sp = np.cos(psi), np.sin(psi)
+    n_w = np.column_stack([cp * g.normal[0] - sp * g.normal[1], sp * g.normal[0] + cp * g.normal[1]])
     n_mid = 0.5 * (n_w[:-1] + n_w[1:])
     n_mid /= np.linalg.norm(n_mid, axis=1)[:, None]
+    dc = np.diff(c, axis=0)
     margin = cone_margin(dc, n_mid, mech)
     still = np.hypot(dc[:, 0], dc[:, 1]) < STILL
     return FacePush(g, pose, s, n_w, np.where(still, mech.friction_angle, margin))
+
+
+def contact_path(
+    tool: Tool, face: str, object_xy: ArrayLike, radius: float, mech: PushMechanics, s0: float, *,
+    platform: OmniPlatform | None = None, yaw: ArrayLike | None = None, iters: int = 6,
+) -> NDArray[np.float64]:
+    """The contact's arc lengths (K,) [m] along ``face`` of :func:`push_tool_path` (same arguments, the
+    same values: its ``s``) without the tool poses and the friction cone's margins there."""
+    g, c, r, yaw_a = _inputs(tool, face, object_xy, radius, platform, yaw)
+    return _roll(g, c, r, mech, s0, platform, yaw_a, iters)[0]

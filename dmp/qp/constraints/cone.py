@@ -17,9 +17,12 @@ def cone_rows(direction: float | NDArray[np.float64], theta_b: float | NDArray[n
     one for all or (K,)).
     """
     hi, lo = direction + theta_b, direction - theta_b
-    n1 = np.stack([np.sin(hi), -np.cos(hi)], axis=-1)  # inward normals of the two edges
-    n2 = np.stack([-np.sin(lo), np.cos(lo)], axis=-1)
-    return -np.stack([n1, n2], axis=-2)  # -n . v <= 0
+    s_hi, c_hi, s_lo, c_lo = np.sin(hi), np.cos(hi), np.sin(lo), np.cos(lo)
+    rows = np.empty((*np.shape(hi), 2, 2), dtype=np.result_type(s_hi, s_lo))
+    # -n . v <= 0 with the inward normals n of the two edges, (sin hi, -cos hi) and (-sin lo, cos lo)
+    rows[..., 0, 0], rows[..., 0, 1] = -s_hi, c_hi
+    rows[..., 1, 0], rows[..., 1, 1] = s_lo, -c_lo
+    return rows
 
 
 class VelocityCone(Constraint):

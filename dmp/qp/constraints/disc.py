@@ -19,6 +19,13 @@ def _norms(d: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.sqrt(np.einsum("ij,ij->i", d, d))
 
 
+def _left_of(travel: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The unit vector a quarter turn counter-clockwise from ``travel`` (2,) (from +x when it is zero)."""
+    norm = np.linalg.norm(travel)
+    u = travel / norm if norm > 0 else np.array([1.0, 0.0])
+    return np.array([-u[1], u[0]])
+
+
 class OutsideDisc(Constraint):
     """Keep the position outside the disc ``|x - c| >= r``, as one tangent half-plane per sample.
 
@@ -58,10 +65,9 @@ class OutsideDisc(Constraint):
     ) -> NDArray[np.float64]:
         """Unit normals (K, 2) from the centre towards the points ``x_lin`` (K, 2)."""
         d = x_lin - self.center
-        norm = np.linalg.norm(travel)
-        u = travel / norm if norm > 0 else np.array([1.0, 0.0])
-        left = np.array([-u[1], u[0]])
+        left = None  # the unit normal to the left of ``travel``: only where a side or a point at the centre needs it
         if side is not None:
+            left = _left_of(travel)
             sgn = 1.0 if side == "left" else -1.0
             off = d @ left
             inside = _norms(d) < self.radius
@@ -69,14 +75,15 @@ class OutsideDisc(Constraint):
             d[wrong] -= 2.0 * off[wrong, None] * left
         r = _norms(d)
         tiny = r < 1e-12 * max(1.0, self.radius)
-        d[tiny] = (-1.0 if side == "right" else 1.0) * left
-        r[tiny] = 1.0
+        if tiny.any():
+            d[tiny] = (-1.0 if side == "right" else 1.0) * (_left_of(travel) if left is None else left)
+            r[tiny] = 1.0
         return d / r[:, None]
 
     def _coefficients(self, k: NDArray[np.intp], t: NDArray[np.float64], x_lin: NDArray[np.float64]) -> Coefficients:
         if x_lin.shape[1] != 2:
             raise InputError("OutsideDisc", "a planar (2-D) motion", f"{x_lin.shape[1]}-D")
-        n = self.normals(x_lin[k].copy(), x_lin[-1] - x_lin[0], self.side)
+        n = self.normals(x_lin[k], x_lin[-1] - x_lin[0], self.side)
         bound = -(n @ self.center + self.radius)
         return Coefficients(k, -n[:, None, :], None, bound[:, None])
 

@@ -28,7 +28,7 @@ from tooltransfer.planner.planning.oe.push_plan import Push
 from tooltransfer.tools.model import Tool
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.pose import placed_outlines
-from tooltransfer.tools.pushing.inverse import FaceGeometry, FacePush, push_tool_path
+from tooltransfer.tools.pushing.inverse import FaceGeometry, FacePush, contact_path, push_tool_path
 
 if TYPE_CHECKING:
     from tooltransfer.planner.planning.setting import Setting
@@ -76,6 +76,11 @@ def usable_range(tool: Tool, face: str, limits: ContactLimits) -> tuple[float, f
 
 def _inverse(setting: Setting, face: str, x: NDArray[np.float64], s0: float) -> FacePush:
     return push_tool_path(setting.tool, face, x, setting.radius, setting.mechanics, s0, platform=setting.platform)
+
+
+def _arc(setting: Setting, face: str, x: NDArray[np.float64], s0: float) -> NDArray[np.float64]:
+    """``_inverse(...).s`` without the tool poses (the contact's arc lengths [m] only)."""
+    return contact_path(setting.tool, face, x, setting.radius, setting.mechanics, s0, platform=setting.platform)
 
 
 def _longest_fit(travel: NDArray[np.float64], width: float) -> int:
@@ -155,8 +160,7 @@ def realise_span(setting: Setting, face: str, t: NDArray[np.float64], x: NDArray
         step = max(1, piece.size // 60)  # the travel profile on every step-th sample (the final inverse is whole)
         coarse = np.unique(np.append(np.arange(0, piece.size, step), piece.size - 1))
         for _ in range(3):  # where the contact starts moves the tool, hence the heading: a fixed point
-            travel = np.interp(np.arange(piece.size), coarse,
-                               _inverse(setting, face, x[piece[coarse]], s0).s - s0)
+            travel = np.interp(np.arange(piece.size), coarse, _arc(setting, face, x[piece[coarse]], s0) - s0)
             j = _longest_fit(travel, width)
             part = piece[: j + 1]
             new = mid - 0.5 * (travel[: j + 1].max() + travel[: j + 1].min())

@@ -170,7 +170,7 @@ def _realised(fit: SequenceFit, best: ScoredSequence, s_first: float | None = No
         if any(c.empty(roll.t, roll.x) for c in problem.constraints if isinstance(c, HeadingCone)):
             why = "the cones at the realised contacts do not overlap"
             break
-        again = fit.score(best.faces, best.switches, offsets=seen, start=(roll.t, roll.x))
+        again = fit.score(best.faces, best.switches, offsets=seen, start=(roll.t, roll.x), problem=problem)
         again_fits.append(again)
         if not again.feasible or again.result.rollout is None:
             why = "its fit with the cone at the realised contacts is infeasible"

@@ -112,6 +112,7 @@ class SequenceFit:
                 ring = np.asarray(o.exterior.coords)[:-1]
                 self.fixed.append(OutsidePolygon(ring, grow, family="obstacle"))
         self._const: float | None = None
+        self._reach: dict[tuple[str, float, float, bool], list[Constraint]] = {}  # :meth:`_reach_rows`
 
     def problem(self, faces: tuple[str, ...], switches: tuple[float, ...],
                 offsets: Mapping[int, Sequence[OffsetSeries]] | None = None) -> FitProblem:
@@ -122,17 +123,9 @@ class SequenceFit:
         cons = list(self.fixed)
         for n, (face, lo, hi) in enumerate(zip(faces, edges[:-1], edges[1:], strict=True)):
             fr = self.frames[face]
-            g, (s_lo, s_hi), ends = self._face_rows[face]
+            g, (s_lo, s_hi), _ = self._face_rows[face]
             cons.append(HeadingCone(fr, window=(lo, hi), offsets=(offsets or {}).get(n, ())))
-            ref = self.universal[(self.t >= lo - 1e-12) & (self.t <= hi + 1e-12)] - fr.base
-            ang = np.arctan2(ref[:, 1], ref[:, 0])
-            near = (float(ang.min()), float(ang.max())) if ang.size else None
-            for end in ends:  # the Omni reaches the tool wherever the contact is on the face
-                rows = reach_constraints(end, window=(lo, hi), near=near)
-                if self.free_start and n == 0:
-                    start = self._entry(rows, lo, hi)
-                    rows = rows if start == lo else reach_constraints(end, window=(start, hi), near=near)
-                cons += rows
+            cons += self._reach_rows(face, lo, hi, first=n == 0)
             if s_hi > s_lo:
                 cons.append(ContactOnFace(fr, g, self.setting.mechanics, self.setting.radius, s_lo, s_hi,
                                           max_contacts=self.opts.max_contacts, window=(lo, hi)))
@@ -146,6 +139,27 @@ class SequenceFit:
                 self.universal, self.setting, self.opts.recontact_price))
         return FitProblem(self.dmp, self.t, x0=self.universal[0], g=self.target, objectives=objectives,
                           constraints=cons)
+
+    def _reach_rows(self, face: str, lo: float, hi: float, first: bool) -> list[Constraint]:
+        """The reach rows of a push of ``face`` over the window ``[lo, hi]`` [s]: at both ends of its usable
+        segment (the Omni reaches the tool wherever the contact is on the face), in a re-plan's first
+        window from where the reference enters them (:meth:`_entry`). Built once per window and shared by
+        the candidates' problems, as the obstacles' rows are (these rows keep no state)."""
+        key = (face, lo, hi, self.free_start and first)
+        if key not in self._reach:
+            fr, ends = self.frames[face], self._face_rows[face][2]
+            ref = self.universal[(self.t >= lo - 1e-12) & (self.t <= hi + 1e-12)] - fr.base
+            ang = np.arctan2(ref[:, 1], ref[:, 0])
+            near = (float(ang.min()), float(ang.max())) if ang.size else None
+            out: list[Constraint] = []
+            for end in ends:
+                rows = reach_constraints(end, window=(lo, hi), near=near)
+                if key[3]:
+                    start = self._entry(rows, lo, hi)
+                    rows = rows if start == lo else reach_constraints(end, window=(start, hi), near=near)
+                out += rows
+            self._reach[key] = out
+        return self._reach[key]
 
     def _entry(self, rows: list[Constraint], lo: float, hi: float) -> float:
         """When one contact end's reach ``rows`` start to apply in a re-plan's first window
@@ -161,12 +175,15 @@ class SequenceFit:
     def score(self, faces: tuple[str, ...], switches: tuple[float, ...], *, contact_rows: bool = True,
               warm: bool = False,
               offsets: Mapping[int, Sequence[OffsetSeries]] | None = None,
-              start: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None) -> ScoredSequence:
+              start: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+              problem: FitProblem | None = None) -> ScoredSequence:
         """The candidate's fit: first without the contact rows (cone, reach, obstacles and the ends).
 
         ``warm``: the first linearisation at the universal path instead of the free DMP's; ``start``:
         at this path instead (its times [s] (T,) and positions (T, 2) [m]); ``offsets``: see
-        :meth:`problem`.
+        :meth:`problem`; ``problem``: that :meth:`problem` of ``faces``, ``switches`` and ``offsets``
+        when the caller has it already (not yet solved: its contact rows share out their budget at
+        their first linearisation), else it is built here.
 
         Without ``contact_rows`` (screening) the contacts that path needs and the excess contact
         travel beyond ``max_contacts`` contacts per push are only measured, for the cost. With them
@@ -176,7 +193,7 @@ class SequenceFit:
         of contacts is priced, not only bounded. A candidate the first stage finds infeasible is so for
         the second.
         """
-        problem = self.problem(faces, switches, offsets)
+        problem = self.problem(faces, switches, offsets) if problem is None else problem
         kw = {"tol": self.opts.tol, "max_scp": self.opts.max_scp, "scp_rtol": self.opts.scp_rtol}
         contact = [c for c in problem.constraints if isinstance(c, ContactOnFace)]
         first = replace(problem, constraints=[c for c in problem.constraints if not isinstance(c, ContactOnFace)])
