@@ -117,9 +117,10 @@ def test_a_task_only_the_field_s_order_solves_gets_a_plan_that_executes() -> Non
 
 def test_the_field_s_attempts_come_last_and_not_after_a_plan_is_kept() -> None:
     """exec60-00054 (l_shape, one obstacle; the push plans of its attempts on windows fit, the switches
-    between their faces do not, and after the search it is certified ``switch_separated``): the ladder ends with the attempt in the field's order, on
-    every face's windows; where the caller keeps a plan of an attempt before (one with little
-    room), it does not make it: it is there for tasks with no plan at all."""
+    between their faces do not, and after the search it is certified ``switch_separated``): the ladder
+    ends with the attempt in the field's order, on every face's windows; where the caller keeps a plan
+    of an attempt before (one with little room), it does not make it: it is there for tasks with no
+    plan at all."""
     task = generated("execution_60.yaml", "exec60-00054")
     every = ladder_plans(task, keep_after_first=False)
     field = [k for k, p in enumerate(every) if p.metrics.get("guided_field")

@@ -456,8 +456,8 @@ def test_a_task_only_the_widest_share_of_the_cone_solves_gets_a_plan_at_that_sha
 def test_the_widest_share_is_tried_only_where_it_widens_some_face_s_cone() -> None:
     """On l_shape every face's push cone of the tool file (``push_angle +- theta_b``) lies inside 0.8 of the
     friction cone, so an attempt at 0.95 would search and fit the same cones again: exec60-00054 (l_shape;
-    certified infeasible after the search, by the switches its tool cannot make) makes none; the slope's ``inclined`` face's cone does widen (verd200-00011 is solved at 0.95,
-    the test above)."""
+    certified infeasible after the search, by the switches its tool cannot make) makes none; the slope's
+    ``inclined`` face's cone does widen (verd200-00011 is solved at 0.95, the test above)."""
     from tooltransfer.planner.planning.oe.guided import _widens
 
     task = _task("exec60-00054")
