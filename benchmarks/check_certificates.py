@@ -155,7 +155,8 @@ def _closest(args: tuple[Any, int, bool, bool, float, float, str | None]
 def _own(test: dict[str, Any]) -> str:
     """The certificate's own test, printed."""
     if test["depth"] is not None:
-        return f"; deepest inside (or outside: switch_separated) its set {test['depth'] * 1e3:.2f} mm"
+        where = "farthest outside its sets" if test["kind"] == "switch_separated" else "deepest inside its set"
+        return f"; {where} {test['depth'] * 1e3:.2f} mm"
     if test["v_low"] is not None:
         return (f"; its quantity at least {test['v_low'] * 1e3:+.2f} mrad from the start's value "
                 f"(the target's at most {test['v_goal'] * 1e3:+.2f})")
