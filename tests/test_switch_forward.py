@@ -12,7 +12,13 @@ from test_switch_space import grid_separated
 from test_verdicts import _cone, _edges_first, _holds, generated
 
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
-from tooltransfer.planner.planning.verdicts.certificate import certify, certify_switches, check_certificate
+from tooltransfer.planner.planning.verdicts.backward import BlockGrid
+from tooltransfer.planner.planning.verdicts.certificate import (
+    Certificate,
+    certify,
+    certify_switches,
+    check_certificate,
+)
 from tooltransfer.planner.planning.verdicts.rules import setting_rules
 from tooltransfer.planner.planning.verdicts.switch_space import placement_space
 from tooltransfer.tools.objects import Disc
@@ -90,6 +96,12 @@ def test_a_task_whose_only_way_needs_a_switch_the_tool_cannot_make_is_certified_
     assert cert.extra["holders"] == ["left"]
     assert check_certificate(cert, rules, space) == []
     assert "placement space is needed" in check_certificate(cert, rules)[0]
+    # a grid that does not cover the push space (blocks outside it would go unchecked): refused
+    h = cert.grid.h
+    small = BlockGrid((cert.grid.origin[0] + 3 * h, cert.grid.origin[1] + 3 * h), h,
+                      (cert.grid.shape[0] - 6, cert.grid.shape[1] - 6))
+    forged = Certificate(**{**cert.__dict__, "grid": small})
+    assert "does not cover" in check_certificate(forged, rules, space)[0]
     # the stored sets, with the target added to one: refused
     data = cert.to_dict()
     assert data["kind"] == "switch_separated" and set(data["regions_wkt"]) == {f.name for f in setting.tool.faces}

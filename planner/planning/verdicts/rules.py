@@ -19,7 +19,9 @@ contact at fraction ``s`` of the face's contact range:
 Everything else the planner demands (the contact staying on the face as it rolls, the tool body
 clear of obstacles, switches and re-contacts that do not penetrate, the joints along the tool
 path) is NOT assumed: leaving rules out only lets more plans through, so a certificate relative to
-these rules holds for the planner's stricter ones.
+these rules holds for the planner's stricter ones. (The ``switch_separated`` certificate adds one of
+them, with the tool's placements: a switch is a planar tool path within the joints that does not
+penetrate an obstacle or the puck, :mod:`.switch_space`.)
 """
 
 from __future__ import annotations

@@ -44,6 +44,7 @@ from tooltransfer.planner.planning.verdicts.backward import (
     safe_union,
     shadow,
 )
+from tooltransfer.planner.planning.verdicts.bounds import push_space
 from tooltransfer.planner.planning.verdicts.rules import PushRules
 from tooltransfer.planner.planning.verdicts.switch_space import PlacementSpace, components
 from tooltransfer.tools.model import Tool
@@ -132,7 +133,9 @@ class _Blocks:
             others = [g for g in own if g != f and not own[g].is_empty]
             if others:
                 cut = self.separated(box)
-                parts += [shapely.intersection(own[g], sp) for g in others if (g, f) not in cut]
+                # grown by the rounding, as the pushes' sources are: a set that only touches S_fW still passes
+                parts += [shapely.intersection(shapely.buffer(own[g], ROUNDING), sp) for g in others
+                          if (g, f) not in cut]
             grown = polygonal(safe_union(parts)) if parts else shapely.Polygon()
             if not grown.is_empty:
                 out[f] = grown
@@ -228,12 +231,17 @@ def check_forward(rules: PushRules, space: PlacementSpace, tool: Tool, grid: Blo
                   regions: dict[str, shapely.Geometry], start: np.ndarray, goal: shapely.Geometry,
                   holders: list[str], gap: float, zone: shapely.Geometry) -> list[str]:
     """What is wrong with the closed sets ``regions`` (module docstring; empty: nothing), checked again
-    block by block with the faces' models and the separated pairs made anew: each holder's set holds the
-    start's disc, none comes within ``gap`` of the ``goal``, no block adds area to any set."""
+    block by block with the faces' models and the separated pairs made anew: the grid covers the push
+    space, the goal and the start, each holder's set holds the start's disc, none comes within ``gap`` of the
+    ``goal``, no block adds area to any set."""
     problems = []
     disc = shapely.Point(start).buffer(0.5 * gap, quad_segs=16)
     if set(regions) != {f.name for f in rules.faces}:
         return ["the sets are not the faces'"]
+    x0, y0 = grid.block_box(0, 0)[:2]
+    x1, y1 = grid.block_box(*grid.shape)[2:]
+    if not shapely.covers(shapely.box(x0, y0, x1, y1), shapely.union_all([push_space(rules), goal, disc])):
+        return ["the grid does not cover the push space, the goal and the start"]
     for f in holders:
         if not shapely.covers(shapely.buffer(regions[f], 1e-9), disc):
             problems.append(f"the set of {f!r} does not hold the start")

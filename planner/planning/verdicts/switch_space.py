@@ -213,8 +213,8 @@ class PlacementSpace:
         (``|da/do| = 1/v``, ``|du/do| = |o|/v``, ``|du/dc_y| = 1``; ``o``, ``c_y`` move at most the face's
         length per unit of its fraction), and for a puck anywhere within ``spread`` [m] of ``centre``
         (``|da/dp| <= 1/|d| + |o| / (|d| v)``, ``|du/dp| = |d|/v``, ``d = p - b``), each bound taken at the
-        smallest ``|d|`` and ``v`` and the largest ``|o|`` there. Poses outside the joints by more than that
-        are left out."""
+        smallest ``|d|`` and ``v`` and the largest ``|o|`` there (infinite pads where those bounds fail: the
+        pose may then be anywhere). Poses outside the joints by more than that are left out."""
         d = np.asarray(centre, dtype=np.float64) - self.base
         r2 = float(d @ d)
         near = math.sqrt(r2) - spread  # the least |d| within the spread
@@ -225,11 +225,15 @@ class PlacementSpace:
             c = face.point(float(si)) + radius * face.normal
             o = D_TOOL - float(c[0])
             v2_lo = near * abs(near) - (abs(o) + step) ** 2
-            if near <= 0.0 or v2_lo <= 0.0:
-                continue
-            v, v_lo = math.sqrt(r2 - o * o), math.sqrt(v2_lo)
+            if r2 <= o * o:
+                continue  # the puck too near the Omni's axis for this contact: no pose at all
+            v = math.sqrt(r2 - o * o)
             u = v - float(c[1])
             q1 = math.remainder(math.atan2(d[1], d[0]) - math.atan2(o, v) - self.base_yaw, 2 * math.pi)
+            if near <= 0.0 or v2_lo <= 0.0:  # no bound on how far the pose moves: it may be anywhere
+                out.append((q1, u, math.inf, math.inf))
+                continue
+            v_lo = math.sqrt(v2_lo)
             pad_q = step / v_lo + spread * (1.0 + (abs(o) + step) / v_lo) / near
             pad_u = step * (1.0 + (abs(o) + step) / v_lo) + spread * (near + 2.0 * spread) / v_lo
             if (self.q1_range[0] - pad_q <= q1 <= self.q1_range[1] + pad_q
@@ -249,6 +253,9 @@ class PlacementSpace:
         place's pads of it, in every row its waist may fall in."""
         out: set[int] = set()
         for q1, u, pad_q, pad_u in places:
+            if math.isinf(pad_q) or math.isinf(pad_u):
+                out.update(lab for row in labels for lab in row)
+                continue
             k0 = max(0, math.floor((q1 - pad_q - self.q1_range[0]) / self.dq))
             k1 = min(self.n_rows - 1, math.floor((q1 + pad_q - self.q1_range[0]) / self.dq))
             for k in range(k0, k1 + 1):
