@@ -96,6 +96,9 @@ def test_a_task_whose_only_way_needs_a_switch_the_tool_cannot_make_is_certified_
     assert cert.extra["holders"] == ["left"]
     assert check_certificate(cert, rules, space) == []
     assert "placement space is needed" in check_certificate(cert, rules)[0]
+    other = generated("execution_60.yaml", "exec60-00020")  # the finger: another tool's placements
+    finger = placement_space(setting_from_task(other, task_skills(other, need_ss=False)))
+    assert "another tool or Omni" in check_certificate(cert, rules, finger)[0]
     # a grid that does not cover the push space (blocks outside it would go unchecked): refused
     h = cert.grid.h
     small = BlockGrid((cert.grid.origin[0] + 3 * h, cert.grid.origin[1] + 3 * h), h,

@@ -280,6 +280,7 @@ def certify_switches(rules: PushRules, space: PlacementSpace, start: np.ndarray,
                        start=(float(start[0]), float(start[1])), target=(float(target[0]), float(target[1])),
                        rules=rules.to_dict(), space=pushes, region=union, grid=grid,
                        extra={"holders": holders, "blocks_processed": res.blocks_processed,
+                              "placements": _placements_of(space),
                               "regions_wkt": {f: shapely.to_wkt(g, rounding_precision=-1)
                                               for f, g in res.regions.items()}})
     problems = check_certificate(cert, rules, placements=space)
@@ -297,8 +298,17 @@ def _check_switches(cert: Certificate, rules: PushRules, space: PlacementSpace |
     regions, grid = cert.extra.get("regions_wkt"), cert.grid
     if not isinstance(regions, dict) or grid is None:
         return ["no sets or grid stored"]
+    if cert.extra.get("placements") != _placements_of(space):
+        return ["the certificate was made for another tool or Omni (its placements differ)"]
     holders = start_faces(rules, start)
     if sorted(holders) != sorted(cert.extra.get("holders", [])):
         return ["the faces that may hold the puck at the start differ"]
     return check_forward(rules, space, space.tool, grid, {f: shapely.from_wkt(w) for f, w in regions.items()},
                          start, goal, holders, START_GAP, obstacle_zone(rules))
+
+
+def _placements_of(space: PlacementSpace) -> dict[str, Any]:
+    """What a ``switch_separated`` certificate's placements are made of, beyond its rules: the tool's
+    outline [m, tool frame], the Omni's axis [m], waist [rad] and reach [m] ranges (JSON data)."""
+    return {"outline": np.asarray(space.tool.outline.exterior.coords).tolist(), "base": space.base.tolist(),
+            "base_yaw": space.base_yaw, "q1_range": list(space.q1_range), "u_range": list(space.u_range)}
