@@ -260,10 +260,12 @@ def _clipped(grid: BlockGrid, cells: Cells) -> Cells:
 
 
 def _split(grid: BlockGrid, g: shapely.Geometry) -> dict[tuple[int, int], shapely.Geometry]:
-    """``g`` cut into the grid's cells."""
+    """``g`` cut into the grid's cells (only the cells its bounds meet: the others hold none of it)."""
+    x0, y0, x1, y1 = g.bounds
+    ox, oy, h = grid.origin[0], grid.origin[1], grid.h
     out = {}
-    for i in range(grid.shape[0]):
-        for j in range(grid.shape[1]):
+    for i in range(max(0, math.floor((x0 - ox) / h)), min(grid.shape[0], math.floor((x1 - ox) / h) + 1)):
+        for j in range(max(0, math.floor((y0 - oy) / h)), min(grid.shape[1], math.floor((y1 - oy) / h) + 1)):
             piece = polygonal(shapely.intersection(g, shapely.box(*grid.cell_box(i, j))))
             if not piece.is_empty:
                 out[(i, j)] = piece

@@ -266,8 +266,7 @@ def certify_switches(rules: PushRules, space: PlacementSpace, start: np.ndarray,
     pushes, goal, zone = push_space(rules), _goal(rules, target), obstacle_zone(rules)
     holders = start_faces(rules, start)
     grid = grid_over(shapely.union_all([pushes, goal, shapely.Point(start).buffer(START_GAP)]), SWITCH_CELL)
-    res = forward_sets(rules, space, space.tool, grid, start, goal, holders, gap=START_GAP, max_blocks=max_blocks,
-                       zone=zone)
+    res = forward_sets(rules, space, grid, start, goal, holders, gap=START_GAP, max_blocks=max_blocks, zone=zone)
     tried = (f"the faces' sets from the start with switches only where the tool gets round the puck (cells of "
              f"{SWITCH_CELL * 1e3:g} mm): {res.stopped} (after {res.blocks_processed} blocks)")
     if res.regions is None:
@@ -303,7 +302,7 @@ def _check_switches(cert: Certificate, rules: PushRules, space: PlacementSpace |
     holders = start_faces(rules, start)
     if sorted(holders) != sorted(cert.extra.get("holders", [])):
         return ["the faces that may hold the puck at the start differ"]
-    return check_forward(rules, space, space.tool, grid, {f: shapely.from_wkt(w) for f, w in regions.items()},
+    return check_forward(rules, space, grid, {f: shapely.from_wkt(w) for f, w in regions.items()},
                          start, goal, holders, START_GAP, obstacle_zone(rules))
 
 

@@ -37,6 +37,8 @@ from tooltransfer.planner.planning.verdicts.backward import (
     COARSEN,
     ROUNDING,
     BlockGrid,
+    _clipped,
+    _split,
     block_face,
     coarsen,
     face_regions,
@@ -47,7 +49,6 @@ from tooltransfer.planner.planning.verdicts.backward import (
 from tooltransfer.planner.planning.verdicts.bounds import push_space
 from tooltransfer.planner.planning.verdicts.rules import PushRules
 from tooltransfer.planner.planning.verdicts.switch_space import PlacementSpace, components
-from tooltransfer.tools.model import Tool
 
 #: Puck centres per side of a block at which the faces' contact poses are placed (each padded to the
 #: rest of its share of the block: :meth:`~.switch_space.PlacementSpace.contact_places`).
@@ -58,7 +59,7 @@ BLOCK_CONTACTS = 24
 Model = dict[str, tuple[tuple[float, float] | None, shapely.Geometry, shapely.Geometry]]
 
 
-def block_separated(space: PlacementSpace, tool: Tool, faces: list[str], box: tuple[float, float, float, float],
+def block_separated(space: PlacementSpace, faces: list[str], box: tuple[float, float, float, float],
                     radius: float) -> frozenset[tuple[str, str]]:
     """The pairs ``(g, f)`` of ``faces`` between which no switch exists with the puck (``radius`` [m]) at
     rest anywhere in ``box`` [m]: the free placements with the puck shrunk by the box's half-diagonal about
@@ -75,7 +76,7 @@ def block_separated(space: PlacementSpace, tool: Tool, faces: list[str], box: tu
                for i in range(BLOCK_SAMPLES) for j in range(BLOCK_SAMPLES)]
     held: dict[str, set[int]] = {}
     for name in faces:
-        face, got = tool.face(name), set()
+        face, got = space.tool.face(name), set()
         for c in centres:
             places = space.contact_places(face, c, radius, BLOCK_CONTACTS, spread=share)
             got |= space.place_components(places, rows, labels)
@@ -97,8 +98,8 @@ class ForwardResult:
 class _Blocks:
     """The faces' models and separated pairs per block, made once each."""
 
-    def __init__(self, rules: PushRules, space: PlacementSpace, tool: Tool, zone: shapely.Geometry) -> None:
-        self.rules, self.space, self.tool, self.zone = rules, space, tool, zone
+    def __init__(self, rules: PushRules, space: PlacementSpace, zone: shapely.Geometry) -> None:
+        self.rules, self.space, self.zone = rules, space, zone
         self.regions = face_regions(rules)
         self.models: dict[tuple[float, ...], Model] = {}
         self.seps: dict[tuple[float, ...], frozenset[tuple[str, str]]] = {}
@@ -115,8 +116,7 @@ class _Blocks:
 
     def separated(self, box: tuple[float, float, float, float]) -> frozenset[tuple[str, str]]:
         if box not in self.seps:
-            self.seps[box] = block_separated(self.space, self.tool, [r.name for r in self.rules.faces], box,
-                                             self.rules.radius)
+            self.seps[box] = block_separated(self.space, [r.name for r in self.rules.faces], box, self.rules.radius)
         return self.seps[box]
 
     def grown(self, box: tuple[float, float, float, float], own: dict[str, shapely.Geometry]
@@ -142,42 +142,27 @@ class _Blocks:
         return out
 
 
-def forward_sets(rules: PushRules, space: PlacementSpace, tool: Tool, grid: BlockGrid, start: np.ndarray,
+def forward_sets(rules: PushRules, space: PlacementSpace, grid: BlockGrid, start: np.ndarray,
                  goal: shapely.Geometry, holders: list[str], *, gap: float, max_blocks: int,
                  zone: shapely.Geometry) -> ForwardResult:
     """The smallest closed sets (module docstring) on ``grid``, grown from a disc of radius ``gap`` [m] about
     ``start`` (2,) in the sets of the faces ``holders`` that may hold the puck there; stops early once a set
     comes within ``gap`` of the ``goal`` disc, or after ``max_blocks`` block updates. ``zone``: where the
     puck's centre may not be. Two passes, as :func:`~.backward.backward_set`: coarse pieces, then exact."""
-    blocks = _Blocks(rules, space, tool, zone)
+    blocks = _Blocks(rules, space, zone)
     disc = shapely.Point(start).buffer(gap, quad_segs=16)
     cells: dict[str, dict[tuple[int, int], shapely.Geometry]] = {f.name: {} for f in rules.faces}
     for f in holders:
-        cells[f] = {c: g for c, g in _cut(grid, disc).items()}
+        cells[f] = _split(grid, disc)
     done = 0
     for tol, simplify in ((2 * COARSEN, True), (ROUNDING, False)):
         stopped, done = _close(blocks, grid, cells, goal, gap, max_blocks, done, tol, simplify)
         if stopped:
             return ForwardResult(None, stopped, done, grid)
         if simplify:  # back inside their cells, so that a block grows from all of a set in it
-            for f in cells:
-                cells[f] = {c: p for c, g in cells[f].items()
-                            if not (p := polygonal(shapely.intersection(g, shapely.box(*grid.cell_box(*c))))).is_empty}
+            cells = {f: _clipped(grid, per) for f, per in cells.items()}
     return ForwardResult({f: safe_union(list(c.values())) if c else shapely.Polygon() for f, c in cells.items()},
                          "", done, grid)
-
-
-def _cut(grid: BlockGrid, g: shapely.Geometry) -> dict[tuple[int, int], shapely.Geometry]:
-    """``g`` cut into the grid's cells (only the cells its bounds meet)."""
-    x0, y0, x1, y1 = g.bounds
-    ox, oy, h = grid.origin[0], grid.origin[1], grid.h
-    out = {}
-    for i in range(max(0, math.floor((x0 - ox) / h)), min(grid.shape[0], math.floor((x1 - ox) / h) + 1)):
-        for j in range(max(0, math.floor((y0 - oy) / h)), min(grid.shape[1], math.floor((y1 - oy) / h) + 1)):
-            piece = polygonal(shapely.intersection(g, shapely.box(*grid.cell_box(i, j))))
-            if not piece.is_empty:
-                out[(i, j)] = piece
-    return out
 
 
 def _close(blocks: _Blocks, grid: BlockGrid, cells: dict[str, dict[tuple[int, int], shapely.Geometry]],
@@ -227,7 +212,7 @@ def _close(blocks: _Blocks, grid: BlockGrid, cells: dict[str, dict[tuple[int, in
     return "", done
 
 
-def check_forward(rules: PushRules, space: PlacementSpace, tool: Tool, grid: BlockGrid,
+def check_forward(rules: PushRules, space: PlacementSpace, grid: BlockGrid,
                   regions: dict[str, shapely.Geometry], start: np.ndarray, goal: shapely.Geometry,
                   holders: list[str], gap: float, zone: shapely.Geometry) -> list[str]:
     """What is wrong with the closed sets ``regions`` (module docstring; empty: nothing), checked again
@@ -247,7 +232,7 @@ def check_forward(rules: PushRules, space: PlacementSpace, tool: Tool, grid: Blo
             problems.append(f"the set of {f!r} does not hold the start")
     if any(shapely.distance(g, goal) <= gap for g in regions.values() if not g.is_empty):
         problems.append("a set comes within the gap of the target")
-    blocks = _Blocks(rules, space, tool, zone)
+    blocks = _Blocks(rules, space, zone)
     for i, j in grid.blocks():
         box = grid.block_box(i, j)
         own = {f: shapely.intersection(g, shapely.box(*box)) for f, g in regions.items()}
