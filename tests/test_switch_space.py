@@ -19,9 +19,11 @@ from test_verdicts import generated
 
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import solve
-from tooltransfer.planner.planning.verdicts.switch_space import PlacementSpace, components, placement_space
+from tooltransfer.planner.planning.verdicts.switch_forward import block_separated
+from tooltransfer.planner.planning.verdicts.switch_space import components, placement_space
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.dh import D_TOOL
+from tooltransfer.tools.omni.reach import reach_sector
 
 
 def _world(task_id: str):
@@ -29,12 +31,12 @@ def _world(task_id: str):
     return task, setting_from_task(task, task_skills(task, need_ss=False))
 
 
-def _outline_at(ps: PlacementSpace, a: float, u: float, ring: np.ndarray) -> shapely.Polygon:
-    """The tool ``ring`` (V, 2) [tool frame] placed with waist angle ``a`` and reach ``u``: origin
-    ``b + R(a) (u, d_t)``, heading ``a - pi/2``."""
+def _outline_at(base: np.ndarray, a: float, u: float, ring: np.ndarray) -> shapely.Polygon:
+    """The tool ``ring`` (V, 2) [tool frame] placed with waist angle ``a`` and reach ``u`` on the Omni at
+    ``base`` (2,) [m]: origin ``base + R(a) (u, d_t)``, heading ``a - pi/2``."""
     yaw = a - math.pi / 2
     rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
-    origin = ps.base + np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]]) @ np.array([u, D_TOOL])
+    origin = base + np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]]) @ np.array([u, D_TOOL])
     return shapely.Polygon(ring @ rot.T + origin)
 
 
@@ -61,7 +63,7 @@ def test_a_blocked_placement_meets_an_obstacle_or_the_puck_at_every_angle_of_its
             free_checked += 1
             continue
         for a in (a_mid - 0.5 * ps.dq, a_mid, a_mid + 0.5 * ps.dq):
-            assert _outline_at(ps, a, u, ring).intersects(shapes), (k, u, a)
+            assert _outline_at(ps.base, a, u, ring).intersects(shapes), (k, u, a)
         checked += 1
     assert checked > 20 and free_checked > 20
 
@@ -92,20 +94,22 @@ def test_the_switch_paths_of_a_solved_plan_lie_in_one_component_with_their_conta
                                 setting.radius)
 
 
-def _grid_pieces(ps: PlacementSpace, setting, centre: np.ndarray, move: float):
+def _grid_pieces(setting, centre: np.ndarray, move: float):
     """Brute force (module docstring): labels of the free points of a grid of waist angles and reaches
-    whose neighbours are at most ``move`` [m] apart at any tool point, and the grid's axes."""
+    whose neighbours are at most ``move`` [m] apart at any tool point, and the grid's axes. The grid spans
+    the joints of the Omni's reach sector (not the placement space's copy of them)."""
+    sec = reach_sector(setting.platform)
     reach = float(np.hypot(*np.asarray(setting.tool.outline.exterior.coords).T).max())
-    r_max = math.hypot(ps.u_range[1] + reach, D_TOOL + reach)
-    qs = np.arange(ps.q1_range[0], ps.q1_range[1] + 1e-12, move / r_max)
-    us = np.arange(ps.u_range[0], ps.u_range[1] + 1e-12, move)
+    r_max = math.hypot(sec.u_range[1] + reach, D_TOOL + reach)
+    qs = np.arange(sec.q1_range[0], sec.q1_range[1] + 1e-12, move / r_max)
+    us = np.arange(sec.u_range[0], sec.u_range[1] + 1e-12, move)
     shrunk = setting.tool.outline.buffer(-1.5 * move, join_style="mitre")
     ring = np.asarray(shrunk.exterior.coords)
     shapes = _shapes(setting, centre)
     shapely.prepare(shapes)
     free = np.zeros((qs.size, us.size), dtype=bool)
     for i, q in enumerate(qs):
-        polys = [_outline_at(ps, ps.base_yaw + q, u, ring) for u in us]
+        polys = [_outline_at(np.asarray(sec.centre), sec.base_yaw + q, u, ring) for u in us]
         free[i] = ~shapely.intersects(shapes, np.array(polys, dtype=object))
     label = -np.ones(free.shape, dtype=int)
     n = 0
@@ -126,10 +130,33 @@ def _grid_pieces(ps: PlacementSpace, setting, centre: np.ndarray, move: float):
     return label, qs, us
 
 
-def _grid_contacts(ps, label, qs, us, face, centre, radius) -> set[int]:
-    """The brute-force grid's labels at the free points next to any contact pose of ``face``."""
+def contact_poses(setting, face, centre: np.ndarray, n: int = 200) -> list[tuple[float, float, float]]:
+    """``(q1, u, s)``: the waist angle [rad] about the Omni's base yaw and the reach [m] at which ``face``'s
+    contact, at ``n`` places ``s`` along its range, holds the puck at ``centre`` (2,) [m], within the Omni's
+    joints: worked out here from the reach sector alone (``test_verdicts._holds``'s arithmetic, not the
+    placement space's ``contact_places``)."""
+    sec = reach_sector(setting.platform)
+    d = np.asarray(centre, dtype=np.float64) - sec.centre
+    r = math.hypot(*d)
+    out = []
+    for s in np.linspace(*face.contact_range, n):
+        c = face.point(s) + setting.radius * face.normal
+        o = D_TOOL - c[0]
+        if r <= abs(o):
+            continue
+        v = math.sqrt(r * r - o * o)
+        u = v - c[1]
+        q1 = math.remainder(math.atan2(d[1], d[0]) - math.atan2(o, v) - sec.base_yaw, 2 * math.pi)
+        if sec.u_range[0] <= u <= sec.u_range[1] and sec.q1_range[0] <= q1 <= sec.q1_range[1]:
+            out.append((q1, u, float(s)))
+    return out
+
+
+def _grid_contacts(setting, label, qs, us, face, centre, radius) -> set[int]:
+    """The brute-force grid's labels at the free points next to any contact pose of ``face``
+    (:func:`contact_poses`)."""
     out = set()
-    for q1, u, _, _ in ps.contact_places(face, centre, radius, n=200):
+    for q1, u, _ in contact_poses(setting, face, centre):
         i, j = np.searchsorted(qs, q1), np.searchsorted(us, u)
         for a in (i - 1, i):
             for b in (j - 1, j):
@@ -142,10 +169,9 @@ def grid_separated(setting, face_a, face_b, centre: np.ndarray, move: float = 6e
     """Brute force (module docstring): whether the grid's free points next to the contact poses of
     ``face_a`` and of ``face_b`` with the puck at ``centre`` lie in different pieces (False where either
     face has none: nothing to separate)."""
-    ps = placement_space(setting)
-    label, qs, us = _grid_pieces(ps, setting, centre, move)
-    a = _grid_contacts(ps, label, qs, us, face_a, centre, setting.radius)
-    b = _grid_contacts(ps, label, qs, us, face_b, centre, setting.radius)
+    label, qs, us = _grid_pieces(setting, centre, move)
+    a = _grid_contacts(setting, label, qs, us, face_a, centre, setting.radius)
+    b = _grid_contacts(setting, label, qs, us, face_b, centre, setting.radius)
     return bool(a) and bool(b) and not (a & b)
 
 
@@ -161,8 +187,57 @@ def test_separated_agrees_with_a_brute_force_grid(where, faces, apart) -> None:
     if not apart:  # the puck at the target: both faces reach it
         centre = np.array(task.target)
     assert ps.separated(fa, fb, centre, setting.radius) is apart
-    label, qs, us = _grid_pieces(ps, setting, centre, 6e-4)
-    a = _grid_contacts(ps, label, qs, us, fa, centre, setting.radius)
-    b = _grid_contacts(ps, label, qs, us, fb, centre, setting.radius)
+    label, qs, us = _grid_pieces(setting, centre, 6e-4)
+    a = _grid_contacts(setting, label, qs, us, fa, centre, setting.radius)
+    b = _grid_contacts(setting, label, qs, us, fb, centre, setting.radius)
     assert a and b
     assert (not (a & b)) is apart
+
+
+def test_the_independent_contact_poses_hold_the_puck_and_match_the_placement_space() -> None:
+    """:func:`contact_poses` puts each face's contact on the puck: the tool placed at the pose (as the
+    brute-force grid places it) carries the contact point, the face's point pushed out by the radius, to
+    the puck's centre; and the placement space's own poses (``contact_places``, the certificate's) are the
+    same poses."""
+    task, setting = _world("exec60-00054")
+    ps = placement_space(setting)
+    centre = np.array(task.start) + np.array((-0.016, 0.008))
+    sec = reach_sector(setting.platform)
+    for face in setting.tool.faces:
+        mine = contact_poses(setting, face, centre, n=25)
+        for q1, u, s in mine:
+            c = face.point(s) + setting.radius * face.normal
+            at = _outline_at(np.asarray(sec.centre), sec.base_yaw + q1, u, np.array([c, c, c]))
+            assert np.allclose(np.asarray(at.exterior.coords)[0], centre, atol=1e-12)
+        theirs = [(q, u) for q, u, _, _ in ps.contact_places(face, centre, setting.radius, n=25)
+                  if sec.q1_range[0] <= q <= sec.q1_range[1] and sec.u_range[0] <= u <= sec.u_range[1]]
+        assert np.allclose(np.array(theirs).reshape(-1, 2), np.array([m[:2] for m in mine]).reshape(-1, 2),
+                           atol=1e-12)
+
+
+def test_a_pair_block_separated_calls_apart_is_apart_for_the_brute_force_across_the_block() -> None:
+    """``block_separated`` claims its pairs have no switch for a puck anywhere in the block (a 5 mm block,
+    as the certificate's sets use on 2.5 mm cells): the brute-force grid, at the block's corners, middle and
+    two random points, never joins a claimed pair's contact poses (and it does find poses of both faces of
+    the pair the test is about, so the check is not empty)."""
+    task, setting = _world("exec60-00054")
+    ps = placement_space(setting)
+    mid = np.array(task.start) + np.array((-0.016, 0.008))
+    h = 0.0025
+    box = (mid[0] - h, mid[1] - h, mid[0] + h, mid[1] + h)
+    names = [f.name for f in setting.tool.faces]
+    cut = block_separated(ps, names, box, setting.radius)
+    assert ("foot_top", "left") in cut
+    rng = np.random.default_rng(11)
+    inset = h - 1e-6
+    points = [mid + np.array(c) for c in ((-inset, -inset), (-inset, inset), (inset, -inset), (inset, inset),
+                                          (0.0, 0.0))]
+    points += [mid + rng.uniform(-inset, inset, 2) for _ in range(2)]
+    both = 0
+    for p in points:
+        label, qs, us = _grid_pieces(setting, p, 6e-4)
+        held = {f: _grid_contacts(setting, label, qs, us, setting.tool.face(f), p, setting.radius) for f in names}
+        for g, f in cut:
+            assert not (held[g] & held[f]), (g, f, p)
+        both += bool(held["foot_top"] and held["left"])
+    assert both == len(points)
