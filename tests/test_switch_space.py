@@ -15,7 +15,7 @@ from collections import deque
 import numpy as np
 import pytest
 import shapely
-from test_verdicts import generated
+from test_verdicts import contact_pose, generated
 
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import solve
@@ -31,13 +31,18 @@ def _world(task_id: str):
     return task, setting_from_task(task, task_skills(task, need_ss=False))
 
 
-def _outline_at(base: np.ndarray, a: float, u: float, ring: np.ndarray) -> shapely.Polygon:
-    """The tool ``ring`` (V, 2) [tool frame] placed with waist angle ``a`` and reach ``u`` on the Omni at
-    ``base`` (2,) [m]: origin ``base + R(a) (u, d_t)``, heading ``a - pi/2``."""
+def _placed(base: np.ndarray, a: float, u: float, pts: np.ndarray) -> np.ndarray:
+    """Points ``pts`` (V, 2) [tool frame] with the tool placed at waist angle ``a`` and reach ``u`` on the
+    Omni at ``base`` (2,) [m]: origin ``base + R(a) (u, d_t)``, heading ``a - pi/2``; (V, 2) [m]."""
     yaw = a - math.pi / 2
     rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
     origin = base + np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]]) @ np.array([u, D_TOOL])
-    return shapely.Polygon(ring @ rot.T + origin)
+    return pts @ rot.T + origin
+
+
+def _outline_at(base: np.ndarray, a: float, u: float, ring: np.ndarray) -> shapely.Polygon:
+    """The tool ``ring`` (V, 2) [tool frame] placed as :func:`_placed` places it."""
+    return shapely.Polygon(_placed(base, a, u, ring))
 
 
 def _shapes(setting, centre: np.ndarray) -> shapely.Geometry:
@@ -133,35 +138,27 @@ def _grid_pieces(setting, centre: np.ndarray, move: float):
 def contact_poses(setting, face, centre: np.ndarray, n: int = 200) -> list[tuple[float, float, float]]:
     """``(q1, u, s)``: the waist angle [rad] about the Omni's base yaw and the reach [m] at which ``face``'s
     contact, at ``n`` places ``s`` along its range, holds the puck at ``centre`` (2,) [m], within the Omni's
-    joints: worked out here from the reach sector alone (``test_verdicts._holds``'s arithmetic, not the
-    placement space's ``contact_places``)."""
+    joints: worked out from the reach sector alone (``test_verdicts.contact_pose``, not the placement
+    space's ``contact_places``)."""
     sec = reach_sector(setting.platform)
-    d = np.asarray(centre, dtype=np.float64) - sec.centre
-    r = math.hypot(*d)
-    out = []
-    for s in np.linspace(*face.contact_range, n):
-        c = face.point(s) + setting.radius * face.normal
-        o = D_TOOL - c[0]
-        if r <= abs(o):
-            continue
-        v = math.sqrt(r * r - o * o)
-        u = v - c[1]
-        q1 = math.remainder(math.atan2(d[1], d[0]) - math.atan2(o, v) - sec.base_yaw, 2 * math.pi)
-        if sec.u_range[0] <= u <= sec.u_range[1] and sec.q1_range[0] <= q1 <= sec.q1_range[1]:
-            out.append((q1, u, float(s)))
-    return out
+    centre = np.asarray(centre, dtype=np.float64)
+    poses = ((contact_pose(sec, face, centre, setting.radius, s), float(s))
+             for s in np.linspace(*face.contact_range, n))
+    return [(pose[2], pose[1], s) for pose, s in poses if pose is not None]
 
 
-def _grid_contacts(setting, label, qs, us, face, centre, radius) -> set[int]:
-    """The brute-force grid's labels at the free points next to any contact pose of ``face``
-    (:func:`contact_poses`)."""
-    out = set()
-    for q1, u, _ in contact_poses(setting, face, centre):
-        i, j = np.searchsorted(qs, q1), np.searchsorted(us, u)
-        for a in (i - 1, i):
-            for b in (j - 1, j):
-                if 0 <= a < qs.size and 0 <= b < us.size and label[a, b] >= 0:
-                    out.add(int(label[a, b]))
+def grid_holds(setting, centre: np.ndarray, faces: list[str], move: float = 6e-4) -> dict[str, set[int]]:
+    """Brute force (module docstring): per face of ``faces``, the labels of the grid's free points next to any
+    of its contact poses (:func:`contact_poses`) with the puck at ``centre``."""
+    label, qs, us = _grid_pieces(setting, centre, move)
+    out: dict[str, set[int]] = {}
+    for name in faces:
+        got = set()
+        for q1, u, _ in contact_poses(setting, setting.tool.face(name), centre):
+            i, j = np.searchsorted(qs, q1), np.searchsorted(us, u)
+            got |= {int(label[a, b]) for a in (i - 1, i) for b in (j - 1, j)
+                    if 0 <= a < qs.size and 0 <= b < us.size and label[a, b] >= 0}
+        out[name] = got
     return out
 
 
@@ -169,9 +166,8 @@ def grid_separated(setting, face_a, face_b, centre: np.ndarray, move: float = 6e
     """Brute force (module docstring): whether the grid's free points next to the contact poses of
     ``face_a`` and of ``face_b`` with the puck at ``centre`` lie in different pieces (False where either
     face has none: nothing to separate)."""
-    label, qs, us = _grid_pieces(setting, centre, move)
-    a = _grid_contacts(setting, label, qs, us, face_a, centre, setting.radius)
-    b = _grid_contacts(setting, label, qs, us, face_b, centre, setting.radius)
+    held = grid_holds(setting, centre, [face_a.name, face_b.name], move)
+    a, b = held[face_a.name], held[face_b.name]
     return bool(a) and bool(b) and not (a & b)
 
 
@@ -187,9 +183,8 @@ def test_separated_agrees_with_a_brute_force_grid(where, faces, apart) -> None:
     if not apart:  # the puck at the target: both faces reach it
         centre = np.array(task.target)
     assert ps.separated(fa, fb, centre, setting.radius) is apart
-    label, qs, us = _grid_pieces(setting, centre, 6e-4)
-    a = _grid_contacts(setting, label, qs, us, fa, centre, setting.radius)
-    b = _grid_contacts(setting, label, qs, us, fb, centre, setting.radius)
+    held = grid_holds(setting, centre, list(faces))
+    a, b = held[faces[0]], held[faces[1]]
     assert a and b
     assert (not (a & b)) is apart
 
@@ -207,8 +202,8 @@ def test_the_independent_contact_poses_hold_the_puck_and_match_the_placement_spa
         mine = contact_poses(setting, face, centre, n=25)
         for q1, u, s in mine:
             c = face.point(s) + setting.radius * face.normal
-            at = _outline_at(np.asarray(sec.centre), sec.base_yaw + q1, u, np.array([c, c, c]))
-            assert np.allclose(np.asarray(at.exterior.coords)[0], centre, atol=1e-12)
+            assert np.allclose(_placed(np.asarray(sec.centre), sec.base_yaw + q1, u, c[None, :])[0], centre,
+                               atol=1e-12)
         theirs = [(q, u) for q, u, _, _ in ps.contact_places(face, centre, setting.radius, n=25)
                   if sec.q1_range[0] <= q <= sec.q1_range[1] and sec.u_range[0] <= u <= sec.u_range[1]]
         assert np.allclose(np.array(theirs).reshape(-1, 2), np.array([m[:2] for m in mine]).reshape(-1, 2),
@@ -235,8 +230,7 @@ def test_a_pair_block_separated_calls_apart_is_apart_for_the_brute_force_across_
     points += [mid + rng.uniform(-inset, inset, 2) for _ in range(2)]
     both = 0
     for p in points:
-        label, qs, us = _grid_pieces(setting, p, 6e-4)
-        held = {f: _grid_contacts(setting, label, qs, us, setting.tool.face(f), p, setting.radius) for f in names}
+        held = grid_holds(setting, p, names)
         for g, f in cut:
             assert not (held[g] & held[f]), (g, f, p)
         both += bool(held["foot_top"] and held["left"])

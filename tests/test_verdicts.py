@@ -42,27 +42,38 @@ def _rules_of(task):
     return s, setting_rules(s)
 
 
+def contact_pose(sec, face, p: np.ndarray, radius: float, s: float) -> tuple[float, float, float] | None:
+    """``(a, u, q1)``: the waist angle [rad] (world), the arm-plane reach [m] and the waist about the Omni's
+    base yaw [rad] at which ``face``'s contact at ``s`` of its range holds the puck (``radius`` [m]) at
+    ``p`` (2,) [m], worked out from the reach sector ``sec`` alone; None outside the Omni's joints."""
+    d = p - sec.centre
+    r = math.hypot(*d)
+    c = face.point(s) + radius * face.normal
+    o = D_TOOL - c[0]
+    if r <= abs(o):
+        return None
+    v = math.sqrt(r * r - o * o)
+    u = v - c[1]
+    a = math.atan2(d[1], d[0]) - math.atan2(o, v)
+    q1 = math.remainder(a - sec.base_yaw, 2 * math.pi)
+    if not (sec.u_range[0] <= u <= sec.u_range[1] and sec.q1_range[0] <= q1 <= sec.q1_range[1]):
+        return None
+    return a, u, q1
+
+
 def _holds(tool: Tool, face, platform, p: np.ndarray, radius: float, obstacles: list, contacts: int = 7,
            room: float = 0.0) -> list[float]:
     """The tool yaws [rad] at which ``face`` can push the puck at ``p`` (contact sampled at ``contacts``
-    places along the face's range): waist and reach within the limits, the outline clear of the obstacles
-    (farther than ``room`` [m] from them)."""
+    places along the face's range): waist and reach within the limits (:func:`contact_pose`), the outline
+    clear of the obstacles (farther than ``room`` [m] from them)."""
     sec = reach_sector(platform)
-    d = p - sec.centre
-    r = math.hypot(*d)
     yaws = []
     for s in np.linspace(*face.contact_range, contacts):
+        pose = contact_pose(sec, face, p, radius, s)
+        if pose is None:
+            continue
         c = face.point(s) + radius * face.normal
-        o = D_TOOL - c[0]
-        if r <= abs(o):
-            continue
-        v = math.sqrt(r * r - o * o)
-        u = v - c[1]
-        a = math.atan2(d[1], d[0]) - math.atan2(o, v)
-        q1 = math.remainder(a - sec.base_yaw, 2 * math.pi)
-        if not (sec.u_range[0] <= u <= sec.u_range[1] and sec.q1_range[0] <= q1 <= sec.q1_range[1]):
-            continue
-        yaw = a - math.pi / 2
+        yaw = pose[0] - math.pi / 2
         rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
         outline = shapely.Polygon((np.asarray(tool.outline.exterior.coords) - c) @ rot.T + p)
         if all(shapely.distance(outline, o.polygon() if isinstance(o, Disc) else o) > room for o in obstacles):
