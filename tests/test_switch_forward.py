@@ -127,3 +127,54 @@ def test_a_feasible_task_with_switches_is_not_certified() -> None:
     cert, why = certify_switches(setting_rules(setting), placement_space(setting), np.array(task.start),
                                  np.array(task.target))
     assert cert is None and "came within the gap of the target" in why
+
+
+def test_a_switch_hands_over_the_set_not_the_set_grown() -> None:
+    """Where two faces may switch in a block, the update passes one face's set to the other within the
+    other's hold set, and not grown by the rounding: grown at each update, two faces switched freely handed
+    each other a set 1 nm larger every time, without end, and the sets' exact pass did not finish where a
+    push's edge meets an obstacle's zone at a narrow angle (``exec60-00022``, benchmarks/README.md)."""
+    from tooltransfer.planner.planning.verdicts.bounds import obstacle_zone
+    from tooltransfer.planner.planning.verdicts.switch_forward import _Blocks
+
+    task = generated("execution_60.yaml", "exec60-00022")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    rules, space = setting_rules(setting), placement_space(setting)
+    blocks = _Blocks(rules, space, obstacle_zone(rules))
+    start, h = np.array(task.start), 0.00125
+    found = 0
+    for dx, dy in ((0, 0), (1, 0), (0, 1), (1, 1), (2, 0), (0, 2), (2, 2), (-1, 0), (0, -1)):
+        lo = start + h * np.array([dx - 1.0, dy - 1.0])
+        box = (lo[0], lo[1], lo[0] + 2 * h, lo[1] + 2 * h)
+        models, cut = blocks.model(box), blocks.separated(box)
+        for g, f in ((g, f) for g in models for f in models if g != f and (g, f) not in cut):
+            both = shapely.intersection(models[g][1], models[f][1])
+            if both.area < 0.05 * h * h:
+                continue
+            own = {name: shapely.Polygon() for name in models}
+            own[g] = shapely.intersection(both, both.centroid.buffer(0.4 * h))
+            handed = blocks.grown(box, own)[f]
+            assert shapely.difference(handed, own[g]).area < 1e-20  # 1 nm round a 1 mm set: 3e-12 m^2
+            assert shapely.difference(own[g], handed).area < 1e-20
+            found += 1
+    assert found >= 2, "no block near the start where two faces may switch"
+
+
+def test_a_task_at_the_edge_of_the_rules_is_certified_on_the_finer_grid() -> None:
+    """``exec60-00022`` (trapezoid, one 3 mm disc): ``left``'s lowest push direction from the start passes
+    0.53 mm inside the obstacle's margin. On 2.5 mm cells with a 0.5 mm start disc the sets pass under the
+    obstacle; on 1.25 mm cells with a 0.05 mm disc and the pieces stored exactly they close, and the check
+    replays them. The independent search stays far from the target."""
+    task = generated("execution_60.yaml", "exec60-00022")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    rules, space = setting_rules(setting), placement_space(setting)
+    start, target = np.array(task.start), np.array(task.target)
+    cert, why = certify_switches(rules, space, start, target)
+    assert cert is not None, why
+    assert cert.grid.h == 0.00125 and cert.extra["start_gap"] == 5e-5
+    assert cert.to_dict()["start_gap"] == 5e-5
+    assert check_certificate(cert, rules, space) == []
+    cert.extra = cert.extra | {"start_gap": 1e-9}  # a gap below the rounding proves nothing: refused
+    assert "start gap" in check_certificate(cert, rules, space)[0]
+    closest, _, exhausted = switch_lattice_search(setting, start, target)
+    assert exhausted and closest > 0.01, f"the search came {closest * 1e3:.2f} mm from the target"

@@ -243,6 +243,28 @@ SWITCH_CELL = 0.0025
 SWITCH_BLOCKS = 3000
 
 
+@dataclass(frozen=True)
+class SwitchGrid:
+    """One attempt at the ``switch_separated`` sets: cells of ``cell`` [m], a start disc of radius ``gap``
+    [m] (also the least distance kept from the goal), pieces stored ``exact`` or grown (:func:`~.switch_forward.
+    forward_sets`), at most ``blocks`` block updates (times the budget)."""
+
+    cell: float
+    gap: float
+    exact: bool
+    blocks: int
+
+
+#: The attempts, in turn while the sets reach the target. The second is for tasks at the edge of the
+#: rules, where a push's lowest edge passes an obstacle's margin by a fraction of a millimetre: the first's
+#: start disc and the heading's spread over its blocks take the sets under it, the growth of its stored
+#: pieces along the margin (benchmarks/README.md, twentieth and twenty-first sessions).
+SWITCH_GRIDS = (SwitchGrid(SWITCH_CELL, START_GAP, False, SWITCH_BLOCKS),
+                SwitchGrid(0.5 * SWITCH_CELL, 0.1 * START_GAP, True, 4000))
+#: The least start gap [m] a stored ``switch_separated`` certificate may claim (far above the rounding).
+MIN_SWITCH_GAP = 1e-5
+
+
 def start_faces(rules: PushRules, start: np.ndarray) -> list[str]:
     """The faces that may hold the puck at ``start`` (2,) [m]: their hold set in a box of 2 um about it
     (:func:`~.backward.block_face`, an over-approximation) comes within 0.1 um of it."""
@@ -257,36 +279,44 @@ def start_faces(rules: PushRules, start: np.ndarray) -> list[str]:
 
 
 def certify_switches(rules: PushRules, space: PlacementSpace, start: np.ndarray, target: np.ndarray, *,
-                     max_blocks: int = SWITCH_BLOCKS) -> tuple[Certificate | None, str]:
+                     budget: float = 1.0, grids: tuple[SwitchGrid, ...] = SWITCH_GRIDS
+                     ) -> tuple[Certificate | None, str]:
     """A ``switch_separated`` certificate (module docstring) that ``start`` (2,) [m] cannot reach ``target``
     (2,) [m] under ``rules`` with switches only where the tool's placements ``space`` join the faces'
-    contacts, or None with what was tried; at most ``max_blocks`` block updates."""
+    contacts, or None with what was tried; each of ``grids`` in turn, ``budget`` scaling its block updates."""
     t0 = time.perf_counter()
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
     pushes, goal, zone = push_space(rules), _goal(rules, target), obstacle_zone(rules)
     holders = start_faces(rules, start)
-    grid = grid_over(shapely.union_all([pushes, goal, shapely.Point(start).buffer(START_GAP)]), SWITCH_CELL)
-    res = forward_sets(rules, space, grid, start, goal, holders, gap=START_GAP, max_blocks=max_blocks, zone=zone)
-    tried = (f"the faces' sets from the start with switches only where the tool gets round the puck (cells of "
-             f"{SWITCH_CELL * 1e3:g} mm): {res.stopped} (after {res.blocks_processed} blocks)")
-    if res.regions is None:
-        return None, tried
-    union = shapely.union_all(list(res.regions.values()))
-    cert = Certificate("switch_separated", "the positions each face could push the puck to from the start (over-"
-                       "approximated as for the backward-reachable set), a face's passed to another only where the "
-                       "tool can get from the one's contact to the other's round the resting puck within the Omni's "
-                       f"joints, leave the target out by {shapely.distance(union, goal) * 1e3:.1f} mm",
-                       start=(float(start[0]), float(start[1])), target=(float(target[0]), float(target[1])),
-                       rules=rules.to_dict(), space=pushes, region=union, grid=grid,
-                       extra={"holders": holders, "blocks_processed": res.blocks_processed,
-                              "placements": _placements_of(space),
-                              "regions_wkt": {f: shapely.to_wkt(g, rounding_precision=-1)
-                                              for f, g in res.regions.items()}})
-    problems = check_certificate(cert, rules, placements=space)
-    if problems:
-        return None, "switch-separated sets: their check failed: " + "; ".join(problems)
-    cert.time = time.perf_counter() - t0
-    return cert, ""
+    tried = []
+    for attempt in grids:
+        grid = grid_over(shapely.union_all([pushes, goal, shapely.Point(start).buffer(attempt.gap)]), attempt.cell)
+        res = forward_sets(rules, space, grid, start, goal, holders, gap=attempt.gap,
+                           max_blocks=round(attempt.blocks * budget), zone=zone, exact=attempt.exact)
+        exact = ", pieces exact" if attempt.exact else ""
+        tried.append(f"cells of {attempt.cell * 1e3:g} mm, a start disc of {attempt.gap * 1e3:g} mm{exact}: "
+                     f"{res.stopped} (after {res.blocks_processed} blocks)")
+        if res.regions is None:
+            continue
+        union = shapely.union_all(list(res.regions.values()))
+        cert = Certificate("switch_separated", "the positions each face could push the puck to from the start "
+                           "(over-approximated as for the backward-reachable set), a face's passed to another only "
+                           "where the tool can get from the one's contact to the other's round the resting puck "
+                           "within the Omni's joints, leave the target out by "
+                           f"{shapely.distance(union, goal) * 1e3:.2f} mm",
+                           start=(float(start[0]), float(start[1])), target=(float(target[0]), float(target[1])),
+                           rules=rules.to_dict(), space=pushes, region=union, grid=grid,
+                           extra={"holders": holders, "blocks_processed": res.blocks_processed,
+                                  "start_gap": attempt.gap, "placements": _placements_of(space),
+                                  "regions_wkt": {f: shapely.to_wkt(g, rounding_precision=-1)
+                                                  for f, g in res.regions.items()}})
+        problems = check_certificate(cert, rules, placements=space)
+        if not problems:
+            cert.time = time.perf_counter() - t0
+            return cert, ""
+        tried[-1] += "; their check failed: " + "; ".join(problems)
+    return None, ("the faces' sets from the start with switches only where the tool gets round the puck ("
+                  + "; ".join(tried) + ")")
 
 
 def _check_switches(cert: Certificate, rules: PushRules, space: PlacementSpace | None, start: np.ndarray,
@@ -302,8 +332,11 @@ def _check_switches(cert: Certificate, rules: PushRules, space: PlacementSpace |
     holders = start_faces(rules, start)
     if sorted(holders) != sorted(cert.extra.get("holders", [])):
         return ["the faces that may hold the puck at the start differ"]
+    gap = cert.extra.get("start_gap", START_GAP)
+    if not (isinstance(gap, float) and gap >= MIN_SWITCH_GAP):
+        return [f"the start gap {gap!r} is not a length of at least {MIN_SWITCH_GAP} m"]
     return check_forward(rules, space, grid, {f: shapely.from_wkt(w) for f, w in regions.items()},
-                         start, goal, holders, START_GAP, obstacle_zone(rules))
+                         start, goal, holders, gap, obstacle_zone(rules))
 
 
 def _placements_of(space: PlacementSpace) -> dict[str, Any]:

@@ -23,7 +23,6 @@ from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.verdicts.backward import BUDGET_SPENT
 from tooltransfer.planner.planning.verdicts.certificate import (
     FINE_BLOCKS,
-    SWITCH_BLOCKS,
     Certificate,
     certify,
     certify_switches,
@@ -105,7 +104,6 @@ def _with_switches(sought: Sought, setting: Setting, start: np.ndarray, target: 
     (:func:`certify_switches`, ``budget`` scaling its block updates): tried only once the search has failed,
     its sets cost some seconds where they close and where they do not."""
     t0 = time.perf_counter()
-    cert, why = certify_switches(setting_rules(setting), placement_space(setting), start, target,
-                                 max_blocks=round(SWITCH_BLOCKS * budget))
+    cert, why = certify_switches(setting_rules(setting), placement_space(setting), start, target, budget=budget)
     spent = sought.spent + time.perf_counter() - t0
     return Sought(cert, f"{sought.why}; {why}" if cert is None else "", spent)

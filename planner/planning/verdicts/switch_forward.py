@@ -133,9 +133,11 @@ class _Blocks:
             others = [g for g in own if g != f and not own[g].is_empty]
             if others:
                 cut = self.separated(box)
-                # grown by the rounding, as the pushes' sources are: a set that only touches S_fW still passes
-                parts += [shapely.intersection(shapely.buffer(own[g], ROUNDING), sp) for g in others
-                          if (g, f) not in cut]
+                # within S_fW grown by the rounding, as the pushes' sources are: a set that only touches S_fW
+                # still passes. Not the set grown: two faces switched freely would hand each other a set grown
+                # by the rounding at every update, a growth that builds up without end where a push's edge
+                # meets an obstacle's zone at a narrow angle (benchmarks/README.md, twenty-first session)
+                parts += [polygonal(shapely.intersection(own[g], near)) for g in others if (g, f) not in cut]
             grown = polygonal(safe_union(parts)) if parts else shapely.Polygon()
             if not grown.is_empty:
                 out[f] = grown
@@ -144,18 +146,21 @@ class _Blocks:
 
 def forward_sets(rules: PushRules, space: PlacementSpace, grid: BlockGrid, start: np.ndarray,
                  goal: shapely.Geometry, holders: list[str], *, gap: float, max_blocks: int,
-                 zone: shapely.Geometry) -> ForwardResult:
+                 zone: shapely.Geometry, exact: bool = False) -> ForwardResult:
     """The smallest closed sets (module docstring) on ``grid``, grown from a disc of radius ``gap`` [m] about
     ``start`` (2,) in the sets of the faces ``holders`` that may hold the puck there; stops early once a set
     comes within ``gap`` of the ``goal`` disc, or after ``max_blocks`` block updates. ``zone``: where the
-    puck's centre may not be. Two passes, as :func:`~.backward.backward_set`: coarse pieces, then exact."""
+    puck's centre may not be. Two passes, as :func:`~.backward.backward_set`: coarse pieces, then exact.
+    ``exact``: the first pass stores its pieces as they are too (only its stopping tolerance is coarse), since
+    the growth of :func:`~.backward.coarsen` at each update of a cell builds up where the sets run along an
+    obstacle's zone (benchmarks/README.md, twentieth session); slower where the sets are large."""
     blocks = _Blocks(rules, space, zone)
     disc = shapely.Point(start).buffer(gap, quad_segs=16)
     cells: dict[str, dict[tuple[int, int], shapely.Geometry]] = {f.name: {} for f in rules.faces}
     for f in holders:
         cells[f] = _split(grid, disc)
     done = 0
-    for tol, simplify in ((2 * COARSEN, True), (ROUNDING, False)):
+    for tol, simplify in ((2 * COARSEN, not exact), (ROUNDING, False)):
         stopped, done = _close(blocks, grid, cells, goal, gap, max_blocks, done, tol, simplify)
         if stopped:
             return ForwardResult(None, stopped, done, grid)
