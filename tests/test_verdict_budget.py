@@ -40,8 +40,9 @@ def test_a_certificate_out_of_block_updates_makes_the_verdict_budget_limited() -
 
 
 def test_an_unknown_whose_searches_closed_their_space_is_not_budget_limited() -> None:
-    """exec60-00022 (trapezoid, one obstacle): every attempt expands every lattice cell it can reach."""
-    task = generated("execution_60.yaml", "exec60-00022")
+    """verd200-00049 (one obstacle): every attempt expands every lattice cell it can reach, and every
+    certificate's set reaches the start or the target within its budget."""
+    task = generated("verdicts_200.yaml", "verd200-00049")
     plan = solve(task)
     assert plan.status == "unknown", plan.reason
     assert plan.metrics["guided_attempts"] >= 4 and plan.metrics["guided_attempts_on_budget"] == 0
@@ -80,9 +81,9 @@ def test_the_batch_report_counts_the_unknowns_that_stopped_on_a_budget(tmp_path)
 
 def test_solve_json_says_whether_an_unknown_stopped_on_a_budget(tmp_path, capsys) -> None:
     """The command line's summary of an unknown carries the flag (exit code 3: unknown)."""
-    batch = ROOT / "problems" / "batch" / "execution_60.yaml"
-    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "exec60-00022")
-    path = tmp_path / "exec60-00022.yaml"
+    batch = ROOT / "problems" / "batch" / "verdicts_200.yaml"
+    data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "verd200-00049")
+    path = tmp_path / "verd200-00049.yaml"
     path.write_text(json.dumps(data))  # JSON is YAML; the generated task's paths are absolute
     assert main(["solve", str(path), "--json"]) == 3
     summary = json.loads(capsys.readouterr().out)
@@ -93,13 +94,13 @@ def test_solve_json_says_whether_an_unknown_stopped_on_a_budget(tmp_path, capsys
 def test_a_task_the_certificate_proves_infeasible_is_not_searched_further() -> None:
     """The certificate is looked for before the guided search (a sound one leaves it nothing to find):
     exec60-00016 (certified) runs no attempt of it, and its time to certify is part of its planning time;
-    exec60-00022 (unknown) runs the guided search after the certificate failed, and keeps that look's
+    verd200-00049 (unknown) runs the guided search after the certificate failed, and keeps that look's
     account and time."""
     certified = solve(generated("execution_60.yaml", "exec60-00016"))
     assert certified.status == "infeasible" and certified.evidence["kind"] == "backward_reachable"
     assert "guided_attempts" not in certified.metrics and "the guided search" not in certified.reason
     assert certified.metrics["time_certify"] > 0
-    unknown = solve(generated("execution_60.yaml", "exec60-00022"))
+    unknown = solve(generated("verdicts_200.yaml", "verd200-00049"))
     assert unknown.status == "unknown" and unknown.metrics["guided_attempts"] >= 4
     assert unknown.evidence["not_proved"].startswith("backward-reachable set of the target")
     assert unknown.metrics["time_certify"] > 0
@@ -107,12 +108,12 @@ def test_a_task_the_certificate_proves_infeasible_is_not_searched_further() -> N
 
 def test_the_planning_time_counts_the_certificate_and_the_guided_search_once() -> None:
     """A certified task's planning time holds its look for the certificate (and no guided search); an
-    unknown's holds both the look and the guided search's attempts (exec60-00022 closes its attempts'
+    unknown's holds both the look and the guided search's attempts (verd200-00049 closes its attempts'
     spaces quickly)."""
     certified = solve(generated("execution_60.yaml", "exec60-00016"))
     m = certified.metrics
     assert "time_guided" not in m and certified.planning_time >= m["time_certify"]
-    unknown = solve(generated("execution_60.yaml", "exec60-00022"))
+    unknown = solve(generated("verdicts_200.yaml", "verd200-00049"))
     m = unknown.metrics
     assert unknown.planning_time >= m["time_certify"] + m["time_guided"]
     assert unknown.planning_time <= m["time_certify"] + m["time_guided"] + m["time_skills"] + m["time_oe"] + 1.0

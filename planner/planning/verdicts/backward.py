@@ -219,7 +219,7 @@ class BackwardResult:
 
 def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geometry, start: np.ndarray, *,
                  h: float = 0.01, gap: float = 5e-4, max_blocks: int = 20000,
-                 zone: shapely.Geometry | None = None) -> BackwardResult:
+                 zone: shapely.Geometry | None = None, exact: bool = False) -> BackwardResult:
     """The smallest closed set (module docstring) holding ``goal`` [m], grown inside ``space`` (the
     push space, :func:`~tooltransfer.planner.planning.verdicts.bounds.push_space`), on blocks of cells of side
     ``h`` [m]; stops early once it comes within ``gap`` [m] of ``start`` (2,). ``zone``: where no path
@@ -228,13 +228,16 @@ def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geomet
     sound: every piece of such a path lies outside it).
 
     Two passes: a coarse one whose pieces are grown by :data:`COARSEN` and simplified (few vertices,
-    quick), then an exact one from the coarse set until no block adds area beyond the rounding."""
+    quick), then an exact one from the coarse set until no block adds area beyond the rounding. ``exact``:
+    the coarse pass stores its pieces as they are too (only its stopping tolerance is coarse): the growth
+    at each update of a cell builds up, and on a task at the edge of the rules it alone takes the set to
+    the start (benchmarks/README.md, twenty-first session); slower where the set is large."""
     grid = grid_over(shapely.union(space, goal), h)
     zone, regions = obstacle_zone(rules) if zone is None else zone, face_regions(rules)
     models: dict[tuple[int, int], list] = {}
     cells = _split(grid, goal)
     done = 0
-    for tol, simplify in ((2 * COARSEN, True), (ROUNDING, False)):
+    for tol, simplify in ((2 * COARSEN, not exact), (ROUNDING, False)):
         cells, stopped, done = _close(rules, grid, cells, start, gap, max_blocks, done, zone, regions, models, tol,
                                       simplify)
         if stopped:

@@ -48,6 +48,13 @@ from tooltransfer.planner.planning.verdicts.switch_space import PlacementSpace
 
 #: The start's least distance [m] from a certificate's set (far above the polygons' rounding).
 START_GAP = 5e-4
+#: The least start gap [m] a stored certificate may claim (far above the rounding).
+MIN_START_GAP = 1e-5
+#: The last backward-reachable set, tried once the search has failed (``decide.attach_verdict``): cells [m], a
+#: start gap [m] and block updates (times the budget), pieces exact. For tasks at the edge of the rules,
+#: where the growth of the stored pieces alone takes the set to the start (benchmarks/README.md,
+#: twenty-first session).
+LAST_BACKWARD = (0.0025, 5e-5, 12000)
 
 
 @dataclass
@@ -107,12 +114,14 @@ FINE_BLOCKS = (5000, 1500)
 
 
 def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple[float, ...] = CELL_SIDES,
-            max_blocks: int = 20000, fine_blocks: tuple[int, ...] = FINE_BLOCKS) -> tuple[Certificate | None, str]:
+            max_blocks: int = 20000, fine_blocks: tuple[int, ...] = FINE_BLOCKS, gap: float = START_GAP,
+            exact: bool = False) -> tuple[Certificate | None, str]:
     """A certificate that ``start`` (2,) [m] cannot reach ``target`` (2,) [m] under ``rules``, or None
     with what was tried (an honest "not proved": the task may still be infeasible). The
     backward-reachable set is built on cells of side ``h[0]`` [m], then of each next side in turn while it
-    comes within the gap of the start; ``max_blocks`` block updates in all, at most ``fine_blocks[k]`` on
-    the grid ``h[k + 1]`` (the last allowance for any further grid)."""
+    comes within ``gap`` [m] of the start (pieces stored ``exact``: :func:`~.backward.backward_set`);
+    ``max_blocks`` block updates in all, at most ``fine_blocks[k]`` on the grid ``h[k + 1]`` (the last
+    allowance for any further grid)."""
     t0 = time.perf_counter()
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
     if np.hypot(*(start - target)) <= rules.goal_tol:
@@ -144,10 +153,11 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
     zone = None if sp is None else restricted_zone(rules, sp, start, space, goal)
     inside = space if zone is None else shapely.difference(space, zone)
     tried, left = [], max_blocks
+    finer = "" if gap == START_GAP and not exact else f", a start gap of {gap * 1e3:g} mm{', pieces exact' * exact}"
     for k, side in enumerate(h):
         allowed = left if k == 0 else min(left, fine_blocks[min(k, len(fine_blocks)) - 1])
-        back = backward_set(rules, inside, goal, start, h=side, gap=START_GAP, max_blocks=allowed, zone=zone)
-        tried.append(f"cells of {side * 1e3:g} mm: {back.stopped} (after {back.blocks_processed} blocks)")
+        back = backward_set(rules, inside, goal, start, h=side, gap=gap, max_blocks=allowed, zone=zone, exact=exact)
+        tried.append(f"cells of {side * 1e3:g} mm{finer}: {back.stopped} (after {back.blocks_processed} blocks)")
         left -= back.blocks_processed
         if back.region is not None or left <= 0:
             break
@@ -160,7 +170,7 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
                        "body only where it overlaps an obstacle whatever the contact, switches free) leave the start "
                        f"out by {shapely.distance(back.region, shapely.Point(start)) * 1e3:.1f} mm", **common,
                        region=back.region, grid=back.grid, time=time.perf_counter() - t0,
-                       extra={"blocks_processed": back.blocks_processed}
+                       extra={"blocks_processed": back.blocks_processed, "start_gap": gap}
                        | ({} if sp is None else {"invariant": sp.to_dict()}))
     problems = check_certificate(cert, rules)
     if problems:
@@ -207,7 +217,10 @@ def check_certificate(cert: Certificate, rules: PushRules, placements: Placement
             return [*problems, "no set or grid stored"]
         if not shapely.covers(shapely.buffer(region, 1e-9), goal):
             problems.append("the set does not hold the target's goal disc")
-        if shapely.distance(region, shapely.Point(start)) <= START_GAP:
+        gap = cert.extra.get("start_gap", START_GAP)
+        if not (isinstance(gap, float) and gap >= MIN_START_GAP):
+            return [*problems, f"the start gap {gap!r} is not a length of at least {MIN_START_GAP} m"]
+        if shapely.distance(region, shapely.Point(start)) <= gap:
             problems.append("the set does not leave the start out")
         zone, regions = obstacle_zone(rules), face_regions(rules)
         if "invariant" in cert.extra:  # the set was grown on the start's side of a quantity no push decreases
@@ -261,8 +274,6 @@ class SwitchGrid:
 #: pieces along the margin (benchmarks/README.md, twentieth and twenty-first sessions).
 SWITCH_GRIDS = (SwitchGrid(SWITCH_CELL, START_GAP, False, SWITCH_BLOCKS),
                 SwitchGrid(0.5 * SWITCH_CELL, 0.1 * START_GAP, True, 4000))
-#: The least start gap [m] a stored ``switch_separated`` certificate may claim (far above the rounding).
-MIN_SWITCH_GAP = 1e-5
 
 
 def start_faces(rules: PushRules, start: np.ndarray) -> list[str]:
@@ -333,8 +344,8 @@ def _check_switches(cert: Certificate, rules: PushRules, space: PlacementSpace |
     if sorted(holders) != sorted(cert.extra.get("holders", [])):
         return ["the faces that may hold the puck at the start differ"]
     gap = cert.extra.get("start_gap", START_GAP)
-    if not (isinstance(gap, float) and gap >= MIN_SWITCH_GAP):
-        return [f"the start gap {gap!r} is not a length of at least {MIN_SWITCH_GAP} m"]
+    if not (isinstance(gap, float) and gap >= MIN_START_GAP):
+        return [f"the start gap {gap!r} is not a length of at least {MIN_START_GAP} m"]
     return check_forward(rules, space, grid, {f: shapely.from_wkt(w) for f, w in regions.items()},
                          start, goal, holders, gap, obstacle_zone(rules))
 
