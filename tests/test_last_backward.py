@@ -1,6 +1,6 @@
-"""The last backward-reachable set (``certificate.LAST_BACKWARD``, tried once the search has failed): 2.5 mm
-cells, pieces stored exactly, a 0.05 mm start gap. On a task at the edge of the rules the growth of the
-stored pieces alone takes the default sets to the start."""
+"""The backward-reachable set with exact pieces (``certificate.LAST_BACKWARD``: 2.5 mm cells, pieces stored
+exactly, a 0.05 mm start gap; not tried by the verdict, see its comment). On a task at the edge of the
+rules the growth of the stored pieces alone takes the default sets to the start."""
 
 from __future__ import annotations
 

@@ -50,10 +50,10 @@ from tooltransfer.planner.planning.verdicts.switch_space import PlacementSpace
 START_GAP = 5e-4
 #: The least start gap [m] a stored certificate may claim (far above the rounding).
 MIN_START_GAP = 1e-5
-#: The last backward-reachable set, tried once the search has failed (``decide.attach_verdict``): cells [m], a
-#: start gap [m] and block updates (times the budget), pieces exact. For tasks at the edge of the rules,
-#: where the growth of the stored pieces alone takes the set to the start (benchmarks/README.md,
-#: twenty-first session).
+#: A backward-reachable set with exact pieces (cells [m], a start gap [m], block updates): it certifies
+#: ``exec60-00015``, where the growth of the stored pieces alone takes the default sets to the start, but is
+#: not tried by ``decide.attach_verdict``: on another task its pieces' vertices made it run for minutes
+#: (benchmarks/README.md, twenty-first session).
 LAST_BACKWARD = (0.0025, 5e-5, 12000)
 
 

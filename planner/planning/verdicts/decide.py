@@ -23,7 +23,6 @@ from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.verdicts.backward import BUDGET_SPENT
 from tooltransfer.planner.planning.verdicts.certificate import (
     FINE_BLOCKS,
-    LAST_BACKWARD,
     Certificate,
     certify,
     certify_switches,
@@ -78,8 +77,8 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                                        "checks": "every hard check holds (metrics)", "budget": budget})
     if sought is None:
         sought = seek_certificate(setting, start, target, max_blocks=max_blocks, budget=budget)
-    if sought.cert is None and plan.status != "violated":  # last: exact pieces, then the switches
-        sought = _with_last(sought, setting, start, target, budget)
+    if sought.cert is None and plan.status != "violated":  # last: the switches the tool cannot make
+        sought = _with_switches(sought, setting, start, target, budget)
     cert, why, spent = sought.cert, sought.why, sought.spent
     metrics = {**plan.metrics, "time_certify": spent}
     if "time_total" in metrics:
@@ -99,18 +98,14 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                    reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)
 
 
-def _with_last(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float) -> Sought:
-    """``sought`` (no certificate found), or the backward-reachable set once more with its pieces exact and a
-    smaller start gap (:data:`~.certificate.LAST_BACKWARD`), else the ``switch_separated`` certificate where
-    the faces' sets from the start, passed from face to face only where the tool can get round the puck,
-    leave the target out (:func:`certify_switches`); ``budget`` scales their block updates. Tried only once
-    the search has failed: their sets cost some seconds where they close and where they do not."""
+def _with_switches(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float) -> Sought:
+    """``sought`` (no certificate found), or the ``switch_separated`` certificate where the faces' sets from
+    the start, passed from face to face only where the tool can get round the puck, leave the target out
+    (:func:`certify_switches`, ``budget`` scaling its block updates): tried only once the search has failed,
+    its sets cost some seconds where they close and where they do not. (The backward set with exact pieces,
+    ``certify(..., exact=True)``, is not tried here: on one task its pieces' vertices made it run for minutes;
+    benchmarks/README.md, twenty-first session.)"""
     t0 = time.perf_counter()
-    rules = setting_rules(setting)
-    side, gap, blocks = LAST_BACKWARD
-    cert, why = certify(rules, start, target, h=(side,), max_blocks=round(blocks * budget), gap=gap, exact=True)
-    if cert is None:
-        cert, why_switch = certify_switches(rules, placement_space(setting), start, target, budget=budget)
-        why = f"{why}; {why_switch}"
+    cert, why = certify_switches(setting_rules(setting), placement_space(setting), start, target, budget=budget)
     spent = sought.spent + time.perf_counter() - t0
     return Sought(cert, f"{sought.why}; {why}" if cert is None else "", spent)
