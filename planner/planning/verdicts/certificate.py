@@ -217,9 +217,9 @@ def check_certificate(cert: Certificate, rules: PushRules, placements: Placement
             return [*problems, "no set or grid stored"]
         if not shapely.covers(shapely.buffer(region, 1e-9), goal):
             problems.append("the set does not hold the target's goal disc")
-        gap = cert.extra.get("start_gap", START_GAP)
-        if not (isinstance(gap, float) and gap >= MIN_START_GAP):
-            return [*problems, f"the start gap {gap!r} is not a length of at least {MIN_START_GAP} m"]
+        gap = _stored_gap(cert)
+        if isinstance(gap, str):
+            return [*problems, gap]
         if shapely.distance(region, shapely.Point(start)) <= gap:
             problems.append("the set does not leave the start out")
         zone, regions = obstacle_zone(rules), face_regions(rules)
@@ -343,11 +343,20 @@ def _check_switches(cert: Certificate, rules: PushRules, space: PlacementSpace |
     holders = start_faces(rules, start)
     if sorted(holders) != sorted(cert.extra.get("holders", [])):
         return ["the faces that may hold the puck at the start differ"]
-    gap = cert.extra.get("start_gap", START_GAP)
-    if not (isinstance(gap, float) and gap >= MIN_START_GAP):
-        return [f"the start gap {gap!r} is not a length of at least {MIN_START_GAP} m"]
+    gap = _stored_gap(cert)
+    if isinstance(gap, str):
+        return [gap]
     return check_forward(rules, space, grid, {f: shapely.from_wkt(w) for f, w in regions.items()},
                          start, goal, holders, gap, obstacle_zone(rules))
+
+
+def _stored_gap(cert: Certificate) -> float | str:
+    """The start gap [m] ``cert`` claims (:data:`START_GAP` where it stores none), or what is wrong with it:
+    a gap below :data:`MIN_START_GAP` (the rounding) proves nothing."""
+    gap = cert.extra.get("start_gap", START_GAP)
+    if not (isinstance(gap, float) and gap >= MIN_START_GAP):
+        return f"the start gap {gap!r} is not a length of at least {MIN_START_GAP} m"
+    return gap
 
 
 def _placements_of(space: PlacementSpace) -> dict[str, Any]:
