@@ -10,11 +10,11 @@ true free space, so where it finds two contact poses in different pieces no move
 from __future__ import annotations
 
 import math
-from collections import deque
 
 import numpy as np
 import pytest
 import shapely
+from scipy import ndimage
 from test_verdicts import contact_pose, generated
 
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
@@ -43,6 +43,16 @@ def _placed(base: np.ndarray, a: float, u: float, pts: np.ndarray) -> np.ndarray
 def _outline_at(base: np.ndarray, a: float, u: float, ring: np.ndarray) -> shapely.Polygon:
     """The tool ``ring`` (V, 2) [tool frame] placed as :func:`_placed` places it."""
     return shapely.Polygon(_placed(base, a, u, ring))
+
+
+def _outlines_along(base: np.ndarray, a: float, us: np.ndarray, ring: np.ndarray) -> np.ndarray:
+    """The tool ``ring`` (V, 2) placed as :func:`_placed` places it at waist angle ``a`` and each reach of
+    ``us`` (U,) [m]: (U,) polygons, made in one call (one by one they took most of a lattice search)."""
+    yaw = a - math.pi / 2
+    rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
+    arm = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    origins = np.array([base + arm @ np.array([u, D_TOOL]) for u in us])  # as _placed computes each
+    return shapely.polygons((ring @ rot.T)[None, :, :] + origins[:, None, :])
 
 
 def _shapes(setting, centre: np.ndarray) -> shapely.Geometry:
@@ -114,25 +124,9 @@ def _grid_pieces(setting, centre: np.ndarray, move: float):
     shapely.prepare(shapes)
     free = np.zeros((qs.size, us.size), dtype=bool)
     for i, q in enumerate(qs):
-        polys = [_outline_at(np.asarray(sec.centre), sec.base_yaw + q, u, ring) for u in us]
-        free[i] = ~shapely.intersects(shapes, np.array(polys, dtype=object))
-    label = -np.ones(free.shape, dtype=int)
-    n = 0
-    for start in zip(*np.nonzero(free), strict=True):
-        if label[start] >= 0:
-            continue
-        label[start] = n
-        todo = deque([start])
-        while todo:
-            i, j = todo.popleft()
-            for di in (-1, 0, 1):
-                for dj in (-1, 0, 1):
-                    a, b = i + di, j + dj
-                    if 0 <= a < qs.size and 0 <= b < us.size and free[a, b] and label[a, b] < 0:
-                        label[a, b] = n
-                        todo.append((a, b))
-        n += 1
-    return label, qs, us
+        free[i] = ~shapely.intersects(shapes, _outlines_along(np.asarray(sec.centre), sec.base_yaw + q, us, ring))
+    pieces, _ = ndimage.label(free, structure=np.ones((3, 3), dtype=int))  # 8-neighbours, as one move joins
+    return pieces - 1, qs, us
 
 
 def contact_poses(setting, face, centre: np.ndarray, n: int = 200) -> list[tuple[float, float, float]]:
