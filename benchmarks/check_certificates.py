@@ -125,7 +125,7 @@ def _closest(args: tuple[Any, int, bool, bool, float, float, str | None]
     import numpy as np
     from test_verdicts import _rules_of, depth_inside, lattice_search
 
-    from tooltransfer.planner.planning.verdicts.certificate import certify
+    from tooltransfer.planner.planning.verdicts.certificate import certify, certify_exact_backward
     from tooltransfer.planner.planning.verdicts.spiral import Spiral, _values
 
     job, budget, dense, unknowns, share, room, kind = args
@@ -140,6 +140,8 @@ def _closest(args: tuple[Any, int, bool, bool, float, float, str | None]
                        room=room, **(DENSE if dense else {}))
     cpu = time.process_time() - cpu
     cert = None if unknowns else certify(rules, start, target)[0]
+    if cert is None and not unknowns and kind == "backward_reachable":  # the verdict's last backward attempt
+        cert = certify_exact_backward(rules, start, target)[0]
     test: dict[str, Any] = {"kind": None if cert is None else cert.kind, "depth": None, "v_low": None,
                             "v_goal": None}
     pts = np.asarray(visited)

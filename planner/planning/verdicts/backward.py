@@ -219,7 +219,8 @@ class BackwardResult:
 
 def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geometry, start: np.ndarray, *,
                  h: float = 0.01, gap: float = 5e-4, max_blocks: int = 20000,
-                 zone: shapely.Geometry | None = None, exact: bool = False) -> BackwardResult:
+                 zone: shapely.Geometry | None = None, exact: bool = False,
+                 max_vertices: int | None = None) -> BackwardResult:
     """The smallest closed set (module docstring) holding ``goal`` [m], grown inside ``space`` (the
     push space, :func:`~tooltransfer.planner.planning.verdicts.bounds.push_space`), on blocks of cells of side
     ``h`` [m]; stops early once it comes within ``gap`` [m] of ``start`` (2,). ``zone``: where no path
@@ -231,15 +232,17 @@ def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geomet
     quick), then an exact one from the coarse set until no block adds area beyond the rounding. ``exact``:
     the coarse pass stores its pieces as they are too (only its stopping tolerance is coarse): the growth
     at each update of a cell builds up, and on a task at the edge of the rules it alone takes the set to
-    the start (benchmarks/README.md, twenty-first session); slower where the set is large."""
+    the start (benchmarks/README.md, twenty-first session); slower where the set is large, and where exact
+    pieces gather vertices (on one task tens of thousands in one block) each update costs more: ``max_vertices``
+    bounds the work, the vertices of the pieces grown summed over the updates (None: no bound)."""
     grid = grid_over(shapely.union(space, goal), h)
     zone, regions = obstacle_zone(rules) if zone is None else zone, face_regions(rules)
     models: dict[tuple[int, int], list] = {}
     cells = _split(grid, goal)
-    done = 0
+    done, work = 0, [0, max_vertices]
     for tol, simplify in ((2 * COARSEN, not exact), (ROUNDING, False)):
         cells, stopped, done = _close(rules, grid, cells, start, gap, max_blocks, done, zone, regions, models, tol,
-                                      simplify)
+                                      simplify, work)
         if stopped:
             return BackwardResult(None, stopped, done, grid)
         if simplify:  # the coarse pieces back inside their cells, so that a block grows from all of the set in it
@@ -276,10 +279,11 @@ def _split(grid: BlockGrid, g: shapely.Geometry) -> dict[tuple[int, int], shapel
 
 
 def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, gap: float, max_blocks: int,
-           done: int, zone: shapely.Geometry, regions: list, models: dict, tol: float, simplify: bool
-           ) -> tuple[dict, str, int]:
+           done: int, zone: shapely.Geometry, regions: list, models: dict, tol: float, simplify: bool,
+           work: list) -> tuple[dict, str, int]:
     """Grow ``cells`` block by block until no block adds more than ``tol`` [m] beyond them; returns the
-    cells, why it stopped early ("" if it did not) and the block updates made so far."""
+    cells, why it stopped early ("" if it did not) and the block updates made so far. ``work``: the vertices
+    grown so far and their bound (or None), the first updated here."""
     nx, ny = grid.shape
     start_pt = shapely.Point(start)
     sx, sy = (float(v) for v in start)
@@ -306,7 +310,11 @@ def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, ga
         box = grid.block_box(i, j)
         if v not in models:
             models[v] = block_faces(rules, box, zone, regions)
-        grown = grow(safe_union(own), models[v], box)
+        source = safe_union(own)
+        work[0] += shapely.get_num_coordinates(source)
+        if work[1] is not None and work[0] > work[1]:
+            return cells, f"{BUDGET_SPENT} {work[1]} vertices grown (after {done} block updates)", done
+        grown = grow(source, models[v], box)
         for c in quad:
             if grown.is_empty or not (0 <= c[0] < nx and 0 <= c[1] < ny):
                 continue

@@ -50,11 +50,26 @@ from tooltransfer.planner.planning.verdicts.switch_space import PlacementSpace
 START_GAP = 5e-4
 #: The least start gap [m] a stored certificate may claim (far above the rounding).
 MIN_START_GAP = 1e-5
-#: A backward-reachable set with exact pieces (cells [m], a start gap [m], block updates): it certifies
-#: ``exec60-00015``, where the growth of the stored pieces alone takes the default sets to the start, but is
-#: not tried by ``decide.attach_verdict``: on another task its pieces' vertices made it run for minutes
-#: (benchmarks/README.md, twenty-first session).
-LAST_BACKWARD = (0.0025, 5e-5, 12000)
+
+
+@dataclass(frozen=True)
+class ExactBackward:
+    """The last attempt at a ``backward_reachable`` certificate: cells of ``cell`` [m], a start gap of ``gap``
+    [m], pieces stored exactly (:func:`~.backward.backward_set`), at most ``blocks`` block updates and
+    ``vertices`` vertices grown (each times the budget)."""
+
+    cell: float
+    gap: float
+    blocks: int
+    vertices: int
+
+
+#: Tried by ``decide.attach_verdict`` once the search has failed: it certifies ``exec60-00015``, where the
+#: growth of the stored pieces alone takes the default sets to the start, after 344,672 vertices grown
+#: (9,529 updates, some 20 s). The vertex bound stops it where exact pieces gather vertices: on
+#: ``tiny-00001`` of ``examples/tiny_batch.yaml`` one block's pieces reached 26,755 and the set ran for minutes
+#: unbounded (benchmarks/README.md, twenty-first and twenty-second sessions).
+LAST_BACKWARD = ExactBackward(0.0025, 5e-5, 12000, 600_000)
 
 
 @dataclass
@@ -115,13 +130,13 @@ FINE_BLOCKS = (5000, 1500)
 
 def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple[float, ...] = CELL_SIDES,
             max_blocks: int = 20000, fine_blocks: tuple[int, ...] = FINE_BLOCKS, gap: float = START_GAP,
-            exact: bool = False) -> tuple[Certificate | None, str]:
+            exact: bool = False, max_vertices: int | None = None) -> tuple[Certificate | None, str]:
     """A certificate that ``start`` (2,) [m] cannot reach ``target`` (2,) [m] under ``rules``, or None
     with what was tried (an honest "not proved": the task may still be infeasible). The
     backward-reachable set is built on cells of side ``h[0]`` [m], then of each next side in turn while it
     comes within ``gap`` [m] of the start (pieces stored ``exact``: :func:`~.backward.backward_set`);
     ``max_blocks`` block updates in all, at most ``fine_blocks[k]`` on the grid ``h[k + 1]`` (the last
-    allowance for any further grid)."""
+    allowance for any further grid); ``max_vertices``: the vertices grown each set may take (None: no bound)."""
     t0 = time.perf_counter()
     start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
     if np.hypot(*(start - target)) <= rules.goal_tol:
@@ -156,7 +171,8 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
     finer = "" if gap == START_GAP and not exact else f", a start gap of {gap * 1e3:g} mm{', pieces exact' * exact}"
     for k, side in enumerate(h):
         allowed = left if k == 0 else min(left, fine_blocks[min(k, len(fine_blocks)) - 1])
-        back = backward_set(rules, inside, goal, start, h=side, gap=gap, max_blocks=allowed, zone=zone, exact=exact)
+        back = backward_set(rules, inside, goal, start, h=side, gap=gap, max_blocks=allowed, zone=zone, exact=exact,
+                            max_vertices=max_vertices)
         tried.append(f"cells of {side * 1e3:g} mm{finer}: {back.stopped} (after {back.blocks_processed} blocks)")
         left -= back.blocks_processed
         if back.region is not None or left <= 0:
@@ -177,6 +193,14 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
         return None, "backward-reachable set of the target: its check failed: " + "; ".join(problems)
     cert.time = time.perf_counter() - t0
     return cert, ""
+
+
+def certify_exact_backward(rules: PushRules, start: np.ndarray, target: np.ndarray, *, budget: float = 1.0,
+                           last: ExactBackward = LAST_BACKWARD) -> tuple[Certificate | None, str]:
+    """:func:`certify` with the set of exact pieces ``last`` (its block updates and vertices times ``budget``):
+    the verdict's last backward attempt (``decide.attach_verdict``, once the search has failed)."""
+    return certify(rules, start, target, h=(last.cell,), max_blocks=round(last.blocks * budget), gap=last.gap,
+                   exact=True, max_vertices=round(last.vertices * budget))
 
 
 def restricted_zone(rules: PushRules, sp: Spiral, start: np.ndarray, space: shapely.Geometry,

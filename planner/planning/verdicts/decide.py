@@ -25,6 +25,7 @@ from tooltransfer.planner.planning.verdicts.certificate import (
     FINE_BLOCKS,
     Certificate,
     certify,
+    certify_exact_backward,
     certify_switches,
 )
 from tooltransfer.planner.planning.verdicts.rules import setting_rules
@@ -77,6 +78,8 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                                        "checks": "every hard check holds (metrics)", "budget": budget})
     if sought is None:
         sought = seek_certificate(setting, start, target, max_blocks=max_blocks, budget=budget)
+    if sought.cert is None and plan.status != "violated":  # then the backward set with exact pieces
+        sought = _with_exact_backward(sought, setting, start, target, budget)
     if sought.cert is None and plan.status != "violated":  # last: the switches the tool cannot make
         sought = _with_switches(sought, setting, start, target, budget)
     cert, why, spent = sought.cert, sought.why, sought.spent
@@ -98,13 +101,23 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                    reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)
 
 
+def _with_exact_backward(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray,
+                         budget: float) -> Sought:
+    """``sought`` (no certificate found), or the ``backward_reachable`` certificate of the set with exact pieces
+    (:func:`~.certificate.certify_exact_backward`, ``budget`` scaling its block updates and vertices): tried only
+    once the search has failed, where the default sets came within the gap of the start or spent their budget."""
+    t0 = time.perf_counter()
+    cert, why = certify_exact_backward(setting_rules(setting), np.asarray(start, dtype=np.float64),
+                                       np.asarray(target, dtype=np.float64), budget=budget)
+    spent = sought.spent + time.perf_counter() - t0
+    return Sought(cert, f"{sought.why}; {why}" if cert is None else "", spent)
+
+
 def _with_switches(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float) -> Sought:
     """``sought`` (no certificate found), or the ``switch_separated`` certificate where the faces' sets from
     the start, passed from face to face only where the tool can get round the puck, leave the target out
     (:func:`certify_switches`, ``budget`` scaling its block updates): tried only once the search has failed,
-    its sets cost some seconds where they close and where they do not. (The backward set with exact pieces,
-    ``certify(..., exact=True)``, is not tried here: on one task its pieces' vertices made it run for minutes;
-    benchmarks/README.md, twenty-first session.)"""
+    its sets cost some seconds where they close and where they do not."""
     t0 = time.perf_counter()
     cert, why = certify_switches(setting_rules(setting), placement_space(setting), start, target, budget=budget)
     spent = sought.spent + time.perf_counter() - t0
