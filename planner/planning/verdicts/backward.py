@@ -239,7 +239,7 @@ def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geomet
     zone, regions = obstacle_zone(rules) if zone is None else zone, face_regions(rules)
     models: dict[tuple[int, int], list] = {}
     cells = _split(grid, goal)
-    done, work = 0, [0, max_vertices]
+    done, work = 0, _Vertices(max_vertices)
     for tol, simplify in ((2 * COARSEN, not exact), (ROUNDING, False)):
         cells, stopped, done = _close(rules, grid, cells, start, gap, max_blocks, done, zone, regions, models, tol,
                                       simplify, work)
@@ -251,6 +251,15 @@ def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geomet
 
 
 Cells = dict[tuple[int, int], shapely.Geometry]
+
+
+@dataclass
+class _Vertices:
+    """The vertices of the pieces grown so far over both passes of :func:`backward_set`, and their bound
+    (None: none)."""
+
+    bound: int | None
+    grown: int = 0
 
 
 def _clipped(grid: BlockGrid, cells: Cells) -> Cells:
@@ -280,10 +289,10 @@ def _split(grid: BlockGrid, g: shapely.Geometry) -> dict[tuple[int, int], shapel
 
 def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, gap: float, max_blocks: int,
            done: int, zone: shapely.Geometry, regions: list, models: dict, tol: float, simplify: bool,
-           work: list) -> tuple[dict, str, int]:
+           work: _Vertices) -> tuple[dict, str, int]:
     """Grow ``cells`` block by block until no block adds more than ``tol`` [m] beyond them; returns the
     cells, why it stopped early ("" if it did not) and the block updates made so far. ``work``: the vertices
-    grown so far and their bound (or None), the first updated here."""
+    grown so far and their bound, updated here."""
     nx, ny = grid.shape
     start_pt = shapely.Point(start)
     sx, sy = (float(v) for v in start)
@@ -311,9 +320,9 @@ def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, ga
         if v not in models:
             models[v] = block_faces(rules, box, zone, regions)
         source = safe_union(own)
-        work[0] += shapely.get_num_coordinates(source)
-        if work[1] is not None and work[0] > work[1]:
-            return cells, f"{BUDGET_SPENT} {work[1]} vertices grown (after {done} block updates)", done
+        work.grown += shapely.get_num_coordinates(source)
+        if work.bound is not None and work.grown > work.bound:
+            return cells, f"{BUDGET_SPENT} {work.bound} vertices grown (after {done} block updates)", done
         grown = grow(source, models[v], box)
         for c in quad:
             if grown.is_empty or not (0 <= c[0] < nx and 0 <= c[1] < ny):
