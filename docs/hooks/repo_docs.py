@@ -42,6 +42,7 @@ from __future__ import annotations
 import ast
 import html
 import importlib
+import inspect
 import json
 import logging
 import os
@@ -211,7 +212,9 @@ def on_startup(command: str, dirty: bool) -> None:
         from griffe._internal.finder import ModuleFinder
     except ImportError:  # another griffe: leave its walk alone
         return
-    if not hasattr(ModuleFinder, "_filter_py_modules") or not hasattr(ModuleFinder, "extensions_set"):
+    walk = getattr(ModuleFinder, "_filter_py_modules", None)
+    if walk is None or not hasattr(ModuleFinder, "extensions_set") or \
+            list(inspect.signature(walk).parameters) != ["self", "path"]:
         return
 
     def packages_only(self: Any, path: Path) -> Any:

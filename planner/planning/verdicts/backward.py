@@ -322,7 +322,7 @@ def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, ga
         source = safe_union(own)
         work.grown += shapely.get_num_coordinates(source)
         if work.bound is not None and work.grown > work.bound:
-            return cells, f"{BUDGET_SPENT} {work.bound} vertices grown (after {done} block updates)", done
+            return cells, f"{BUDGET_SPENT} {work.bound} vertices grown", done
         grown = grow(source, models[v], box)
         for c in quad:
             if grown.is_empty or not (0 <= c[0] < nx and 0 <= c[1] < ny):

@@ -3,6 +3,7 @@
 The planner's search is bounded (a few scored push sequences, at most ``oe.max_pushes`` pushes), so
 its failure says nothing about the task. :func:`attach_verdict` looks for a certificate under the
 rules of :mod:`~tooltransfer.planner.planning.verdicts.rules` (:func:`certify`; once the search has failed, also
+:func:`~.certificate.certify_exact_backward`, the backward set with exact pieces, then
 :func:`certify_switches`, the switches the tool cannot make) and returns the plan
 with ``status`` ``"infeasible"`` and the certificate as its evidence when one is found, else with
 ``status`` ``"unknown"`` (or ``"violated"`` for a plan that broke its hard checks) and evidence that
@@ -37,11 +38,12 @@ CERTIFY_BLOCKS = 20000
 
 def budget_limited(metrics: dict[str, float], not_proved: str) -> bool:
     """Whether an ``unknown`` verdict's search or certificate stopped on its budget: an attempt of the
-    guided search ran out of expansions (``guided_attempts_on_budget``) or the backward-reachable set
-    out of block updates (``not_proved``). Where neither did, every attempt searched its whole space
+    guided search ran out of expansions (``guided_attempts_on_budget``) or a certificate's set out of block
+    updates or of vertices grown (``not_proved``). Where neither did, every attempt searched its whole space
     under its own rules and every grid's set reached the start: a larger ``budget`` is unlikely to decide
     the task (benchmarks/README.md: on the verdict benchmark, 4 times the budget decided 6 of 32 unknowns,
-    16 times none more), a wider search or a tighter certificate might."""
+    16 times none more, measured before the exact backward set was tried), a wider search or a tighter
+    certificate might."""
     return metrics.get("guided_attempts_on_budget", 0.0) > 0.0 or BUDGET_SPENT in not_proved
 
 
@@ -104,8 +106,8 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
 def _with_exact_backward(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray,
                          budget: float) -> Sought:
     """``sought`` (no certificate found), or the ``backward_reachable`` certificate of the set with exact pieces
-    (:func:`~.certificate.certify_exact_backward`, ``budget`` scaling its block updates and vertices): tried only
-    once the search has failed, where the default sets came within the gap of the start or spent their budget."""
+    (:func:`~.certificate.certify_exact_backward`, ``budget`` scaling its block updates and vertices): tried
+    once the search has failed and the default sets proved nothing (on a ``violated`` plan it is not tried)."""
     t0 = time.perf_counter()
     cert, why = certify_exact_backward(setting_rules(setting), np.asarray(start, dtype=np.float64),
                                        np.asarray(target, dtype=np.float64), budget=budget)
