@@ -4,6 +4,8 @@ On a task at the edge of the rules the growth of the stored pieces alone takes t
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from test_verdicts import _rules_of, depth_inside, generated, lattice_search
 
@@ -45,9 +47,8 @@ def test_the_vertices_grown_bound_the_exact_set_and_say_a_budget_stopped_it() ->
     the reason says a budget stopped it, so the verdict is ``budget_limited`` (a larger ``--budget`` may help)."""
     task = generated("execution_60.yaml", "exec60-00015")
     _, rules = _rules_of(task)
-    last = LAST_BACKWARD
-    cert, why = certify(rules, np.array(task.start), np.array(task.target), h=(last.cell,), max_blocks=last.blocks,
-                        gap=last.gap, exact=True, max_vertices=20_000)
+    cert, why = certify_exact_backward(rules, np.array(task.start), np.array(task.target),
+                                       last=replace(LAST_BACKWARD, vertices=20_000))
     assert cert is None and f"{BUDGET_SPENT} 20000 vertices grown" in why
     assert budget_limited({}, why)
 

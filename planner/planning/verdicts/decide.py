@@ -80,10 +80,8 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                                        "checks": "every hard check holds (metrics)", "budget": budget})
     if sought is None:
         sought = seek_certificate(setting, start, target, max_blocks=max_blocks, budget=budget)
-    if sought.cert is None and plan.status != "violated":  # then the backward set with exact pieces
-        sought = _with_exact_backward(sought, setting, start, target, budget)
-    if sought.cert is None and plan.status != "violated":  # last: the switches the tool cannot make
-        sought = _with_switches(sought, setting, start, target, budget)
+    if sought.cert is None and plan.status != "violated":
+        sought = _after_search(sought, setting, start, target, budget)
     cert, why, spent = sought.cert, sought.why, sought.spent
     metrics = {**plan.metrics, "time_certify": spent}
     if "time_total" in metrics:
@@ -103,24 +101,20 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                    reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)
 
 
-def _with_exact_backward(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray,
-                         budget: float) -> Sought:
-    """``sought`` (no certificate found), or the ``backward_reachable`` certificate of the set with exact pieces
-    (:func:`~.certificate.certify_exact_backward`, ``budget`` scaling its block updates and vertices): tried
-    once the search has failed and the default sets proved nothing (on a ``violated`` plan it is not tried)."""
-    t0 = time.perf_counter()
-    cert, why = certify_exact_backward(setting_rules(setting), np.asarray(start, dtype=np.float64),
-                                       np.asarray(target, dtype=np.float64), budget=budget)
-    spent = sought.spent + time.perf_counter() - t0
-    return Sought(cert, f"{sought.why}; {why}" if cert is None else "", spent)
-
-
-def _with_switches(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float) -> Sought:
-    """``sought`` (no certificate found), or the ``switch_separated`` certificate where the faces' sets from
-    the start, passed from face to face only where the tool can get round the puck, leave the target out
-    (:func:`certify_switches`, ``budget`` scaling its block updates): tried only once the search has failed,
-    its sets cost some seconds where they close and where they do not."""
-    t0 = time.perf_counter()
-    cert, why = certify_switches(setting_rules(setting), placement_space(setting), start, target, budget=budget)
-    spent = sought.spent + time.perf_counter() - t0
-    return Sought(cert, f"{sought.why}; {why}" if cert is None else "", spent)
+def _after_search(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float) -> Sought:
+    """``sought`` (no certificate found), or the first certificate of the attempts made only once the search
+    has failed, in turn: the backward set with exact pieces (:func:`~.certificate.certify_exact_backward`), then
+    the ``switch_separated`` sets (:func:`certify_switches`: the faces' sets from the start, passed from face to
+    face only where the tool can get round the puck); ``budget`` scales their block updates (and vertices).
+    Each costs some seconds where it proves something and where it does not."""
+    rules = setting_rules(setting)
+    attempts = (lambda: certify_exact_backward(rules, start, target, budget=budget),
+                lambda: certify_switches(rules, placement_space(setting), start, target, budget=budget))
+    for attempt in attempts:
+        t0 = time.perf_counter()
+        cert, why = attempt()
+        spent = sought.spent + time.perf_counter() - t0
+        sought = Sought(cert, f"{sought.why}; {why}" if cert is None else "", spent)
+        if cert is not None:
+            break
+    return sought
