@@ -5,6 +5,7 @@ Run after the verdict benchmark (``make bench-verdicts`` or ``python benchmarks/
 RESULTS``)::
 
     python benchmarks/check_certificates.py RESULTS.json [--budget 15000] [--workers 2] [--dense] [--unknowns]
+        [--goal-disc G]
 
 For every task the run called ``infeasible`` (whatever the certificate's kind) the task is generated
 again from its batch file and the test suite's own lattice search
@@ -35,6 +36,12 @@ are reported per task:
 * the closest approach to the target [mm], and how many come within ``--flag`` (3 mm, the test suite's
   threshold): a sound certificate whose set or quantity passes close to the target may be approached
   this close, so this number is a description, not a test, where the certificate has its own.
+
+With ``--goal-disc G`` [m] every certificate is also made again with a goal disc of radius ``G`` instead
+of the hard check's ``goal_tol`` (0.1 mm): the stronger claim that no plan ends within ``G`` of the target.
+How many still hold is printed (a description: a certificate is relative to ``goal_tol``, so one that does
+not hold at a wider disc is not flagged); a checker that accepts plans ending farther from the target
+than the hard check does can see which certificates its own tolerance leaves standing.
 
 The exit code is 1 when any certificate is flagged. Single-threaded BLAS; CPU seconds per task are
 printed. ``--dense`` searches denser (nine directions, every one of 13 contact places, 0.75 mm cells);
@@ -112,7 +119,21 @@ def _switches(setting: Any, rules: Any, start: Any, target: Any, budget: int) ->
     return d, cpu, test
 
 
-def _closest(args: tuple[Any, int, bool, bool, float, float, str | None]
+def _made_with_goal(setting: Any, rules: Any, start: Any, target: Any, goal: float) -> str | None:
+    """The kind of the certificate the verdict's attempts make (in its order: the default sets, the exact
+    backward set, the switch sets) with a goal disc of radius ``goal`` [m] in ``rules``; None: none is made."""
+    from dataclasses import replace
+
+    from tooltransfer.planner.planning.verdicts.certificate import certify, certify_exact_backward, certify_switches
+    from tooltransfer.planner.planning.verdicts.switch_space import placement_space
+
+    wide = replace(rules, goal_tol=goal)
+    cert = certify(wide, start, target)[0] or certify_exact_backward(wide, start, target)[0] \
+        or certify_switches(wide, placement_space(setting), start, target)[0]
+    return None if cert is None else cert.kind
+
+
+def _closest(args: tuple[Any, int, bool, bool, float, float, str | None, float | None]
              ) -> tuple[str, float, float, dict[str, Any]]:
     """``(task_id, closest approach [m], CPU [s], the certificate's own test)`` of the lattice search
     (``dense``: :data:`DENSE`; steps whose end the face still holds) on one job's task. The test: the
@@ -121,19 +142,22 @@ def _closest(args: tuple[Any, int, bool, bool, float, float, str | None]
     the least value of a ``polar_invariant``'s quantity less its value at the start (both None for the
     other kinds, where no certificate is made, and for ``unknowns``, where none is made). The CPU time is
     the search's (not the certificate's). ``share``, ``room``: :func:`lattice_search`'s (1 and 0 but for
-    ``unknowns``)."""
+    ``unknowns``). ``goal``: a goal disc [m] to make the certificate again with (``test["wide"]``: its kind,
+    or None; :func:`_made_with_goal`), or None."""
     import numpy as np
     from test_verdicts import _rules_of, depth_inside, lattice_search
 
     from tooltransfer.planner.planning.verdicts.certificate import certify, certify_exact_backward
     from tooltransfer.planner.planning.verdicts.spiral import Spiral, _values
 
-    job, budget, dense, unknowns, share, room, kind = args
+    job, budget, dense, unknowns, share, room, kind, goal = args
     task = _task(job)
     setting, rules = _rules_of(task)
     start, target = np.array(task.start), np.array(task.target)
+    wide = {} if goal is None else {"wide": _made_with_goal(setting, rules, start, target, goal)}
     if kind == "switch_separated":
-        return (job.task_id, *_switches(setting, rules, start, target, budget))
+        tid, d, cpu, test = job.task_id, *_switches(setting, rules, start, target, budget)
+        return tid, d, cpu, test | wide
     cpu = time.process_time()
     visited: list[Any] = []
     d = lattice_search(setting, start, target, budget=budget, ends_held=True, visited=visited, share=share,
@@ -151,7 +175,7 @@ def _closest(args: tuple[Any, int, bool, bool, float, float, str | None]
         sp = Spiral.from_dict(cert.extra["invariant"])
         test["v_low"] = min(_values(rules, sp, p, p)[0] for p in pts) - sp.v_start
         test["v_goal"] = sp.v_goal - sp.v_start
-    return job.task_id, d, cpu, test
+    return job.task_id, d, cpu, test | wide
 
 
 def _own(test: dict[str, Any]) -> str:
@@ -163,6 +187,21 @@ def _own(test: dict[str, Any]) -> str:
         return (f"; its quantity at least {test['v_low'] * 1e3:+.2f} mrad from the start's value "
                 f"(the target's at most {test['v_goal'] * 1e3:+.2f})")
     return ""
+
+
+def _wide(test: dict[str, Any], goal: float | None) -> str:
+    """The certificate made again with the goal disc ``goal`` [m] (``--goal-disc``), printed."""
+    if goal is None:
+        return ""
+    return f"; with a goal disc of {goal * 1e3:g} mm: {test.get('wide') or 'not made'}"
+
+
+def _wide_problem(test: dict[str, Any], d: float, goal: float | None) -> str:
+    """"" unless a certificate made with the goal disc ``goal`` [m] says no plan ends within it while the
+    search comes that close to the target (``d`` [m])."""
+    if goal is None or not test.get("wide") or d > goal:
+        return ""
+    return f"made with a goal disc of {goal * 1e3:g} mm, but the search comes within {d * 1e3:.2f} mm of the target"
 
 
 def _verdict_of(test: dict[str, Any], kind: str | None, d: float, flag: float) -> str:
@@ -196,14 +235,23 @@ def main(argv: Sequence[str] | None = None) -> int:
                     help="with --unknowns: the share (0, 1] of the friction cone's half-angle the search pushes in")
     ap.add_argument("--room", type=float, default=0.0,
                     help="with --unknowns: how far [m] the tool outline keeps from the obstacles")
+    ap.add_argument("--goal-disc", type=float, default=None,
+                    help="also make every certificate again with a goal disc of this radius [m] (a stronger claim)")
     args = ap.parse_args(argv)
     narrowed = (args.share, args.room) != (1.0, 0.0)  # the lattice's rules narrower than the certificates'
     if narrowed and not args.unknowns:
         ap.error("--share and --room narrow the rules: a certificate is checked under its own (use them with "
                  "--unknowns)")
+    if args.goal_disc is not None and (args.unknowns or not 0.0 < args.goal_disc < 1.0):
+        ap.error(f"--goal-disc is a radius in (0, 1) [m] for the certificates (not with --unknowns), "
+                 f"got {args.goal_disc}")
     if not 0.0 < args.share <= 1.0 or not args.room >= 0.0:
         ap.error(f"--share must be in (0, 1] and --room >= 0 [m], got {args.share} and {args.room}")
-    data = json.loads(args.results.read_text())
+    try:
+        data = json.loads(args.results.read_text())
+    except (OSError, ValueError) as exc:
+        print(f"{args.results}: not a bench_verdicts.py --json file that can be read: {exc}", file=sys.stderr)
+        return 2
     verdict = "unknown" if args.unknowns else "infeasible"
     rows = [r for r in data["rows"] if r.get("verdict") == verdict]
     # the run's batch files, else the files of that name in this checkout (a run made elsewhere)
@@ -217,17 +265,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     kind = {r["task_id"]: r.get("evidence_kind") for r in rows}
     found: list[tuple[str, float, float]] = []
     wrong: list[str] = []
+    held: list[str] = []  # (--goal-disc) the certificates made again with the wider goal disc
     with ProcessPoolExecutor(args.workers) as pool:
-        todo = [(jobs[r["task_id"]], args.budget, args.dense, args.unknowns, args.share, args.room, kind[r["task_id"]])
-                for r in rows]
+        todo = [(jobs[r["task_id"]], args.budget, args.dense, args.unknowns, args.share, args.room, kind[r["task_id"]],
+                 args.goal_disc) for r in rows]
         for tid, d, cpu, test in pool.map(_closest, todo):
             found.append((tid, d, cpu))
             if args.unknowns:
                 mark = "  reached" if d <= args.flag else ""
             else:
-                problem = _verdict_of(test, kind[tid], d, args.flag)
+                problem = _verdict_of(test, kind[tid], d, args.flag) or _wide_problem(test, d, args.goal_disc)
                 wrong += [tid] if problem else []
-                mark = _own(test) + (f"  FLAGGED: {problem}" if problem else "")
+                mark = _own(test) + _wide(test, args.goal_disc) + (f"  FLAGGED: {problem}" if problem else "")
+                held += [tid] if test.get("wide") else []
             print(f"{tid} {kind[tid] or verdict}: closest {d * 1e3:.2f} mm (CPU {cpu:.1f} s){mark}", flush=True)
     if not found:
         print(f"no {'unknown' if args.unknowns else 'certificate'} in the run")
@@ -243,6 +293,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"\n{len(found)} certificates; the lattice search's closest approach: min "
           f"{min(d for _, d, _ in found) * 1e3:.2f} mm; within {args.flag * 1e3:g} mm: {len(flagged)} {flagged}; "
           f"inconsistent with their own certificate: {len(wrong)} {wrong}")
+    if args.goal_disc is not None:
+        print(f"made again with a goal disc of {args.goal_disc * 1e3:g} mm: {len(held)} of {len(found)}; not: "
+              f"{[t for t, _, _ in found if t not in held]}")
     return 1 if wrong else 0
 
 

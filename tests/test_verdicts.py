@@ -358,5 +358,25 @@ def test_check_certificates_refuses_margins_on_certificates(capsys, monkeypatch)
         assert err.value.code == 2
     assert "--share" in capsys.readouterr().err
     # the whole cone and no room are the certificates' own rules: accepted (then the missing file is read)
-    with pytest.raises(FileNotFoundError):
-        check_certificates.main(["no-such-results.json", "--share", "1.0", "--room", "0"])
+    capsys.readouterr()
+    assert check_certificates.main(["no-such-results.json", "--share", "1.0", "--room", "0"]) == 2
+    assert "no-such-results.json: not a bench_verdicts.py --json file" in capsys.readouterr().err
+    # a wider goal disc remakes certificates: a radius in metres, not with --unknowns
+    for extra in (["--goal-disc", "0"], ["--goal-disc", "3"], ["--goal-disc", "0.001", "--unknowns"]):
+        with pytest.raises(SystemExit) as err:
+            check_certificates.main(["results.json", *extra])
+        assert err.value.code == 2
+    assert "--goal-disc" in capsys.readouterr().err
+
+
+def test_check_certificates_makes_a_certificate_again_with_a_wider_goal_disc(monkeypatch) -> None:
+    """``--goal-disc``: the verdict's attempts with the goal disc widened; none where it holds the start."""
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    import check_certificates
+
+    task = load_task(ROOT / "problems" / "hard" / "target_out_of_reach.yaml")
+    setting, rules = _rules_of(task)
+    start, target = np.array(task.start), np.array(task.target)
+    assert check_certificates._made_with_goal(setting, rules, start, target, 0.001) == "target_unpushable"
+    wider = float(np.hypot(*(start - target))) + 0.001  # the start inside the goal disc: nothing to prove
+    assert check_certificates._made_with_goal(setting, rules, start, target, wider) is None
