@@ -233,18 +233,35 @@ def test_report_statistics_and_files(tmp_path, capsys) -> None:
     assert main(["batch", "report", str(tmp_path / "missing.sqlite")]) == 2
 
 
-def test_retry_forgets_only_the_asked_statuses(tmp_path, capsys) -> None:
+def test_retry_runs_only_the_asked_statuses_and_never_loses_a_verdict(tmp_path, capsys) -> None:
+    """``--retry``: the rows of those statuses run again, each kept until its new result comes; a new run
+    that gives no verdict (error, timeout) does not replace a verdict already stored."""
+    import sqlite3 as sql
+
     with ResultStore(tmp_path / "r.sqlite") as store:
-        for i, status in enumerate(("solved", "infeasible", "error", "timeout", "error")):
-            store.put({"task_id": f"t{i}", "variant": "v", "status": status})
-        assert store.forget(["error", "timeout"]) == 3
-        assert sorted(k for k, _ in store.done()) == ["t0", "t1"]
+        for i, status in enumerate(("solved", "infeasible", "error", "timeout", "unknown")):
+            store.put({"task_id": f"t{i}", "variant": "v", "status": status, "reason": f"first {status}"})
+        assert store.again(["error", "timeout", "unknown"]) == {("t2", "v"), ("t3", "v"), ("t4", "v")}
+        assert store.count() == 5  # nothing is deleted before the new results come (a stopped retry loses none)
+        assert store.put({"task_id": "t2", "variant": "v", "status": "solved", "reason": ""})
+        assert store.put({"task_id": "t3", "variant": "v", "status": "timeout", "reason": "again 120 s"})
+        assert not store.put({"task_id": "t4", "variant": "v", "status": "timeout", "reason": "no result in 120 s"})
+        with pytest.raises(sql.IntegrityError):  # a row not being run again is never stored twice
+            store.put({"task_id": "t0", "variant": "v", "status": "error"})
+    with sql.connect(tmp_path / "r.sqlite") as c:
+        rows = {t: (st, r, d) for t, st, r, d in c.execute("SELECT task_id, status, reason, detail FROM results")}
+    assert {t: st for t, (st, _, _) in rows.items()} == {"t0": "solved", "t1": "infeasible", "t2": "solved",
+                                                          "t3": "timeout", "t4": "unknown"}
+    assert rows["t2"][2] == "replaces a row of an earlier run: error (first error)"
+    assert rows["t3"][1] == "again 120 s"
+    assert rows["t4"][1] == "first unknown"  # the verdict kept, and how the new run ended
+    assert rows["t4"][2] == "run again, it ended timeout (no result in 120 s): this row is kept"
     batch = _batch(tmp_path)
     assert main(["batch", "run", str(batch), "--db", str(tmp_path / "x.sqlite"), "--resume", "--retry", "solved"]) == 2
     assert "--retry" in capsys.readouterr().err
 
 
-def test_retry_unknown_with_a_larger_budget_runs_those_rows_again(tmp_path) -> None:
+def test_retry_unknown_with_a_larger_budget_runs_those_rows_again(tmp_path, capsys) -> None:
     """``--resume --retry unknown --budget K``: only the unknown rows run again, with the search's and the
     certificate's budgets multiplied by K (recorded in each row's evidence)."""
     import json
@@ -265,4 +282,18 @@ def test_retry_unknown_with_a_larger_budget_runs_those_rows_again(tmp_path) -> N
     for t, (finished, metrics) in rows.items():
         assert (finished != first[t][0]) == (t in again), t
         assert metrics["evidence"]["budget"] == (3.0 if t in again else 1.0), t
+    # a retry that gives no verdict (every job past its timeout) keeps the verdicts stored, and says so
+    sql = "SELECT task_id, status, reason, finished_at, detail FROM results ORDER BY task_id"
+    with sqlite3.connect(db) as c:
+        c.execute("UPDATE results SET status = 'unknown'")
+        before = c.execute(sql).fetchall()
+    capsys.readouterr()
+    assert main(["batch", "run", str(batch), "--db", str(db), "-q", "--workers", "1", "--resume",
+                 "--retry", "unknown", "--timeout", "0.001"]) == 1
+    assert "2 of them ran again and gave no verdict (error or timeout)" in capsys.readouterr().out
+    with sqlite3.connect(db) as c:
+        after = c.execute(sql).fetchall()
+    assert [r[:4] for r in after] == [r[:4] for r in before]
+    assert all(r[4].endswith("run again, it ended timeout (no result within the timeout of 0.001 s): this row is "
+                             "kept") for r in after)
     assert main(["batch", "run", str(batch), "--db", str(db), "-q", "--resume", "--budget", "0.5"]) == 2

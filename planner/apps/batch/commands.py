@@ -63,6 +63,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(f"{s.stored} results stored ({counts}), {s.skipped} already done, of {s.total}; "
           f"{s.wall:.1f} s on {s.slots} {s.kind} slots: {s.throughput:.3f} results (task-variant pairs) per second "
           "per slot")
+    if s.kept:
+        print(f"{s.kept} of them ran again and gave no verdict (error or timeout): the verdicts stored before were "
+              "kept instead, their rows' detail says how the new run ended")
     code = run_exit_code(s)
     if code == EXIT_INTERRUPTED:
         print(f"stopped before the end: carry on with `tooltransfer batch run {args.batch} --db {args.db} --resume`")

@@ -83,9 +83,10 @@ CHUNK = 64
 def lazy_jobs(spec: BatchSpec, batch_path: str | Path, store: ResultStore, first: GeneratedTask,
                timeout: float | None, simulate: bool | None,
                warm: tuple[tuple[str, tuple], ...], skills: str | None = None, budget: float = 1.0) -> Iterator[Job]:
-    """The jobs not yet stored, task by task: tasks generated :data:`CHUNK` at a time and recorded in
-    the store's ``tasks`` table before their jobs are handed out. A task that cannot be generated
-    (its ranges leave no room) becomes an ``error`` row per variant, and the batch goes on."""
+    """The jobs not yet stored (or stored and being run again, ``store.retrying``), task by task: tasks
+    generated :data:`CHUNK` at a time and recorded in the store's ``tasks`` table before their jobs are
+    handed out. A task that cannot be generated (its ranges leave no room) becomes an ``error`` row per
+    variant, and the batch goes on."""
     from tooltransfer.planner.apps.batch.generate import GenerationError, generate_task
     from tooltransfer.planner.apps.batch.spec import dataset_folder
 
@@ -100,6 +101,7 @@ def lazy_jobs(spec: BatchSpec, batch_path: str | Path, store: ResultStore, first
                 failed.append((i, str(exc)))
         store.add_tasks(task_records(chunk))
         done = store.done_for([t.task_id for t in chunk] + [f"{spec.name}-{i:05d}" for i, _ in failed])
+        done -= store.retrying  # (run again: ``batch run --retry``)
         for t in chunk:
             yield from (j for j in task_jobs(spec, batch_path, t, timeout, simulate, warm, skills, budget)
                         if j.key not in done)

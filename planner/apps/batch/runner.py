@@ -74,6 +74,7 @@ class RunSummary:
         total: (task, variant) pairs in the batch.
         skipped: pairs already in the store (resume).
         counts: rows stored by this run, per status.
+        kept: of those, rows run again that gave no verdict where the store had one, which it kept.
         interrupted: stopped by Ctrl-C before the end.
         wall: wall time of the run [s] (after the warm-up).
         slots: parallel jobs.
@@ -83,6 +84,7 @@ class RunSummary:
     total: int
     skipped: int
     counts: Counter = field(default_factory=Counter)
+    kept: int = 0
     interrupted: bool = False
     wall: float = 0.0
     slots: int = 1
@@ -273,7 +275,7 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
 
     def store_row(job: Job, row: dict[str, Any]) -> None:
         row = {**extra(job), **row, "task_id": job.task_id, "variant": job.variant}
-        store.put(row)
+        summary.kept += not store.put(row)
         summary.counts[row["status"]] += 1
 
     try:
@@ -347,7 +349,8 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
         simulate: override the batch file's ``simulate.enabled`` (part of the store's settings: a resume
             with the other setting is refused).
         resume: carry on a store that already holds rows of this batch.
-        retry: statuses to run again on resume (e.g. ``("error", "timeout")``).
+        retry: statuses to run again on resume (e.g. ``("error", "timeout")``); each row stays until its new
+            result replaces it, and one that gave no verdict keeps a stored verdict (``ResultStore.put``).
         budget: the search's and the certificate's budgets multiplied (>= 1; with ``retry=("unknown",)``
             the undecided tasks get more: :func:`~tooltransfer.planner.planning.solve.solve`).
     """
@@ -380,7 +383,7 @@ def run_batch(batch_path: str | Path, db: str | Path, *, workers: int | None = N
         with ResultStore(db) as store:
             open_batch_store(store, spec, [], resume, simulate)
             if retry:
-                store.forget(retry)
+                store.again(retry)
             return _run_store(store, slots, spec, batch_path, first, warm, warmed, timeout, simulate, progress,
                               console, shipped.digest if shipped is not None else None, budget)
 
@@ -407,7 +410,7 @@ def _run_store(store: ResultStore, slots: Slots, spec: BatchSpec, batch_path: st
     """:func:`run_batch` on the opened, locked and checked store and executor: the jobs not stored yet."""
     pairs = spec.variants.pairs()
     total = spec.count * len(pairs)
-    skipped = store.count()
+    skipped = store.count() - len(store.retrying)
     if skipped < total and not warmed:
         _warm_parent(task_jobs(spec, batch_path, first, timeout, simulate, warm), console, progress)
 

@@ -9,7 +9,7 @@ the executions of a solved plan: open loop (``open_loop_*``, also under the sche
 ``sim_*``) and closed loop (``closed_loop_*``), each with a status, a reason and a wall time). The
 journal is WAL; each row is committed on its own, so a process killed at any point loses at most
 the rows not yet written, and ``(task_id, variant)`` is the primary key: a row can never be stored
-twice.
+twice (a row run again, ``batch run --retry``, is replaced by its new result, :meth:`ResultStore.put`).
 
 Schema 2 added the execution columns. A schema-1 file (no ``open_loop_*``/``closed_loop_*``
 columns) still opens for reading (:meth:`ResultStore.rows` gives its ``sim_final_error`` as
@@ -71,6 +71,8 @@ TASK_COLUMNS: dict[str, str] = {
 
 #: Every status a result row may have.
 STATUSES = ("solved", "violated", "infeasible", "unknown", "error", "timeout")
+#: The statuses that are a verdict of the planner on the task (``error`` and ``timeout``: the run gave none).
+VERDICT_STATUSES = ("solved", "violated", "infeasible", "unknown")
 
 _META_COLUMNS = {"key": "TEXT PRIMARY KEY", "value": "TEXT"}
 #: The tables of a store, exactly (:func:`~tooltransfer.planner.apps.batch.store_file.check_schema`).
@@ -99,6 +101,8 @@ class ResultStore:
         self.field = field
         #: rows that could not be read (a note for the reader), or ""
         self.note = ""
+        #: the (task id, variant) pairs being run again (:meth:`again`)
+        self.retrying: frozenset[tuple[str, str]] = frozenset()
         self._copy: tempfile.TemporaryDirectory | None = None  # a private copy read instead (readonly)
         try:
             kind = file_kind(os.stat(self.path).st_mode)
@@ -244,21 +248,43 @@ class ResultStore:
                 out.update(self.db.execute(sql, part).fetchall())
         return out
 
-    def put(self, row: dict[str, Any]) -> None:
-        """Store one result row and commit it (raises ``sqlite3.IntegrityError`` for a stored key, and
-        :class:`~tooltransfer.planner.apps.batch.store_file.StoreError` when it cannot be written: the
-        rows stored before are kept)."""
-        keys = [k for k in RESULT_COLUMNS if k in row]
-        vals = [json.dumps(row[k]) if isinstance(row[k], dict | list) else row[k] for k in keys]
-        with self._guard(), self.db:
-            self.db.execute(f"INSERT INTO results ({', '.join(keys)}) VALUES ({', '.join('?' * len(keys))})", vals)
+    def put(self, row: dict[str, Any]) -> bool:
+        """Store one result row and commit it; False where a row run again (:meth:`again`) is kept instead.
 
-    def forget(self, statuses: Sequence[str]) -> int:
-        """Delete the rows of these statuses (to run them again); how many were deleted."""
+        A stored key raises ``sqlite3.IntegrityError`` unless it is run again: then the new row replaces the
+        stored one (its ``detail`` names the status it replaces), except where the stored row is a verdict
+        (:data:`VERDICT_STATUSES`) and the new run gave none (``error``, ``timeout``): the stored row is kept,
+        its ``detail`` saying how the new run ended, so that a retry never loses a verdict already computed.
+        :class:`~tooltransfer.planner.apps.batch.store_file.StoreError` when it cannot be written (the rows
+        stored before are kept)."""
+        key = (row.get("task_id"), row.get("variant"))
         with self._guard(), self.db:
-            cur = self.db.execute(f"DELETE FROM results WHERE status IN ({', '.join('?' * len(statuses))})",
-                                  list(statuses))
-        return cur.rowcount
+            if key in self.retrying:
+                where = "FROM results WHERE task_id = ? AND variant = ?"
+                old = self.db.execute(f"SELECT status, reason, detail {where}", key).fetchone()
+                if old is not None and old[0] in VERDICT_STATUSES and row.get("status") not in VERDICT_STATUSES:
+                    note = f"run again, it ended {row.get('status')} ({_short(row.get('reason'))}): this row is kept"
+                    self.db.execute("UPDATE results SET detail = ? WHERE task_id = ? AND variant = ?",
+                                    (_joined(old[2], note), *key))
+                    return False
+                if old is not None:
+                    note = f"replaces a row of an earlier run: {old[0]} ({_short(old[1])})"
+                    row = {**row, "detail": _joined(row.get("detail"), note)}
+                    self.db.execute(f"DELETE {where}", key)
+            keys = [k for k in RESULT_COLUMNS if k in row]
+            vals = [json.dumps(row[k]) if isinstance(row[k], dict | list) else row[k] for k in keys]
+            self.db.execute(f"INSERT INTO results ({', '.join(keys)}) VALUES ({', '.join('?' * len(keys))})", vals)
+        return True
+
+    def again(self, statuses: Sequence[str]) -> frozenset[tuple[str, str]]:
+        """The (task id, variant) pairs stored with these statuses, to be run again (``batch run --retry``):
+        :meth:`put` replaces each one's row as its new result comes (or keeps it, see there); until then the
+        stored row stays, so a retry stopped half way loses nothing."""
+        with self._guard():
+            sql = f"SELECT task_id, variant FROM results WHERE status IN ({', '.join('?' * len(statuses))})"
+            pairs = frozenset(self.db.execute(sql, list(statuses)).fetchall())
+        self.retrying = self.retrying | pairs
+        return pairs
 
     def rows(self) -> list[dict[str, Any]]:
         """Every result joined with its task's difficulty measures, in task and variant order."""
@@ -341,3 +367,14 @@ def lock_store(path: str | Path) -> Iterator[Path]:
         yield lock
     finally:
         fh.close()  # releases the lock
+
+
+def _short(text: object, n: int = 300) -> str:
+    """``text`` as one line of at most ``n`` characters."""
+    one = " ".join(str(text or "").split())
+    return one if len(one) <= n else one[: n - 3] + "..."
+
+
+def _joined(detail: object, note: str) -> str:
+    """A row's ``detail`` with ``note`` added as its last line (the whole kept under 8000 characters)."""
+    return (f"{detail}\n{note}" if detail else note)[-8000:]
