@@ -247,7 +247,7 @@ def run_jobs(jobs: Sequence[Job] | Iterable[Job], store: ResultStore, slots: Slo
     """
     extra = _extra_fields(info)
     if isinstance(jobs, Sequence):
-        done = store.done()
+        done = store.done() - store.retrying
         todo: Iterable[Job] = [j for j in jobs if j.key not in done]
         total, skipped = len(jobs), len(jobs) - len(todo)  # type: ignore[arg-type]
     else:
