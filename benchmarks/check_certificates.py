@@ -124,12 +124,13 @@ def _made_with_goal(setting: Any, rules: Any, start: Any, target: Any, goal: flo
     backward set, the switch sets) with a goal disc of radius ``goal`` [m] in ``rules``; None: none is made."""
     from dataclasses import replace
 
-    from tooltransfer.planner.planning.verdicts.certificate import certify, certify_exact_backward, certify_switches
-    from tooltransfer.planner.planning.verdicts.switch_space import placement_space
+    from tooltransfer.planner.planning.verdicts.certificate import certify
+    from tooltransfer.planner.planning.verdicts.decide import later_attempts
 
     wide = replace(rules, goal_tol=goal)
-    cert = certify(wide, start, target)[0] or certify_exact_backward(wide, start, target)[0] \
-        or certify_switches(wide, placement_space(setting), start, target)[0]
+    cert = certify(wide, start, target)[0]
+    for attempt in later_attempts(wide, setting, start, target):
+        cert = cert or attempt()[0]
     return None if cert is None else cert.kind
 
 

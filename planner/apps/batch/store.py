@@ -26,6 +26,7 @@ import tempfile
 from collections.abc import Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from textwrap import shorten
 from typing import Any
 
 from tooltransfer.errors import InputError
@@ -263,12 +264,13 @@ class ResultStore:
                 where = "FROM results WHERE task_id = ? AND variant = ?"
                 old = self.db.execute(f"SELECT status, reason, detail {where}", key).fetchone()
                 if old is not None and old[0] in VERDICT_STATUSES and row.get("status") not in VERDICT_STATUSES:
-                    note = f"run again, it ended {row.get('status')} ({_short(row.get('reason'))}): this row is kept"
+                    why = shorten(str(row.get("reason") or ""), 300)
+                    note = f"run again, it ended {row.get('status')} ({why}): this row is kept"
                     self.db.execute("UPDATE results SET detail = ? WHERE task_id = ? AND variant = ?",
                                     (_joined(old[2], note), *key))
                     return False
                 if old is not None:
-                    note = f"replaces a row of an earlier run: {old[0]} ({_short(old[1])})"
+                    note = f"replaces a row of an earlier run: {old[0]} ({shorten(str(old[1] or ''), 300)})"
                     row = {**row, "detail": _joined(row.get("detail"), note)}
                     self.db.execute(f"DELETE {where}", key)
             keys = [k for k in RESULT_COLUMNS if k in row]
@@ -367,12 +369,6 @@ def lock_store(path: str | Path) -> Iterator[Path]:
         yield lock
     finally:
         fh.close()  # releases the lock
-
-
-def _short(text: object, n: int = 300) -> str:
-    """``text`` as one line of at most ``n`` characters."""
-    one = " ".join(str(text or "").split())
-    return one if len(one) <= n else one[: n - 3] + "..."
 
 
 def _joined(detail: object, note: str) -> str:

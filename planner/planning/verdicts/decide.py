@@ -14,6 +14,7 @@ could change that, :func:`budget_limited`).
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
@@ -29,7 +30,7 @@ from tooltransfer.planner.planning.verdicts.certificate import (
     certify_exact_backward,
     certify_switches,
 )
-from tooltransfer.planner.planning.verdicts.rules import setting_rules
+from tooltransfer.planner.planning.verdicts.rules import PushRules, setting_rules
 from tooltransfer.planner.planning.verdicts.switch_space import placement_space
 
 #: Block updates the backward-reachable set may make before the verdict is left ``unknown``.
@@ -107,10 +108,7 @@ def _after_search(sought: Sought, setting: Setting, start: np.ndarray, target: n
     the ``switch_separated`` sets (:func:`certify_switches`: the faces' sets from the start, passed from face to
     face only where the tool can get round the puck); ``budget`` scales their block updates (and vertices).
     Each costs some seconds where it proves something and where it does not."""
-    rules = setting_rules(setting)
-    attempts = (lambda: certify_exact_backward(rules, start, target, budget=budget),
-                lambda: certify_switches(rules, placement_space(setting), start, target, budget=budget))
-    for attempt in attempts:
+    for attempt in later_attempts(setting_rules(setting), setting, start, target, budget):
         t0 = time.perf_counter()
         cert, why = attempt()
         spent = sought.spent + time.perf_counter() - t0
@@ -118,3 +116,12 @@ def _after_search(sought: Sought, setting: Setting, start: np.ndarray, target: n
         if cert is not None:
             break
     return sought
+
+
+def later_attempts(rules: PushRules, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float = 1.0
+                   ) -> tuple[Callable[[], tuple[Certificate | None, str]], ...]:
+    """The certificates tried only once the search has failed, in the verdict's order, each a call giving
+    ``(certificate or None, why not)`` under ``rules`` (the tool's placements of ``setting``): the backward set
+    with exact pieces, then the ``switch_separated`` sets; ``budget`` scales their block updates (and vertices)."""
+    return (lambda: certify_exact_backward(rules, start, target, budget=budget),
+            lambda: certify_switches(rules, placement_space(setting), start, target, budget=budget))
