@@ -30,7 +30,9 @@ are reported per task:
   gets round the puck), the search is ``tests/test_switch_forward.py::switch_lattice_search`` instead (the
   same steps on states of a cell and a face, the face changed only where a brute-force grid of the tool's
   placements finds a way round the puck), and how far outside the sets it reaches is flagged beyond
-  :data:`DEPTH_TOL`. For the kinds without a set (the
+  :data:`DEPTH_TOL`; for ``forward_backward`` (on log-polar cells, the positions a plan from the start could
+  reach within those from which the target could be reached), how far outside the first set any position the
+  search reaches inside the second lies, flagged beyond :data:`DEPTH_TOL`. For the kinds without a set (the
   start or the target where no face holds the puck) the search is flagged where it comes within
   ``--flag`` of the target;
 * the closest approach to the target [mm], and how many come within ``--flag`` (3 mm, the test suite's
@@ -93,6 +95,8 @@ DEPTH_TOL = 5e-4
 #: a cone's edge lower it by about the square of the step each, 0.98 mrad at most over the 13 invariants of
 #: the verdict benchmark's run (benchmarks/README.md).
 V_TOL = 5e-3
+#: The kinds whose sets hold what a plan from the start could reach (the search must stay inside them).
+FORWARD_KINDS = ("switch_separated", "forward_backward")
 
 
 def _switches(setting: Any, rules: Any, start: Any, target: Any, budget: int) -> tuple[float, float, dict[str, Any]]:
@@ -117,6 +121,22 @@ def _switches(setting: Any, rules: Any, start: Any, target: Any, budget: int) ->
     if cert is not None and cert.region is not None and visited:
         test["depth"] = float(shapely.distance(cert.region, shapely.points(np.asarray(visited))).max())
     return d, cpu, test
+
+
+def _outside_ahead(cert: Any, pts: Any) -> float:
+    """For a ``forward_backward`` certificate: how far [m of its log-polar plane] outside its set ``F`` (the
+    positions a plan from the start could reach within ``B``) the farthest of the positions ``pts`` (K, 2) [m]
+    the search reaches from the start lies, of those inside ``B`` (the positions from which the target could
+    be reached: a position outside it cannot lie on a plan); 0 where none lies outside."""
+    import shapely
+
+    from tooltransfer.planner.planning.verdicts.polar_sets import LogPolar
+
+    lp = LogPolar(tuple(cert.rules["base"]), cert.extra["map"]["r0"], cert.extra["map"]["phi0"])
+    back, ahead = shapely.from_wkt(cert.extra["back_wkt"]), shapely.from_wkt(cert.extra["ahead_wkt"])
+    at = shapely.points(lp.forward(pts))
+    inside = shapely.covers(back, at)
+    return float(shapely.distance(ahead, at[inside]).max()) if inside.any() else 0.0
 
 
 def _made_with_goal(setting: Any, rules: Any, start: Any, target: Any, goal: float) -> str | None:
@@ -148,7 +168,7 @@ def _closest(args: tuple[Any, int, bool, bool, float, float, str | None, float |
     import numpy as np
     from test_verdicts import _rules_of, depth_inside, lattice_search
 
-    from tooltransfer.planner.planning.verdicts.certificate import certify, certify_exact_backward
+    from tooltransfer.planner.planning.verdicts.certificate import certify, certify_both_ways, certify_exact_backward
     from tooltransfer.planner.planning.verdicts.spiral import Spiral, _values
 
     job, budget, dense, unknowns, share, room, kind, goal = args
@@ -167,11 +187,15 @@ def _closest(args: tuple[Any, int, bool, bool, float, float, str | None, float |
     cert = None if unknowns else certify(rules, start, target)[0]
     if cert is None and not unknowns and kind == "backward_reachable":  # the verdict's last backward attempt
         cert = certify_exact_backward(rules, start, target)[0]
+    if cert is None and not unknowns and kind == "forward_backward":  # the verdict's last attempt
+        cert = certify_both_ways(rules, start, target)[0]
     test: dict[str, Any] = {"kind": None if cert is None else cert.kind, "depth": None, "v_low": None,
                             "v_goal": None}
     pts = np.asarray(visited)
     if cert is not None and cert.kind == "backward_reachable" and cert.region is not None:
         test["depth"] = depth_inside(cert.region, pts)
+    elif cert is not None and cert.kind == "forward_backward":
+        test["depth"] = _outside_ahead(cert, pts)
     elif cert is not None and cert.kind == "polar_invariant":
         sp = Spiral.from_dict(cert.extra["invariant"])
         test["v_low"] = min(_values(rules, sp, p, p)[0] for p in pts) - sp.v_start
@@ -182,7 +206,7 @@ def _closest(args: tuple[Any, int, bool, bool, float, float, str | None, float |
 def _own(test: dict[str, Any]) -> str:
     """The certificate's own test, printed."""
     if test["depth"] is not None:
-        where = "farthest outside its sets" if test["kind"] == "switch_separated" else "deepest inside its set"
+        where = "farthest outside its sets" if test["kind"] in FORWARD_KINDS else "deepest inside its set"
         return f"; {where} {test['depth'] * 1e3:.2f} mm"
     if test["v_low"] is not None:
         return (f"; its quantity at least {test['v_low'] * 1e3:+.2f} mrad from the start's value "
@@ -210,7 +234,7 @@ def _verdict_of(test: dict[str, Any], kind: str | None, d: float, flag: float) -
     if test["kind"] != kind:
         return f"the certificate is not made again ({test['kind']} instead of {kind})"
     if test["depth"] is not None and not test["depth"] <= DEPTH_TOL:  # NaN flagged too
-        where = "outside the certificate's sets from the start" if kind == "switch_separated" else \
+        where = "outside the certificate's sets from the start" if kind in FORWARD_KINDS else \
             "inside the certificate's set"
         return f"the search reaches {test['depth'] * 1e3:.2f} mm {where}"
     if test["v_low"] is not None and not test["v_low"] >= -min(V_TOL, -0.5 * test["v_goal"]):

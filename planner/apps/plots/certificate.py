@@ -41,7 +41,7 @@ def certificate_figure(evidence: dict[str, Any], obstacles: list[dict[str, Any]]
     _fill(ax, shapely.from_wkt(cert["space_wkt"]), color="#dfe8f2", label="push space (any face can hold the puck)")
     if cert.get("region_wkt"):
         # the invariant's side of the start, or the faces' sets grown from the start: not the target's set
-        forward = cert["kind"] in ("polar_invariant", "switch_separated")
+        forward = cert["kind"] in ("polar_invariant", "switch_separated", "forward_backward")
         _fill(ax, shapely.from_wkt(cert["region_wkt"]), color="#a9d18e" if forward else "#f4b183", alpha=0.8,
               label="positions a plan from the start could reach" if forward
               else "positions that could reach the target")

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import heapq
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,6 +43,9 @@ WIDEST_CONE = 0.9 * math.pi
 #: operations; well below the start's required gap).
 ROUNDING = 1e-9
 
+
+#: A block's faces from its box (:func:`block_faces`' list: each face's directions, hold set and that grown).
+BlockModel = Callable[[tuple[float, float, float, float]], list]
 
 #: How :attr:`BackwardResult.stopped` begins when the work ran out of block updates (a larger budget may
 #: still close the set: :func:`tooltransfer.planner.planning.verdicts.decide.budget_limited` looks for it).
@@ -220,7 +224,7 @@ class BackwardResult:
 def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geometry, start: np.ndarray, *,
                  h: float = 0.01, gap: float = 5e-4, max_blocks: int = 20000,
                  zone: shapely.Geometry | None = None, exact: bool = False,
-                 max_vertices: int | None = None) -> BackwardResult:
+                 max_vertices: int | None = None, model: BlockModel | None = None) -> BackwardResult:
     """The smallest closed set (module docstring) holding ``goal`` [m], grown inside ``space`` (the
     push space, :func:`~tooltransfer.planner.planning.verdicts.bounds.push_space`), on blocks of cells of side
     ``h`` [m]; stops early once it comes within ``gap`` [m] of ``start`` (2,). ``zone``: where no path
@@ -234,15 +238,19 @@ def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geomet
     at each update of a cell builds up, and on a task at the edge of the rules it alone takes the set to
     the start (benchmarks/README.md, twenty-first session); slower where the set is large, and where exact
     pieces gather vertices (on one task tens of thousands in one block) each update costs more: ``max_vertices``
-    bounds the work, the vertices of the pieces grown summed over the updates (None: no bound)."""
+    bounds the work, the vertices of the pieces grown summed over the updates (None: no bound). ``model``: each
+    block's faces (as :func:`block_faces` gives them) in another plane than the world's (the plane of
+    ``space``, ``goal``, ``start`` and ``zone``, :mod:`.polar_sets`); None: the world's, :func:`block_faces`."""
     grid = grid_over(shapely.union(space, goal), h)
-    zone, regions = obstacle_zone(rules) if zone is None else zone, face_regions(rules)
+    zone = obstacle_zone(rules) if zone is None else zone
+    if model is None:
+        regions = face_regions(rules)
+        model = lambda box: block_faces(rules, box, zone, regions)  # noqa: E731
     models: dict[tuple[int, int], list] = {}
     cells = _split(grid, goal)
     done, work = 0, _Vertices(max_vertices)
     for tol, simplify in ((2 * COARSEN, not exact), (ROUNDING, False)):
-        cells, stopped, done = _close(rules, grid, cells, start, gap, max_blocks, done, zone, regions, models, tol,
-                                      simplify, work)
+        cells, stopped, done = _close(model, grid, cells, start, gap, max_blocks, done, models, tol, simplify, work)
         if stopped:
             return BackwardResult(None, stopped, done, grid)
         if simplify:  # the coarse pieces back inside their cells, so that a block grows from all of the set in it
@@ -287,12 +295,11 @@ def _split(grid: BlockGrid, g: shapely.Geometry) -> dict[tuple[int, int], shapel
     return out
 
 
-def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, gap: float, max_blocks: int,
-           done: int, zone: shapely.Geometry, regions: list, models: dict, tol: float, simplify: bool,
-           work: _Vertices) -> tuple[dict, str, int]:
-    """Grow ``cells`` block by block until no block adds more than ``tol`` [m] beyond them; returns the
-    cells, why it stopped early ("" if it did not) and the block updates made so far. ``work``: the vertices
-    grown so far and their bound, updated here."""
+def _close(model: BlockModel, grid: BlockGrid, cells: dict, start: np.ndarray, gap: float, max_blocks: int,
+           done: int, models: dict, tol: float, simplify: bool, work: _Vertices) -> tuple[dict, str, int]:
+    """Grow ``cells`` block by block (each block's faces from ``model``) until no block adds more than ``tol``
+    [m] beyond them; returns the cells, why it stopped early ("" if it did not) and the block updates made so
+    far. ``work``: the vertices grown so far and their bound, updated here."""
     nx, ny = grid.shape
     start_pt = shapely.Point(start)
     sx, sy = (float(v) for v in start)
@@ -318,7 +325,7 @@ def _close(rules: PushRules, grid: BlockGrid, cells: dict, start: np.ndarray, ga
             continue
         box = grid.block_box(i, j)
         if v not in models:
-            models[v] = block_faces(rules, box, zone, regions)
+            models[v] = model(box)
         source = safe_union(own)
         work.grown += shapely.get_num_coordinates(source)
         if work.bound is not None and work.grown > work.bound:

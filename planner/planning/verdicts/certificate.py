@@ -15,7 +15,11 @@ Kinds, cheapest first:
 - ``switch_separated``: closed sets of the positions each face may push the puck to from the start, a
   face's set passed to another only where the tool can get from one's contact to the other's round the
   resting puck (:mod:`.switch_forward`, :mod:`.switch_space`), leave the target out by at least ``gap``
-  (:func:`certify_switches`: tried last, after the search).
+  (:func:`certify_switches`: tried after the search);
+- ``forward_backward``: on blocks of log-polar cells about the Omni's axis (where a face's cone does not
+  turn with the polar angle), a closed set of the positions from which the target may be reachable, and
+  within it a closed set of the positions reachable from the start, which leaves the target out
+  (:mod:`.polar_sets`, :func:`certify_both_ways`: tried last).
 
 A certificate stores its kind, the rules' parameters, the sets as polygons and the grid; anyone can
 replay it with :func:`check_certificate`, which recomputes the cones from the rules and checks the
@@ -41,6 +45,13 @@ from tooltransfer.planner.planning.verdicts.backward import (
     grow,
 )
 from tooltransfer.planner.planning.verdicts.bounds import obstacle_zone, push_space
+from tooltransfer.planner.planning.verdicts.polar_sets import (
+    START_DISC,
+    both_ways,
+    certificate_data,
+    check_both_ways,
+    world_region,
+)
 from tooltransfer.planner.planning.verdicts.rules import PushRules
 from tooltransfer.planner.planning.verdicts.spiral import V_GAP, Spiral, check_spiral, invariant, start_side
 from tooltransfer.planner.planning.verdicts.switch_forward import check_forward, forward_sets
@@ -267,6 +278,8 @@ def check_certificate(cert: Certificate, rules: PushRules, placements: Placement
                 break
     elif cert.kind == "switch_separated":
         problems += _check_switches(cert, rules, placements, start, goal)
+    elif cert.kind == "forward_backward":
+        problems += check_both_ways(rules, start, target, goal, cert.extra)
     else:
         problems.append(f"unknown kind {cert.kind!r}")
     return problems
@@ -388,3 +401,30 @@ def _placements_of(space: PlacementSpace) -> dict[str, Any]:
     outline [m, tool frame], the Omni's axis [m], waist [rad] and reach [m] ranges (JSON data)."""
     return {"outline": np.asarray(space.tool.outline.exterior.coords).tolist(), "base": space.base.tolist(),
             "base_yaw": space.base_yaw, "q1_range": list(space.q1_range), "u_range": list(space.u_range)}
+
+
+def certify_both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, *, budget: float = 1.0
+                      ) -> tuple[Certificate | None, str]:
+    """A ``forward_backward`` certificate (module docstring, :mod:`.polar_sets`) that ``start`` (2,) [m] cannot
+    reach ``target`` (2,) [m] under ``rules``, or None with what was tried; ``budget`` scales the block updates."""
+    t0 = time.perf_counter()
+    start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
+    goal = _goal(rules, target)
+    found = both_ways(rules, start, target, goal, budget=budget)
+    tried = f"the sets both ways on log-polar cells: {found.stopped or 'closed'} (after {found.blocks} blocks)"
+    if found.ahead is None:
+        return None, tried
+    lp = found.world.map
+    cert = Certificate("forward_backward", "on cells of log-polar coordinates about the Omni's axis (where a "
+                       "face's cone turns with the distance only), the positions from which the target could be "
+                       "reached, and within them the positions a plan from the start could reach (over-approximated "
+                       "as for the backward-reachable set), leave the target out by "
+                       f"{shapely.distance(found.ahead, lp.image(goal, 0.0)) * 1e3:.1f} mm (of that plane)",
+                       start=(float(start[0]), float(start[1])), target=(float(target[0]), float(target[1])),
+                       rules=rules.to_dict(), space=push_space(rules), region=world_region(lp, found.ahead),
+                       extra={"blocks_processed": found.blocks, "start_gap": START_DISC, **certificate_data(found)})
+    problems = check_certificate(cert, rules)
+    if problems:
+        return None, f"{tried}; its check failed: " + "; ".join(problems)
+    cert.time = time.perf_counter() - t0
+    return cert, ""

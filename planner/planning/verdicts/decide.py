@@ -4,7 +4,8 @@ The planner's search is bounded (a few scored push sequences, at most ``oe.max_p
 its failure says nothing about the task. :func:`attach_verdict` looks for a certificate under the
 rules of :mod:`~tooltransfer.planner.planning.verdicts.rules` (:func:`certify`; once the search has failed, also
 :func:`~.certificate.certify_exact_backward`, the backward set with exact pieces, then
-:func:`certify_switches`, the switches the tool cannot make) and returns the plan
+:func:`certify_switches`, the switches the tool cannot make, then :func:`~.certificate.certify_both_ways`, the
+sets both ways on log-polar cells) and returns the plan
 with ``status`` ``"infeasible"`` and the certificate as its evidence when one is found, else with
 ``status`` ``"unknown"`` (or ``"violated"`` for a plan that broke its hard checks) and evidence that
 says what was searched and why nothing was proved (and ``budget_limited``: whether a larger ``budget``
@@ -27,6 +28,7 @@ from tooltransfer.planner.planning.verdicts.certificate import (
     FINE_BLOCKS,
     Certificate,
     certify,
+    certify_both_ways,
     certify_exact_backward,
     certify_switches,
 )
@@ -106,7 +108,8 @@ def _after_search(sought: Sought, setting: Setting, start: np.ndarray, target: n
     """``sought`` (no certificate found), or the first certificate of the attempts made only once the search
     has failed, in turn: the backward set with exact pieces (:func:`~.certificate.certify_exact_backward`), then
     the ``switch_separated`` sets (:func:`certify_switches`: the faces' sets from the start, passed from face to
-    face only where the tool can get round the puck); ``budget`` scales their block updates (and vertices).
+    face only where the tool can get round the puck), then the ``forward_backward`` sets on log-polar cells
+    (:func:`~.certificate.certify_both_ways`); ``budget`` scales their block updates (and vertices).
     Each costs some seconds where it proves something and where it does not."""
     for attempt in later_attempts(setting_rules(setting), setting, start, target, budget):
         t0 = time.perf_counter()
@@ -122,6 +125,8 @@ def later_attempts(rules: PushRules, setting: Setting, start: np.ndarray, target
                    ) -> tuple[Callable[[], tuple[Certificate | None, str]], ...]:
     """The certificates tried only once the search has failed, in the verdict's order, each a call giving
     ``(certificate or None, why not)`` under ``rules`` (the tool's placements of ``setting``): the backward set
-    with exact pieces, then the ``switch_separated`` sets; ``budget`` scales their block updates (and vertices)."""
+    with exact pieces, then the ``switch_separated`` sets, then the ``forward_backward`` sets on log-polar cells;
+    ``budget`` scales their block updates (and vertices)."""
     return (lambda: certify_exact_backward(rules, start, target, budget=budget),
-            lambda: certify_switches(rules, placement_space(setting), start, target, budget=budget))
+            lambda: certify_switches(rules, placement_space(setting), start, target, budget=budget),
+            lambda: certify_both_ways(rules, start, target, budget=budget))
