@@ -16,7 +16,7 @@ import shapely
 from test_verdicts import _rules_of, generated, lattice_search
 
 from tooltransfer.planner.planning.verdicts.certificate import certify_both_ways, check_certificate
-from tooltransfer.planner.planning.verdicts.polar_sets import LogPolar, world_region
+from tooltransfer.planner.planning.verdicts.polar_sets import DENSE, IMAGE_ROOM, LogPolar, world_region
 
 
 def test_the_map_is_conformal_and_turns_a_direction_by_the_polar_angle() -> None:
@@ -32,6 +32,23 @@ def test_the_map_is_conformal_and_turns_a_direction_by_the_polar_angle() -> None
         assert abs(math.remainder(math.atan2(d[1], d[0]) - (w - phi), 2 * math.pi)) < 1e-6
         assert math.hypot(*d) == pytest.approx(1e-7 * lp.r0 / r, rel=1e-5)
         assert np.allclose(lp.inverse(lp.forward(p)), p, atol=1e-12)
+
+
+def test_a_mapped_edge_stays_within_the_room_kept_from_the_curve_it_stands_for() -> None:
+    """A world edge of :data:`DENSE` maps to a chord of its true image (a curve): the zones are shrunk and the
+    goal grown by :data:`IMAGE_ROOM` so that the chords' polygons stay inside (outside) the true images; the
+    chord's distance from the curve, sampled over distances of 0.03-0.35 m and ``r0`` of 0.1-0.3 m, is below it."""
+    rng = np.random.default_rng(0)
+    worst = 0.0
+    for r0 in (0.1, 0.2, 0.3):
+        lp = LogPolar((0.0, 0.0), r0, 0.5)
+        for _ in range(3000):
+            r, a, w = rng.uniform(0.03, 0.35), rng.uniform(-1.0, 2.0), rng.uniform(-math.pi, math.pi)
+            p = r * np.array([math.cos(a), math.sin(a)])
+            m = lp.forward(p + DENSE * np.linspace(0.0, 1.0, 21)[:, None] * np.array([math.cos(w), math.sin(w)]))
+            d = m[-1] - m[0]
+            worst = max(worst, float(np.abs((m - m[0]) @ np.array([-d[1], d[0]]) / math.hypot(*d)).max()))
+    assert worst < 0.5 * IMAGE_ROOM, worst
 
 
 @pytest.fixture(scope="module")

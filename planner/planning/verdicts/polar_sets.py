@@ -64,10 +64,11 @@ FORWARD_BLOCKS = 8000
 #: Radius [m] of the disc about the start that ``F`` holds, and the least distance it keeps from the target's
 #: goal disc.
 START_DISC = 5e-5
-#: Length [m] of the world edges of a polygon before it is mapped (its mapped edges are chords of the mapped
-#: curves, which bend by about ``1 / r``: a sagitta under 1e-7 m at 0.1 m).
-DENSE = 2e-4
-#: How far [m] mapped zones are shrunk and the mapped goal grown: above the sagitta, far below any cell.
+#: Length [m] of the world edges of a polygon before it is mapped: its mapped edges are chords of the mapped
+#: curves, some 4e-7 m from them at most (sampled) for puck distances of 0.03 m and more and ``r0`` up to
+#: 0.3 m (1.6e-6 m with edges of 0.2 mm; ``tests/test_polar_sets.py`` samples it).
+DENSE = 1e-4
+#: How far [m] mapped zones are shrunk and the mapped goal grown: above the chords' sagitta, far below any cell.
 IMAGE_ROOM = 2e-6
 
 
