@@ -42,9 +42,11 @@ def certificate_figure(evidence: dict[str, Any], obstacles: list[dict[str, Any]]
     if cert.get("region_wkt"):
         # the invariant's side of the start, or the faces' sets grown from the start: not the target's set
         forward = cert["kind"] in ("polar_invariant", "switch_separated", "forward_backward")
+        label = ("positions a plan from the start could reach" if forward else "positions that could reach the target")
+        if cert["kind"] == "forward_backward":
+            label += ",\nof those that could still reach the target"
         _fill(ax, shapely.from_wkt(cert["region_wkt"]), color="#a9d18e" if forward else "#f4b183", alpha=0.8,
-              label="positions a plan from the start could reach" if forward
-              else "positions that could reach the target")
+              label=label)
     for i, o in enumerate(obstacles):
         shape = (shapely.Point(o["centre"]).buffer(o["radius"]) if o["kind"] == "disc"
                  else shapely.Polygon(o["vertices"]))

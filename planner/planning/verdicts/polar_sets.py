@@ -28,7 +28,6 @@ for drawing only.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -332,9 +331,3 @@ def world_region(lp: LogPolar, g: shapely.Geometry) -> shapely.Geometry:
         parts.append(shapely.make_valid(shapely.Polygon(lp.inverse(shapely.get_coordinates(p.exterior)), holes)))
     return polygonal(shapely.union_all(parts)) if parts else shapely.Polygon()
 
-
-def timed_both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, goal: shapely.Geometry,
-                    budget: float = 1.0) -> tuple[BothWays, float]:
-    """:func:`both_ways` and its seconds [s]."""
-    t0 = time.perf_counter()
-    return both_ways(rules, start, target, goal, budget=budget), time.perf_counter() - t0
