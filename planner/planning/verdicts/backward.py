@@ -84,6 +84,29 @@ class BlockGrid:
         """Every grid vertex ``(i, j)``, ``0 <= i <= nx``, ``0 <= j <= ny``."""
         return [(i, j) for i in range(self.shape[0] + 1) for j in range(self.shape[1] + 1)]
 
+    def covered(self) -> shapely.Geometry:
+        """The box [m] every block of the grid covers."""
+        return shapely.box(*self.block_box(0, 0)[:2], *self.block_box(*self.shape)[2:])
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON data."""
+        return {"origin": list(self.origin), "h": self.h, "shape": list(self.shape)}
+
+
+def unclosed_block(region: shapely.Geometry, grid: BlockGrid, model: BlockModel
+                   ) -> tuple[tuple[int, int], float] | None:
+    """The first block of ``grid`` where ``region`` is not closed under the faces ``model`` gives it (a push
+    from its part there ends outside it by more than the rounding), with the area [m^2] outside; None: none."""
+    for i, j in grid.blocks():
+        box = grid.block_box(i, j)
+        own = shapely.intersection(region, shapely.box(*box))
+        if own.is_empty or own.area == 0.0:
+            continue
+        missing = shapely.difference(grow(own, model(box), box), shapely.buffer(region, 1e-8))
+        if missing.area > 1e-14:
+            return (i, j), float(missing.area)
+    return None
+
 
 def grid_over(area: shapely.Geometry, h: float) -> BlockGrid:
     """A :class:`BlockGrid` of cell side ``h`` [m] covering ``area`` with one cell to spare each side."""

@@ -42,7 +42,7 @@ from tooltransfer.planner.planning.verdicts.backward import (
     block_faces,
     face_regions,
     grid_over,
-    grow,
+    unclosed_block,
 )
 from tooltransfer.planner.planning.verdicts.bounds import obstacle_zone, push_space
 from tooltransfer.planner.planning.verdicts.polar_sets import (
@@ -115,8 +115,7 @@ class Certificate:
             "kind": self.kind, "reason": self.reason, "start": list(self.start), "target": list(self.target),
             "rules": self.rules, "space_wkt": shapely.to_wkt(self.space, rounding_precision=-1),
             "region_wkt": None if self.region is None else shapely.to_wkt(self.region, rounding_precision=-1),
-            "grid": None if self.grid is None else {"origin": list(self.grid.origin), "h": self.grid.h,
-                                                    "shape": list(self.grid.shape)},
+            "grid": None if self.grid is None else self.grid.to_dict(),
             "start_gap": START_GAP, "time": self.time, **self.extra,
         }
 
@@ -263,19 +262,11 @@ def check_certificate(cert: Certificate, rules: PushRules, placements: Placement
             problems += check_spiral(rules, sp, start, target, separating=False)
             zone = restricted_zone(rules, sp, start, space, goal)
             space = shapely.difference(space, zone)
-        gx0, gy0, gx1, gy1 = grid.block_box(0, 0)[0], grid.block_box(0, 0)[1], *grid.block_box(*grid.shape)[2:]
-        if not shapely.covers(shapely.box(gx0, gy0, gx1, gy1), shapely.union(space, goal)):
+        if not shapely.covers(grid.covered(), shapely.union(space, goal)):
             problems.append("the grid does not cover the push space")
-        for i, j in grid.blocks():
-            box = grid.block_box(i, j)
-            own = shapely.intersection(region, shapely.box(*box))
-            if own.is_empty or own.area == 0.0:
-                continue
-            grown = grow(own, block_faces(rules, box, zone, regions), box)
-            missing = shapely.difference(grown, shapely.buffer(region, 1e-8))
-            if missing.area > 1e-14:
-                problems.append(f"block {(i, j)} is not closed ({missing.area * 1e6:.3g} mm^2 outside the set)")
-                break
+        bad = unclosed_block(region, grid, lambda box: block_faces(rules, box, zone, regions))
+        if bad is not None:
+            problems.append(f"block {bad[0]} is not closed ({bad[1] * 1e6:.3g} mm^2 outside the set)")
     elif cert.kind == "switch_separated":
         problems += _check_switches(cert, rules, placements, start, goal)
     elif cert.kind == "forward_backward":

@@ -41,8 +41,8 @@ from tooltransfer.planner.planning.verdicts.backward import (
     WIDEST_CONE,
     BlockGrid,
     backward_set,
-    grow,
     polygonal,
+    unclosed_block,
 )
 from tooltransfer.planner.planning.verdicts.bounds import (
     body_zone,
@@ -109,14 +109,8 @@ class LogPolar:
     def image(self, g: shapely.Geometry, room: float) -> shapely.Geometry:
         """The polygons ``g`` [m] mapped (edges cut to :data:`DENSE` first), then grown by ``room`` [m]
         (negative: shrunk)."""
-        g = polygonal(g)
-        if g.is_empty:
-            return g
-        parts = []
-        for p in shapely.get_parts(shapely.segmentize(g, DENSE)):
-            holes = [self.forward(shapely.get_coordinates(h)) for h in p.interiors]
-            parts.append(shapely.make_valid(shapely.Polygon(self.forward(shapely.get_coordinates(p.exterior)), holes)))
-        return polygonal(shapely.buffer(polygonal(shapely.union_all(parts)), room, join_style="mitre"))
+        mapped = _mapped(g, self.forward)
+        return mapped if mapped.is_empty else polygonal(shapely.buffer(mapped, room, join_style="mitre"))
 
     def world_sector(self, box: tuple[float, float, float, float]) -> shapely.Geometry:
         """A world polygon [m] holding the points of the block ``box`` (an annular sector, outer arc
@@ -279,33 +273,19 @@ def check_both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, goa
         problems.append("F does not hold the start's disc")
     if shapely.distance(ahead, g) <= START_DISC:
         problems.append("F comes within the gap of the target's goal disc")
-    if not shapely.covers(_grid_box(grids[0]), shapely.union(world.space, g)):
+    if not shapely.covers(grids[0].covered(), shapely.union(world.space, g)):
         problems.append("B's grid does not cover the push space")
-    if not shapely.covers(_grid_box(grids[1]), shapely.union(shapely.intersection(world.space, back), seed)):
+    if not shapely.covers(grids[1].covered(), shapely.union(shapely.intersection(world.space, back), seed)):
         problems.append("F's grid does not cover the push space within B")
     if problems:
         return problems
     shapely.prepare(back)
-    problems += _closed(back, grids[0], lambda box: world.block_faces(rules, box), "B")
-    return problems or _closed(ahead, grids[1],
-                               lambda box: world.block_faces(rules, box, reverse=True, within=back), "F")
-
-
-def _grid_box(grid: BlockGrid) -> shapely.Geometry:
-    """The box covered by every block of ``grid``."""
-    return shapely.box(*grid.block_box(0, 0)[:2], *grid.block_box(*grid.shape)[2:])
-
-
-def _closed(region: shapely.Geometry, grid: BlockGrid, model: Any, name: str) -> list[str]:
-    """Where ``region`` is not closed on the blocks of ``grid`` under the faces of ``model`` (empty: nowhere)."""
-    for i, j in grid.blocks():
-        box = grid.block_box(i, j)
-        own = shapely.intersection(region, shapely.box(*box))
-        if own.is_empty or own.area == 0.0:
-            continue
-        missing = shapely.difference(grow(own, model(box), box), shapely.buffer(region, 1e-8))
-        if missing.area > 1e-14:
-            return [f"{name}: block {(i, j)} is not closed ({missing.area * 1e6:.3g} mm^2 outside the set)"]
+    for name, region, grid, model in (
+            ("B", back, grids[0], lambda box: world.block_faces(rules, box)),
+            ("F", ahead, grids[1], lambda box: world.block_faces(rules, box, reverse=True, within=back))):
+        bad = unclosed_block(region, grid, model)
+        if bad is not None:
+            return [f"{name}: block {bad[0]} is not closed ({bad[1] * 1e6:.3g} mm^2 outside the set)"]
     return []
 
 
@@ -315,19 +295,23 @@ def certificate_data(found: BothWays) -> dict[str, Any]:
     return {"map": found.world.map.to_dict(),
             "back_wkt": shapely.to_wkt(found.back, rounding_precision=-1),
             "ahead_wkt": shapely.to_wkt(found.ahead, rounding_precision=-1),
-            "back_grid": _grid_dict(found.back_grid), "ahead_grid": _grid_dict(found.ahead_grid),
+            "back_grid": found.back_grid.to_dict(), "ahead_grid": found.ahead_grid.to_dict(),
             "start_disc": START_DISC}
-
-
-def _grid_dict(grid: BlockGrid) -> dict[str, Any]:
-    return {"origin": list(grid.origin), "h": grid.h, "shape": list(grid.shape)}
 
 
 def world_region(lp: LogPolar, g: shapely.Geometry) -> shapely.Geometry:
     """The world image [m] of polygons ``g`` of the (U, V) plane (edges cut first; for drawing)."""
-    parts = []
-    for p in shapely.get_parts(shapely.segmentize(polygonal(g), DENSE)):
-        holes = [lp.inverse(shapely.get_coordinates(h)) for h in p.interiors]
-        parts.append(shapely.make_valid(shapely.Polygon(lp.inverse(shapely.get_coordinates(p.exterior)), holes)))
-    return polygonal(shapely.union_all(parts)) if parts else shapely.Polygon()
+    return _mapped(g, lp.inverse)
 
+
+def _mapped(g: shapely.Geometry, point_map: Any) -> shapely.Geometry:
+    """The polygons ``g`` with every vertex moved by ``point_map`` ((K, 2) -> (K, 2)), edges cut to
+    :data:`DENSE` first (of ``g``'s plane), made valid."""
+    g = polygonal(g)
+    if g.is_empty:
+        return g
+    parts = []
+    for p in shapely.get_parts(shapely.segmentize(g, DENSE)):
+        holes = [point_map(shapely.get_coordinates(h)) for h in p.interiors]
+        parts.append(shapely.make_valid(shapely.Polygon(point_map(shapely.get_coordinates(p.exterior)), holes)))
+    return polygonal(shapely.union_all(parts))
