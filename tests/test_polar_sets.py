@@ -13,10 +13,18 @@ import math
 import numpy as np
 import pytest
 import shapely
-from test_verdicts import _rules_of, generated, lattice_search
+from test_verdicts import ROOT, _rules_of, generated, lattice_search
 
 from tooltransfer.planner.planning.verdicts.certificate import certify_both_ways, check_certificate
-from tooltransfer.planner.planning.verdicts.polar_sets import DENSE, IMAGE_ROOM, LogPolar, world_region
+from tooltransfer.planner.planning.verdicts.polar_sets import (
+    DENSE,
+    FORWARD_FIRST,
+    IMAGE_ROOM,
+    LogPolar,
+    PolarWorld,
+    world_region,
+)
+from tooltransfer.problems.task import load_task
 
 
 def test_the_map_is_conformal_and_turns_a_direction_by_the_polar_angle() -> None:
@@ -59,6 +67,7 @@ def certified():
     start, target = np.array(task.start), np.array(task.target)
     cert, why = certify_both_ways(rules, start, target)
     assert cert is not None and cert.kind == "forward_backward", why
+    assert cert.extra["blocks_processed"] > FORWARD_FIRST  # F without B did not close: B was built
     return setting, rules, start, target, cert
 
 
@@ -115,3 +124,39 @@ def test_a_forward_backward_certificate_whose_sets_are_cut_fails_its_check(certi
     cut = with_(map={"r0": cert.extra["map"]["r0"] * 1.01, "phi0": cert.extra["map"]["phi0"]})
     assert cut == ["the map is not the one about the Omni's axis and the target"]
     assert with_(back_wkt="not wkt")[0].startswith("the stored sets cannot be read")
+
+
+def test_f_closed_without_b_is_a_certificate_with_b_the_whole_push_space() -> None:
+    """``small-00006`` (slope, two obstacles): ``F`` grown first without ``B`` closes away from the target, so
+    it is the certificate with ``B`` the whole push space (trivially closed backward); the check replays it, the
+    lattice search stays out of reach of the target and in ``F``, and ``F`` cut is refused."""
+    task = generated("small.yaml", "small-00006")
+    setting, rules = _rules_of(task)
+    start, target = np.array(task.start), np.array(task.target)
+    cert, why = certify_both_ways(rules, start, target)
+    assert cert is not None, why
+    assert cert.extra["blocks_processed"] <= FORWARD_FIRST  # B was not built
+    lp = LogPolar(tuple(cert.rules["base"]), cert.extra["map"]["r0"], cert.extra["map"]["phi0"])
+    world = PolarWorld.of(rules, lp)
+    back, ahead = shapely.from_wkt(cert.extra["back_wkt"]), shapely.from_wkt(cert.extra["ahead_wkt"])
+    assert shapely.covers(shapely.buffer(back, 1e-9), world.space)
+    assert check_certificate(cert, rules) == []
+    visited: list = []
+    closest = lattice_search(setting, start, target, ends_held=True, visited=visited)
+    assert closest > 0.003, f"the lattice search came {closest * 1e3:.2f} mm from the target of a certified task"
+    assert float(shapely.distance(ahead, shapely.points(lp.forward(np.asarray(visited)))).max()) < 5e-4
+    s = lp.forward(start)[0]
+    band = shapely.difference(shapely.Point(s).buffer(0.006), shapely.Point(s).buffer(0.004))
+    cert.extra = {**cert.extra, "ahead_wkt": shapely.to_wkt(shapely.difference(ahead, band), rounding_precision=-1)}
+    assert any("F: block" in p and "not closed" in p for p in check_certificate(cert, rules))
+
+
+def test_f_at_the_target_without_b_leaves_b_unbuilt() -> None:
+    """The paper's transfer (a solved task): ``F`` without ``B`` comes to the target within a few hundred updates,
+    so ``B`` (some 20 s on its wide push space) is not built and nothing is certified."""
+    task = load_task(ROOT / "problems" / "paper" / "transfer_tool2.yaml")
+    _, rules = _rules_of(task)
+    cert, why = certify_both_ways(rules, np.array(task.start), np.array(task.target))
+    assert cert is None
+    assert "the set F (without B): it came within the gap of the target's goal disc" in why
+    assert int(why.rsplit("after ", 1)[1].split()[0]) < FORWARD_FIRST

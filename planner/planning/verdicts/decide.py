@@ -14,7 +14,10 @@ could change that, :func:`budget_limited`).
 
 from __future__ import annotations
 
+import hashlib
+import json
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any, Literal
@@ -53,23 +56,60 @@ def budget_limited(metrics: dict[str, float], not_proved: str) -> bool:
 @dataclass(frozen=True)
 class Sought:
     """A look for a certificate (:func:`seek_certificate`): the certificate, or None with ``why`` nothing
-    was proved, and the seconds [s] it took."""
+    was proved, the seconds [s] it took, and whether it was taken from an earlier look at the same task in this
+    process (:func:`remembered`; ``spent`` is then the time the look took here, not the first one's)."""
 
     cert: Certificate | None
     why: str
     spent: float
+    reused: bool = False
+
+
+#: The looks for certificates made in this process, newest last, by :func:`task_key` (at most :data:`REMEMBERED`).
+_LOOKS: OrderedDict[str, Sought] = OrderedDict()
+#: How many looks :data:`_LOOKS` keeps.
+REMEMBERED = 32
+
+
+def task_key(setting: Setting, start: np.ndarray, target: np.ndarray, *parts: Any) -> str:
+    """A digest of what a certificate depends on: the world (``setting``: its description, mechanics and
+    margin, what makes two settings equal), ``start`` and ``target`` (2,) [m] and ``parts`` (budgets, the
+    attempt). Not the variant: a certificate is a property of the task, so the variants of a task
+    (``compare``, a batch's rows run in one process) share each look."""
+    data = json.dumps([setting.describe(), repr(setting.mechanics), setting.margin,
+                       np.asarray(start, dtype=np.float64).tolist(), np.asarray(target, dtype=np.float64).tolist(),
+                       list(parts)], sort_keys=True, default=str)
+    return hashlib.sha256(data.encode()).hexdigest()
+
+
+def remembered(key: str, look: Callable[[], Sought]) -> Sought:
+    """The look of ``key`` made earlier in this process (``reused``, with the time of this call), else ``look()``
+    made and kept. Sound to share: every look is deterministic in what :func:`task_key` digests."""
+    t0 = time.perf_counter()
+    if key in _LOOKS:
+        _LOOKS.move_to_end(key)
+        return replace(_LOOKS[key], spent=time.perf_counter() - t0, reused=True)
+    found = look()
+    _LOOKS[key] = found
+    while len(_LOOKS) > REMEMBERED:
+        _LOOKS.popitem(last=False)
+    return found
 
 
 def seek_certificate(setting: Setting, start: np.ndarray, target: np.ndarray, *, max_blocks: int = CERTIFY_BLOCKS,
                      budget: float = 1.0) -> Sought:
     """A certificate that the object cannot be pushed from ``start`` to ``target`` (2,) [m] under the rules
     of ``setting`` (:func:`certify`); ``budget`` scales its block updates (``max_blocks`` and each of
-    :data:`FINE_BLOCKS`)."""
-    t0 = time.perf_counter()
-    cert, why = certify(setting_rules(setting), np.asarray(start, dtype=np.float64),
-                        np.asarray(target, dtype=np.float64), max_blocks=round(max_blocks * budget),
-                        fine_blocks=tuple(round(b * budget) for b in FINE_BLOCKS))
-    return Sought(cert, why, time.perf_counter() - t0)
+    :data:`FINE_BLOCKS`). Made once per task in a process (:func:`remembered`)."""
+    start, target = np.asarray(start, dtype=np.float64), np.asarray(target, dtype=np.float64)
+
+    def look() -> Sought:
+        t0 = time.perf_counter()
+        cert, why = certify(setting_rules(setting), start, target, max_blocks=round(max_blocks * budget),
+                            fine_blocks=tuple(round(b * budget) for b in FINE_BLOCKS))
+        return Sought(cert, why, time.perf_counter() - t0)
+
+    return remembered(task_key(setting, start, target, "first", max_blocks, budget), look)
 
 
 def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.ndarray, *,
@@ -93,6 +133,8 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
     if cert is not None:
         evidence: dict[str, Any] = {"verdict": "infeasible", "kind": cert.kind, "searched": searched,
                                     "certificate": cert.to_dict(), "budget": budget}
+        if sought.reused:
+            evidence["certificate_reused"] = True
         return replace(plan, status="infeasible", metrics=metrics, evidence=evidence,
                        reason=f"certified infeasible ({cert.kind}): {cert.reason}; the planner's search: {searched}")
     status: Literal["unknown", "violated"] = "violated" if plan.status == "violated" else "unknown"
@@ -100,6 +142,8 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                 "searched": searched, "not_proved": why, "budget": budget}
     if status == "unknown":
         evidence["budget_limited"] = budget_limited(plan.metrics, why)
+    if sought.reused:
+        evidence["certificate_reused"] = True
     return replace(plan, status=status, metrics=metrics, evidence=evidence,
                    reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)
 
@@ -110,15 +154,21 @@ def _after_search(sought: Sought, setting: Setting, start: np.ndarray, target: n
     the ``switch_separated`` sets (:func:`certify_switches`: the faces' sets from the start, passed from face to
     face only where the tool can get round the puck), then the ``forward_backward`` sets on log-polar cells
     (:func:`~.certificate.certify_both_ways`); ``budget`` scales their block updates (and vertices).
-    Each costs some seconds where it proves something and where it does not."""
-    for attempt in later_attempts(setting_rules(setting), setting, start, target, budget):
-        t0 = time.perf_counter()
-        cert, why = attempt()
-        spent = sought.spent + time.perf_counter() - t0
-        sought = Sought(cert, f"{sought.why}; {why}" if cert is None else "", spent)
-        if cert is not None:
-            break
-    return sought
+    Each costs some seconds where it proves something and where it does not; made once per task in a process
+    (:func:`remembered`)."""
+
+    def look() -> Sought:
+        t0, whys = time.perf_counter(), []
+        for attempt in later_attempts(setting_rules(setting), setting, start, target, budget):
+            cert, why = attempt()
+            if cert is not None:
+                return Sought(cert, "", time.perf_counter() - t0)
+            whys.append(why)
+        return Sought(None, "; ".join(whys), time.perf_counter() - t0)
+
+    later = remembered(task_key(setting, start, target, "after search", budget), look)
+    return Sought(later.cert, f"{sought.why}; {later.why}" if later.cert is None else "", sought.spent + later.spent,
+                  sought.reused or later.reused)
 
 
 def later_attempts(rules: PushRules, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float = 1.0

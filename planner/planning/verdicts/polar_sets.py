@@ -18,7 +18,13 @@ Two closed sets of :mod:`.backward`'s construction, built in that plane:
   (:data:`FORWARD_CELL`), each face held only within ``B``: cut a plan's path into pieces as :mod:`.backward`
   does; every piece lies in ``B`` and starts in ``F``, so it ends in ``F``.
 
-If ``F`` leaves the target's goal disc out, no plan from the start reaches the target. Over-approximation
+If ``F`` leaves the target's goal disc out, no plan from the start reaches the target.
+
+``F`` is first grown without ``B`` (that is, with ``B`` the whole push space, trivially closed backward), for
+at most :data:`FORWARD_FIRST` updates: where it reaches the goal there, ``B`` (the costly set: some 20 s on a
+wide push space) is not built, since a set ``F`` so quickly at the goal is rarely cut off from it by the coarse
+``B`` (on the verdict benchmark, every task ``B`` helps to certify takes more than 3000 updates without it); where
+it closes without reaching it, it is the certificate, with ``B`` the whole push space. Over-approximation
 only: the obstacles' zone and the tool-body zone are drawn with inscribed polygons and their images shrunk by
 :data:`IMAGE_ROOM`, the regions and the goal disc are taken larger, so each set holds what its exact
 counterpart holds. The sets are stored in the ``(U, V)`` plane with ``r0`` and ``phi0``; their world image is
@@ -39,8 +45,10 @@ from tooltransfer.planner.planning.verdicts.backward import (
     BUDGET_SPENT,
     ROUNDING,
     WIDEST_CONE,
+    BackwardResult,
     BlockGrid,
     backward_set,
+    grid_over,
     polygonal,
     unclosed_block,
 )
@@ -60,6 +68,8 @@ FORWARD_CELL = 0.00125
 #: Block updates of ``B`` and of ``F`` (each times the budget): ``verd200-00147`` takes 1799 in all.
 BACK_BLOCKS = 3000
 FORWARD_BLOCKS = 8000
+#: Block updates (times the budget) of ``F`` grown first without ``B`` (module docstring).
+FORWARD_FIRST = 1000
 #: Radius [m] of the disc about the start that ``F`` holds, and the least distance it keeps from the target's
 #: goal disc.
 START_DISC = 5e-5
@@ -216,30 +226,48 @@ def goal_image(lp: LogPolar, goal: shapely.Geometry) -> shapely.Geometry:
 
 def both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, goal: shapely.Geometry, *,
               budget: float = 1.0) -> BothWays:
-    """``B`` closed from the goal (``goal``: a polygon [m] holding the target's goal disc), then ``F`` from the
-    start within ``B`` (module docstring), stopping once ``F`` comes within :data:`START_DISC` of the goal;
-    ``budget`` scales the block updates."""
+    """``F`` from the start without ``B`` for at most :data:`FORWARD_FIRST` updates; unless it reached or closed,
+    ``B`` closed from the goal (``goal``: a polygon [m] holding the target's goal disc), then ``F`` from the
+    start within ``B`` (module docstring), each ``F`` stopping once it comes within :data:`START_DISC` of the
+    goal; ``budget`` scales the block updates."""
     lp = LogPolar.about(rules, target)
     world = PolarWorld.of(rules, lp)
     g = goal_image(lp, goal)
-    s = lp.forward(start)[0]
-    back = backward_set(rules, world.space, g, s, h=BACK_CELL, gap=-1.0, max_blocks=round(BACK_BLOCKS * budget),
-                        zone=world.zone, model=lambda box: world.block_faces(rules, box))
+    whole = shapely.union(world.space, g)
+    first = _ahead(rules, world, g, start, whole, round(FORWARD_FIRST * budget))
+    if BUDGET_SPENT not in first.stopped:  # reached the goal, or closed: B is the whole space
+        return _ended(world, g, whole, grid_over(whole, BACK_CELL), first, first.blocks_processed, " (without B)")
+    back = backward_set(rules, world.space, g, lp.forward(start)[0], h=BACK_CELL, gap=-1.0,
+                        max_blocks=round(BACK_BLOCKS * budget), zone=world.zone,
+                        model=lambda box: world.block_faces(rules, box))
+    done = first.blocks_processed + back.blocks_processed
     if back.region is None:
-        return BothWays(world, None, None, None, None, f"the set B: {back.stopped}", back.blocks_processed)
-    seed = start_disc(lp, start)
-    inside = shapely.intersection(world.space, back.region)
-    shapely.prepare(back.region)
-    ahead = backward_set(rules, shapely.union(inside, g), seed, shapely.centroid(g).coords[0], h=FORWARD_CELL,
-                         gap=_goal_gap(g), max_blocks=round(FORWARD_BLOCKS * budget), zone=world.zone, exact=True,
-                         model=lambda box: world.block_faces(rules, box, reverse=True, within=back.region))
-    done = back.blocks_processed + ahead.blocks_processed
+        return BothWays(world, None, None, None, None, f"the set B: {back.stopped}", done)
+    ahead = _ahead(rules, world, g, start, back.region, round(FORWARD_BLOCKS * budget))
+    return _ended(world, g, back.region, back.grid, ahead, done + ahead.blocks_processed, "")
+
+
+def _ahead(rules: PushRules, world: PolarWorld, g: shapely.Geometry, start: np.ndarray, back: shapely.Geometry,
+           max_blocks: int) -> BackwardResult:
+    """``F``: the forward set from the start's disc, each face held only within ``back`` (``B``), stopping
+    within :data:`START_DISC` of the goal image ``g``."""
+    shapely.prepare(back)
+    inside = shapely.intersection(world.space, back)
+    return backward_set(rules, shapely.union(inside, g), start_disc(world.map, start), shapely.centroid(g).coords[0],
+                        h=FORWARD_CELL, gap=_goal_gap(g), max_blocks=max_blocks, zone=world.zone, exact=True,
+                        model=lambda box: world.block_faces(rules, box, reverse=True, within=back))
+
+
+def _ended(world: PolarWorld, g: shapely.Geometry, back: shapely.Geometry, back_grid: BlockGrid,
+           ahead: BackwardResult, done: int, note: str) -> BothWays:
+    """What :func:`both_ways` found once ``F`` (``ahead``, within ``back``) stopped or closed (``g``: the goal
+    image)."""
     if ahead.region is None:
         why = ahead.stopped if BUDGET_SPENT in ahead.stopped else "it came within the gap of the target's goal disc"
-        return BothWays(world, back.region, back.grid, None, None, f"the set F: {why}", done)
+        return BothWays(world, back, back_grid, None, None, f"the set F{note}: {why}", done)
     if shapely.distance(ahead.region, g) <= START_DISC:
-        return BothWays(world, back.region, back.grid, None, None, "the set F came within the gap of the goal", done)
-    return BothWays(world, back.region, back.grid, ahead.region, ahead.grid, "", done)
+        return BothWays(world, back, back_grid, None, None, f"the set F{note} came within the gap of the goal", done)
+    return BothWays(world, back, back_grid, ahead.region, ahead.grid, "", done)
 
 
 def _goal_gap(g: shapely.Geometry) -> float:
