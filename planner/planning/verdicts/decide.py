@@ -75,7 +75,7 @@ def task_key(setting: Setting, start: np.ndarray, target: np.ndarray, *parts: An
     """A digest of what a certificate depends on: the world (``setting``: its description, mechanics and
     margin, what makes two settings equal), ``start`` and ``target`` (2,) [m] and ``parts`` (budgets, the
     attempt). Not the variant: a certificate is a property of the task, so the variants of a task
-    (``compare``, a batch's rows run in one process) share each look."""
+    (``compare``; a batch's rows where one slot runs them in turn) share each look."""
     data = json.dumps([setting.describe(), repr(setting.mechanics), setting.margin,
                        np.asarray(start, dtype=np.float64).tolist(), np.asarray(target, dtype=np.float64).tolist(),
                        list(parts)], sort_keys=True, default=str)
