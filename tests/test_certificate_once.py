@@ -26,7 +26,9 @@ def test_a_look_is_made_once_per_task_and_budget() -> None:
     first = decide.seek_certificate(setting, start, target)
     again = decide.seek_certificate(setting, start.copy(), target.copy())
     assert first.cert is not None and not first.reused
-    assert again.reused and again.cert is first.cert and again.why == first.why
+    assert again.reused and again.why == first.why and again.shared == first.spent
+    assert again.cert is not None and again.cert is not first.cert  # each plan its own copy
+    assert again.cert.to_dict() == first.cert.to_dict()
     assert not decide.seek_certificate(setting, start, target, budget=2.0).reused  # another budget
     assert not decide.seek_certificate(setting, start + 1e-6, target).reused  # another start
     assert not decide.seek_certificate(replace(setting, margin=setting.margin + 1e-3), start, target).reused
@@ -43,4 +45,5 @@ def test_the_second_variant_of_a_task_reuses_the_first_ones_certificate() -> Non
     assert qp.status == mapping.status == "infeasible"
     assert qp.evidence is not None and mapping.evidence is not None
     assert "certificate_reused" not in qp.evidence and mapping.evidence["certificate_reused"] is True
+    assert mapping.evidence["time_certify_shared"] > 0.0  # the first look's time, kept
     assert mapping.evidence["certificate"] == qp.evidence["certificate"]

@@ -14,6 +14,7 @@ could change that, :func:`budget_limited`).
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 import time
@@ -57,12 +58,13 @@ def budget_limited(metrics: dict[str, float], not_proved: str) -> bool:
 class Sought:
     """A look for a certificate (:func:`seek_certificate`): the certificate, or None with ``why`` nothing
     was proved, the seconds [s] it took, and whether it was taken from an earlier look at the same task in this
-    process (:func:`remembered`; ``spent`` is then the time the look took here, not the first one's)."""
+    process (:func:`remembered`; ``spent`` is then the time the look took here, ``shared`` the first one's [s])."""
 
     cert: Certificate | None
     why: str
     spent: float
     reused: bool = False
+    shared: float = 0.0
 
 
 #: The looks for certificates made in this process, newest last, by :func:`task_key` (at most :data:`REMEMBERED`).
@@ -88,7 +90,9 @@ def remembered(key: str, look: Callable[[], Sought]) -> Sought:
     t0 = time.perf_counter()
     if key in _LOOKS:
         _LOOKS.move_to_end(key)
-        return replace(_LOOKS[key], spent=time.perf_counter() - t0, reused=True)
+        first = _LOOKS[key]  # a copy of its certificate: a plan's is its own
+        return replace(first, cert=copy.deepcopy(first.cert), spent=time.perf_counter() - t0, reused=True,
+                       shared=first.spent)
     found = look()
     _LOOKS[key] = found
     while len(_LOOKS) > REMEMBERED:
@@ -134,7 +138,7 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
         evidence: dict[str, Any] = {"verdict": "infeasible", "kind": cert.kind, "searched": searched,
                                     "certificate": cert.to_dict(), "budget": budget}
         if sought.reused:
-            evidence["certificate_reused"] = True
+            evidence.update(certificate_reused=True, time_certify_shared=sought.shared)
         return replace(plan, status="infeasible", metrics=metrics, evidence=evidence,
                        reason=f"certified infeasible ({cert.kind}): {cert.reason}; the planner's search: {searched}")
     status: Literal["unknown", "violated"] = "violated" if plan.status == "violated" else "unknown"
@@ -143,7 +147,7 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
     if status == "unknown":
         evidence["budget_limited"] = budget_limited(plan.metrics, why)
     if sought.reused:
-        evidence["certificate_reused"] = True
+        evidence.update(certificate_reused=True, time_certify_shared=sought.shared)
     return replace(plan, status=status, metrics=metrics, evidence=evidence,
                    reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)
 
@@ -167,8 +171,11 @@ def _after_search(sought: Sought, setting: Setting, start: np.ndarray, target: n
         return Sought(None, "; ".join(whys), time.perf_counter() - t0)
 
     later = remembered(task_key(setting, start, target, "after search", budget), look)
-    return Sought(later.cert, f"{sought.why}; {later.why}" if later.cert is None else "", sought.spent + later.spent,
-                  sought.reused or later.reused)
+    if later.cert is not None:  # the certificate is the later look's
+        return replace(later, spent=sought.spent + later.spent,
+                       shared=later.shared + (sought.shared if later.reused else 0.0))
+    return Sought(None, f"{sought.why}; {later.why}", sought.spent + later.spent, sought.reused or later.reused,
+                  sought.shared + later.shared)
 
 
 def later_attempts(rules: PushRules, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float = 1.0

@@ -69,7 +69,8 @@ FORWARD_CELL = 0.00125
 #: Block updates of ``B`` and of ``F`` (each times the budget): ``verd200-00147`` takes 1799 in all.
 BACK_BLOCKS = 3000
 FORWARD_BLOCKS = 8000
-#: Block updates (times the budget) of ``F`` grown first without ``B`` (module docstring).
+#: Block updates of ``F`` grown first without ``B`` (module docstring; not scaled by the budget, so that a larger
+#: budget builds ``B`` wherever a smaller one did).
 FORWARD_FIRST = 1000
 #: Radius [m] of the disc about the start that ``F`` holds, and the least distance it keeps from the target's
 #: goal disc.
@@ -230,12 +231,12 @@ def both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, goal: sha
     """``F`` from the start without ``B`` for at most :data:`FORWARD_FIRST` updates; unless it reached or closed,
     ``B`` closed from the goal (``goal``: a polygon [m] holding the target's goal disc), then ``F`` from the
     start within ``B`` (module docstring), each ``F`` stopping once it comes within :data:`START_DISC` of the
-    goal; ``budget`` scales the block updates."""
+    goal; ``budget`` scales the block updates of ``B`` and of ``F`` within it."""
     lp = LogPolar.about(rules, target)
     world = PolarWorld.of(rules, lp)
     g = goal_image(lp, goal)
     whole = shapely.union(world.space, g)
-    first = _ahead(rules, world, g, start, whole, round(FORWARD_FIRST * budget))
+    first = _ahead(rules, world, g, start, whole, FORWARD_FIRST)  # not scaled: a larger budget skips B no more often
     if BUDGET_SPENT not in first.stopped:  # reached the goal, or closed: B is the whole space
         return _ended(world, g, whole, grid_over(whole, BACK_CELL), first, first.blocks_processed, " (without B)")
     back = backward_set(rules, world.space, g, lp.forward(start)[0], h=BACK_CELL, gap=-1.0,
@@ -243,9 +244,11 @@ def both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, goal: sha
                         model=lambda box: world.block_faces(rules, box))
     done = first.blocks_processed + back.blocks_processed
     if back.region is None:
-        return BothWays(world, None, None, None, None, f"the set B: {back.stopped}", done)
+        return BothWays(world, None, None, None, None, f"the set F without B: {first.stopped}; the set B: "
+                        f"{back.stopped}", done)
     ahead = _ahead(rules, world, g, start, back.region, round(FORWARD_BLOCKS * budget))
-    return _ended(world, g, back.region, back.grid, ahead, done + ahead.blocks_processed, "")
+    return _ended(world, g, back.region, back.grid, ahead, done + ahead.blocks_processed, " (within B, after "
+                  f"{first.blocks_processed} updates without it)")
 
 
 def _ahead(rules: PushRules, world: PolarWorld, g: shapely.Geometry, start: np.ndarray, back: shapely.Geometry,
