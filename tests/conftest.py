@@ -1,5 +1,5 @@
-"""Test-wide settings: learned skills are cached in a temporary folder, not in the user's home; a
-factory of small batch files."""
+"""Test-wide settings: learned skills are cached in a temporary folder, not in the user's home; the
+certificate looks remembered per process emptied before each test; a factory of small batch files."""
 
 from __future__ import annotations
 
@@ -25,6 +25,15 @@ def _skill_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
     mp.setenv("TOOLTRANSFER_CACHE", str(cache))
     yield
     mp.undo()
+
+
+@pytest.fixture(autouse=True)
+def _fresh_certificate_looks() -> None:
+    """Each test looks for its certificates afresh (the verdict's per-process memo, verdicts/decide.py, emptied):
+    a test that changes a certificate's settings cannot leave a look behind for the next."""
+    from tooltransfer.planner.planning.verdicts import decide
+
+    decide._LOOKS.clear()
 
 
 @pytest.fixture
