@@ -130,10 +130,9 @@ def _outside_ahead(cert: Any, pts: Any) -> float:
     be reached: a position outside it cannot lie on a plan); 0 where none lies outside."""
     import shapely
 
-    from tooltransfer.planner.planning.verdicts.polar_sets import LogPolar
+    from tooltransfer.planner.planning.verdicts.polar_sets import stored_sets
 
-    lp = LogPolar(tuple(cert.rules["base"]), cert.extra["map"]["r0"], cert.extra["map"]["phi0"])
-    back, ahead = shapely.from_wkt(cert.extra["back_wkt"]), shapely.from_wkt(cert.extra["ahead_wkt"])
+    lp, back, ahead = stored_sets(cert.rules["base"], cert.extra)
     at = shapely.points(lp.forward(pts))
     inside = shapely.covers(back, at)
     return float(shapely.distance(ahead, at[inside]).max()) if inside.any() else 0.0

@@ -22,6 +22,7 @@ from tooltransfer.planner.planning.verdicts.polar_sets import (
     IMAGE_ROOM,
     LogPolar,
     PolarWorld,
+    stored_sets,
     world_region,
 )
 from tooltransfer.problems.task import load_task
@@ -82,8 +83,7 @@ def test_a_task_certified_both_ways_is_checked_again_and_the_lattice_search_stay
     visited = []
     lattice_search(setting, start, target, step=0.001, cell=0.0005, budget=8000, directions=9, ends_held=True,
                    visited=visited)
-    lp = LogPolar(tuple(cert.rules["base"]), cert.extra["map"]["r0"], cert.extra["map"]["phi0"])
-    back, ahead = shapely.from_wkt(cert.extra["back_wkt"]), shapely.from_wkt(cert.extra["ahead_wkt"])
+    lp, back, ahead = stored_sets(cert.rules["base"], cert.extra)
     at = shapely.points(lp.forward(np.asarray(visited)))
     inside = shapely.covers(back, at)
     assert inside.sum() > 3  # the start and some positions pushed from it
@@ -96,9 +96,8 @@ def test_a_task_certified_both_ways_is_checked_again_and_the_lattice_search_stay
 
 def test_a_forward_backward_certificate_whose_sets_are_cut_fails_its_check(certified) -> None:
     _, rules, start, _, cert = certified
-    lp = LogPolar(tuple(cert.rules["base"]), cert.extra["map"]["r0"], cert.extra["map"]["phi0"])
+    lp, back, ahead = stored_sets(cert.rules["base"], cert.extra)
     s = lp.forward(start)[0]
-    back, ahead = shapely.from_wkt(cert.extra["back_wkt"]), shapely.from_wkt(cert.extra["ahead_wkt"])
 
     def with_(**changes):
         cert.extra, old = {**cert.extra, **changes}, cert.extra
@@ -136,9 +135,8 @@ def test_f_closed_without_b_is_a_certificate_with_b_the_whole_push_space() -> No
     cert, why = certify_both_ways(rules, start, target)
     assert cert is not None, why
     assert cert.extra["blocks_processed"] <= FORWARD_FIRST  # B was not built
-    lp = LogPolar(tuple(cert.rules["base"]), cert.extra["map"]["r0"], cert.extra["map"]["phi0"])
+    lp, back, ahead = stored_sets(cert.rules["base"], cert.extra)
     world = PolarWorld.of(rules, lp)
-    back, ahead = shapely.from_wkt(cert.extra["back_wkt"]), shapely.from_wkt(cert.extra["ahead_wkt"])
     assert shapely.covers(shapely.buffer(back, 1e-9), world.space)
     assert check_certificate(cert, rules) == []
     visited: list = []

@@ -263,12 +263,12 @@ def backward_set(rules: PushRules, space: shapely.Geometry, goal: shapely.Geomet
     pieces gather vertices (on one task tens of thousands in one block) each update costs more: ``max_vertices``
     bounds the work, the vertices of the pieces grown summed over the updates (None: no bound). ``model``: each
     block's faces (as :func:`block_faces` gives them) in another plane than the world's (the plane of
-    ``space``, ``goal``, ``start`` and ``zone``, :mod:`.polar_sets`); None: the world's, :func:`block_faces`."""
+    ``space``, ``goal`` and ``start``, :mod:`.polar_sets`; its faces keep out of its own zone, and ``zone`` is not
+    used); None: the world's, :func:`block_faces`."""
     grid = grid_over(shapely.union(space, goal), h)
-    zone = obstacle_zone(rules) if zone is None else zone
     if model is None:
-        regions = face_regions(rules)
-        model = lambda box: block_faces(rules, box, zone, regions)  # noqa: E731
+        world_zone, regions = obstacle_zone(rules) if zone is None else zone, face_regions(rules)
+        model = lambda box: block_faces(rules, box, world_zone, regions)  # noqa: E731
     models: dict[tuple[int, int], list] = {}
     cells = _split(grid, goal)
     done, work = 0, _Vertices(max_vertices)

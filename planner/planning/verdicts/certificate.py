@@ -198,11 +198,7 @@ def certify(rules: PushRules, start: np.ndarray, target: np.ndarray, *, h: tuple
                        region=back.region, grid=back.grid, time=time.perf_counter() - t0,
                        extra={"blocks_processed": back.blocks_processed, "start_gap": gap}
                        | ({} if sp is None else {"invariant": sp.to_dict()}))
-    problems = check_certificate(cert, rules)
-    if problems:
-        return None, "backward-reachable set of the target: its check failed: " + "; ".join(problems)
-    cert.time = time.perf_counter() - t0
-    return cert, ""
+    return _issued(cert, rules, t0, "backward-reachable set of the target: its check failed: ")
 
 
 def certify_exact_backward(rules: PushRules, start: np.ndarray, target: np.ndarray, *, budget: float = 1.0,
@@ -349,11 +345,10 @@ def certify_switches(rules: PushRules, space: PlacementSpace, start: np.ndarray,
                                   "start_gap": attempt.gap, "placements": _placements_of(space),
                                   "regions_wkt": {f: shapely.to_wkt(g, rounding_precision=-1)
                                                   for f, g in res.regions.items()}})
-        problems = check_certificate(cert, rules, placements=space)
-        if not problems:
-            cert.time = time.perf_counter() - t0
-            return cert, ""
-        tried[-1] += "; their check failed: " + "; ".join(problems)
+        issued, why = _issued(cert, rules, t0, "; their check failed: ", placements=space)
+        if issued is not None:
+            return issued, ""
+        tried[-1] += why
     return None, ("the faces' sets from the start with switches only where the tool gets round the puck ("
                   + "; ".join(tried) + ")")
 
@@ -414,8 +409,15 @@ def certify_both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, *
                        start=(float(start[0]), float(start[1])), target=(float(target[0]), float(target[1])),
                        rules=rules.to_dict(), space=push_space(rules), region=world_region(lp, found.ahead),
                        extra={"blocks_processed": found.blocks, "start_gap": START_DISC, **certificate_data(found)})
-    problems = check_certificate(cert, rules)
+    return _issued(cert, rules, t0, f"{tried}; its check failed: ")
+
+
+def _issued(cert: Certificate, rules: PushRules, t0: float, failed: str, placements: PlacementSpace | None = None
+            ) -> tuple[Certificate | None, str]:
+    """``(cert, "")`` with its time (the seconds since ``t0``, its check included) where
+    :func:`check_certificate` finds nothing wrong with it, else ``(None, failed + the problems)``."""
+    problems = check_certificate(cert, rules, placements=placements)
     if problems:
-        return None, f"{tried}; its check failed: " + "; ".join(problems)
+        return None, failed + "; ".join(problems)
     cert.time = time.perf_counter() - t0
     return cert, ""

@@ -134,11 +134,10 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
     if "time_total" in metrics:
         metrics["time_total"] += spent
     searched = plan.reason or "no plan"
+    reused = {"certificate_reused": True, "time_certify_shared": sought.shared} if sought.reused else {}
     if cert is not None:
         evidence: dict[str, Any] = {"verdict": "infeasible", "kind": cert.kind, "searched": searched,
-                                    "certificate": cert.to_dict(), "budget": budget}
-        if sought.reused:
-            evidence.update(certificate_reused=True, time_certify_shared=sought.shared)
+                                    "certificate": cert.to_dict(), "budget": budget, **reused}
         return replace(plan, status="infeasible", metrics=metrics, evidence=evidence,
                        reason=f"certified infeasible ({cert.kind}): {cert.reason}; the planner's search: {searched}")
     status: Literal["unknown", "violated"] = "violated" if plan.status == "violated" else "unknown"
@@ -146,8 +145,7 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
                 "searched": searched, "not_proved": why, "budget": budget}
     if status == "unknown":
         evidence["budget_limited"] = budget_limited(plan.metrics, why)
-    if sought.reused:
-        evidence.update(certificate_reused=True, time_certify_shared=sought.shared)
+    evidence.update(reused)
     return replace(plan, status=status, metrics=metrics, evidence=evidence,
                    reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)
 
@@ -171,11 +169,9 @@ def _after_search(sought: Sought, setting: Setting, start: np.ndarray, target: n
         return Sought(None, "; ".join(whys), time.perf_counter() - t0)
 
     later = remembered(task_key(setting, start, target, "after search", budget), look)
-    if later.cert is not None:  # the certificate is the later look's
-        return replace(later, spent=sought.spent + later.spent,
-                       shared=later.shared + (sought.shared if later.reused else 0.0))
-    return Sought(None, f"{sought.why}; {later.why}", sought.spent + later.spent, sought.reused or later.reused,
-                  sought.shared + later.shared)
+    found = later.cert is not None  # then the certificate is the later look's alone
+    return Sought(later.cert, "" if found else f"{sought.why}; {later.why}", sought.spent + later.spent,
+                  later.reused if found else sought.reused or later.reused, sought.shared + later.shared)
 
 
 def later_attempts(rules: PushRules, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float = 1.0

@@ -240,8 +240,7 @@ def both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, goal: sha
     if BUDGET_SPENT not in first.stopped:  # reached the goal, or closed: B is the whole space
         return _ended(world, g, whole, grid_over(whole, BACK_CELL), first, first.blocks_processed, " (without B)")
     back = backward_set(rules, world.space, g, lp.forward(start)[0], h=BACK_CELL, gap=-1.0,
-                        max_blocks=round(BACK_BLOCKS * budget), zone=world.zone,
-                        model=lambda box: world.block_faces(rules, box))
+                        max_blocks=round(BACK_BLOCKS * budget), model=lambda box: world.block_faces(rules, box))
     done = first.blocks_processed + back.blocks_processed
     if back.region is None:
         return BothWays(world, None, None, None, None, f"the set F without B: {first.stopped}; the set B: "
@@ -258,7 +257,7 @@ def _ahead(rules: PushRules, world: PolarWorld, g: shapely.Geometry, start: np.n
     shapely.prepare(back)
     inside = shapely.intersection(world.space, back)
     return backward_set(rules, shapely.union(inside, g), start_disc(world.map, start), shapely.centroid(g).coords[0],
-                        h=FORWARD_CELL, gap=_goal_gap(g), max_blocks=max_blocks, zone=world.zone, exact=True,
+                        h=FORWARD_CELL, gap=_goal_gap(g), max_blocks=max_blocks, exact=True,
                         model=lambda box: world.block_faces(rules, box, reverse=True, within=back))
 
 
@@ -288,8 +287,7 @@ def check_both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, goa
     ``B`` holds the goal and is closed backward on every block of its grid, which covers the push space;
     ``F`` holds the start's disc, keeps :data:`START_DISC` from the goal and is closed forward within ``B``."""
     try:
-        lp = LogPolar(rules.base, float(extra["map"]["r0"]), float(extra["map"]["phi0"]))
-        back, ahead = shapely.from_wkt(extra["back_wkt"]), shapely.from_wkt(extra["ahead_wkt"])
+        lp, back, ahead = stored_sets(rules.base, extra)
         grids = [BlockGrid(tuple(d["origin"]), float(d["h"]), tuple(d["shape"]))  # type: ignore[arg-type]
                  for d in (extra["back_grid"], extra["ahead_grid"])]
     except (KeyError, TypeError, ValueError, shapely.errors.GEOSException) as e:
@@ -319,6 +317,14 @@ def check_both_ways(rules: PushRules, start: np.ndarray, target: np.ndarray, goa
         if bad is not None:
             return [f"{name}: block {bad[0]} is not closed ({bad[1] * 1e6:.3g} mm^2 outside the set)"]
     return []
+
+
+def stored_sets(base: tuple[float, float], extra: dict[str, Any]
+                ) -> tuple[LogPolar, shapely.Geometry, shapely.Geometry]:
+    """The map about ``base`` (2,) [m] (the Omni's axis) and the sets ``B`` and ``F`` (of its plane) that a
+    ``forward_backward`` certificate stores in ``extra`` (:func:`certificate_data`)."""
+    lp = LogPolar((float(base[0]), float(base[1])), float(extra["map"]["r0"]), float(extra["map"]["phi0"]))
+    return lp, shapely.from_wkt(extra["back_wkt"]), shapely.from_wkt(extra["ahead_wkt"])
 
 
 def certificate_data(found: BothWays) -> dict[str, Any]:
