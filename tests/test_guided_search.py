@@ -306,7 +306,9 @@ def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the
     runs after them. The attempt on the whole faces and their windows where the whole is not held runs
     in both cases (on fine steps), at 0.8 of the cone and, last, at the widest share where that is wider;
     after them all, in both cases, the attempt on every face's windows in the distance field's order
-    (tests/test_guided_field.py). verd200-00056 is solved by the windows' attempt."""
+    (tests/test_guided_field.py), and where a search on whole steps ended on its budget (verd200-00011's
+    do), the weighted search made again (tests/test_guided_spent.py). verd200-00056 is solved by the
+    windows' attempt."""
     from guided_ladder import ladder_plans
 
     # three attempts closed at once; the windows' gives a push plan (its approach, at the edge of the
@@ -326,12 +328,15 @@ def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the
     moved = solve(_widest(_verdict_task("verd200-00011"), 0.8))
     assert moved.verdict != "solved"
     attempts = (moved.reason or "").split("the guided search: ")[1].split("; then ")
-    assert not any("windows of each face" in a for a in attempts[:-1])
+    assert not any("windows of each face" in a for a in attempts[:-2])
     assert "half steps and new runs" in attempts[2] and " 4 mm steps" in attempts[2]
+    assert "no path within 4000 expansions of 4 mm steps" in attempts[2]  # on its budget
     assert " 2 mm steps" in attempts[3] and "windows" not in attempts[3]
     assert "where that is not held, on its 4 mm windows" in attempts[4] and " 2 mm steps" in attempts[4]
     assert "4 mm windows of each face" in attempts[5] and "over a grid of where the faces push" in attempts[5]
-    assert len(attempts) == 6
+    assert "again after a search on whole steps spent its budget" in attempts[6] and " 4 mm steps" in attempts[6]
+    assert "weighted 3" in attempts[6] and "windows" not in attempts[6]
+    assert len(attempts) == 7
 
 
 def test_a_passage_whole_steps_miss_is_found_on_fine_steps_and_the_plan_executes() -> None:

@@ -67,10 +67,12 @@ UNITS: dict[str, Unit] = {
     # and whether it ended on its budget (1) or with its space closed (0); on a plan the search did not
     # solve, its attempts and how many of them ended on their budget; 1 where the plan came from an
     # attempt at the widest share (oe.friction_cone_fraction_max, beyond 0.8: little margin for mu), or
-    # from the last attempt, in the order of a distance field (oe.guided_field)
+    # from an attempt in the order of a distance field (oe.guided_field), or from the weighted search made
+    # again where one on whole steps ended on its budget (guided_spent)
     "friction_cone_fraction": "",
     "guided_widest": "",
     "guided_field": "",
+    "guided_spent": "",
     "guided_step": "m",
     "time_guided": "s",
     "guided_expansions": "",

@@ -178,7 +178,8 @@ class _Rung(NamedTuple):
     steps and cells of a :data:`FINE` share of the usual and ``1 / FINE`` times the expansions;
     ``refusals``: how many times it searches again without a change of face a later stage refused;
     ``widest``: at ``friction_cone_fraction_max`` beyond the ladder's middle share; ``guide``: ordered by
-    the distance to go of :func:`guide_field`, the ladder's last rung)."""
+    the distance to go of :func:`guide_field`; ``spent``: made only where an attempt before on whole steps
+    and whole faces ended on its budget, not its space, the ladder's last rung)."""
 
     change: dict[str, float]
     windows: bool = False
@@ -190,6 +191,7 @@ class _Rung(NamedTuple):
     refusals: int = REFUSALS
     widest: bool = False
     guide: bool = False
+    spent: bool = False
 
 
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
@@ -301,7 +303,10 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     ``mixed`` attempts are, but in the order of the distance to go over a grid of the faces' pushes
     (:mod:`~.guided_field`, ``guide``: a way round an obstacle that the straight line's order left
     unexpanded), whether or not the attempts before could push from the start (the caller does not make
-    it after a plan with little room). The ``mixed``
+    it after a plan with little room); after it, where an attempt on whole steps and whole faces ended on
+    its budget rather than with its space closed, the middle share's whole steps with half steps and new
+    runs again, weighted toward the target (:data:`GREED`) and searched again :data:`LAST_REFUSALS` times
+    (metric ``guided_spent``; not made after a plan with little room either). The ``mixed``
     attempts run also where the attempts before them could not push from the start (their windows may;
     the widest share's whole-face attempts do not), and after a plan with little room (the caller's
     ``GUIDED_ROOM``), which a roomier one may replace (the caller takes none at the widest share after a
@@ -346,11 +351,17 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     # of the distance field (a path the straight line's order left unexpanded)
     tries += [_Rung({**at_middle, "contact_span": span}, windows=True, more=True, fine=True, greed=GREED,
                     room=LAST_ROOM, refusals=LAST_REFUSALS, guide=True)] if windowed else []
+    # last, where a search on whole steps spent its budget: that search weighted toward the target (weighted A*
+    # reaches a lattice's far side in fewer expansions; where every space closed, a new order has little to find)
+    tries.append(_Rung(at_middle, more=True, greed=GREED, refusals=LAST_REFUSALS, spent=True))
     stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
     kept = False  # the caller keeps a whole plan of an attempt before
+    spent = False  # an attempt on whole steps and whole faces ended on its budget
     for rung in tries:
-        if rung.guide and kept:
-            continue  # after a plan kept with little room: the field's order is for tasks with no plan at all
+        if (rung.guide or rung.spent) and kept:
+            continue  # after a plan kept with little room: the last attempts are for tasks with no plan at all
+        if rung.spent and not spent:
+            continue
         if not rung.guide and ((rung.windows and not stuck)
                                or (stuck and rung.mixed is None and (rung.fine or rung.widest))):
             continue  # (which faces hold the puck at the start depends on neither; their steps' directions
@@ -363,6 +374,8 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
         for _ in range(1 + rung.refusals):
             plan = _attempt(t, setting, target, opts, universal, refused, rung, order)
             stuck = stuck and (rung.windows or rung.mixed is not None or plan.metrics.get("guided_expansions") == 1.0)
+            spent = spent or (not (rung.fine or rung.windows) and rung.mixed is None
+                              and plan.metrics.get("guided_on_budget") == 1.0)
             failed = yield plan
             kept = kept or isinstance(failed, Plan)
             where = getattr(failed, "where", None)
@@ -394,7 +407,8 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
           f"{f' or, where that is not held, on its {mixed * 1e3:g} mm windows' if mixed is not None else ''}"
           f"{', half steps and new runs where it rolls off' if rung.more else ''}"
           f"{f', the distance to go weighted {rung.greed:g}' if rung.greed != 1.0 else ''}"
-          f"{', that distance over a grid of where the faces push' if rung.guide else ''})")
+          f"{', that distance over a grid of where the faces push' if rung.guide else ''}"
+          f"{', again after a search on whole steps spent its budget' if rung.spent else ''})")
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
@@ -421,4 +435,6 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
         plan.metrics["guided_widest"] = 1.0
     if rung.guide:  # a plan in the distance field's order
         plan.metrics["guided_field"] = 1.0
+    if rung.spent:  # a plan of the weighted search made again after one on whole steps spent its budget
+        plan.metrics["guided_spent"] = 1.0
     return plan
