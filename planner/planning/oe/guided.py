@@ -323,8 +323,42 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     with no tool path there) makes the search run again without that change of face near there (at
     most :data:`REFUSALS` times per attempt, :data:`LAST_REFUSALS` in the ``mixed`` ones); a whole plan it keeps
     (a :class:`~tooltransfer.planner.planning.plan.Plan`: one with little room, kept unless a later attempt gives
-    a roomier one) makes it skip the ``guide`` attempt; anything else, the next attempt."""
+    a roomier one) makes it skip the ``guide`` and ``spent`` attempts; anything else, the next attempt."""
     target = universal[-1] if target is None else target
+    tries = _ladder(setting, options)
+    stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
+    kept = False  # the caller keeps a whole plan of an attempt before
+    spent = False  # an attempt on whole steps and whole faces ended on its budget
+    for rung in tries:
+        if (rung.guide or rung.spent) and kept:
+            continue  # after a plan kept with little room: the last attempts are for tasks with no plan at all
+        if rung.spent and not spent:
+            continue
+        if not rung.guide and ((rung.windows and not stuck)
+                               or (stuck and rung.mixed is None and (rung.fine or rung.widest))):
+            continue  # (which faces hold the puck at the start depends on neither; their steps' directions
+            # do a little on the share, so a face held there but stepping nowhere at 0.8 is not tried wider;
+            # the field's order runs on every face's windows whether or not those before could push from it)
+        opts = options.model_copy(update=rung.change)
+        order = guide_field(setting, universal[0], target, options=opts, step=FINE * STEP if rung.fine else STEP,
+                            windows=rung.windows, mixed=rung.mixed, room=rung.room) if rung.guide else None
+        refused: list[Refusal] = []
+        for _ in range(1 + rung.refusals):
+            plan = _attempt(t, setting, target, opts, universal, refused, rung, order)
+            stuck = stuck and (rung.windows or rung.mixed is not None or plan.metrics.get("guided_expansions") == 1.0)
+            spent = spent or (not (rung.fine or rung.windows) and rung.mixed is None
+                              and plan.metrics.get("guided_on_budget") == 1.0)
+            failed = yield plan
+            kept = kept or isinstance(failed, Plan)
+            where = getattr(failed, "where", None)
+            if plan.status != "solved" or where is None:
+                break
+            refused.append(Refusal(failed.face_a, failed.face_b, where))
+
+
+def _ladder(setting: Setting, options: QPOptions) -> list[_Rung]:
+    """The attempts of :func:`guided_plans`, in order (its docstring), before it leaves out those the
+    attempts before them make needless."""
     wide, span = options.friction_cone_fraction_max, options.guided_contact_span
     share = options.friction_cone_fraction
     middle = max(share, min(wide, MIDDLE_SHARE))  # the rung of the ladder below the widest share
@@ -354,34 +388,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     # last, where a search on whole steps spent its budget: that search weighted toward the target (weighted A*
     # reaches a lattice's far side in fewer expansions; where every space closed, a new order has little to find)
     tries.append(_Rung(at_middle, more=True, greed=GREED, refusals=LAST_REFUSALS, spent=True))
-    stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
-    kept = False  # the caller keeps a whole plan of an attempt before
-    spent = False  # an attempt on whole steps and whole faces ended on its budget
-    for rung in tries:
-        if (rung.guide or rung.spent) and kept:
-            continue  # after a plan kept with little room: the last attempts are for tasks with no plan at all
-        if rung.spent and not spent:
-            continue
-        if not rung.guide and ((rung.windows and not stuck)
-                               or (stuck and rung.mixed is None and (rung.fine or rung.widest))):
-            continue  # (which faces hold the puck at the start depends on neither; their steps' directions
-            # do a little on the share, so a face held there but stepping nowhere at 0.8 is not tried wider;
-            # the field's order runs on every face's windows whether or not those before could push from it)
-        opts = options.model_copy(update=rung.change)
-        order = guide_field(setting, universal[0], target, options=opts, step=FINE * STEP if rung.fine else STEP,
-                            windows=rung.windows, mixed=rung.mixed, room=rung.room) if rung.guide else None
-        refused: list[Refusal] = []
-        for _ in range(1 + rung.refusals):
-            plan = _attempt(t, setting, target, opts, universal, refused, rung, order)
-            stuck = stuck and (rung.windows or rung.mixed is not None or plan.metrics.get("guided_expansions") == 1.0)
-            spent = spent or (not (rung.fine or rung.windows) and rung.mixed is None
-                              and plan.metrics.get("guided_on_budget") == 1.0)
-            failed = yield plan
-            kept = kept or isinstance(failed, Plan)
-            where = getattr(failed, "where", None)
-            if plan.status != "solved" or where is None:
-                break
-            refused.append(Refusal(failed.face_a, failed.face_b, where))
+    return tries
 
 
 def _widens(setting: Setting, narrow: float, wide: float) -> bool:
