@@ -13,6 +13,9 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 
+# the helpers' checks report their values on failure as a test's own asserts do
+pytest.register_assert_rewrite("guided_ladder")
+
 
 @pytest.fixture(autouse=True, scope="session")
 def _skill_cache(tmp_path_factory: pytest.TempPathFactory) -> None:

@@ -328,11 +328,11 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     tries = _ladder(setting, options)
     stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
     kept = False  # the caller keeps a whole plan of an attempt before
-    spent = False  # an attempt on whole steps and whole faces ended on its budget
+    on_budget = False  # an attempt on whole steps and whole faces ended on its budget
     for rung in tries:
         if (rung.guide or rung.spent) and kept:
             continue  # after a plan kept with little room: the last attempts are for tasks with no plan at all
-        if rung.spent and not spent:
+        if rung.spent and not on_budget:
             continue
         if not rung.guide and ((rung.windows and not stuck)
                                or (stuck and rung.mixed is None and (rung.fine or rung.widest))):
@@ -346,8 +346,8 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
         for _ in range(1 + rung.refusals):
             plan = _attempt(t, setting, target, opts, universal, refused, rung, order)
             stuck = stuck and (rung.windows or rung.mixed is not None or plan.metrics.get("guided_expansions") == 1.0)
-            spent = spent or (not (rung.fine or rung.windows) and rung.mixed is None
-                              and plan.metrics.get("guided_on_budget") == 1.0)
+            on_budget = on_budget or (not (rung.fine or rung.windows) and rung.mixed is None
+                                      and plan.metrics.get("guided_on_budget") == 1.0)
             failed = yield plan
             kept = kept or isinstance(failed, Plan)
             where = getattr(failed, "where", None)
