@@ -193,6 +193,18 @@ class _Rung(NamedTuple):
     guide: bool = False
     spent: bool = False
 
+    @property
+    def whole_faces(self) -> bool:
+        """Whether the search holds each face as a whole (no contact windows, not even where the whole is
+        not held)."""
+        return not self.windows and self.mixed is None
+
+    @property
+    def last(self) -> bool:
+        """Whether this is one of the ladder's last attempts, for tasks with no plan at all (not made after a
+        plan kept with little room)."""
+        return self.guide or self.spent
+
 
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = CELL, switch_price: float = 0.01,
@@ -330,7 +342,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     kept = False  # the caller keeps a whole plan of an attempt before
     on_budget = False  # an attempt on whole steps and whole faces ended on its budget
     for rung in tries:
-        if (rung.guide or rung.spent) and kept:
+        if rung.last and kept:
             continue  # after a plan kept with little room: the last attempts are for tasks with no plan at all
         if rung.spent and not on_budget:
             continue
@@ -345,8 +357,8 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
         refused: list[Refusal] = []
         for _ in range(1 + rung.refusals):
             plan = _attempt(t, setting, target, opts, universal, refused, rung, order)
-            stuck = stuck and (rung.windows or rung.mixed is not None or plan.metrics.get("guided_expansions") == 1.0)
-            on_budget = on_budget or (not (rung.fine or rung.windows) and rung.mixed is None
+            stuck = stuck and (not rung.whole_faces or plan.metrics.get("guided_expansions") == 1.0)
+            on_budget = on_budget or (rung.whole_faces and not rung.fine
                                       and plan.metrics.get("guided_on_budget") == 1.0)
             failed = yield plan
             kept = kept or isinstance(failed, Plan)
@@ -438,10 +450,8 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
                   if f.name in faces}
         plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share,
                             guided_step=FINE * STEP if fine else STEP)
-    if rung.widest:  # the caller keeps a plan with little room of a narrower share rather than this
-        plan.metrics["guided_widest"] = 1.0
-    if rung.guide:  # a plan in the distance field's order
-        plan.metrics["guided_field"] = 1.0
-    if rung.spent:  # a plan of the weighted search made again after one on whole steps spent its budget
-        plan.metrics["guided_spent"] = 1.0
+    # where the plan came from: the widest share (the caller keeps a plan with little room of a narrower share
+    # rather than this), the distance field's order, the weighted search made again after one spent its budget
+    plan.metrics.update({metric: 1.0 for metric, made in (("guided_widest", rung.widest), ("guided_field", rung.guide),
+                                                          ("guided_spent", rung.spent)) if made})
     return plan
