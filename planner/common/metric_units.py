@@ -68,11 +68,13 @@ UNITS: dict[str, Unit] = {
     # solve, its attempts and how many of them ended on their budget; 1 where the plan came from an
     # attempt at the widest share (oe.friction_cone_fraction_max, beyond 0.8: little margin for mu), or
     # from an attempt in the order of a distance field (oe.guided_field), or from the weighted search made
-    # again where one on whole steps ended on its budget (guided_spent)
+    # again where one on whole steps ended on its budget (guided_spent), or from the attempt on narrow
+    # contact windows where a face is not held as a whole (guided_narrow)
     "friction_cone_fraction": "",
     "guided_widest": "",
     "guided_field": "",
     "guided_spent": "",
+    "guided_narrow": "",
     "guided_step": "m",
     "time_guided": "s",
     "guided_expansions": "",

@@ -161,8 +161,9 @@ def _guided(task: Task, setting: Setting, attempts: Generator[Any, Any, None], f
     with more room (the closed loop's corrections need some), but for the attempts at the widest share of
     the friction cone (metric ``guided_widest``) after a plan at a narrower one: they would spend the
     margin kept for an error in ``mu``. The plan kept is sent back to the search, which then makes none of its
-    last attempts (``guide`` and ``spent``, :func:`~tooltransfer.planner.planning.oe.guided.guided_plans`): they
-    come after every other and are there for tasks with no plan at all."""
+    last attempts (``guide``, ``spent`` and ``narrow``,
+    :func:`~tooltransfer.planner.planning.oe.guided.guided_plans`): they come after every other and are there for
+    tasks with no plan at all."""
     clock = time.perf_counter()
     whys: list[str] = []
     n_tried = n_on_budget = 0  # the attempts, and those whose search ended on its budget (not its space)

@@ -34,6 +34,7 @@ from tooltransfer.planner.planning.oe.face_frame import FaceFrame
 from tooltransfer.planner.planning.oe.guided_field import UNREACHED, DistanceField, distance_field
 from tooltransfer.planner.planning.oe.guided_holds import lattice_rules, straight_to
 from tooltransfer.planner.planning.oe.guided_moves import (
+    MAX_WINDOWS,
     REACH_SLACK,
     _Contact,
     _FaceMoves,
@@ -154,6 +155,16 @@ LAST_ROOM = 0.001
 #: (each a cheap search: a switch with no tool path in reach often recurs a few millimetres further on).
 LAST_REFUSALS = 5
 
+#: The share of ``guided_contact_span`` the ladder's narrow attempt spans its windows with (a contact held
+#: only within a millimetre or two of one place, where no wider window is held at both of its ends).
+NARROW = 0.5
+#: The most windows per face of the narrow attempt (odd): they overlap on faces up to ten spans long (the
+#: library's l_shape foot, 12 mm); on longer ones they are spread with gaps between them.
+NARROW_WINDOWS = 11
+#: The narrow attempt's expansions, as a multiple of the other fine attempts' (its lattice holds a face's
+#: every window where the whole face is not held).
+NARROW_BUDGET = 2
+
 
 def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touch: _Contact,
                moves: dict[str, _FaceMoves]) -> GuidedPath:
@@ -179,7 +190,9 @@ class _Rung(NamedTuple):
     ``refusals``: how many times it searches again without a change of face a later stage refused;
     ``widest``: at ``friction_cone_fraction_max`` beyond the ladder's middle share; ``guide``: ordered by
     the distance to go of :func:`guide_field`; ``spent``: made only where an attempt before on whole steps
-    and whole faces ended on its budget, not its space, the ladder's last rung)."""
+    and whole faces ended on its budget, not its space; ``narrow``: windows of a :data:`NARROW` share of
+    the span where the whole face is not held, :data:`NARROW_WINDOWS` of them per face, with
+    :data:`NARROW_BUDGET` times the expansions, the ladder's last rung)."""
 
     change: dict[str, float]
     windows: bool = False
@@ -192,6 +205,7 @@ class _Rung(NamedTuple):
     widest: bool = False
     guide: bool = False
     spent: bool = False
+    narrow: bool = False
 
     @property
     def whole_faces(self) -> bool:
@@ -203,14 +217,15 @@ class _Rung(NamedTuple):
     def last(self) -> bool:
         """Whether this is one of the ladder's last attempts, for tasks with no plan at all (not made after a
         plan kept with little room)."""
-        return self.guide or self.spent
+        return self.guide or self.spent or self.narrow
 
 
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = CELL, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False,
                 more: bool = False, mixed: float | None = None, greed: float = 1.0,
-                room: float = REACH_SLACK, guide: DistanceField | None = None) -> GuidedPath | GuidedMiss:
+                room: float = REACH_SLACK, guide: DistanceField | None = None,
+                most: int = MAX_WINDOWS) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
     ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin,
     span and most contacts per push); ``switch_price`` [m]: a face change's worth in path; ``refused``:
@@ -226,11 +241,11 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     the tool outline keeps from the obstacles at the search's nodes (``mixed`` and ``windows`` are not
     taken together: their windows would share keys); ``guide``: the distance to go, instead of the
     straight line, a field of these faces and holds (:func:`guide_field`: a path round an obstacle that
-    the straight line's order leaves unexpanded). A lattice cell is visited once per face (and window),
-    with the contacts its first visit had used."""
+    the straight line's order leaves unexpanded); ``most``: the most windows per face (odd). A lattice cell
+    is visited once per face (and window), with the contacts its first visit had used."""
     if windows and mixed is not None:
         raise ValueError("guided_path takes windows or mixed, not both")
-    held, free, by_name = lattice_rules(setting, options, windows, mixed, room)
+    held, free, by_name = lattice_rules(setting, options, windows, mixed, room, most)
 
     def allowed(came: str | None, face: str, p: NDArray[np.float64]) -> bool:
         """Whether the change from ``came`` to ``face`` at ``p`` was not refused (``face`` "": a re-contact
@@ -318,7 +333,12 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     it after a plan with little room); after it, where an attempt on whole steps and whole faces ended on
     its budget rather than with its space closed, the middle share's whole steps with half steps and new
     runs again, weighted toward the target (:data:`GREED`) and searched again :data:`LAST_REFUSALS` times
-    (metric ``guided_spent``; not made after a plan with little room either). The ``mixed``
+    (metric ``guided_spent``; not made after a plan with little room either); last of all (where
+    ``guided_contact_span`` is narrower), the middle share's ``mixed`` attempt again on windows of a
+    :data:`NARROW` share of that span, :data:`NARROW_WINDOWS` per face and :data:`NARROW_BUDGET` times the
+    expansions (a contact held only within a millimetre or two of one place on a face, where no window of
+    the span is held at both of its ends; metric ``guided_narrow``; not made after a plan with little room
+    either). The ``mixed``
     attempts run also where the attempts before them could not push from the start (their windows may;
     the widest share's whole-face attempts do not), and after a plan with little room (the caller's
     ``GUIDED_ROOM``), which a roomier one may replace (the caller takes none at the widest share after a
@@ -400,6 +420,9 @@ def _ladder(setting: Setting, options: QPOptions) -> list[_Rung]:
     # last, where a search on whole steps spent its budget: that search weighted toward the target (weighted A*
     # reaches a lattice's far side in fewer expansions; where every space closed, a new order has little to find)
     tries.append(_Rung(at_middle, more=True, greed=GREED, refusals=LAST_REFUSALS, spent=True))
+    # last of all: the attempt on windows where needed at the middle share, on narrower windows (a contact held
+    # only within a millimetre or two of one place on the face, its rolling kept there by the half steps)
+    tries += [mixed_rung(at_middle)._replace(mixed=NARROW * span, narrow=True)] if windowed else []
     return tries
 
 
@@ -417,10 +440,12 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
     """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes, on
     the search's settings of ``rung`` (:class:`_Rung`), in the order of ``order`` where given."""
     share, fine, mixed = opts.friction_cone_fraction, rung.fine, rung.mixed
+    budget = opts.guided_budget * (NARROW_BUDGET if rung.narrow else 1)
     found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=rung.windows,
                         more=rung.more, mixed=mixed, greed=rung.greed, room=rung.room, guide=order,
-                        **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(opts.guided_budget / FINE)}
-                           if fine else {"budget": opts.guided_budget}))
+                        most=NARROW_WINDOWS if rung.narrow else MAX_WINDOWS,
+                        **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(budget / FINE)}
+                           if fine else {"budget": budget}))
     but = f" without the {len(refused)} change(s) of face refused," if refused else ""
     on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if rung.windows else ''} of each face"
           f"{f' or, where that is not held, on its {mixed * 1e3:g} mm windows' if mixed is not None else ''}"
@@ -453,5 +478,6 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
     # where the plan came from: the widest share (the caller keeps a plan with little room of a narrower share
     # rather than this), the distance field's order, the weighted search made again after one spent its budget
     plan.metrics.update({metric: 1.0 for metric, made in (("guided_widest", rung.widest), ("guided_field", rung.guide),
-                                                          ("guided_spent", rung.spent)) if made})
+                                                          ("guided_spent", rung.spent), ("guided_narrow", rung.narrow))
+                         if made})
     return plan

@@ -18,7 +18,14 @@ import numpy as np
 import shapely
 from numpy.typing import NDArray
 
-from tooltransfer.planner.planning.oe.guided_moves import REACH_SLACK, _face_moves, _FaceMoves, _heading, _pointing
+from tooltransfer.planner.planning.oe.guided_moves import (
+    MAX_WINDOWS,
+    REACH_SLACK,
+    _face_moves,
+    _FaceMoves,
+    _heading,
+    _pointing,
+)
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.tools.objects import Disc
@@ -93,16 +100,17 @@ def straight_to(way: float, here: list[tuple[str, float, float]], there: list[tu
 
 
 def lattice_rules(setting: Setting, options: QPOptions, windows: bool = False, mixed: float | None = None,
-                  room: float = REACH_SLACK) -> tuple[_Holds, Callable[[NDArray[np.float64]], bool],
-                                                      dict[str, _FaceMoves]]:
-    """The search's rules under ``options`` (module docstring; ``windows``, ``mixed`` [m], ``room`` [m] as
-    :func:`~tooltransfer.planner.planning.oe.guided.guided_path` takes them): which faces hold the puck
-    where (:class:`_Holds`), whether its centre may be at a point (2,) [m], and the faces by key."""
+                  room: float = REACH_SLACK, most: int = MAX_WINDOWS,
+                  ) -> tuple[_Holds, Callable[[NDArray[np.float64]], bool], dict[str, _FaceMoves]]:
+    """The search's rules under ``options`` (module docstring; ``windows``, ``mixed`` [m], ``room`` [m] and
+    ``most`` (the most windows per face) as :func:`~tooltransfer.planner.planning.oe.guided.guided_path`
+    takes them): which faces hold the puck where (:class:`_Holds`), whether its centre may be at a point (2,)
+    [m], and the faces by key."""
     outline = np.asarray(setting.tool.outline.exterior.coords)
     body_zone, centre_zone = _zones(setting, room)
-    faces = _face_moves(setting, options, windows)
+    faces = _face_moves(setting, options, windows, most)
     if mixed is not None:
-        faces += [fm for fm in _face_moves(setting, options.model_copy(update={"contact_span": mixed}), True)
+        faces += [fm for fm in _face_moves(setting, options.model_copy(update={"contact_span": mixed}), True, most)
                   if fm.window is not None]
 
     def free(q: NDArray[np.float64]) -> bool:

@@ -47,18 +47,18 @@ class _FaceMoves:
 MAX_WINDOWS = 5
 
 
-def contact_windows(tool: Tool, face: str, options: QPOptions) -> list[tuple[float, float]]:
+def contact_windows(tool: Tool, face: str, options: QPOptions, most: int = MAX_WINDOWS) -> list[tuple[float, float]]:
     """Stretches ``(lo, hi)`` [m] of ``options.contact_span`` along ``face``'s contact range less the
-    contact margin, evenly placed from one end of it to the other (an odd number, at most
-    :data:`MAX_WINDOWS`, the middle one :func:`usable_range`'s): where the Omni holds the tool only with
-    the contact toward one end of a face, a run of it keeps its contact there. A face no longer than a
-    span has the one window of :func:`usable_range`."""
+    contact margin, evenly placed from one end of it to the other (an odd number, at most ``most``
+    (odd), the middle one :func:`usable_range`'s): where the Omni holds the tool only with the contact
+    toward one end of a face, a run of it keeps its contact there. A face no longer than a span has the
+    one window of :func:`usable_range`."""
     g = FaceGeometry.of(tool, face)
     lo, hi = g.lo + options.contact_margin, g.hi - options.contact_margin
     w = options.contact_span
     if hi - lo <= w:
         return [usable_range(tool, face, options)]
-    n = min(MAX_WINDOWS, math.ceil((hi - lo) / w))
+    n = min(most, math.ceil((hi - lo) / w))
     n += 1 - n % 2
     return [(float(c - 0.5 * w), float(c + 0.5 * w)) for c in np.linspace(lo + 0.5 * w, hi - 0.5 * w, n)]
 
@@ -71,16 +71,18 @@ def face_cone(setting: Setting, face: Face, share: float) -> tuple[float, float]
     return (lo, hi) if hi > lo else None
 
 
-def _face_moves(setting: Setting, options: QPOptions, windows: bool = False) -> list[_FaceMoves]:
+def _face_moves(setting: Setting, options: QPOptions, windows: bool = False,
+                most: int = MAX_WINDOWS) -> list[_FaceMoves]:
     """One :class:`_FaceMoves` per face that can push under ``options`` (the plan's narrowed cone, its
-    contact margin and span), or one per face and contact window (:func:`contact_windows`)."""
+    contact margin and span), or one per face and contact window (:func:`contact_windows`, at most ``most``
+    per face)."""
     out = []
     cone_share = options.friction_cone_fraction
     for f in setting.tool.faces:
         if face_cone(setting, f, cone_share) is None:
             continue
         g = FaceGeometry.of(setting.tool, f.name)
-        ranges = (contact_windows(setting.tool, f.name, options) if windows
+        ranges = (contact_windows(setting.tool, f.name, options, most) if windows
                   else [usable_range(setting.tool, f.name, options)])
         for i, (a, b) in enumerate(ranges):
             one = len(ranges) == 1
