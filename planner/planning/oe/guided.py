@@ -476,7 +476,8 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
         plan.metrics.update(plan_metrics(plan, frames, target, setting), friction_cone_fraction=share,
                             guided_step=FINE * STEP if fine else STEP)
     # where the plan came from: the widest share (the caller keeps a plan with little room of a narrower share
-    # rather than this), the distance field's order, the weighted search made again after one spent its budget
+    # rather than this), the distance field's order, the weighted search made again after one spent its budget,
+    # the narrow windows
     plan.metrics.update({metric: 1.0 for metric, made in (("guided_widest", rung.widest), ("guided_field", rung.guide),
                                                           ("guided_spent", rung.spent), ("guided_narrow", rung.narrow))
                          if made})
