@@ -190,9 +190,10 @@ class _Rung(NamedTuple):
     ``refusals``: how many times it searches again without a change of face a later stage refused;
     ``widest``: at ``friction_cone_fraction_max`` beyond the ladder's middle share; ``guide``: ordered by
     the distance to go of :func:`guide_field`; ``spent``: made only where an attempt before on whole steps
-    and whole faces ended on its budget, not its space; ``narrow``: windows of a :data:`NARROW` share of
-    the span where the whole face is not held, :data:`NARROW_WINDOWS` of them per face, with
-    :data:`NARROW_BUDGET` times the expansions, the ladder's last rung)."""
+    and whole faces ended on its budget, not its space; ``most``: the most contact windows per face;
+    ``scale``: the attempt's expansions as a multiple of ``oe.guided_budget`` (on fine steps, of theirs);
+    ``narrow``: the attempt on windows of a :data:`NARROW` share of the span where the whole face is not
+    held, the ladder's last rung)."""
 
     change: dict[str, float]
     windows: bool = False
@@ -205,6 +206,8 @@ class _Rung(NamedTuple):
     widest: bool = False
     guide: bool = False
     spent: bool = False
+    most: int = MAX_WINDOWS
+    scale: int = 1
     narrow: bool = False
 
     @property
@@ -422,7 +425,8 @@ def _ladder(setting: Setting, options: QPOptions) -> list[_Rung]:
     tries.append(_Rung(at_middle, more=True, greed=GREED, refusals=LAST_REFUSALS, spent=True))
     # last of all: the attempt on windows where needed at the middle share, on narrower windows (a contact held
     # only within a millimetre or two of one place on the face, its rolling kept there by the half steps)
-    tries += [mixed_rung(at_middle)._replace(mixed=NARROW * span, narrow=True)] if windowed else []
+    tries += [mixed_rung(at_middle)._replace(mixed=NARROW * span, most=NARROW_WINDOWS, scale=NARROW_BUDGET,
+                                             narrow=True)] if windowed else []
     return tries
 
 
@@ -440,10 +444,9 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
     """One attempt of :func:`guided_plans` at the share of ``opts``, without the ``refused`` changes, on
     the search's settings of ``rung`` (:class:`_Rung`), in the order of ``order`` where given."""
     share, fine, mixed = opts.friction_cone_fraction, rung.fine, rung.mixed
-    budget = opts.guided_budget * (NARROW_BUDGET if rung.narrow else 1)
+    budget = opts.guided_budget * rung.scale
     found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=rung.windows,
-                        more=rung.more, mixed=mixed, greed=rung.greed, room=rung.room, guide=order,
-                        most=NARROW_WINDOWS if rung.narrow else MAX_WINDOWS,
+                        more=rung.more, mixed=mixed, greed=rung.greed, room=rung.room, guide=order, most=rung.most,
                         **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(budget / FINE)}
                            if fine else {"budget": budget}))
     but = f" without the {len(refused)} change(s) of face refused," if refused else ""
