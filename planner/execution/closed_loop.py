@@ -24,7 +24,8 @@ re-solves the rest of the task from there with the same condensing as the plan:
    limit surface is), a new search when none fits, at most ``max_rounds``; a correction the object
    strays from by more than the re-plan threshold is made again from where the object is.
 
-It ends ``"reached"`` (the measured object within ``tolerance``, in a last look of ``FINAL_LOOKS``
+It ends ``"reached"`` (the measured object within ``tolerance``: between two chunks in a look confirmed by
+:data:`~tooltransfer.planner.execution.loop_steps.CONFIRM_LOOKS` looks averaged, in a last look of ``FINAL_LOOKS``
 observations for a run that ended otherwise), ``"closest"`` (no push sequence brings it closer),
 ``"rounds"`` (``max_rounds`` used up) or ``"failed"`` (a move refused by the planners, or a plant
 method that raised; the reason says which).

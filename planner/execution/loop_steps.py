@@ -24,6 +24,11 @@ STAGE = 0.025
 #: Commands the envelope may refuse in one run, each followed by a correction from where the object is
 #: seen, before the run ends ``"unsafe"``.
 MAX_REFUSALS = 3
+#: Looks averaged before a run ends ``"reached"`` between two chunks (:func:`next_chunk`): one look is checked
+#: after every chunk, and with the camera's noise one in many sees the object within the tolerance though it is
+#: not (measured on the verdict benchmark's 154 solved `verd200` plans, nominal plant: two runs ended `reached`
+#: 2.03 and 2.17 mm from the target, the tolerance 1 mm).
+CONFIRM_LOOKS = 4
 
 
 @dataclass(frozen=True)
@@ -100,13 +105,16 @@ def plan_done(loop: LoopRun, ref: PlanReference, f: InForce, pace: Pace) -> tupl
 def next_chunk(loop: LoopRun, ref: PlanReference, f: InForce, pace: Pace) -> bool:
     """Observe, re-plan if the object strays more than the threshold from where the plan in force
     puts it, stage the last stretch for a mispredicting plant, then push one chunk. Whether the
-    object was observed at the target (the run ends)."""
+    object was observed at the target (the run ends): a look that sees it there is averaged with
+    :data:`CONFIRM_LOOKS` - 1 more before the run ends."""
     p = f.plan.pushes[f.i]
     o = loop.observe()
     if loop.adapt:
         loop.learn(o)
-    if np.hypot(*(loop.target - o)) <= pace.tolerance:
-        return True
+    if np.hypot(*(loop.target - o)) <= pace.tolerance:  # seen there: looked at longer before the run ends
+        o = np.mean([o, *(loop.observe() for _ in range(CONFIRM_LOOKS - 1))], axis=0)
+        if np.hypot(*(loop.target - o)) <= pace.tolerance:
+            return True
     expected = f.plan.object_xy[p.samples[f.k]]
     tau = f.base + float(f.plan.t[p.samples[f.k]] - f.plan.t[0])
     off = np.hypot(*(o - expected)) > pace.threshold
