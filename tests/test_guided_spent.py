@@ -37,8 +37,17 @@ def test_weighted_toward_the_target_the_search_finds_a_path_the_plain_order_spen
 def test_a_task_only_the_weighted_search_again_solves_gets_a_plan_that_passes_every_hard_check() -> None:
     """verd200-00113 was ``unknown``: every attempt of the ladder before fails, some on their budget; the
     weighted search made again gives a plan that passes every hard check, records where it came from, and
-    ends within 5 mm of the target open loop on the MuJoCo platform (0.05 mm when measured)."""
-    executed_plan_of(generated("verdicts_200.yaml", "verd200-00113"), "guided_spent")
+    ends within 5 mm of the target open loop on the MuJoCo platform (0.05 mm when measured). Closed loop
+    (the benchmarks' camera-noise seed 0) it ends within 2 mm too: its 35 pushes pass close to the obstacles,
+    the object strays there and the safety envelope refuses a command; the correction that then goes round
+    them comes from the guided search (``loop_steps._instead``; before, no correction fitted and the run
+    stopped ``unsafe`` 48.9 mm from the target; 0.63 mm when measured)."""
+    from tooltransfer.planner.execution.closed_loop import execute_closed_loop
+
+    plan = executed_plan_of(generated("verdicts_200.yaml", "verd200-00113"), "guided_spent")
+    rep = execute_closed_loop(plan, seed=0)
+    assert rep.status == "reached", rep.reason
+    assert rep.final_error <= 0.002
 
 
 def test_the_weighted_search_again_is_made_only_after_a_search_spent_its_budget() -> None:
