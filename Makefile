@@ -128,10 +128,11 @@ bench-exec: $(PY)
 	$(PY) -m pip install -q -e ".[all]"
 	$(PY) benchmarks/bench_execution.py
 
-# 60 + 200 generated tasks planned on 2 cores: solved / certified infeasible / unknown, and the planning times
+# 60 + 200 generated tasks planned on 2 cores: solved / certified infeasible / unknown, the planning times, and the
+# solved plans executed open and closed loop on the simulated Omni
 bench-verdicts: $(PY)
 	$(PY) -m pip install -q -e ".[all]"
-	$(PY) benchmarks/bench_verdicts.py --json out/verdicts.json
+	$(PY) benchmarks/bench_verdicts.py --execute --json out/verdicts.json
 
 # every certificate of the last `make bench-verdicts` against the test suite's own lattice search
 check-certificates: $(PY)

@@ -18,9 +18,11 @@ planning time per verdict (median, p90, max of ``planning_time`` as ``solve --js
 plan's ``time_total``, else the sum of its ``time_*`` metrics; ``time_certify`` apart); a per-tool
 table; the issue's targets (decided >= 97 %, median planning time <= 2 s, p90 <= 10 s) each marked
 met or MISSED; the slowest tasks. ``--execute`` (off by default) also runs every solved plan open
-loop on the simulated Omni (:func:`tooltransfer.planner.execution.simulate.simulate_plan`) and reports
-the share within 5 mm (``make bench-exec`` has the full execution figures). ``--json PATH`` writes
-every per-task row and the run's settings.
+loop on the simulated Omni (:func:`tooltransfer.planner.execution.simulate.simulate_plan`) and closed
+loop on the nominal MuJoCo plant (:func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`,
+the task's camera-noise seed, as ``bench_execution.py`` runs it) and reports the shares within 5 mm and
+2 mm against the issue's 95 % (``make bench-exec`` has the full execution figures: mismatched plants,
+the model's prediction). ``--json PATH`` writes every per-task row and the run's settings.
 
     python benchmarks/bench_verdicts.py --json out/verdicts.json   # 260 tasks
     python benchmarks/bench_verdicts.py --count 10                 # a quick look: 20 tasks
@@ -71,27 +73,31 @@ BATCHES = (ROOT / "problems" / "batch" / "execution_60.yaml", ROOT / "problems" 
 VERDICTS = ("solved", "infeasible", "unknown")
 TARGET_DECIDED, TARGET_MEDIAN, TARGET_P90 = 0.97, 2.0, 10.0
 """The issue's targets: the decided share, the median and p90 planning time per task [s]."""
-WITHIN = 0.005
-"""Open-loop final-error threshold [m] of ``--execute``."""
+WITHIN, WITHIN_CLOSED, TARGET_EXECUTED = 0.005, 0.002, 0.95
+"""Open-loop and closed-loop final-error thresholds [m] of ``--execute``, and the issue's share of the solved
+plans within each."""
 
 
 @dataclass(frozen=True)
 class VerdictJob(Job):
-    """A :class:`bench_execution.Job` (planning only) and whether to execute a solved plan open loop."""
+    """A :class:`bench_execution.Job` (planning only) and whether to execute a solved plan (open and closed
+    loop)."""
 
     execute: bool = False
 
 
 def run_verdict(job: VerdictJob) -> Row:
     """Plan one task: its verdict, the evidence's kind, the times [s] (and, with ``job.execute``, the
-    open-loop final error [m] of a solved plan); never raises for the task's own failures."""
+    open-loop and closed-loop final errors [m] of a solved plan, the closed loop's status and reason); never
+    raises for the task's own failures."""
     from tooltransfer.planner.planning.solve import solve
 
     row: Row = {"task_id": job.task_id, "kind": job.kind, "batch": Path(job.source).name, "index": job.index,
                 "tool": job.tool, "variant": job.variant, "n_obstacles": job.n_obstacles, "status": None,
                 "verdict": "error", "evidence_kind": None, "reason": "", "not_proved": None, "budget_limited": None,
                 "planning_time": None, "time_certify": None, "plan_wall": None, "plan_cpu": None,
-                "n_pushes": None, "open_loop_status": None, "open_loop_error": None, "worker": os.getpid()}
+                "n_pushes": None, "open_loop_status": None, "open_loop_error": None, "closed_loop_status": None,
+                "closed_loop_error": None, "closed_loop_reason": None, "worker": os.getpid()}
     started, cpu = time.perf_counter(), time.process_time()
     try:
         with _deadline(job.timeout, "planning"):
@@ -114,6 +120,15 @@ def run_verdict(job: VerdictJob) -> Row:
                 row.update(open_loop_status="ok", open_loop_error=simulate_plan(plan).final_error)
         except Exception as exc:
             row["open_loop_status"] = _exception(exc)
+        from tooltransfer.planner.execution.closed_loop import execute_closed_loop
+
+        try:
+            with _deadline(job.timeout, "closed loop"):
+                cl = execute_closed_loop(plan, seed=job.seed)
+            row.update(closed_loop_status=cl.status, closed_loop_error=cl.final_error,
+                       closed_loop_reason=(cl.reason or "")[:300])
+        except Exception as exc:
+            row["closed_loop_status"] = _exception(exc)
     row["task_wall"] = time.perf_counter() - started
     return row
 
@@ -208,6 +223,7 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
     con.print(t)
 
     ran = [r for r in rows if r.get("open_loop_status") is not None]
+    executed: list[str] = []  # the execution targets' lines
     if ran:
         errs = [r["open_loop_error"] for r in ran if not _is_exc(r["open_loop_status"])]
         share = sum(e is not None and e <= WITHIN for e in errs) / len(ran)
@@ -215,6 +231,26 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
         con.print(f"open loop of the {len(ran)} solved plans: within {1e3 * WITHIN:.0f} mm {_pct(share)} "
                   f"(an exception a miss: {len(ran) - len(errs)}); median {_mm(q and q[0])} mm, "
                   f"max {_mm(q and q[2])} mm")
+        executed.append(f"  solved plans open loop >= {100 * TARGET_EXECUTED:.0f} % within {1e3 * WITHIN:.0f} mm: "
+                        f"{100 * share:.1f} % {_met(share >= TARGET_EXECUTED)}")
+        closed = [r for r in ran if r.get("closed_loop_status") is not None]
+        if closed:
+            cerrs = [r["closed_loop_error"] for r in closed if not _is_exc(r["closed_loop_status"])]
+            cshare = sum(e is not None and e <= WITHIN_CLOSED for e in cerrs) / len(closed)
+            cq = _quantiles([e for e in cerrs if e is not None])
+            ends = Counter(r["closed_loop_status"] for r in closed)
+            con.print(f"closed loop (nominal MuJoCo plant) of the {len(closed)} solved plans: within "
+                      f"{1e3 * WITHIN_CLOSED:.0f} mm {100 * cshare:.1f} % "
+                      f"(an exception a miss: {len(closed) - len(cerrs)}); "
+                      f"median {_mm(cq and cq[0])} mm, max {_mm(cq and cq[2])} mm; "
+                      "ends: " + ", ".join(f"{k} {n}" for k, n in ends.most_common()))
+            executed.append(f"  solved plans closed loop >= {100 * TARGET_EXECUTED:.0f} % within "
+                            f"{1e3 * WITHIN_CLOSED:.0f} mm: {100 * cshare:.1f} % {_met(cshare >= TARGET_EXECUTED)}")
+            for r in closed:
+                e = r["closed_loop_error"]
+                if e is None or e > WITHIN_CLOSED:
+                    con.print(f"  {r['task_id']} ({r['tool']}, {r['n_obstacles']} obstacles, {r['n_pushes']} pushes): "
+                              f"{r['closed_loop_status']} {_mm(e)} mm {(r.get('closed_loop_reason') or '')[:110]}")
 
     n = len(rows)
     decided = sum(_verdict_of(r) in ("solved", "infeasible") for r in rows) / n
@@ -225,6 +261,8 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
               f"{_met(decided >= TARGET_DECIDED)}")
     con.print(f"  median planning time <= {TARGET_MEDIAN:g} s: {q[0]:.2f} s {_met(q[0] <= TARGET_MEDIAN)}")
     con.print(f"  p90 planning time <= {TARGET_P90:g} s: {q[1]:.2f} s {_met(q[1] <= TARGET_P90)}")
+    for line in executed:
+        con.print(line)
     if len(times) < n:
         con.print(f"  ({n - len(times)} tasks without a planning time: errors, left out of the times)")
 
@@ -243,9 +281,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--count", type=int, default=None, help="only the first N tasks of each batch file")
     ap.add_argument("--workers", type=int, default=2, help="worker processes (1: in this process)")
     ap.add_argument("--execute", action="store_true",
-                    help="also run solved plans open loop on the simulated Omni (off by default)")
+                    help="also run solved plans open and closed loop on the simulated Omni (off by default)")
     ap.add_argument("--timeout", type=float, default=600.0,
-                    help="per task and stage (planning, open loop) [s], an error row past it; 0: none")
+                    help="per task and stage (planning, open loop, closed loop) [s], an error row past it; 0: none")
     ap.add_argument("--json", type=Path, default=None, help="write every per-task row to this file")
     ap.add_argument("--quiet", action="store_true", help="no line per finished task")
     args = ap.parse_args(argv)
@@ -257,7 +295,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     jobs = make_verdict_jobs(batches, args.count, args.timeout, args.execute)
     commit = _commit()
     con.print(f"verdict benchmark: {len(jobs)} tasks ({', '.join(b.name for b in batches)}"
-              f"{'' if args.count is None else f', first {args.count} of each'}; variant qp/opt; open loop "
+              f"{'' if args.count is None else f', first {args.count} of each'}; variant qp/opt; open and closed loop "
               f"{'on' if args.execute else 'off'}); {args.workers} workers; commit {commit}")
     t0 = time.perf_counter()
     done = 0
@@ -270,6 +308,8 @@ def main(argv: Sequence[str] | None = None) -> None:
             extra = r.get("evidence_kind") or r.get("status") or ""
             if r.get("open_loop_error") is not None:
                 extra += f" | open {_mm(r['open_loop_error'])} mm"
+            if r.get("closed_loop_status") is not None:
+                extra += f" | closed {r['closed_loop_status']} {_mm(r.get('closed_loop_error'))} mm"
             print(f"[{done:>3}/{len(jobs)}] {r['task_id']:<14} {r['tool']:<9} {_verdict_of(r):<10} {pt:>8} "
                   f"{extra}", flush=True)
 
