@@ -333,3 +333,30 @@ def test_one_look_at_the_target_is_confirmed_before_the_run_ends(plan_file: Path
     assert plant.lied_at is not None  # the lie was told, with the object 1.5-4 mm from the target
     assert rep.status == "reached", rep.reason
     assert rep.final_error <= 0.0012
+
+
+def test_a_correction_whose_first_switch_the_envelope_would_refuse_is_not_taken(plan_file: Path) -> None:
+    """A correction that starts on another face than the one in contact needs a switch from here
+    (``LoopRun.first_change_missing``); one whose tool path passes nearer an obstacle than the safety envelope's
+    margin is not taken, for the envelope would refuse it and the same correction come again (measured on a
+    held-out t_shape task: three refusals of one switch, the run ``unsafe``). On the paper's transfer plan, its
+    first change of face planned from where the plan has it: taken with the envelope's margin below that path's
+    clearance, refused above it."""
+    from tooltransfer.planner.planning.oe.replan import PlanReference
+
+    plan, loop = _loop_on(plan_file)
+    pp = PlanReference.of(plan).plan
+    k = next(i for i in range(1, len(pp.pushes)) if pp.pushes[i].face != pp.pushes[i - 1].face)
+    before, after = pp.pushes[k - 1], pp.pushes[k]
+    o = pp.object_xy[after.samples[0]]
+    loop.face = before.face
+    loop.plant.tool_pose = lambda: before.tool_pose[-1].copy()  # the tool where the plan has it at the change
+    sw = loop.switch(o, before.face, before.tool_pose[-1], after.face, after.tool_pose[0])
+    assert sw.status == "solved" and 0.0 < sw.obstacle_clearance < 0.05
+    rest = replace(pp, pushes=pp.pushes[k:])
+    envelope = loop.plant.envelope
+    loop.plant.envelope = replace(envelope, margin=0.5 * sw.obstacle_clearance)
+    assert loop.first_change_missing(rest, o) == ""
+    loop.plant.envelope = replace(envelope, margin=sw.obstacle_clearance + 0.001)
+    why = loop.first_change_missing(rest, o)
+    assert why.startswith(f"the switch {before.face} -> {after.face} from here passes") and "the envelope keeps" in why

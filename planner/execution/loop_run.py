@@ -263,13 +263,20 @@ class LoopRun:
         the object observed at ``o`` (2,) [m], from the tool's reported pose), which :meth:`leave` would
         otherwise find missing only once the correction is in force, ending the run ``failed`` though the
         plan in force could go on (measured: ``derh60-00045``, derived i_shape faces, open loop 0.04 mm,
-        whose closed loop staged its last 19 mm on a face the Omni could not reach there). A first push of
-        the face in contact needs no change."""
+        whose closed loop staged its last 19 mm on a face the Omni could not reach there). The path must keep
+        the safety envelope's margin from the obstacles (:meth:`keeps_margin`), or the envelope refuses it and the
+        same correction is chosen again (measured: ``s26new-00058``, t_shape, two obstacles: a switch
+        ``stem_left -> top`` 0.1 mm from an obstacle refused three times, the run ``unsafe`` 8.9 mm from the
+        target). A first push of the face in contact needs no change."""
         if self.face is None or not pp.pushes or pp.pushes[0].face == self.face:
             return ""
         first = pp.pushes[0]
         sw = self.switch(o, self.face, self.plant.tool_pose(), first.face, first.tool_pose[0])
-        return "" if sw.status == "solved" else f"no switch {self.face} -> {first.face} from here: {sw.reason}"
+        if sw.status != "solved":
+            return f"no switch {self.face} -> {first.face} from here: {sw.reason}"
+        return "" if self.keeps_margin(sw) else (
+            f"the switch {self.face} -> {first.face} from here passes {1e3 * sw.obstacle_clearance:.2f} mm from an "
+            f"obstacle (the envelope keeps {1e3 * self.plant.envelope.margin:.2f} mm)")
 
     def guided_correction(self, o: NDArray[np.float64]) -> PushPlan | None:
         """The first plan of the variant's guided search (the planner's own fallback:
