@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from tooltransfer.planner.execution.loop_run import LoopRun
 from tooltransfer.planner.execution.loop_stop import NoToolPath, UnsafeCommand
@@ -92,9 +93,7 @@ def plan_done(loop: LoopRun, ref: PlanReference, f: InForce, pace: Pace) -> tupl
     if f.rounds > pace.max_rounds:
         return "rounds", f"{pace.max_rounds} correction rounds did not reach the target"
     d = float(np.hypot(*(loop.target - o)))
-    pp = loop.correction(o)
-    if pp.status != "solved":
-        pp = loop.guided_correction(o) or pp
+    pp = _correction_or_guided(loop, o)
     if pp.status != "solved":
         return "closest", f"no push brings the object closer from {np.round(o, 4).tolist()} m " \
             f"({1e3 * d:.1f} mm from the target): {pp.reason}"
@@ -167,12 +166,17 @@ def _instead(loop: LoopRun, f: InForce, refused: UnsafeCommand | NoToolPath, bas
     if loop.refusals > MAX_REFUSALS:
         raise refused
     o = loop.observe()
-    pp = loop.correction(o)
-    if pp.status != "solved":  # as at the plan's end: a path of several faces round the obstacle
-        pp = loop.guided_correction(o) or pp
+    pp = _correction_or_guided(loop, o)
     if pp.status != "solved":
         raise refused
     loop.log.append(f"{refused.reason}; corrected from {np.round(o, 4).tolist()} m instead: {' -> '.join(pp.faces)}")
     f.switch_to(pp, base)
     return False
 
+
+def _correction_or_guided(loop: LoopRun, o: NDArray[np.float64]) -> PushPlan:
+    """A correction from the object observed at ``o`` (2,) [m]; where none fits, the guided search's (a way of
+    several faces round an obstacle, :meth:`~tooltransfer.planner.execution.loop_run.LoopRun.guided_correction`),
+    else the correction's failure. Taken at the plan's end and after a refused command."""
+    pp = loop.correction(o)
+    return pp if pp.status == "solved" else loop.guided_correction(o) or pp
