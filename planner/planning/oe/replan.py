@@ -10,9 +10,10 @@ it. What such a re-plan is made of lives here:
 * :func:`replan_setting`: the setting from the observed object (the safety margin at most the
   object's clearance there);
 * :func:`replan_options`: the friction cone's share widened by :data:`REPLAN_CONE_WIDENING`, and the
-  plan's contact budget carried over to the push model in force;
-* :func:`refuse_tool_overlap`: a re-plan whose tool outline overlaps an obstacle is refused, as the
-  nominal plan is.
+  plan's contact budget carried over to the push model in force.
+
+The loop takes a re-plan only where it can run it to its end
+(:meth:`tooltransfer.planner.execution.loop_run.LoopRun.runnable`).
 
 The correction rounds' references, once the plan's path is used up, are
 :func:`tooltransfer.planner.planning.oe.correction.correction_references`.
@@ -20,7 +21,6 @@ The correction rounds' references, once the plan's path is used up, are
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import TypeVar
 
@@ -33,8 +33,6 @@ from tooltransfer.planner.planning.oe.push_plan import Push, PushPlan
 from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.plan import Plan
 from tooltransfer.planner.planning.setting import Setting
-from tooltransfer.tools.model import Tool
-from tooltransfer.tools.objects import Obstacle
 
 #: The options of an OE variant (:data:`tooltransfer.planner.planning.variant_registry.OE_VARIANTS`).
 Options = TypeVar("Options", QPOptions, MappingOptions)
@@ -179,24 +177,3 @@ def replan_options(options: Options, c_plan: float, c: float) -> Options:
         if n != n0:
             update["max_contacts"] = n
     return options.model_copy(update=update)
-
-
-def refuse_tool_overlap(tool: Tool, obstacles: Sequence[Obstacle], pp: PushPlan) -> PushPlan:
-    """``pp`` (as it is when not solved or without a push), or ``pp`` refused when the tool outline
-    overlaps an obstacle at a pose of its first push (the one the loop executes next) or at the
-    second push's contact pose (where the switch or re-contact after it must end, a pose the switch
-    planner refuses): the fit keeps the object clear of the obstacles, not the tool, and the nominal
-    plan is refused for the same overlap (:func:`tooltransfer.planner.planning.solve.solve`). The later poses
-    are left to the re-plans made from the observed object before they run. A refused re-plan lets
-    the caller try another (a new search, a correction's next leg)."""
-    from tooltransfer.planner.planning.tool_clearance import tool_obstacle_clearance
-
-    if not obstacles or pp.status != "solved" or not pp.pushes:
-        return pp
-    poses = np.vstack([pp.pushes[0].tool_pose, *(p.tool_pose[:1] for p in pp.pushes[1:2])])
-    near = tool_obstacle_clearance(tool, poses, obstacles)
-    if near.distance > 0.0:
-        return pp
-    where = np.round(poses[near.sample, :2], 4).tolist()
-    return replace(pp, status="infeasible",
-                   reason=f"the tool outline overlaps obstacles[{near.obstacle}] with the tool at {where} m")
