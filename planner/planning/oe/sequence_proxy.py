@@ -68,13 +68,17 @@ def best_boundaries(cost: NDArray[np.float64], order: tuple[int, ...]) -> tuple[
     best = np.full((p + 1, k + 1), np.inf)
     arg = np.zeros((p + 1, k + 1), dtype=int)
     best[0, 0] = 0.0
+    ends = np.arange(k + 1)[:, None]
     for i in range(1, p + 1):
         f = order[i - 1]
-        for e in range(i, k + 1):
-            starts = np.arange(i - 1, e)
-            vals = best[i - 1, starts] + cum[e, f] - cum[starts, f]
-            j = int(np.argmin(vals))
-            best[i, e], arg[i, e] = vals[j], starts[j]
+        # every end e >= i at once: block i starts at s in [i - 1, e - 1] (the same sums, term by term, as one
+        # end at a time; later starts masked, so the first least start is taken, as argmin over each end's starts)
+        starts = np.arange(i - 1, k)
+        with np.errstate(invalid="ignore"):  # inf - inf where a face cannot carry a stretch at all, as before
+            vals = best[i - 1, starts][None, :] + cum[i:, f][:, None] - cum[starts, f][None, :]
+        vals = np.where(starts[None, :] < ends[i:], vals, np.inf)
+        j = np.argmin(vals, axis=1)
+        best[i, i:], arg[i, i:] = vals[np.arange(len(j)), j], starts[j]
     cuts, e = [], k
     for i in range(p, 0, -1):
         e = arg[i, e]
