@@ -224,13 +224,18 @@ def test_a_replan_whose_tool_overlaps_an_obstacle_anywhere_is_refused(plan_file:
     poses = np.vstack([p.tool_pose for p in pp.pushes])
     away = last[-1, :2] - np.mean(poses[:, :2], axis=0)
     away /= np.hypot(*away)
+    early = np.vstack([first, pp.pushes[1].tool_pose[:1]])  # what the loop checked before: clear of the disc
     for gap, status in ((0.5 * margin, "infeasible"), (2.0 * margin, "solved")):
         lo, hi = 0.0, 0.05
+        assert tool_obstacle_clearance(loop.tool, poses, (Disc(last[-1, :2] + hi * away, 0.001),)).distance >= gap
         for _ in range(50):  # the disc's distance along `away` whose clearance is `gap`
             mid = 0.5 * (lo + hi)
             near = tool_obstacle_clearance(loop.tool, poses, (Disc(last[-1, :2] + mid * away, 0.001),))
             lo, hi = (mid, hi) if near.distance < gap else (lo, mid)
-        loop.setting = replace(loop.setting, obstacles=(far, Disc(last[-1, :2] + hi * away, 0.001)))
+        disc = Disc(last[-1, :2] + hi * away, 0.001)
+        assert gap <= tool_obstacle_clearance(loop.tool, poses, (disc,)).distance < gap + 1e-6
+        assert tool_obstacle_clearance(loop.tool, early, (disc,)).distance >= margin
+        loop.setting = replace(loop.setting, obstacles=(far, disc))
         checked = loop.clear_of_obstacles(pp)
         assert checked.status == status, (gap, checked.reason)
         if status == "infeasible":
@@ -263,10 +268,35 @@ def test_a_replan_whose_next_switch_has_no_tool_path_is_refused(plan_file: Path)
     _, blocked = _loop_on(plan_file, more_obstacles=({"kind": "disc", "centre": sw.xy[j, :2].tolist(),
                                                       "radius": radius},))
     assert gap > blocked.plant.envelope.margin
+    o = pp.object_xy[before.samples[-1]]  # the disc is clear of the object there, by more than its safety margin
+    assert np.hypot(*(sw.xy[j, :2] - o)) > radius + blocked.setting.radius + blocked.setting.margin
     assert blocked.clear_of_obstacles(rest) is rest
+    again = blocked.switch(o, before.face, before.tool_pose[-1], after.face, after.tool_pose[0])
+    assert not blocked.keeps_margin(again)
     refused = blocked.runnable(rest)
     assert refused.status == "infeasible"
-    assert refused.reason.startswith(f"no switch {before.face} -> {after.face} where the plan has it")
+    assert refused.reason.startswith(f"no switch {before.face} -> {after.face} where the plan has it: ")
+    assert refused.reason.endswith(again.reason if again.status != "solved" else "mm)")
+
+
+def test_every_fit_of_a_replan_passes_runnable(plan_file: Path) -> None:
+    """``LoopRun.replan`` hands each fit it makes (the plan's sequence, then a new search) to ``runnable``, and
+    returns what that gives: a fit it refuses is not put in force."""
+    from tooltransfer.planner.planning.oe.replan import PlanReference
+
+    plan, loop = _loop_on(plan_file)
+    ref = PlanReference.of(plan)
+    o = np.array(plan.task["start"], dtype=np.float64)
+    seen: list[str] = []
+
+    def refuse(pp):  # type: ignore[no-untyped-def]
+        seen.append(pp.status)
+        return replace(pp, status="infeasible", reason="refused by runnable")
+
+    loop.runnable = refuse  # type: ignore[method-assign]
+    t, r, faces, switches = ref.rest(0.0, o, loop.target)
+    out = loop.replan(t, r, faces, switches, o)
+    assert len(seen) == 2 and out.status == "infeasible" and out.reason == "refused by runnable"
 
 
 def test_a_straying_correction_is_corrected_from_the_observed_object(plan_file: Path) -> None:

@@ -12,7 +12,8 @@ re-solves the rest of the task from there with the same condensing as the plan:
    face already touches the object), and when it fails a new search from here; another variant
    re-plans with its own condensing. Re-plans use the push model in force (adapted on line when it
    mispredicts: :mod:`tooltransfer.tools.pushing.adaptation`) and :mod:`tooltransfer.planner.planning.oe.replan`'s
-   options and obstacle check;
+   options; a re-plan is put in force only where its tool keeps the safety envelope's margin along every push and
+   its first change of face has a tool path (:meth:`tooltransfer.planner.execution.loop_run.LoopRun.runnable`);
 2. the next chunk: the first push of that re-plan, at most ``chunk`` of object travel (and at most
    ``approach`` of what is left once the target is near, so the object comes at it from short of it:
    faces cannot pull back), its tool path from the push model (the re-plan's tool poses); a change of

@@ -12,8 +12,8 @@ it. What such a re-plan is made of lives here:
 * :func:`replan_options`: the friction cone's share widened by :data:`REPLAN_CONE_WIDENING`, and the
   plan's contact budget carried over to the push model in force.
 
-The loop takes a re-plan only where it can run it to its end
-(:meth:`tooltransfer.planner.execution.loop_run.LoopRun.runnable`).
+The loop takes a re-plan only where its tool keeps the safety envelope's margin along every push and its first
+change of face has a tool path (:meth:`tooltransfer.planner.execution.loop_run.LoopRun.runnable`).
 
 The correction rounds' references, once the plan's path is used up, are
 :func:`tooltransfer.planner.planning.oe.correction.correction_references`.
