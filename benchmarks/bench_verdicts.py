@@ -61,6 +61,7 @@ from bench_execution import (
     _pct,
     _quantiles,
     _reason_group,
+    _share,
     _task,
     make_jobs,
     run_jobs,
@@ -223,34 +224,15 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
     con.print(t)
 
     ran = [r for r in rows if r.get("open_loop_status") is not None]
-    executed: list[str] = []  # the execution targets' lines
-    if ran:
-        errs = [r["open_loop_error"] for r in ran if not _is_exc(r["open_loop_status"])]
-        share = sum(e is not None and e <= WITHIN for e in errs) / len(ran)
-        q = _quantiles([e for e in errs if e is not None])
-        con.print(f"open loop of the {len(ran)} solved plans: within {1e3 * WITHIN:.0f} mm {_pct(share)} "
-                  f"(an exception a miss: {len(ran) - len(errs)}); median {_mm(q and q[0])} mm, "
-                  f"max {_mm(q and q[2])} mm")
-        executed.append(f"  solved plans open loop >= {100 * TARGET_EXECUTED:.0f} % within {1e3 * WITHIN:.0f} mm: "
-                        f"{100 * share:.1f} % {_met(share >= TARGET_EXECUTED)}")
-        closed = [r for r in ran if r.get("closed_loop_status") is not None]
-        if closed:
-            cerrs = [r["closed_loop_error"] for r in closed if not _is_exc(r["closed_loop_status"])]
-            cshare = sum(e is not None and e <= WITHIN_CLOSED for e in cerrs) / len(closed)
-            cq = _quantiles([e for e in cerrs if e is not None])
-            ends = Counter(r["closed_loop_status"] for r in closed)
-            con.print(f"closed loop (nominal MuJoCo plant) of the {len(closed)} solved plans: within "
-                      f"{1e3 * WITHIN_CLOSED:.0f} mm {100 * cshare:.1f} % "
-                      f"(an exception a miss: {len(closed) - len(cerrs)}); "
-                      f"median {_mm(cq and cq[0])} mm, max {_mm(cq and cq[2])} mm; "
-                      "ends: " + ", ".join(f"{k} {n}" for k, n in ends.most_common()))
-            executed.append(f"  solved plans closed loop >= {100 * TARGET_EXECUTED:.0f} % within "
-                            f"{1e3 * WITHIN_CLOSED:.0f} mm: {100 * cshare:.1f} % {_met(cshare >= TARGET_EXECUTED)}")
-            for r in closed:
-                e = r["closed_loop_error"]
-                if e is None or e > WITHIN_CLOSED:
-                    con.print(f"  {r['task_id']} ({r['tool']}, {r['n_obstacles']} obstacles, {r['n_pushes']} pushes): "
-                              f"{r['closed_loop_status']} {_mm(e)} mm {(r.get('closed_loop_reason') or '')[:110]}")
+    closed = [r for r in ran if r.get("closed_loop_status") is not None]
+    executed = [_executed(con, runs, loop, within, plant) for runs, loop, within, plant in
+                ((ran, "open", WITHIN, "simulated Omni"), (closed, "closed", WITHIN_CLOSED, "nominal MuJoCo plant"))
+                if runs]  # the execution targets' lines
+    for r in closed:
+        e = r["closed_loop_error"]
+        if e is None or e > WITHIN_CLOSED:
+            con.print(f"  {r['task_id']} ({r['tool']}, {r['n_obstacles']} obstacles, {r['n_pushes']} pushes): "
+                      f"{r['closed_loop_status']} {_mm(e)} mm {(r.get('closed_loop_reason') or '')[:110]}")
 
     n = len(rows)
     decided = sum(_verdict_of(r) in ("solved", "infeasible") for r in rows) / n
@@ -271,6 +253,21 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
     busy = sum(r.get("task_wall") or 0.0 for r in rows)
     con.print(f"total: {n} tasks in {wall:.1f} s wall ({wall / 60:.1f} min); sum of task times {busy:.1f} s")
     return {"decided": decided, "median": q[0], "p90": q[1], "max": q[2]}
+
+
+def _executed(con: Any, runs: Sequence[Row], loop: str, within: float, plant: str) -> str:
+    """Print the ``loop`` ("open" or "closed") execution of the solved plans ``runs`` on ``plant``: the share
+    within ``within`` [m] (an exception a miss), the median and max error, how the runs ended; return the
+    issue's target line for it."""
+    errs = [r[f"{loop}_loop_error"] for r in runs if not _is_exc(r[f"{loop}_loop_status"])]
+    share = _share(errs, len(runs), within) or 0.0
+    q = _quantiles([e for e in errs if e is not None])
+    ends = Counter(r[f"{loop}_loop_status"] for r in runs)
+    con.print(f"{loop} loop ({plant}) of the {len(runs)} solved plans: within {1e3 * within:.0f} mm "
+              f"{100 * share:.1f} % (an exception a miss: {len(runs) - len(errs)}); median {_mm(q and q[0])} mm, "
+              f"max {_mm(q and q[2])} mm; ends: " + ", ".join(f"{k} {n}" for k, n in ends.most_common()))
+    return (f"  solved plans {loop} loop >= {100 * TARGET_EXECUTED:.0f} % within {1e3 * within:.0f} mm: "
+            f"{100 * share:.1f} % {_met(share >= TARGET_EXECUTED)}")
 
 
 def main(argv: Sequence[str] | None = None) -> None:

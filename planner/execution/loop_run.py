@@ -212,12 +212,11 @@ class LoopRun:
         pp = self.clear_of_obstacles(pp)
         if pp.status != "solved":
             return pp
-        a, b, sw = next(self.change_paths(pp, recontacts=False), (None, None, None))
-        if sw is None or a is None or b is None or self.keeps_margin(sw):
+        first = next(self.change_paths(pp, recontacts=False), None)
+        if first is None or self.keeps_margin(first[2]):
             return pp
-        why = sw.reason if sw.status != "solved" else (
-            f"it passes {1e3 * sw.obstacle_clearance:.2f} mm from an obstacle (the envelope keeps "
-            f"{1e3 * self.plant.envelope.margin:.2f} mm)")
+        a, b, sw = first
+        why = sw.reason if sw.status != "solved" else f"it {self.too_near(sw)}"
         return replace(pp, status="infeasible", reason=f"no switch {a.face} -> {b.face} where the plan has it: {why}")
 
     def change_paths(self, pp: PushPlan, recontacts: bool) -> Iterator[tuple[Push, Push, SwitchPath]]:
@@ -230,10 +229,12 @@ class LoopRun:
                 yield a, b, planner(pp.object_xy[a.samples[-1]], a.face, a.tool_pose[-1], b.face, b.tool_pose[0])
 
     def change_missing(self, pp: PushPlan) -> str:
-        """Why a change of face of ``pp`` has no tool path at the object where the plan has it (the loop's
-        own switch planner; "" where each has one): :meth:`leave` would stop the run there."""
+        """Why a change of face of ``pp`` after its first has no tool path at the object where the plan has it
+        (the loop's own switch planner; "" where each has one): :meth:`leave` would stop the run there. The
+        first was checked, with the envelope's margin, by :meth:`runnable`, which every re-plan passed."""
+        later = itertools.islice(self.change_paths(pp, recontacts=False), 1, None)
         return next((f"no switch {a.face} -> {b.face} in the correction: {sw.reason}"
-                     for a, b, sw in self.change_paths(pp, recontacts=False) if sw.status != "solved"), "")
+                     for a, b, sw in later if sw.status != "solved"), "")
 
     def changes_keep_margin(self, pp: PushPlan) -> bool:
         """Whether every change of face and re-contact of ``pp`` has a tool path (:meth:`change_paths`) that
@@ -246,6 +247,11 @@ class LoopRun:
         """Whether ``sw`` is a tool path (solved) that keeps the safety envelope's margin from the obstacles."""
         margin = self.plant.envelope.margin
         return sw.status == "solved" and (not self.setting.obstacles or sw.obstacle_clearance >= margin)
+
+    def too_near(self, sw: SwitchPath) -> str:
+        """How the solved path ``sw`` misses the safety envelope's margin, as a clause."""
+        return (f"passes {1e3 * sw.obstacle_clearance:.2f} mm from an obstacle (the envelope keeps "
+                f"{1e3 * self.plant.envelope.margin:.2f} mm)")
 
     def clear_of_obstacles(self, pp: PushPlan) -> PushPlan:
         """``pp``, or refused when its tool outline overlaps an obstacle or comes closer to one than the
@@ -298,9 +304,7 @@ class LoopRun:
         sw = self.switch(o, self.face, self.plant.tool_pose(), first.face, first.tool_pose[0])
         if sw.status != "solved":
             return f"no switch {self.face} -> {first.face} from here: {sw.reason}"
-        return "" if self.keeps_margin(sw) else (
-            f"the switch {self.face} -> {first.face} from here passes {1e3 * sw.obstacle_clearance:.2f} mm from an "
-            f"obstacle (the envelope keeps {1e3 * self.plant.envelope.margin:.2f} mm)")
+        return "" if self.keeps_margin(sw) else f"the switch {self.face} -> {first.face} from here {self.too_near(sw)}"
 
     def guided_correction(self, o: NDArray[np.float64]) -> PushPlan | None:
         """The first plan of the variant's guided search (the planner's own fallback:
