@@ -17,6 +17,7 @@ from tooltransfer.planner.apps.batch.report import summarize
 from tooltransfer.planner.apps.batch.spec import load_batch
 from tooltransfer.planner.apps.batch.store import ResultStore
 from tooltransfer.planner.apps.cli import main
+from tooltransfer.planner.planning.plan import read_plan
 from tooltransfer.planner.planning.solve import solve
 from tooltransfer.planner.planning.verdicts.certificate import certify
 from tooltransfer.planner.planning.verdicts.decide import budget_limited
@@ -85,10 +86,14 @@ def test_solve_json_says_whether_an_unknown_stopped_on_a_budget(tmp_path, capsys
     data = next(g.data for g in generate_tasks(load_batch(batch), batch) if g.task_id == "verd200-00049")
     path = tmp_path / "verd200-00049.yaml"
     path.write_text(json.dumps(data))  # JSON is YAML; the generated task's paths are absolute
-    assert main(["solve", str(path), "--json"]) == 3
+    assert main(["solve", str(path), "--json", "-o", str(tmp_path / "plan.json")]) == 3
     summary = json.loads(capsys.readouterr().out)
     assert summary["status"] == "unknown" and summary["evidence"] == "search_exhausted"
     assert summary["budget_limited"] is False
+    # its start is held only on the last millimetre of one face (tests/test_holds_at.py): the reason says so
+    assert "at the start the contact holds the puck only on 1 mm of 'foot_end'" in summary["reason"]
+    holds = read_plan(tmp_path / "plan.json").evidence["holds"]  # and the plan file keeps where, face by face
+    assert [h["face"] for h in holds["start"] if h["windows"]] == ["foot_end"] and len(holds["target"]) == 4
 
 
 def test_a_task_the_certificate_proves_infeasible_is_not_searched_further() -> None:

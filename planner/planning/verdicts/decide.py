@@ -9,7 +9,8 @@ sets both ways on log-polar cells) and returns the plan
 with ``status`` ``"infeasible"`` and the certificate as its evidence when one is found, else with
 ``status`` ``"unknown"`` (or ``"violated"`` for a plan that broke its hard checks) and evidence that
 says what was searched and why nothing was proved (and ``budget_limited``: whether a larger ``budget``
-could change that, :func:`budget_limited`).
+could change that, :func:`budget_limited`; ``holds``: where on each face the contact holds the puck at the start
+and at the target, :func:`~.holds_at.face_holds`, the reason naming a hold narrower than the search's windows).
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ from tooltransfer.planner.planning.verdicts.certificate import (
     certify_exact_backward,
     certify_switches,
 )
+from tooltransfer.planner.planning.verdicts.holds_at import face_holds, narrow_hold
 from tooltransfer.planner.planning.verdicts.rules import PushRules, setting_rules
 from tooltransfer.planner.planning.verdicts.switch_space import placement_space
 
@@ -143,11 +145,17 @@ def attach_verdict(plan: Plan, setting: Setting, start: np.ndarray, target: np.n
     status: Literal["unknown", "violated"] = "violated" if plan.status == "violated" else "unknown"
     evidence = {"verdict": "unknown", "kind": "search_exhausted" if status == "unknown" else "violated",
                 "searched": searched, "not_proved": why, "budget": budget}
-    if status == "unknown":
-        evidence["budget_limited"] = budget_limited(plan.metrics, why)
+    if status == "violated":
+        evidence.update(reused)
+        return replace(plan, status=status, metrics=metrics, evidence=evidence)
+    evidence["budget_limited"] = budget_limited(plan.metrics, why)
+    holds = {where: face_holds(setting, at) for where, at in (("start", start), ("target", target))}
+    evidence["holds"] = {where: [h.to_dict() for h in per] for where, per in holds.items()}
     evidence.update(reused)
+    narrow = "; ".join(c for c in (narrow_hold(holds["start"], "the start"), narrow_hold(holds["target"], "the target"))
+                       if c)
     return replace(plan, status=status, metrics=metrics, evidence=evidence,
-                   reason=f"{searched} (not proved infeasible: {why})" if status == "unknown" else plan.reason)
+                   reason=f"{searched} (not proved infeasible: {why}{'; ' + narrow if narrow else ''})")
 
 
 def _after_search(sought: Sought, setting: Setting, start: np.ndarray, target: np.ndarray, budget: float) -> Sought:

@@ -1,0 +1,145 @@
+"""Where on each face the contact can hold the puck at one position: what an ``unknown`` verdict leaves open.
+
+A task is left ``unknown`` where the search found no plan and no certificate was proved. One cause the
+search's own reason cannot show is a hold so narrow that the search's contact windows miss it: at the start
+(or the target) the Omni reaches the puck with a face and keeps the tool outline clear of the obstacles only
+with the contact within a fraction of a millimetre of one end of that face (``exec60-00020`` and
+``verd200-00049`` of the verdict benchmark, benchmarks/README.md). :func:`face_holds` measures that, for one
+puck position and every face that can push: along the face's contact range (:data:`HOLD_SAMPLES` places),
+the contacts at which the Omni holds the puck within its joints (the pose of
+:mod:`~tooltransfer.planner.planning.verdicts.rules`, the arm reaching forward) and the tool outline keeps the
+hard check's :data:`~tooltransfer.planner.planning.tool_clearance.TOOL_MARGIN` from every obstacle. The
+stretches of such contacts are a face's *windows*.
+
+A description, not a proof: the places are samples (a window between two of them, or one end of a window, is
+known to the spacing of the samples only), and a hold says nothing about the pushes from there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+
+from tooltransfer.planner.planning.setting import Setting
+from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
+from tooltransfer.planner.planning.verdicts.rules import setting_rules
+from tooltransfer.tools.objects import Disc
+from tooltransfer.tools.omni.dh import D_TOOL
+from tooltransfer.tools.omni.reach import reach_sector
+
+#: Contact places sampled along each face's contact range (a window's ends are known to one spacing).
+HOLD_SAMPLES = 201
+#: A hold narrower than this [m] on every face is narrower than the guided search's narrowest contact
+#: windows (:data:`~tooltransfer.planner.planning.oe.guided.NARROW` of the default ``guided_contact_span``,
+#: 4 mm): its attempts hold a window only where both of its ends are held.
+NARROW_HOLD = 0.002
+
+
+@dataclass(frozen=True)
+class FaceHold:
+    """Where face ``face`` can hold the puck at one position (module docstring).
+
+    Attributes:
+        face: the face's name.
+        length: the face's length [m].
+        windows: the stretches ``(lo, hi)`` [m] along the face (from its start) of the contacts at which the
+            Omni holds the puck and the tool keeps :data:`TOOL_MARGIN` from the obstacles; empty: none.
+        reached: how many of the sampled contacts the Omni reaches within its joints.
+        clearance: the largest distance [m] between the tool outline and the obstacles over the reached
+            contacts (0 where every one overlaps an obstacle, inf without obstacles, NaN where none is reached).
+    """
+
+    face: str
+    length: float
+    windows: tuple[tuple[float, float], ...]
+    reached: int
+    clearance: float
+
+    @property
+    def widest(self) -> float:
+        """The widest window [m] (0 for one sampled contact; -inf where there is none)."""
+        return max((hi - lo for lo, hi in self.windows), default=-math.inf)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON data (non-finite clearances as None)."""
+        return {"face": self.face, "length": self.length, "windows": [list(w) for w in self.windows],
+                "reached": self.reached, "clearance": self.clearance if math.isfinite(self.clearance) else None}
+
+
+def face_holds(setting: Setting, p: NDArray[np.float64], samples: int = HOLD_SAMPLES) -> list[FaceHold]:
+    """Per face that can push (its admissible cone not empty: :func:`~.rules.setting_rules`), where along
+    it the contact holds the puck at ``p`` (2,) [m] in ``setting`` (module docstring), in the tool's order."""
+    p = np.asarray(p, dtype=np.float64)
+    sec = reach_sector(setting.platform)
+    d = p - sec.centre
+    r2 = float(d @ d)
+    can_push = {f.name for f in setting_rules(setting).faces}
+    ring = np.asarray(setting.tool.outline.exterior.coords)[:-1]
+    out = []
+    for face in setting.tool.faces:
+        if face.name not in can_push:
+            continue
+        s = np.linspace(face.contact_range[0], face.contact_range[1], samples)
+        c = np.array([face.point(float(si)) for si in s]) + setting.radius * np.asarray(face.normal)
+        o = D_TOOL - c[:, 0]
+        v = np.sqrt(np.maximum(r2 - o * o, 0.0))
+        u = v - c[:, 1]
+        q1 = np.remainder(math.atan2(d[1], d[0]) - np.arctan2(o, v) - sec.base_yaw + math.pi, 2 * math.pi) - math.pi
+        reached = ((r2 > o * o) & (sec.q1_range[0] <= q1) & (q1 <= sec.q1_range[1])
+                   & (sec.u_range[0] <= u) & (u <= sec.u_range[1]))
+        clear = _clearances(ring, c, q1 + sec.base_yaw - math.pi / 2, p, list(setting.obstacles))
+        held = reached & (clear >= TOOL_MARGIN)
+        out.append(FaceHold(face.name, float(face.length), _runs(held, s * face.length), int(reached.sum()),
+                            float(clear[reached].max()) if reached.any() else math.nan))
+    return out
+
+
+def _clearances(ring: NDArray[np.float64], c: NDArray[np.float64], yaw: NDArray[np.float64], p: NDArray[np.float64],
+                obstacles: list[Any]) -> NDArray[np.float64]:
+    """The distance [m] (K,) between the tool outline ``ring`` (M, 2) (tool frame) and the obstacles with the puck
+    at ``p`` (2,) touched at the puck centres ``c`` (K, 2) (tool frame) and the tool's yaws ``yaw`` (K,) [rad]
+    (0 where they overlap, inf without obstacles)."""
+    cos, sin = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
+    rel = ring[None, :, :] - c[:, None, :]
+    x = p[0] + cos * rel[..., 0] - sin * rel[..., 1]
+    y = p[1] + sin * rel[..., 0] + cos * rel[..., 1]
+    polys = shapely.polygons(np.stack([x, y], axis=-1))
+    best = np.full(len(c), math.inf)
+    for ob in obstacles:
+        dist = (np.maximum(shapely.distance(polys, shapely.Point(ob.centre)) - ob.radius, 0.0)
+                if isinstance(ob, Disc) else shapely.distance(polys, ob))
+        best = np.minimum(best, dist)
+    return best
+
+
+def _runs(held: NDArray[np.bool_], at: NDArray[np.float64]) -> tuple[tuple[float, float], ...]:
+    """The ``(first, last)`` of ``at`` over each run of consecutive True in ``held``."""
+    runs, begin = [], None
+    for k, h in enumerate(held):
+        if h and begin is None:
+            begin = k
+        if begin is not None and (not h or k == len(held) - 1):
+            end = k if h else k - 1
+            runs.append((float(at[begin]), float(at[end])))
+            begin = None
+    return tuple(runs)
+
+
+def narrow_hold(holds: list[FaceHold], where: str) -> str:
+    """A clause saying that the puck at ``where`` ("the start", "the target") is held only on windows narrower
+    than :data:`NARROW_HOLD` (the widest of them named), or that no face holds it there at all; "" where some
+    face holds it on a window at least that wide."""
+    best = max(holds, key=lambda h: h.widest, default=None)
+    if best is None or best.widest < 0.0:
+        return (f"at {where} no face holds the puck at any of its {HOLD_SAMPLES} sampled contacts with the Omni in "
+                f"its joints and the tool {TOOL_MARGIN * 1e3:g} mm clear of the obstacles")
+    if best.widest >= NARROW_HOLD:
+        return ""
+    return (f"at {where} the contact holds the puck only on {best.widest * 1e3:.2g} mm of {best.face!r} "
+            f"(of its {best.length * 1e3:.3g} mm; the tool at most {best.clearance * 1e3:.2g} mm from an obstacle), "
+            f"narrower than the search's {NARROW_HOLD * 1e3:g} mm windows")
