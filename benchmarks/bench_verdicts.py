@@ -13,7 +13,8 @@ raises or runs past ``--timeout`` is an ``error`` row, counted as undecided.
 
 Report: the three counts with their shares and Wilson intervals (95 %), per task file and in all;
 the certificates' kinds (and the unknown verdicts' evidence kinds and reasons, grouped, with the
-tasks whose certificate was built but refused by its own check); the verdicts by obstacle count; the
+tasks whose certificate was built but refused by its own check and those whose start or target no face holds
+on a window as wide as the guided search's narrowest, ``hold_start`` and ``hold_target`` of the rows); the verdicts by obstacle count; the
 planning time per verdict (median, p90, max of ``planning_time`` as ``solve --json`` prints it: the
 plan's ``time_total``, else the sum of its ``time_*`` metrics; ``time_certify`` apart); a per-tool
 table; the issue's targets (decided >= 97 %, median planning time <= 2 s, p90 <= 10 s) each marked
@@ -69,6 +70,7 @@ from bench_execution import (
 )
 
 from tooltransfer.planner.apps.batch.execute import finite_or_none
+from tooltransfer.planner.planning.verdicts.holds_at import NARROW_HOLD
 
 BATCHES = (ROOT / "problems" / "batch" / "execution_60.yaml", ROOT / "problems" / "batch" / "verdicts_200.yaml")
 VERDICTS = ("solved", "infeasible", "unknown")
@@ -87,6 +89,15 @@ class VerdictJob(Job):
     execute: bool = False
 
 
+def _widest_holds(evidence: dict[str, Any]) -> dict[str, float | None]:
+    """``hold_start``, ``hold_target``: the widest window [m] on which any face holds the puck there (an
+    unknown's evidence ``holds``, :func:`~tooltransfer.planner.planning.verdicts.holds_at.face_holds`; -1 where
+    no face does, None without that evidence)."""
+    holds = evidence.get("holds") or {}
+    return {f"hold_{where}": (max((hi - lo for h in holds[where] for lo, hi in h["windows"]), default=-1.0)
+                              if where in holds else None) for where in ("start", "target")}
+
+
 def run_verdict(job: VerdictJob) -> Row:
     """Plan one task: its verdict, the evidence's kind, the times [s] (and, with ``job.execute``, the
     open-loop and closed-loop final errors [m] of a solved plan, the closed loop's status and reason); never
@@ -96,6 +107,7 @@ def run_verdict(job: VerdictJob) -> Row:
     row: Row = {"task_id": job.task_id, "kind": job.kind, "batch": Path(job.source).name, "index": job.index,
                 "tool": job.tool, "variant": job.variant, "n_obstacles": job.n_obstacles, "status": None,
                 "verdict": "error", "evidence_kind": None, "reason": "", "not_proved": None, "budget_limited": None,
+                "hold_start": None, "hold_target": None,
                 "planning_time": None, "time_certify": None, "plan_wall": None, "plan_cpu": None,
                 "n_pushes": None, "open_loop_status": None, "open_loop_error": None, "closed_loop_status": None,
                 "closed_loop_error": None, "closed_loop_reason": None, "worker": os.getpid()}
@@ -109,7 +121,7 @@ def run_verdict(job: VerdictJob) -> Row:
     m, ev = plan.metrics, plan.evidence
     row.update(status=plan.status, verdict=plan.verdict, evidence_kind=ev.get("kind"), reason=(plan.reason or "")[:500],
                not_proved=(str(ev["not_proved"])[:300] if "not_proved" in ev else None),
-               budget_limited=ev.get("budget_limited"),
+               budget_limited=ev.get("budget_limited"), **_widest_holds(ev),
                planning_time=plan.planning_time, time_certify=finite_or_none(m.get("time_certify")),
                plan_wall=time.perf_counter() - started, plan_cpu=time.process_time() - cpu,
                n_pushes=None if m.get("n_pushes") is None else round(m["n_pushes"]))
@@ -191,6 +203,10 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
         spent = [r["task_id"] for r in unknown if r.get("budget_limited")]
         con.print(f"  stopped on the search's or the certificate's budget: {len(spent)}"
                   + (f" ({', '.join(spent)}; --budget K may decide them)" if spent else ""))
+        narrow = [r["task_id"] for r in unknown if any(v is not None and v < NARROW_HOLD
+                                                       for v in (r.get("hold_start"), r.get("hold_target")))]
+        con.print(f"  the start or the target held only on windows under {NARROW_HOLD * 1e3:g} mm (evidence 'holds'): "
+                  f"{len(narrow)}" + (f" ({', '.join(narrow)})" if narrow else ""))
         failed = [r["task_id"] for r in unknown if "check failed" in (r.get("not_proved") or "")]
         if failed:
             con.print("  certificates built but refused by their own check: " + ", ".join(failed))

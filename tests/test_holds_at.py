@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import shapely
 from scipy.optimize import brentq
-from test_verdicts import generated
+from test_verdicts import ROOT, generated
 
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
@@ -106,3 +106,18 @@ def test_a_position_no_face_holds_is_said_so() -> None:
     holds = face_holds(setting, far)
     assert holds and all(h.reached == 0 and not h.windows and math.isnan(h.clearance) for h in holds)
     assert narrow_hold(holds, "the target").startswith("at the target no face holds the puck")
+
+
+def test_the_verdict_benchmark_reads_the_widest_hold_of_an_unknown(monkeypatch) -> None:
+    """``bench_verdicts.py``'s rows keep the widest window at the start and at the target of an unknown's
+    ``holds`` (-1 where no face holds the puck, None without the evidence, as for a solved plan)."""
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    import bench_verdicts
+
+    task, setting = _world("verdicts_200.yaml", "verd200-00049")
+    far = reach_sector(setting.platform).centre + np.array([0.5, 0.5])
+    holds = {"start": [h.to_dict() for h in face_holds(setting, np.asarray(task.start, dtype=float))],
+             "target": [h.to_dict() for h in face_holds(setting, far)]}
+    row = bench_verdicts._widest_holds({"kind": "search_exhausted", "holds": holds})
+    assert 0.0005 < row["hold_start"] < NARROW_HOLD and row["hold_target"] == -1.0
+    assert bench_verdicts._widest_holds({"kind": "plan"}) == {"hold_start": None, "hold_target": None}
