@@ -11,19 +11,19 @@ use the five library tools in turn. ``--count N`` takes the first N tasks of eac
 a process pool (``--workers``, default 2; :func:`bench_execution.run_jobs`); a task whose planning
 raises or runs past ``--timeout`` is an ``error`` row, counted as undecided.
 
-Report: the three counts with their shares and Wilson intervals (95 %), per task file and in all;
-the certificates' kinds (and the unknown verdicts' evidence kinds and reasons, grouped, with the
-tasks whose certificate was built but refused by its own check and those whose start or target no face holds
-on a window as wide as the guided search's narrowest, ``hold_start`` and ``hold_target`` of the rows); the verdicts by obstacle count; the
-planning time per verdict (median, p90, max of ``planning_time`` as ``solve --json`` prints it: the
-plan's ``time_total``, else the sum of its ``time_*`` metrics; ``time_certify`` apart); a per-tool
-table; the issue's targets (decided >= 97 %, median planning time <= 2 s, p90 <= 10 s) each marked
-met or MISSED; the slowest tasks. ``--execute`` (off by default) also runs every solved plan open
-loop on the simulated Omni (:func:`tooltransfer.planner.execution.simulate.simulate_plan`) and closed
-loop on the nominal MuJoCo plant (:func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`,
-the task's camera-noise seed, as ``bench_execution.py`` runs it) and reports the shares within 5 mm and
-2 mm against the issue's 95 % (``make bench-exec`` has the full execution figures: mismatched plants,
-the model's prediction). ``--json PATH`` writes every per-task row and the run's settings.
+Report: the three counts with their shares and Wilson intervals (95 %), per task file and in all; the
+certificates' kinds (and the unknown verdicts' evidence kinds and reasons, grouped, with the tasks whose
+certificate was built but refused by its own check and those whose start or target no face holds on a window
+as wide as the guided search's narrowest, ``hold_start`` and ``hold_target`` of the rows); the verdicts by
+obstacle count; the planning time per verdict (median, p90, max of ``planning_time`` as ``solve --json``
+prints it: the plan's ``time_total``, else the sum of its ``time_*`` metrics; ``time_certify`` apart); a
+per-tool table; the issue's targets (decided >= 97 %, median planning time <= 2 s, p90 <= 10 s) each marked
+met or MISSED; the slowest tasks. ``--execute`` (off by default) also runs every solved plan open loop on the
+simulated Omni (:func:`tooltransfer.planner.execution.simulate.simulate_plan`) and closed loop on the nominal
+MuJoCo plant (:func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`, the task's camera-noise
+seed, as ``bench_execution.py`` runs it) and reports the shares within 5 mm and 2 mm against the issue's 95 %
+(``make bench-exec`` has the full execution figures: mismatched plants, the model's prediction).
+``--json PATH`` writes every per-task row and the run's settings.
 
     python benchmarks/bench_verdicts.py --json out/verdicts.json   # 260 tasks
     python benchmarks/bench_verdicts.py --count 10                 # a quick look: 20 tasks
