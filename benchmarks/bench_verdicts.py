@@ -70,7 +70,7 @@ from bench_execution import (
 )
 
 from tooltransfer.planner.apps.batch.execute import finite_or_none
-from tooltransfer.planner.planning.verdicts.holds_at import NARROW_HOLD
+from tooltransfer.planner.planning.verdicts.hold_windows import NARROW_HOLD, widest_stored
 
 BATCHES = (ROOT / "problems" / "batch" / "execution_60.yaml", ROOT / "problems" / "batch" / "verdicts_200.yaml")
 VERDICTS = ("solved", "infeasible", "unknown")
@@ -94,8 +94,7 @@ def _widest_holds(evidence: dict[str, Any]) -> dict[str, float | None]:
     unknown's evidence ``holds``, :func:`~tooltransfer.planner.planning.verdicts.holds_at.face_holds`; -1 where
     no face does, None without that evidence)."""
     holds = evidence.get("holds") or {}
-    return {f"hold_{where}": (max((hi - lo for h in holds[where] for lo, hi in h["windows"]), default=-1.0)
-                              if where in holds else None) for where in ("start", "target")}
+    return {f"hold_{where}": widest_stored(holds[where]) if where in holds else None for where in ("start", "target")}
 
 
 def run_verdict(job: VerdictJob) -> Row:

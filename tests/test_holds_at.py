@@ -16,7 +16,8 @@ from test_verdicts import ROOT, generated
 
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
-from tooltransfer.planner.planning.verdicts.holds_at import HOLD_SAMPLES, NARROW_HOLD, face_holds, narrow_hold
+from tooltransfer.planner.planning.verdicts.hold_windows import NARROW_HOLD, narrowly_held
+from tooltransfer.planner.planning.verdicts.holds_at import HOLD_SAMPLES, face_holds, narrow_hold
 from tooltransfer.tools.contact import contact_pose
 from tooltransfer.tools.objects import Disc, DiscObject
 from tooltransfer.tools.omni.dh import D_TOOL
@@ -121,3 +122,37 @@ def test_the_verdict_benchmark_reads_the_widest_hold_of_an_unknown(monkeypatch) 
     row = bench_verdicts._widest_holds({"kind": "search_exhausted", "holds": holds})
     assert 0.0005 < row["hold_start"] < NARROW_HOLD and row["hold_target"] == -1.0
     assert bench_verdicts._widest_holds({"kind": "plan"}) == {"hold_start": None, "hold_target": None}
+    assert narrowly_held({"holds": holds}) and not narrowly_held({"kind": "plan"})
+    wide = [h.to_dict() for h in face_holds(setting, np.asarray(task.target, dtype=float))]
+    assert not narrowly_held({"holds": {"start": wide, "target": wide}})
+
+
+def test_the_batch_report_counts_the_unknowns_held_only_narrowly(tmp_path) -> None:
+    """``batch report`` counts, per tool and variant, the unknown rows whose stored evidence holds the start or the
+    target only on windows under :data:`NARROW_HOLD`, and says so after the budget's count."""
+    import io
+    import json
+
+    from rich.console import Console
+
+    from tooltransfer.planner.apps.batch.report import print_report, summarize
+    from tooltransfer.planner.apps.batch.store import ResultStore
+
+    task, setting = _world("verdicts_200.yaml", "verd200-00049")
+    narrow = [h.to_dict() for h in face_holds(setting, np.asarray(task.start, dtype=float))]
+    wide = [h.to_dict() for h in face_holds(setting, np.asarray(task.target, dtype=float))]
+    evidence = [{"verdict": "unknown", "budget_limited": False, "holds": {"start": narrow, "target": wide}},
+                {"verdict": "unknown", "budget_limited": True, "holds": {"start": wide, "target": wide}},
+                {"verdict": "unknown", "budget_limited": True}]  # stored before the evidence had holds
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        store.add_tasks([{"task_id": f"t{i}", "idx": i, "tool": "l_shape", "n_obstacles": 1} for i in range(3)])
+        for i, ev in enumerate(evidence):
+            store.put({"task_id": f"t{i}", "variant": "qp/opt", "tool": "l_shape", "status": "unknown",
+                       "metrics_json": json.dumps({"evidence": ev})})
+        rows = store.rows()
+    stats = summarize(rows)
+    s = {(g.tool, g.variant): g for g in stats}[("l_shape", "qp/opt")]
+    assert (s.unknown, s.unknown_on_budget, s.unknown_narrow) == (3, 2, 1)
+    out = io.StringIO()
+    print_report(stats, [], Console(file=out, width=400))
+    assert "1 held at the start or the target only on contact windows under 2 mm" in out.getvalue()

@@ -38,6 +38,7 @@ from rich.table import Table
 from tooltransfer.atomic import write_bytes
 from tooltransfer.planner.apps.batch.stats import EXEC_TOLS, wilson
 from tooltransfer.planner.common.metric_units import display, label
+from tooltransfer.planner.planning.verdicts.hold_windows import NARROW_HOLD, narrowly_held
 
 CONE_TOL = 0.01
 REACH_TOL = 1e-3
@@ -120,6 +121,7 @@ class GroupStats:
     unknown_ci_high: float = float("nan")
     certificates: str = ""
     unknown_on_budget: int = 0
+    unknown_narrow: int = 0
 
 
 def _pct(a: np.ndarray, q: float) -> float:
@@ -188,6 +190,7 @@ def group_stats(tool: str, variant: str, rows: Sequence[dict[str, Any]]) -> Grou
         _agg(_vals(sim, "sim_final_error"), "median"), **execution_stats(rows), violated=c["violated"],
         unknown=c["unknown"] + c["violated"], **_verdict_cis(c, n), certificates=_certificate_kinds(rows),
         unknown_on_budget=sum(_evidence(r).get("budget_limited") is True for r in rows if r["status"] == "unknown"),
+        unknown_narrow=sum(narrowly_held(_evidence(r)) for r in rows if r["status"] == "unknown"),
     )
 
 
@@ -311,7 +314,9 @@ def print_report(stats: Sequence[GroupStats], reasons: Sequence[dict[str, Any]],
             console.print(f"unknown of {escape(s.tool)} {escape(s.variant)}: {plain}, {s.unknown_on_budget} of them "
                           "stopped on the search's or the certificate's budget (`batch run --resume --retry unknown "
                           "--budget K` may decide those; the others ended within their budgets, where a larger one is "
-                          "unlikely to help)")
+                          "unlikely to help)" + (f"; {s.unknown_narrow} held at the start or the target only on "
+                                                 f"contact windows under {NARROW_HOLD * 1e3:g} mm (evidence 'holds')"
+                                                 if s.unknown_narrow else ""))
     v = Table(title="solved plans: violation maxima, clearance")
     for col in ("tool", "variant", *(label(head, column) for head, _, column, _ in VIOLATION_COLUMNS)):
         v.add_column(escape(col), justify="left" if col in ("tool", "variant") else "right")

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
+from tooltransfer.planner.planning.verdicts.hold_windows import NARROW_HOLD
 from tooltransfer.planner.planning.verdicts.rules import setting_rules
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.dh import D_TOOL
@@ -34,10 +35,6 @@ from tooltransfer.tools.omni.reach import reach_sector
 
 #: Contact places sampled along each face's contact range (a window's ends are known to one spacing).
 HOLD_SAMPLES = 201
-#: A hold narrower than this [m] on every face is narrower than the guided search's narrowest contact
-#: windows (:data:`~tooltransfer.planner.planning.oe.guided.NARROW` of the default ``guided_contact_span``,
-#: 4 mm): its attempts hold a window only where both of its ends are held.
-NARROW_HOLD = 0.002
 
 
 @dataclass(frozen=True)
@@ -143,3 +140,4 @@ def narrow_hold(holds: list[FaceHold], where: str) -> str:
     return (f"at {where} the contact holds the puck only on {best.widest * 1e3:.2g} mm of {best.face!r} "
             f"(of its {best.length * 1e3:.3g} mm; the tool at most {best.clearance * 1e3:.2g} mm from an obstacle), "
             f"narrower than the search's {NARROW_HOLD * 1e3:g} mm windows")
+
