@@ -1,8 +1,9 @@
 """Where on each face the contact holds the puck at one position (verdicts/holds_at.py), against a placement
 of the tool made here another way: the tool's pose from :func:`tooltransfer.tools.contact.contact_pose` (the face
 touching the disc at the sampled contact) at the heading at which the Omni's arm plane passes through the
-tool's origin at its offset ``d_t`` (found by root finding, none of the module's closed form), the outline placed
-with shapely and measured against the obstacles."""
+tool's origin at its offset ``d_t`` (found by root finding, none of the module's closed form), the joints from the
+Omni's inverse kinematics (its own joint limits, not the reach sector's intervals) and the outline's clearance from
+:func:`~tooltransfer.planner.planning.tool_clearance.tool_obstacle_clearance`."""
 
 from __future__ import annotations
 
@@ -10,17 +11,17 @@ import math
 
 import numpy as np
 import pytest
-import shapely
 from scipy.optimize import brentq
 from test_verdicts import ROOT, generated
 
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
-from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
+from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN, tool_obstacle_clearance
 from tooltransfer.planner.planning.verdicts.hold_windows import NARROW_HOLD, narrowly_held
 from tooltransfer.planner.planning.verdicts.holds_at import HOLD_SAMPLES, face_holds, narrow_hold
 from tooltransfer.tools.contact import contact_pose
-from tooltransfer.tools.objects import Disc, DiscObject
+from tooltransfer.tools.objects import DiscObject
 from tooltransfer.tools.omni.dh import D_TOOL
+from tooltransfer.tools.omni.ik import inverse_kinematics
 from tooltransfer.tools.omni.reach import reach_sector
 
 
@@ -31,7 +32,9 @@ def _world(batch: str, task_id: str):
 
 def _held_here(setting, face, s: float, p: np.ndarray) -> bool:
     """Whether the Omni holds ``face``'s contact at fraction ``s`` on the puck at ``p`` with the tool outline
-    :data:`TOOL_MARGIN` clear of the obstacles (module docstring's placement)."""
+    :data:`TOOL_MARGIN` clear of the obstacles (module docstring's placement): the heading found by root finding,
+    the joints by :func:`inverse_kinematics` of the tool's origin (its first branch within every joint limit, the
+    arm reaching forward, at that heading), the clearance by :func:`tool_obstacle_clearance`."""
     sec = reach_sector(setting.platform)
     obj = DiscObject(radius=setting.radius)
 
@@ -48,24 +51,21 @@ def _held_here(setting, face, s: float, p: np.ndarray) -> bool:
         yaw = brentq(lateral, toward - 0.6, toward + 0.6, xtol=1e-13)
     except ValueError:
         return False
-    a = yaw + math.pi / 2
-    u = float((origin(yaw) - sec.centre) @ np.array([math.cos(a), math.sin(a)]))
-    q1 = math.remainder(a - sec.base_yaw, 2 * math.pi)
-    if not (sec.q1_range[0] <= q1 <= sec.q1_range[1] and sec.u_range[0] <= u <= sec.u_range[1]):
+    ik = inverse_kinematics(setting.platform, origin(yaw))
+    if not ik.reachable or ik.heading is None or abs(math.remainder(ik.heading - yaw, 2 * math.pi)) > 1e-6:
         return False
-    rot = np.array([[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]])
-    outline = shapely.Polygon(np.asarray(setting.tool.outline.exterior.coords) @ rot.T + origin(yaw))
-    return min(shapely.distance(outline, shapely.Point(o.centre)) - o.radius if isinstance(o, Disc)
-               else shapely.distance(outline, o) for o in setting.obstacles) >= TOOL_MARGIN
+    pose = np.array([[*origin(yaw), yaw]])
+    return tool_obstacle_clearance(setting.tool, pose, list(setting.obstacles)).distance >= TOOL_MARGIN
 
 
 @pytest.mark.parametrize(("batch", "task_id", "where"), [("verdicts_200.yaml", "verd200-00049", "start"),
+                                                          ("verdicts_200.yaml", "verd200-00049", "target"),
                                                           ("execution_60.yaml", "exec60-00020", "target")])
 def test_the_windows_are_the_contacts_a_placement_made_another_way_holds(batch: str, task_id: str,
                                                                           where: str) -> None:
-    """Every fifth sampled contact of every face is held by the independent placement exactly where it lies in
-    one of the face's windows (the two unknowns of the verdict benchmark whose start or target is held only
-    near one end of a face)."""
+    """Every sampled contact of every face is held by the independent placement exactly where it lies in one of
+    the face's windows: the two unknowns of the verdict benchmark whose start or target is held only near one end
+    of a face, and a target where a face whose contact range starts half way along it (``foot_top``) holds."""
     task, setting = _world(batch, task_id)
     p = np.asarray(task.start if where == "start" else task.target, dtype=float)
     holds = face_holds(setting, p)
@@ -73,7 +73,7 @@ def test_the_windows_are_the_contacts_a_placement_made_another_way_holds(batch: 
     for h in holds:
         face = setting.tool.face(h.face)
         s = np.linspace(face.contact_range[0], face.contact_range[1], HOLD_SAMPLES)
-        for k in range(0, HOLD_SAMPLES, 5):
+        for k in range(HOLD_SAMPLES):
             inside = any(lo - 1e-12 <= s[k] * face.length <= hi + 1e-12 for lo, hi in h.windows)
             assert _held_here(setting, face, float(s[k]), p) == inside, f"{h.face} at s = {s[k]:.3f}"
 
@@ -92,7 +92,9 @@ def test_a_start_held_only_at_the_tip_of_a_face_is_named_narrow() -> None:
     assert hi == pytest.approx(0.012) and 0.0005 < hi - lo < NARROW_HOLD
     assert 0.001 < start["foot_end"].clearance < 0.002
     clause = narrow_hold(list(start.values()), "the start")
-    assert clause.startswith("at the start the contact holds the puck only on 1 mm of 'foot_end'")
+    assert clause == ("at the start the contact holds the puck only on 1 mm of 'foot_end' (a 12 mm face; the tool at "
+                      "most 1.3 mm from an obstacle), narrower than the guided search's narrowest windows (2 mm with "
+                      "its default contact span)")
     target = face_holds(setting, np.asarray(task.target, dtype=float))
     assert narrow_hold(target, "the target") == "" and min(h.widest for h in target) >= NARROW_HOLD
     assert start["foot_end"].to_dict()["windows"] == [[lo, hi]]

@@ -59,8 +59,9 @@ class FaceHold:
 
     @property
     def widest(self) -> float:
-        """The widest window [m] (0 for one sampled contact; -inf where there is none)."""
-        return max((hi - lo for lo, hi in self.windows), default=-math.inf)
+        """The widest window [m] (0 for one sampled contact; -1 where there is none, as
+        :func:`~.hold_windows.widest_stored`)."""
+        return max((hi - lo for lo, hi in self.windows), default=-1.0)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON data (non-finite clearances as None)."""
@@ -130,14 +131,16 @@ def _runs(held: NDArray[np.bool_], at: NDArray[np.float64]) -> tuple[tuple[float
 def narrow_hold(holds: list[FaceHold], where: str) -> str:
     """A clause saying that the puck at ``where`` ("the start", "the target") is held only on windows narrower
     than :data:`NARROW_HOLD` (the widest of them named), or that no face holds it there at all; "" where some
-    face holds it on a window at least that wide."""
+    face holds it on a window at least that wide. (:data:`NARROW_HOLD` is the guided search's narrowest window
+    with the default ``oe.guided_contact_span``; a task that sets another is measured against the default.)"""
     best = max(holds, key=lambda h: h.widest, default=None)
     if best is None or best.widest < 0.0:
         return (f"at {where} no face holds the puck at any of its {HOLD_SAMPLES} sampled contacts with the Omni in "
                 f"its joints and the tool {TOOL_MARGIN * 1e3:g} mm clear of the obstacles")
     if best.widest >= NARROW_HOLD:
         return ""
+    near = f"; the tool at most {best.clearance * 1e3:.2g} mm from an obstacle" if math.isfinite(best.clearance) else ""
     return (f"at {where} the contact holds the puck only on {best.widest * 1e3:.2g} mm of {best.face!r} "
-            f"(of its {best.length * 1e3:.3g} mm; the tool at most {best.clearance * 1e3:.2g} mm from an obstacle), "
-            f"narrower than the search's {NARROW_HOLD * 1e3:g} mm windows")
+            f"(a {best.length * 1e3:.3g} mm face{near}), narrower than the guided search's narrowest windows "
+            f"({NARROW_HOLD * 1e3:g} mm with its default contact span)")
 
