@@ -14,15 +14,16 @@ raises or runs past ``--timeout`` is an ``error`` row, counted as undecided.
 Report: the three counts with their shares and Wilson intervals (95 %), per task file and in all; the
 certificates' kinds (and the unknown verdicts' evidence kinds and reasons, grouped, with the tasks whose
 certificate was built but refused by its own check and those whose start or target no face holds on a window
-as wide as the guided search's narrowest, ``hold_start`` and ``hold_target`` of the rows); the verdicts by
-obstacle count; the planning time per verdict (median, p90, max of ``planning_time`` as ``solve --json``
-prints it: the plan's ``time_total``, else the sum of its ``time_*`` metrics; ``time_certify`` apart); a
-per-tool table; the issue's targets (decided >= 97 %, median planning time <= 2 s, p90 <= 10 s) each marked
-met or MISSED; the slowest tasks. ``--execute`` (off by default) also runs every solved plan open loop on the
-simulated Omni (:func:`tooltransfer.planner.execution.simulate.simulate_plan`) and closed loop on the nominal
-MuJoCo plant (:func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`, the task's camera-noise
-seed, as ``bench_execution.py`` runs it) and reports the shares within 5 mm and 2 mm against the issue's 95 %
-(``make bench-exec`` has the full execution figures: mismatched plants, the model's prediction).
+as wide as the guided search's narrowest, ``hold_start`` and ``hold_target`` of the rows, and
+``narrow_hold``); the verdicts by obstacle count; the planning time per verdict (median, p90, max of
+``planning_time`` as ``solve --json`` prints it: the plan's ``time_total``, else the sum of its ``time_*``
+metrics; ``time_certify`` apart); a per-tool table; the issue's targets (decided >= 97 %, median planning time
+<= 2 s, p90 <= 10 s) each marked met or MISSED; the slowest tasks. ``--execute`` (off by default) also runs
+every solved plan open loop on the simulated Omni
+(:func:`tooltransfer.planner.execution.simulate.simulate_plan`) and closed loop on the nominal MuJoCo plant
+(:func:`tooltransfer.planner.execution.closed_loop.execute_closed_loop`, the task's camera-noise seed, as
+``bench_execution.py`` runs it) and reports the shares within 5 mm and 2 mm against the issue's 95 % (``make
+bench-exec`` has the full execution figures: mismatched plants, the model's prediction).
 ``--json PATH`` writes every per-task row and the run's settings.
 
     python benchmarks/bench_verdicts.py --json out/verdicts.json   # 260 tasks
@@ -70,7 +71,7 @@ from bench_execution import (
 )
 
 from tooltransfer.planner.apps.batch.execute import finite_or_none
-from tooltransfer.planner.planning.verdicts.hold_windows import NARROW_HOLD, widest_stored
+from tooltransfer.planner.planning.verdicts.hold_windows import NARROW_HOLD, narrowly_held, widest_stored
 
 BATCHES = (ROOT / "problems" / "batch" / "execution_60.yaml", ROOT / "problems" / "batch" / "verdicts_200.yaml")
 VERDICTS = ("solved", "infeasible", "unknown")
@@ -106,7 +107,7 @@ def run_verdict(job: VerdictJob) -> Row:
     row: Row = {"task_id": job.task_id, "kind": job.kind, "batch": Path(job.source).name, "index": job.index,
                 "tool": job.tool, "variant": job.variant, "n_obstacles": job.n_obstacles, "status": None,
                 "verdict": "error", "evidence_kind": None, "reason": "", "not_proved": None, "budget_limited": None,
-                "hold_start": None, "hold_target": None,
+                "hold_start": None, "hold_target": None, "narrow_hold": None,
                 "planning_time": None, "time_certify": None, "plan_wall": None, "plan_cpu": None,
                 "n_pushes": None, "open_loop_status": None, "open_loop_error": None, "closed_loop_status": None,
                 "closed_loop_error": None, "closed_loop_reason": None, "worker": os.getpid()}
@@ -120,7 +121,7 @@ def run_verdict(job: VerdictJob) -> Row:
     m, ev = plan.metrics, plan.evidence
     row.update(status=plan.status, verdict=plan.verdict, evidence_kind=ev.get("kind"), reason=(plan.reason or "")[:500],
                not_proved=(str(ev["not_proved"])[:300] if "not_proved" in ev else None),
-               budget_limited=ev.get("budget_limited"), **_widest_holds(ev),
+               budget_limited=ev.get("budget_limited"), **_widest_holds(ev), narrow_hold=narrowly_held(ev),
                planning_time=plan.planning_time, time_certify=finite_or_none(m.get("time_certify")),
                plan_wall=time.perf_counter() - started, plan_cpu=time.process_time() - cpu,
                n_pushes=None if m.get("n_pushes") is None else round(m["n_pushes"]))
@@ -202,8 +203,7 @@ def report(rows: Sequence[Row], wall: float, con: Any) -> dict[str, Any]:
         spent = [r["task_id"] for r in unknown if r.get("budget_limited")]
         con.print(f"  stopped on the search's or the certificate's budget: {len(spent)}"
                   + (f" ({', '.join(spent)}; --budget K may decide them)" if spent else ""))
-        narrow = [r["task_id"] for r in unknown if any(v is not None and v < NARROW_HOLD
-                                                       for v in (r.get("hold_start"), r.get("hold_target")))]
+        narrow = [r["task_id"] for r in unknown if r.get("narrow_hold")]
         con.print(f"  the start or the target held only on windows under {NARROW_HOLD * 1e3:g} mm (evidence 'holds'): "
                   f"{len(narrow)}" + (f" ({', '.join(narrow)})" if narrow else ""))
         failed = [r["task_id"] for r in unknown if "check failed" in (r.get("not_proved") or "")]

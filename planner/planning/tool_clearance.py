@@ -44,20 +44,25 @@ def tool_obstacle_clearance(tool: Tool, tool_pose: NDArray[np.float64],
     ok = np.flatnonzero(np.all(np.isfinite(tool_pose), axis=1))
     if not obstacles or ok.size == 0:
         return ToolClearance(float("inf"), -1, -1)
-    tool_pose = tool_pose[ok]
+    best = ToolClearance(float("inf"), -1, -1)
+    for j, d in enumerate(outline_distances(tool, tool_pose[ok], obstacles)):
+        k = int(np.argmin(d))
+        if d[k] < best.distance:
+            best = ToolClearance(float(d[k]), int(ok[k]), j)
+    return best
+
+
+def outline_distances(tool: Tool, tool_pose: NDArray[np.float64],
+                      obstacles: Sequence[Disc | shapely.Polygon]) -> NDArray[np.float64]:
+    """Distance [m] (len(obstacles), K) between the tool outline at each pose of ``tool_pose`` (K, 3) (x, y [m],
+    yaw [rad], world frame, all finite) and each obstacle; 0 where they overlap."""
     ring = np.asarray(tool.outline.exterior.coords)[:-1]
     c, s = np.cos(tool_pose[:, 2]), np.sin(tool_pose[:, 2])
     x = tool_pose[:, None, 0] + c[:, None] * ring[None, :, 0] - s[:, None] * ring[None, :, 1]
     y = tool_pose[:, None, 1] + s[:, None] * ring[None, :, 0] + c[:, None] * ring[None, :, 1]
     polys = shapely.polygons(np.stack([x, y], axis=-1))
-    best = ToolClearance(float("inf"), -1, -1)
+    out = np.empty((len(obstacles), len(tool_pose)))
     for j, o in enumerate(obstacles):
-        if isinstance(o, Disc):
-            d = shapely.distance(polys, shapely.Point(o.centre)) - o.radius
-            d = np.maximum(d, 0.0)
-        else:
-            d = shapely.distance(polys, o)
-        k = int(np.argmin(d))
-        if d[k] < best.distance:
-            best = ToolClearance(float(d[k]), int(ok[k]), j)
-    return best
+        out[j] = (np.maximum(shapely.distance(polys, shapely.Point(o.centre)) - o.radius, 0.0)
+                  if isinstance(o, Disc) else shapely.distance(polys, o))
+    return out

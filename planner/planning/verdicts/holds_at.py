@@ -22,16 +22,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import shapely
 from numpy.typing import NDArray
 
+from tooltransfer.planner.planning.oe.face_frame import FaceFrame, admissible_cone
 from tooltransfer.planner.planning.setting import Setting
-from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
+from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN, outline_distances
 from tooltransfer.planner.planning.verdicts.hold_windows import NARROW_HOLD
-from tooltransfer.planner.planning.verdicts.rules import setting_rules
-from tooltransfer.tools.objects import Disc
-from tooltransfer.tools.omni.dh import D_TOOL
-from tooltransfer.tools.omni.reach import reach_sector
 
 #: Contact places sampled along each face's contact range (a window's ends are known to one spacing).
 HOLD_SAMPLES = 201
@@ -70,49 +66,39 @@ class FaceHold:
 
 
 def face_holds(setting: Setting, p: NDArray[np.float64], samples: int = HOLD_SAMPLES) -> list[FaceHold]:
-    """Per face that can push (its admissible cone not empty: :func:`~.rules.setting_rules`), where along
-    it the contact holds the puck at ``p`` (2,) [m] in ``setting`` (module docstring), in the tool's order."""
+    """Per face that can push (its admissible cone at the whole friction cone not empty, as
+    :func:`~.rules.push_rules` keeps it), where along it the contact holds the puck at ``p`` (2,) [m] in
+    ``setting`` (module docstring), in the tool's order: each sampled contact's :class:`FaceFrame` places the tool
+    (the arm reaching forward) and its outline is measured by :func:`outline_distances`."""
     p = np.asarray(p, dtype=np.float64)
-    sec = reach_sector(setting.platform)
-    d = p - sec.centre
-    r2 = float(d @ d)
-    can_push = {f.name for f in setting_rules(setting).faces}
-    ring = np.asarray(setting.tool.outline.exterior.coords)[:-1]
+    friction = setting.mechanics.friction_angle
     out = []
     for face in setting.tool.faces:
-        if face.name not in can_push:
+        lo, hi = admissible_cone(face.normal_angle, face.push_angle, face.theta_b, friction)
+        if hi < lo:
             continue
         s = np.linspace(face.contact_range[0], face.contact_range[1], samples)
-        c = np.array([face.point(float(si)) for si in s]) + setting.radius * np.asarray(face.normal)
-        o = D_TOOL - c[:, 0]
-        v = np.sqrt(np.maximum(r2 - o * o, 0.0))
-        u = v - c[:, 1]
-        q1 = np.remainder(math.atan2(d[1], d[0]) - np.arctan2(o, v) - sec.base_yaw + math.pi, 2 * math.pi) - math.pi
-        reached = ((r2 > o * o) & (sec.q1_range[0] <= q1) & (q1 <= sec.q1_range[1])
-                   & (sec.u_range[0] <= u) & (u <= sec.u_range[1]))
-        clear = _clearances(ring, c, q1 + sec.base_yaw - math.pi / 2, p, list(setting.obstacles))
+        frames = [FaceFrame.build(setting, face.name, s=float(si), friction_cone_fraction=1.0) for si in s]
+        reached = np.array([_reaches(f, p) for f in frames])
+        clear = np.full(samples, math.inf)
+        if setting.obstacles:
+            poses = np.vstack([f.tool_pose(p[None]) for f in frames])
+            clear = outline_distances(setting.tool, poses, list(setting.obstacles)).min(axis=0)
         held = reached & (clear >= TOOL_MARGIN)
         out.append(FaceHold(face.name, float(face.length), _runs(held, s * face.length), int(reached.sum()),
                             float(clear[reached].max()) if reached.any() else math.nan))
     return out
 
 
-def _clearances(ring: NDArray[np.float64], c: NDArray[np.float64], yaw: NDArray[np.float64], p: NDArray[np.float64],
-                obstacles: list[Any]) -> NDArray[np.float64]:
-    """The distance [m] (K,) between the tool outline ``ring`` (M, 2) (tool frame) and the obstacles with the puck
-    at ``p`` (2,) touched at the puck centres ``c`` (K, 2) (tool frame) and the tool's yaws ``yaw`` (K,) [rad]
-    (0 where they overlap, inf without obstacles)."""
-    cos, sin = np.cos(yaw)[:, None], np.sin(yaw)[:, None]
-    rel = ring[None, :, :] - c[:, None, :]
-    x = p[0] + cos * rel[..., 0] - sin * rel[..., 1]
-    y = p[1] + sin * rel[..., 0] + cos * rel[..., 1]
-    polys = shapely.polygons(np.stack([x, y], axis=-1))
-    best = np.full(len(c), math.inf)
-    for ob in obstacles:
-        dist = (np.maximum(shapely.distance(polys, shapely.Point(ob.centre)) - ob.radius, 0.0)
-                if isinstance(ob, Disc) else shapely.distance(polys, ob))
-        best = np.minimum(best, dist)
-    return best
+def _reaches(frame: FaceFrame, p: NDArray[np.float64]) -> bool:
+    """Whether the Omni holds ``frame``'s contact on the puck at ``p`` (2,) [m] within its joints, the arm reaching
+    forward: ``p`` farther from its axis than the offset, the waist angle and the arm-plane reach in range."""
+    r2 = float(np.sum((p - frame.base) ** 2))
+    if r2 <= frame.offset ** 2:
+        return False
+    a = float(frame.waist_angle(p[None])[0])
+    v = math.sqrt(r2 - frame.offset ** 2)
+    return frame.waist[0] <= a <= frame.waist[1] and frame.reach[0] <= v <= frame.reach[1]
 
 
 def _runs(held: NDArray[np.bool_], at: NDArray[np.float64]) -> tuple[tuple[float, float], ...]:
