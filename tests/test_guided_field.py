@@ -16,8 +16,6 @@ from test_verdicts import generated
 from tooltransfer.planner.planning.oe.guided import (
     CELL,
     FINE,
-    GREED,
-    LAST_ROOM,
     STEP,
     GuidedMiss,
     GuidedPath,
@@ -25,6 +23,7 @@ from tooltransfer.planner.planning.oe.guided import (
     guided_path,
 )
 from tooltransfer.planner.planning.oe.guided_field import UNREACHED, distance_field
+from tooltransfer.planner.planning.oe.guided_rungs import GREED, LAST_ROOM
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import qp_options
 

@@ -12,8 +12,8 @@ from guided_ladder import executed_plan_of
 from test_verdicts import generated
 
 from tooltransfer.planner.planning.oe.contacts import usable_range
-from tooltransfer.planner.planning.oe.guided import NARROW, NARROW_WINDOWS
 from tooltransfer.planner.planning.oe.guided_moves import contact_windows
+from tooltransfer.planner.planning.oe.guided_rungs import NARROW, NARROW_WINDOWS
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import qp_options
 from tooltransfer.tools.pushing.inverse import FaceGeometry

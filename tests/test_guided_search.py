@@ -391,9 +391,10 @@ def test_the_last_attempt_uses_a_face_s_windows_only_where_the_whole_face_is_not
     ends of its window or of the whole range (the Omni's inverse kinematics reaching the tool there, the
     outline the last attempt's room clear of the obstacles), and a window starts only where its face is not
     held as a whole under the search's rule: the windows add moves where the whole face has none."""
-    from tooltransfer.planner.planning.oe.guided import CELL, FINE, GREED, LAST_ROOM, STEP
+    from tooltransfer.planner.planning.oe.guided import CELL, FINE, STEP
     from tooltransfer.planner.planning.oe.guided_holds import _Holds, _zones
     from tooltransfer.planner.planning.oe.guided_moves import _face_moves
+    from tooltransfer.planner.planning.oe.guided_rungs import GREED, LAST_ROOM
 
     task = _verdict_task("verd200-00129")
     setting = setting_from_task(task, task_skills(task, need_ss=False))
@@ -466,7 +467,7 @@ def test_the_widest_share_is_tried_only_where_it_widens_some_face_s_cone() -> No
     friction cone, so an attempt at 0.95 would search and fit the same cones again: exec60-00054 (l_shape;
     certified infeasible after the search, by the switches its tool cannot make) makes none; the slope's
     ``inclined`` face's cone does widen (verd200-00011 is solved at 0.95, the test above)."""
-    from tooltransfer.planner.planning.oe.guided import _widens
+    from tooltransfer.planner.planning.oe.guided_rungs import _widens
 
     task = _task("exec60-00054")
     setting = setting_from_task(task, task_skills(task, need_ss=False))

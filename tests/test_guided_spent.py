@@ -9,7 +9,8 @@ import numpy as np
 from guided_ladder import executed_plan_of, ladder_reasons
 from test_verdicts import generated
 
-from tooltransfer.planner.planning.oe.guided import GREED, GuidedMiss, GuidedPath, guided_path
+from tooltransfer.planner.planning.oe.guided import GuidedMiss, GuidedPath, guided_path
+from tooltransfer.planner.planning.oe.guided_rungs import GREED
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import qp_options
 

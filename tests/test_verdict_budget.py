@@ -52,8 +52,10 @@ def test_an_unknown_whose_searches_closed_their_space_is_not_budget_limited() ->
 
 
 def test_an_unknown_whose_search_ran_out_of_expansions_is_budget_limited() -> None:
-    """verd200-00120 (finger, one obstacle): attempts on fine steps spend their expansions."""
+    """verd200-00120 (finger, one obstacle) with the search's least budget (``oe.guided_budget`` 100; with the
+    default 4000 the ladder's closest attempt solves it): attempts on fine steps spend their expansions."""
     task = generated("verdicts_200.yaml", "verd200-00120")
+    task = task.model_copy(update={"oe": task.oe.model_copy(update={"guided_budget": 100})})
     plan = solve(task)
     assert plan.status == "unknown", plan.reason
     assert plan.metrics["guided_attempts_on_budget"] >= 1

@@ -25,12 +25,13 @@ import heapq
 import math
 from collections.abc import Generator, Sequence
 from dataclasses import dataclass, replace
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from tooltransfer.planner.planning.oe.face_frame import FaceFrame
+from tooltransfer.planner.planning.oe.guided_close import close_angles, close_step
 from tooltransfer.planner.planning.oe.guided_field import UNREACHED, DistanceField, distance_field
 from tooltransfer.planner.planning.oe.guided_holds import lattice_rules, straight_to
 from tooltransfer.planner.planning.oe.guided_moves import (
@@ -40,8 +41,8 @@ from tooltransfer.planner.planning.oe.guided_moves import (
     _FaceMoves,
     _rolled,
     _step_of,
-    face_cone,
 )
+from tooltransfer.planner.planning.oe.guided_rungs import _ladder, _Rung
 from tooltransfer.planner.planning.oe.metrics import plan_metrics
 from tooltransfer.planner.planning.oe.piecewise import fit_runs
 from tooltransfer.planner.planning.oe.push_plan import PushPlan
@@ -129,9 +130,6 @@ class Refusal:
 STEP = 0.004
 #: Side [m] of the lattice cells the search visits once per face.
 CELL = 0.002
-#: The share of the friction cone's half-angle tried before the widest (``friction_cone_fraction_max``),
-#: where that is wider: plans keep the most margin that lets them exist.
-MIDDLE_SHARE = 0.8
 #: The finer attempt's share of :data:`STEP` and :data:`CELL` (narrow passages between an obstacle's
 #: margin and the edge of a cone, where a whole step leaves the cone or enters the margin).
 FINE = 0.5
@@ -139,31 +137,6 @@ FINE = 0.5
 #: How near [m] a refused change of face (:class:`Refusal`) the search no longer makes it.
 REFUSED_RADIUS = 2 * STEP
 
-#: Searches again per share of the friction cone, each without the changes of face refused so far.
-REFUSALS = 2
-
-#: The weight of the distance to go in the order of the attempts on windows where needed (``mixed``;
-#: weighted A*, :func:`guided_path`'s ``greed``): with the windows of every face its lattice is several
-#: times larger, and the shortest path is not needed, only one the fit can follow.
-GREED = 3.0
-#: Room [m] the attempts on windows where needed keep between the tool outline and the obstacles at
-#: their nodes (the other attempts :data:`~.guided_moves.REACH_SLACK`): the fit places the contact
-#: anywhere in a window and the tool turns between nodes, so its plans pass nearer (0.4-0.8 mm on the
-#: verdict benchmark); with REACH_SLACK they broke the 0.25 mm hard check or left the closed loop's corrections no room.
-LAST_ROOM = 0.001
-#: Searches again in the attempts on windows where needed without the changes of face refused so far
-#: (each a cheap search: a switch with no tool path in reach often recurs a few millimetres further on).
-LAST_REFUSALS = 5
-
-#: The share of ``guided_contact_span`` the ladder's narrow attempt spans its windows with (a contact held
-#: only within a millimetre or two of one place, where no wider window is held at both of its ends).
-NARROW = 0.5
-#: The most windows per face of the narrow attempt (odd): they overlap on faces up to ten spans long (the
-#: library's l_shape foot, 12 mm); on longer ones they are spread with gaps between them.
-NARROW_WINDOWS = 11
-#: The narrow attempt's expansions, as a multiple of the other fine attempts' (its lattice holds a face's
-#: every window where the whole face is not held).
-NARROW_BUDGET = 2
 
 
 def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touch: _Contact,
@@ -183,52 +156,13 @@ def _backtrack(nodes: list, k: int, target: NDArray[np.float64], last: str, touc
                       tuple(runs[::-1]))
 
 
-class _Rung(NamedTuple):
-    """One attempt of :func:`guided_plans`' ladder: the options it changes (``change``: the share of the
-    friction cone, the contact span) and the search's settings (as :func:`guided_path` takes them; ``fine``:
-    steps and cells of a :data:`FINE` share of the usual and ``1 / FINE`` times the expansions;
-    ``refusals``: how many times it searches again without a change of face a later stage refused;
-    ``widest``: at ``friction_cone_fraction_max`` beyond the ladder's middle share; ``guide``: ordered by
-    the distance to go of :func:`guide_field`; ``spent``: made only where an attempt before on whole steps
-    and whole faces ended on its budget, not its space; ``most``: the most contact windows per face;
-    ``scale``: the attempt's expansions as a multiple of ``oe.guided_budget`` (on fine steps, of theirs);
-    ``narrow``: the attempt on windows of a :data:`NARROW` share of the span where the whole face is not
-    held, the ladder's last rung)."""
-
-    change: dict[str, float]
-    windows: bool = False
-    more: bool = False
-    fine: bool = False
-    mixed: float | None = None
-    greed: float = 1.0
-    room: float = REACH_SLACK
-    refusals: int = REFUSALS
-    widest: bool = False
-    guide: bool = False
-    spent: bool = False
-    most: int = MAX_WINDOWS
-    scale: int = 1
-    narrow: bool = False
-
-    @property
-    def whole_faces(self) -> bool:
-        """Whether the search holds each face as a whole (no contact windows, not even where the whole is
-        not held)."""
-        return not self.windows and self.mixed is None
-
-    @property
-    def last(self) -> bool:
-        """Whether this is one of the ladder's last attempts, for tasks with no plan at all (not made after a
-        plan kept with little room)."""
-        return self.guide or self.spent or self.narrow
-
 
 def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np.float64], *,
                 options: QPOptions, step: float = STEP, cell: float = CELL, switch_price: float = 0.01,
                 budget: int = 3000, refused: Sequence[Refusal] = (), windows: bool = False,
                 more: bool = False, mixed: float | None = None, greed: float = 1.0,
                 room: float = REACH_SLACK, guide: DistanceField | None = None,
-                most: int = MAX_WINDOWS) -> GuidedPath | GuidedMiss:
+                most: int = MAX_WINDOWS, close: bool = False) -> GuidedPath | GuidedMiss:
     """A* from ``start`` to within ``step`` of ``target`` (module docstring), or a :class:`GuidedMiss` within
     ``budget`` expansions. ``options``: the ``qp`` fit's (its narrowed friction cone, contact margin,
     span and most contacts per push); ``switch_price`` [m]: a face change's worth in path; ``refused``:
@@ -269,12 +203,18 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     to_go = guide.to_go if guide is not None else (lambda q: float(np.hypot(*(target - q))))
     heap: list = [(greed * to_go(start), 0.0, 0, None)]
     nodes: list[tuple[NDArray[np.float64], int, str | None, _Contact]] = [(start, -1, None, _Contact())]
+    levels: dict[int, int] = {}  # the closest attempt's nodes at the end of a shrunk step: their level
+
+    def cell_of(q: NDArray[np.float64], face: str | None, level: int) -> tuple:
+        c = cell / 2 ** level
+        return (int(q[0] // c), int(q[1] // c), face) + ((level,) if level else ())
+
     seen: set = set()
     n = 0
     while heap and n < budget:
         _, g, k, _ = heapq.heappop(heap)
         p, _, came, touch = nodes[k]
-        key = (int(p[0] // cell), int(p[1] // cell), came)
+        key = cell_of(p, came, levels.get(k, 0))
         if key in seen:
             continue
         seen.add(key)
@@ -287,15 +227,23 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
         for name, mid, half in here:
             if not allowed(came, name, p):
                 continue
-            for ang in (mid - half, mid, mid + half):
-                got = _step_of(setting, options, by_name[name], came, touch, p, ang, half, step, more)
-                if got is None or not free(got[0]) or (int(got[0][0] // cell), int(got[0][1] // cell), name) in seen:
+            for ang in close_angles(mid, half) if close else (mid - half, mid, mid + half):
+                level = 0
+                if close:
+                    made = close_step(setting, options, by_name[name], came, touch, p, float(ang), half, step, free,
+                                      lambda q, f: held.holds(by_name[f], q))
+                    got, level = (None, 0) if made is None else (made[:2], made[2])
+                else:
+                    got = _step_of(setting, options, by_name[name], came, touch, p, ang, half, step, more)
+                if got is None or not free(got[0]) or cell_of(got[0], name, level) in seen:
                     continue
                 q, after = got
                 if came == name and (after.count, after.run) != (touch.count, touch.run) and not allowed(name, "", p):
                     continue  # a re-contact of the face the later stages refused near here
-                g2 = g + step + (switch_price if came is not None and name != came else 0.0)
+                g2 = g + step / 2 ** level + (switch_price if came is not None and name != came else 0.0)
                 nodes.append((q, k, name, after))
+                if level:
+                    levels[len(nodes) - 1] = level
                 heapq.heappush(heap, (g2 + greed * to_go(q), g2, len(nodes) - 1, name))
     return GuidedMiss(n, not heap, step, guide is not None and guide.to_go(start) >= UNREACHED)
 
@@ -315,7 +263,7 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
                  target: NDArray[np.float64] | None, options: QPOptions) -> Generator[PushPlan, Any, None]:
     """The ``qp`` variant's fallback when its scored candidates fail: a ladder of attempts, each
     :func:`guided_path` at a share of the friction cone's half-angle: the task's
-    ``options.friction_cone_fraction``; then :data:`MIDDLE_SHARE` (where wider, and at most
+    ``options.friction_cone_fraction``; then :data:`~.guided_rungs.MIDDLE_SHARE` (where wider, and at most
     ``friction_cone_fraction_max``); then that share with half steps and new runs where the contact rolls
     off its face; then, where no attempt before could push from the start at all (the Omni may hold a face
     there only with its contact toward one end), that with each run's contact kept to one window of
@@ -324,8 +272,8 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     at the middle share on fine steps with half steps and new runs, each face as a whole and, where the
     whole is not held, on its windows of ``guided_contact_span`` (``mixed``: a contact toward one end of a
     face where only there the tool clears an obstacle), the search weighted toward the target
-    (:data:`GREED`), the tool :data:`LAST_ROOM` from the obstacles at its nodes, and
-    :data:`LAST_REFUSALS` searches again; last, where ``friction_cone_fraction_max`` is wider still (and
+    (:data:`~.guided_rungs.GREED`), the tool :data:`~.guided_rungs.LAST_ROOM` from the obstacles at its nodes, and
+    :data:`~.guided_rungs.LAST_REFUSALS` searches again; last, where ``friction_cone_fraction_max`` is wider still (and
     widens some face's admissible cone: :func:`_widens`), that share on whole and on fine steps, then as
     the attempt before (plans at the edge of the cone, where nothing narrower was found: a task the
     certificate's whole cone cannot rule out); last of all (where ``guided_contact_span`` is narrower),
@@ -335,13 +283,15 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     unexpanded), whether or not the attempts before could push from the start (the caller does not make
     it after a plan with little room); after it, where an attempt on whole steps and whole faces ended on
     its budget rather than with its space closed, the middle share's whole steps with half steps and new
-    runs again, weighted toward the target (:data:`GREED`) and searched again :data:`LAST_REFUSALS` times
-    (metric ``guided_spent``; not made after a plan with little room either); last of all (where
-    ``guided_contact_span`` is narrower), the middle share's ``mixed`` attempt again on windows of a
-    :data:`NARROW` share of that span, :data:`NARROW_WINDOWS` per face and :data:`NARROW_BUDGET` times the
-    expansions (a contact held only within a millimetre or two of one place on a face, where no window of
-    the span is held at both of its ends; metric ``guided_narrow``; not made after a plan with little room
-    either). The ``mixed``
+    runs again, weighted toward the target (:data:`~.guided_rungs.GREED`) and searched again
+    :data:`~.guided_rungs.LAST_REFUSALS` times (metric ``guided_spent``; not made after a plan with little room
+    either); last (where ``guided_contact_span`` is narrower), the middle share's ``mixed`` attempt again on
+    windows of a :data:`~.guided_rungs.NARROW` share of that span, :data:`~.guided_rungs.NARROW_WINDOWS` per face
+    and :data:`~.guided_rungs.NARROW_BUDGET` times the expansions (a contact held only within a millimetre or two
+    of one place on a face, where no window of the span is held at both of its ends; metric ``guided_narrow``);
+    last of all, that attempt on windows of a :data:`~.guided_rungs.CLOSE` share, the tool
+    :data:`~.guided_close.CLOSE_ROOM` from the obstacles, each step ending where its face still holds the puck
+    (:mod:`~.guided_close`; metric ``guided_close``); neither is made after a plan with little room. The ``mixed``
     attempts run also where the attempts before them could not push from the start (their windows may;
     the widest share's whole-face attempts do not), and after a plan with little room (the caller's
     ``GUIDED_ROOM``), which a roomier one may replace (the caller takes none at the widest share after a
@@ -356,9 +306,10 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     The caller may send back why a solved push plan failed later: a
     :class:`~tooltransfer.planner.planning.assemble.SwitchFailed` with the object's position (a switch
     with no tool path there) makes the search run again without that change of face near there (at
-    most :data:`REFUSALS` times per attempt, :data:`LAST_REFUSALS` in the ``mixed`` ones); a whole plan it keeps
-    (a :class:`~tooltransfer.planner.planning.plan.Plan`: one with little room, kept unless a later attempt gives
-    a roomier one) makes it skip the ``guide`` and ``spent`` attempts; anything else, the next attempt."""
+    most :data:`~.guided_rungs.REFUSALS` times per attempt, :data:`~.guided_rungs.LAST_REFUSALS` in the ``mixed``
+    ones); a whole plan it keeps (a :class:`~tooltransfer.planner.planning.plan.Plan`: one with little room, kept
+    unless a later attempt gives a roomier one) makes it skip the last attempts (``guide``, ``spent``,
+    ``narrow``, ``close``); anything else, the next attempt."""
     target = universal[-1] if target is None else target
     tries = _ladder(setting, options)
     stuck = True  # every attempt so far on whole-face contacts could not push from the start at all
@@ -391,53 +342,6 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
             refused.append(Refusal(failed.face_a, failed.face_b, where))
 
 
-def _ladder(setting: Setting, options: QPOptions) -> list[_Rung]:
-    """The attempts of :func:`guided_plans`, in order (its docstring), before it leaves out those the
-    attempts before them make needless."""
-    wide, span = options.friction_cone_fraction_max, options.guided_contact_span
-    share = options.friction_cone_fraction
-    middle = max(share, min(wide, MIDDLE_SHARE))  # the rung of the ladder below the widest share
-    at_middle = {"friction_cone_fraction": middle}
-    tries = [_Rung({"friction_cone_fraction": share})]
-    if middle > share:
-        tries.append(_Rung(at_middle))
-    tries.append(_Rung(at_middle, more=True))
-    windowed = span < options.contact_span
-    if windowed:
-        tries.append(_Rung({**at_middle, "contact_span": span}, windows=True, more=True))
-    tries.append(_Rung(at_middle, more=True, fine=True))
-
-    def mixed_rung(change: dict[str, float], widest: bool = False) -> _Rung:
-        return _Rung(change, more=True, fine=True, mixed=span, greed=GREED, room=LAST_ROOM, refusals=LAST_REFUSALS,
-                     widest=widest)
-
-    tries += [mixed_rung(at_middle)] if windowed else []
-    if wide > middle and _widens(setting, middle, wide):  # last of all: plans nearer the cone's edge keep less margin
-        at_wide = {"friction_cone_fraction": wide}
-        tries += [_Rung(at_wide, more=True, fine=fine, widest=True) for fine in (False, True)]
-        tries += [mixed_rung(at_wide, widest=True)] if windowed else []
-    # last of all, where every attempt failed: the middle share's fine steps on every face's windows in the order
-    # of the distance field (a path the straight line's order left unexpanded)
-    tries += [_Rung({**at_middle, "contact_span": span}, windows=True, more=True, fine=True, greed=GREED,
-                    room=LAST_ROOM, refusals=LAST_REFUSALS, guide=True)] if windowed else []
-    # last, where a search on whole steps spent its budget: that search weighted toward the target (weighted A*
-    # reaches a lattice's far side in fewer expansions; where every space closed, a new order has little to find)
-    tries.append(_Rung(at_middle, more=True, greed=GREED, refusals=LAST_REFUSALS, spent=True))
-    # last of all: the attempt on windows where needed at the middle share, on narrower windows (a contact held
-    # only within a millimetre or two of one place on the face, its rolling kept there by the half steps)
-    tries += [mixed_rung(at_middle)._replace(mixed=NARROW * span, most=NARROW_WINDOWS, scale=NARROW_BUDGET,
-                                             narrow=True)] if windowed else []
-    return tries
-
-
-def _widens(setting: Setting, narrow: float, wide: float) -> bool:
-    """Whether some face's admissible cone is wider at the ``wide`` share of the friction cone's
-    half-angle than at the ``narrow`` one (where the tool file's ``push_angle +- theta_b`` is the narrower at
-    both, every attempt at ``wide`` would repeat one at ``narrow``: the search and the fit see the same
-    cones). A face that can push at neither share counts as unchanged."""
-    return any(face_cone(setting, f, wide) != face_cone(setting, f, narrow) for f in setting.tool.faces)
-
-
 def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float64], opts: QPOptions,
              universal: NDArray[np.float64], refused: list[Refusal], rung: _Rung,
              order: DistanceField | None = None) -> PushPlan:
@@ -447,15 +351,19 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
     budget = opts.guided_budget * rung.scale
     found = guided_path(setting, universal[0], target, options=opts, refused=refused, windows=rung.windows,
                         more=rung.more, mixed=mixed, greed=rung.greed, room=rung.room, guide=order, most=rung.most,
+                        close=rung.close,
                         **({"step": FINE * STEP, "cell": FINE * CELL, "budget": round(budget / FINE)}
                            if fine else {"budget": budget}))
     but = f" without the {len(refused)} change(s) of face refused," if refused else ""
+    close = (f", each step ending where its face holds, the tool {rung.room * 1e3:g} mm from obstacles"
+             if rung.close else "")
     on = (f" (the contact on {opts.contact_span * 1e3:g} mm{' windows' if rung.windows else ''} of each face"
           f"{f' or, where that is not held, on its {mixed * 1e3:g} mm windows' if mixed is not None else ''}"
           f"{', half steps and new runs where it rolls off' if rung.more else ''}"
           f"{f', the distance to go weighted {rung.greed:g}' if rung.greed != 1.0 else ''}"
           f"{', that distance over a grid of where the faces push' if rung.guide else ''}"
-          f"{', again after a search on whole steps spent its budget' if rung.spent else ''})")
+          f"{', again after a search on whole steps spent its budget' if rung.spent else ''}"
+          f"{close})")
     if isinstance(found, GuidedMiss):
         empty = np.zeros((0, 2))
         return PushPlan("qp", "infeasible", np.zeros(0), empty, empty, universal,
@@ -482,6 +390,7 @@ def _attempt(t: NDArray[np.float64], setting: Setting, target: NDArray[np.float6
     # rather than this), the distance field's order, the weighted search made again after one spent its budget,
     # the narrow windows
     plan.metrics.update({metric: 1.0 for metric, made in (("guided_widest", rung.widest), ("guided_field", rung.guide),
-                                                          ("guided_spent", rung.spent), ("guided_narrow", rung.narrow))
+                                                          ("guided_spent", rung.spent), ("guided_narrow", rung.narrow),
+                                                          ("guided_close", rung.close))
                          if made})
     return plan

@@ -66,6 +66,17 @@ class _Holds:
                           for e, y in close])
         return bool(shapely.intersects(self.body_zone, shapely.polygons(rings)).any())
 
+    def holds(self, fm: _FaceMoves, p: NDArray[np.float64]) -> bool:
+        """Whether ``fm`` (one face or window) holds the object at ``p`` (2,) [m]: the Omni reaching its contact at
+        both ends of its range, the tool outline there clear of the body zone (one face of :meth:`__call__`)."""
+        yaws = [_heading(e, p) for e in fm.ends]
+        if any(y is None for y in yaws):
+            return False
+        if self.body_zone is None:
+            return True
+        near = float(shapely.distance(self.body_zone, shapely.Point(p)))
+        return not self.touches(fm, [y for y in yaws if y is not None], p, near)
+
     def __call__(self, p: NDArray[np.float64], came: str | None = None, every: bool = False,
                  ) -> list[tuple[str, float, float]]:
         """``(face, direction, half)`` [rad] of the faces that can push the object at ``p``: the middle

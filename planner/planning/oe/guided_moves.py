@@ -115,7 +115,7 @@ def _heading(frame: FaceFrame, p: NDArray[np.float64]) -> float | None:
 
 
 #: Room [m] the search keeps inside the Omni's reach and, but in its attempts on windows where needed
-#: (:data:`~.guided.LAST_ROOM`), between the tool outline and the obstacles.
+#: (:data:`~.guided_rungs.LAST_ROOM`), between the tool outline and the obstacles.
 REACH_SLACK = 5e-4
 
 #: Share of a cone's half-width a step turned back inside it aims at (:func:`_stepped`).

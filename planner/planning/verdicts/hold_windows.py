@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 #: A hold narrower than this [m] on every face is narrower than the guided search's narrowest contact
-#: windows (:data:`~tooltransfer.planner.planning.oe.guided.NARROW` of the default ``guided_contact_span``,
+#: windows (:data:`~tooltransfer.planner.planning.oe.guided_rungs.NARROW` of the default ``guided_contact_span``,
 #: 4 mm): its attempts hold a window only where both of its ends are held.
 NARROW_HOLD = 0.002
 
