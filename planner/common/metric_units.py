@@ -69,12 +69,14 @@ UNITS: dict[str, Unit] = {
     # attempt at the widest share (oe.friction_cone_fraction_max, beyond 0.8: little margin for mu), or
     # from an attempt in the order of a distance field (oe.guided_field), or from the weighted search made
     # again where one on whole steps ended on its budget (guided_spent), or from the attempt on narrow
-    # contact windows where a face is not held as a whole (guided_narrow)
+    # contact windows where a face is not held as a whole (guided_narrow), or from the last attempt, on 1 mm
+    # windows with the tool nearer the obstacles (guided_close)
     "friction_cone_fraction": "",
     "guided_widest": "",
     "guided_field": "",
     "guided_spent": "",
     "guided_narrow": "",
+    "guided_close": "",
     "guided_step": "m",
     "time_guided": "s",
     "guided_expansions": "",

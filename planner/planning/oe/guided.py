@@ -178,8 +178,10 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     the tool outline keeps from the obstacles at the search's nodes (``mixed`` and ``windows`` are not
     taken together: their windows would share keys); ``guide``: the distance to go, instead of the
     straight line, a field of these faces and holds (:func:`guide_field`: a path round an obstacle that
-    the straight line's order leaves unexpanded); ``most``: the most windows per face (odd). A lattice cell
-    is visited once per face (and window), with the contacts its first visit had used."""
+    the straight line's order leaves unexpanded); ``most``: the most windows per face (odd); ``close``: the steps of the
+    ladder's closest attempt (:func:`~.guided_close.close_step`: each ending where its face still holds the puck,
+    shrunk where the whole would not, each on cells as much finer). A lattice cell is visited once per face (and
+    window), with the contacts its first visit had used."""
     if windows and mixed is not None:
         raise ValueError("guided_path takes windows or mixed, not both")
     held, free, by_name = lattice_rules(setting, options, windows, mixed, room, most)
