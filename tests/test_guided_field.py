@@ -110,18 +110,20 @@ def test_a_task_only_the_field_s_order_solves_gets_a_plan_that_executes() -> Non
 def test_the_field_s_attempts_come_last_and_not_after_a_plan_is_kept() -> None:
     """exec60-00054 (l_shape, one obstacle; the push plans of its attempts on windows fit, the switches
     between their faces do not, and after the search it is certified ``switch_separated``): the ladder
-    ends with the attempt in the field's order, on every face's windows, and then the narrow windows' attempt
-    (tests/test_guided_narrow.py); where the caller keeps a plan of an attempt before (one with little room),
-    it makes neither: they are there for tasks with no plan at all."""
+    ends with the attempt in the field's order, on every face's windows, then the narrow windows' attempt
+    (tests/test_guided_narrow.py) and the closest attempt (tests/test_guided_close.py); where the caller keeps a plan
+    of an attempt before (one with little room), it makes none of them: they are there for tasks with no plan at
+    all."""
     task = generated("execution_60.yaml", "exec60-00054")
     every = ladder_plans(task, keep_after_first=False)
     field = [k for k, p in enumerate(every) if p.metrics.get("guided_field")
              or "over a grid of where the faces push" in p.reason]
-    assert field == [len(every) - 2]
-    assert every[-2].status == "solved" and every[-2].metrics["guided_field"] == 1.0  # its switches then fail
-    assert every[-1].metrics.get("guided_narrow") == 1.0 or "on its 2 mm windows" in every[-1].reason
+    assert field == [len(every) - 3]
+    assert every[-3].status == "solved" and every[-3].metrics["guided_field"] == 1.0  # its switches then fail
+    assert every[-2].metrics.get("guided_narrow") == 1.0 or "on its 2 mm windows" in every[-2].reason
+    assert every[-1].metrics.get("guided_close") == 1.0 or "each step ending where its face holds" in every[-1].reason
     kept = ladder_plans(task, keep_after_first=True)
-    assert [(p.status, p.reason) for p in kept] == [(p.status, p.reason) for p in every[:-2]]
+    assert [(p.status, p.reason) for p in kept] == [(p.status, p.reason) for p in every[:-3]]
 
 
 def test_a_miss_says_where_the_field_found_no_way_either() -> None:

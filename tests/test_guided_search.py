@@ -308,29 +308,31 @@ def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the
     after them all, in both cases, the attempt on every face's windows in the distance field's order
     (tests/test_guided_field.py), and where a search on whole steps ended on its budget (verd200-00011's
     do), the weighted search made again (tests/test_guided_spent.py), and last the attempt on narrow windows
-    (tests/test_guided_narrow.py). verd200-00056 is solved by the windows' attempt."""
+    (tests/test_guided_narrow.py), then the closest attempt's (tests/test_guided_close.py). verd200-00056 is solved
+    by the windows' attempt."""
     from guided_ladder import ladder_plans
 
     # three attempts closed at once; the windows' gives a push plan (its approach, at the edge of the
     # Omni's workspace, comes in along the face: assemble.WIDE_TURNS), and the whole plan passes; the two
     # on whole faces and windows where not held miss; the seventh, the field's, gives a push plan too; the
-    # eighth is on narrow windows
+    # eighth is on narrow windows, the ninth the closest attempt's
     plans = ladder_plans(_verdict_task("verd200-00056"))
     ladder = [p.reason or "" for p in plans]
-    assert len(ladder) == 8 and all("its space closed after 1 expansions" in a for a in ladder[:3])
+    assert len(ladder) == 9 and all("its space closed after 1 expansions" in a for a in ladder[:3])
     assert all(" 2 mm steps" not in a and " 2 mm, " not in a for a in ladder[:4])
     assert plans[3].status == "solved" and plans[3].metrics["guided_step"] == pytest.approx(0.004)
     for a, share in zip(ladder[4:6], ("0.8", "0.95"), strict=True):
         assert a.startswith(f"at {share} of the friction cone") and "where that is not held, on its 4 mm windows" in a
     assert plans[6].status == "solved" and plans[6].metrics["guided_field"] == 1.0
     assert plans[7].metrics.get("guided_narrow") == 1.0 or "on its 2 mm windows" in ladder[7]
+    assert plans[8].metrics.get("guided_close") == 1.0 or "each step ending where its face holds" in ladder[8]
     stuck = solve(_verdict_task("verd200-00056"))
     assert stuck.verdict == "solved" and "guided_field" not in stuck.metrics
     assert stuck.metrics["alternatives_tried"] == 4
     moved = solve(_widest(_verdict_task("verd200-00011"), 0.8))
     assert moved.verdict != "solved"
     attempts = (moved.reason or "").split("the guided search: ")[1].split("; then ")
-    assert not any("windows of each face" in a for a in attempts[:-3])
+    assert not any("windows of each face" in a for a in attempts[:5])
     assert "half steps and new runs" in attempts[2] and " 4 mm steps" in attempts[2]
     assert "no path within 4000 expansions of 4 mm steps" in attempts[2]  # on its budget
     assert " 2 mm steps" in attempts[3] and "windows" not in attempts[3]
@@ -339,7 +341,8 @@ def test_the_contact_windows_are_tried_only_where_no_attempt_could_push_from_the
     assert "again after a search on whole steps spent its budget" in attempts[6] and " 4 mm steps" in attempts[6]
     assert "weighted 3" in attempts[6] and "windows" not in attempts[6]
     assert "where that is not held, on its 2 mm windows" in attempts[7]
-    assert len(attempts) == 8
+    assert "where that is not held, on its 1 mm windows" in attempts[8] and "each step ending where" in attempts[8]
+    assert len(attempts) == 9
 
 
 def test_a_passage_whole_steps_miss_is_found_on_fine_steps_and_the_plan_executes() -> None:
