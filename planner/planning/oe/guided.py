@@ -206,6 +206,7 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
     heap: list = [(greed * to_go(start), 0.0, 0, None)]
     nodes: list[tuple[NDArray[np.float64], int, str | None, _Contact]] = [(start, -1, None, _Contact())]
     levels: dict[int, int] = {}  # the closest attempt's nodes at the end of a shrunk step: their level
+    one_run_each = options.model_copy(update={"max_contacts": 1}) if close else options  # its re-contacts: new runs
 
     def cell_of(q: NDArray[np.float64], face: str | None, level: int) -> tuple:
         c = cell / 2 ** level
@@ -232,8 +233,8 @@ def guided_path(setting: Setting, start: NDArray[np.float64], target: NDArray[np
             for ang in close_angles(mid, half) if close else (mid - half, mid, mid + half):
                 level = 0
                 if close:
-                    made = close_step(setting, options, by_name[name], came, touch, p, float(ang), half, step, free,
-                                      lambda q, f: held.holds(by_name[f], q))
+                    made = close_step(setting, one_run_each, by_name[name], came, touch, p, float(ang), half, step,
+                                      free, lambda q, f: held.holds(by_name[f], q))
                     got, level = (None, 0) if made is None else (made[:2], made[2])
                 else:
                     got = _step_of(setting, options, by_name[name], came, touch, p, ang, half, step, more)

@@ -56,7 +56,8 @@ def close_step(setting: Setting, options: QPOptions, fm: _FaceMoves, came: str |
                holds: Callable[[NDArray[np.float64], str], bool]) -> tuple[NDArray[np.float64], _Contact, int] | None:
     """A step of ``fm`` from ``p`` (2,) [m] toward ``ang`` [rad] under the closest attempt's rules (module
     docstring): ``(end, contact after it, level)``, the step ``step / 2**level`` [m] long, or None where no size
-    is one. ``came``, ``touch``: the node's face key and contact; ``half`` [rad]: the cone's half-width the
+    is one. ``options``: the search's, with ``max_contacts`` 1 (each re-contact a run of its own, module
+    docstring); ``came``, ``touch``: the node's face key and contact; ``half`` [rad]: the cone's half-width the
     search uses; ``free``: whether the puck's centre may be at a point; ``holds``: whether a face key holds
     the puck at a point."""
     for level in range(CLOSE_LEVELS):
@@ -64,14 +65,11 @@ def close_step(setting: Setting, options: QPOptions, fm: _FaceMoves, came: str |
         q = _stepped(fm, p, ang, half, size)
         if q is None:
             return None
-        after = _rolled(setting, options, fm, came, touch, p, q, True)
-        if after is None or not free(q):
+        ds = _roll(fm, p, q, setting.mechanics.rolling, setting.radius)
+        if not free(q) or abs(ds) > ROLL_SHARE * fm.width * size / MIN_PIECE:
             continue
-        if abs(_roll(fm, p, q, setting.mechanics.rolling, setting.radius)) > ROLL_SHARE * fm.width * size / MIN_PIECE:
+        after = _rolled(setting, options, fm, came, touch, p, q, True, ds)
+        if after is None or not holds(q, fm.key):
             continue
-        if not holds(q, fm.key):
-            continue
-        if after.count > 1:  # a re-contact: a run of its own
-            after = _Contact(1, min(0.0, after.now), after.now, max(0.0, after.now), after.run + 1)
         return q, after, level
     return None

@@ -66,16 +66,18 @@ class _Holds:
                           for e, y in close])
         return bool(shapely.intersects(self.body_zone, shapely.polygons(rings)).any())
 
-    def holds(self, fm: _FaceMoves, p: NDArray[np.float64]) -> bool:
+    def near(self, p: NDArray[np.float64]) -> float:
+        """The body zone's distance [m] from ``p`` (2,) [m] (infinite without obstacles)."""
+        return math.inf if self.body_zone is None else float(shapely.distance(self.body_zone, shapely.Point(p)))
+
+    def holds(self, fm: _FaceMoves, p: NDArray[np.float64], near: float | None = None) -> bool:
         """Whether ``fm`` (one face or window) holds the object at ``p`` (2,) [m]: the Omni reaching its contact at
-        both ends of its range, the tool outline there clear of the body zone (one face of :meth:`__call__`)."""
+        both ends of its range, the tool outline there clear of the body zone (``near``: its distance from ``p``,
+        :meth:`near`, where already known)."""
         yaws = [_heading(e, p) for e in fm.ends]
         if any(y is None for y in yaws):
             return False
-        if self.body_zone is None:
-            return True
-        near = float(shapely.distance(self.body_zone, shapely.Point(p)))
-        return not self.touches(fm, [y for y in yaws if y is not None], p, near)
+        return not self.touches(fm, [y for y in yaws if y is not None], p, self.near(p) if near is None else near)
 
     def __call__(self, p: NDArray[np.float64], came: str | None = None, every: bool = False,
                  ) -> list[tuple[str, float, float]]:
@@ -83,16 +85,13 @@ class _Holds:
         of their admissible directions in the world and the half-width the search uses of them. A
         window of a face held as a whole (``mixed``) is left out unless the node's face ``came`` is it
         or ``every`` (the target of a last step, which adds no node to the lattice)."""
-        near = math.inf if self.body_zone is None else float(shapely.distance(self.body_zone, shapely.Point(p)))
+        near = self.near(p)
         out = []
         whole: set[str] = set()  # the faces held as a whole here
         for fm in self.faces:
             if fm.window is not None and fm.name in whole and fm.key != came and not every:
                 continue
-            yaws = [_heading(e, p) for e in fm.ends]
-            if any(y is None for y in yaws):
-                continue
-            if self.touches(fm, [y for y in yaws if y is not None], p, near):
+            if not self.holds(fm, p, near):
                 continue
             out.append((fm.key, _pointing(fm, p), CONE * fm.cone.theta_b))
             if fm.window is None:

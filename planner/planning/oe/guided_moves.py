@@ -189,13 +189,15 @@ def _stepped(fm: _FaceMoves, p: NDArray[np.float64], ang: float, half: float,
 
 
 def _rolled(setting: Setting, options: QPOptions, fm: _FaceMoves, came: str | None, touch: _Contact,
-            p: NDArray[np.float64], q: NDArray[np.float64], new_runs: bool = False) -> _Contact | None:
+            p: NDArray[np.float64], q: NDArray[np.float64], new_runs: bool = False,
+            ds: float | None = None) -> _Contact | None:
     """The contact of ``fm`` after it pushes the object from ``p`` to ``q`` (2,) [m]: ``touch`` rolled on
     where the node's face ``came`` is ``fm``'s, a run's first contact where the face changes; where the
     run would need more than ``options.max_contacts`` contacts, a new run of the face (``new_runs``) or
-    None; None where the step alone rolls the contact across more than the face's usable range."""
+    None; None where the step alone rolls the contact across more than the face's usable range. ``ds`` [m]:
+    the step's roll (:func:`_roll`), where already known."""
     own = touch if came == fm.key else _Contact()
-    ds = _roll(fm, p, q, setting.mechanics.rolling, setting.radius)
+    ds = _roll(fm, p, q, setting.mechanics.rolling, setting.radius) if ds is None else ds
     after = own.after(ds, fm.width)
     if after is not None and after.count > options.max_contacts:
         return _Contact(1, min(0.0, ds), ds, max(0.0, ds), own.run + 1) if new_runs else None
