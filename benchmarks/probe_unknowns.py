@@ -1,0 +1,182 @@
+"""How near each unknown's target a search under the planner's own rules comes, the contact's rolling included.
+
+Run after the verdict benchmark (``python benchmarks/bench_verdicts.py --json RESULTS``)::
+
+    python benchmarks/probe_unknowns.py RESULTS.json [--budget 60000] [--workers 2] [--step 0.003]
+
+``check_certificates.py --unknowns`` searches with rules looser than the planner's (no rolling, the cone checked
+where a step starts, the Omni's reach without slack, one contact place): an unknown it reaches may still have no
+plan the fit can follow. This probe searches with the fit's own rules, from the planner's code:
+
+- the holds of :func:`~tooltransfer.planner.planning.oe.guided_holds.lattice_rules` on windows of ``--span``
+  (0.5 mm) of each face, at most ``--windows`` (25) across its contact range less the contact margin: the Omni
+  reaching the contact at both ends of a window (with the search's ``REACH_SLACK``), the tool outline ``--room``
+  from the obstacles there, the puck's centre its radius and the safety margin from them;
+- straight steps of ``--step`` in nine directions across each face's cone at the ladder's middle share of the
+  friction cone (:data:`~tooltransfer.planner.planning.oe.guided_rungs.MIDDLE_SHARE`), turned back inside the
+  cone at the step's end (:func:`~tooltransfer.planner.planning.oe.guided_moves._stepped`), and from within three
+  steps of the target a straight push onto it where the cone holds that direction at both of its ends (the guided
+  search's last step); the target counts as reached within the hard check's goal tolerance (0.1 mm);
+- the contact rolls from the window's middle as the inverse push model has it
+  (:func:`~tooltransfer.planner.planning.oe.guided_moves._roll`), and the step's end must be held by the window
+  of the face the rolled contact lies in.
+
+Each step may be a push of its own (the contact placed anew on any window that holds the puck): looser than the
+planner there, since no re-contact or switch of face is checked. So "reached" does not mean that a plan exists,
+and a closed space proves nothing either (the steps, directions and windows are discrete); what the probe tells is
+whether an unknown is left open by the planner's search or by its rules. Weighted A* (the distance to go
+weighted 2) on cells of half a step, once per face. Per task: the closest approach [mm], the expansions, whether
+the space closed or the budget ran out, the CPU seconds. Single-threaded BLAS. Exit code 0 (a description, not a
+check); 2 for a results file that cannot be read.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import argparse
+import heapq
+import json
+import math
+import sys
+import time
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT / "benchmarks")]
+
+from bench_execution import _task  # noqa: E402
+from bench_verdicts import make_verdict_jobs  # noqa: E402
+
+#: Directions across each face's cone.
+DIRECTIONS = 9
+#: Weight of the distance to go in the search's order.
+GREED = 2.0
+#: How near [m] the target counts as reached: the hard check's goal tolerance (a plan ends on the target).
+REACHED = 1e-4
+
+
+def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, budget: int, room: float,
+          span: float, windows: int) -> tuple[float, int, bool]:
+    """``(closest approach [m], expansions, space closed)`` of the probe's search (module docstring) from ``start``
+    to ``target`` (2,) [m] under the ``qp`` fit's ``options`` (its share of the friction cone and contact
+    margin)."""
+    import numpy as np
+
+    from tooltransfer.planner.planning.oe.guided_holds import lattice_rules
+    from tooltransfer.planner.planning.oe.guided_moves import _roll, _stepped
+
+    held, free, by_key = lattice_rules(setting, options.model_copy(update={"contact_span": span}), True, None,
+                                       room, windows)
+    of_face: dict[str, list[Any]] = {}
+    for fm in by_key.values():
+        of_face.setdefault(fm.name, []).append(fm)
+    cell = 0.5 * step
+
+    def to_go(q: Any) -> float:
+        return float(np.hypot(*(target - q)))
+
+    nodes: list[tuple[Any, str | None]] = [(start, None)]
+    heap = [(GREED * to_go(start), 0.0, 0)]
+    seen: set[tuple[int, int, str | None]] = set()
+    n, best = 0, to_go(start)
+    while heap and n < budget:
+        _, g, k = heapq.heappop(heap)
+        p, came = nodes[k]
+        key = (int(p[0] // cell), int(p[1] // cell), came)
+        if key in seen:
+            continue
+        seen.add(key)
+        n += 1
+        best = min(best, to_go(p))
+        size = min(step, to_go(p))
+        way = math.atan2(float(target[1] - p[1]), float(target[0] - p[0]))
+        for name, mid, half in held(p):
+            fm = by_key[name]
+            angles = [(float(a), size) for a in mid + half * np.linspace(-1.0, 1.0, DIRECTIONS)]
+            if to_go(p) <= 3 * step and abs(math.remainder(way - mid, 2 * math.pi)) <= half:
+                angles.append((way, to_go(p)))  # straight onto the target, as the guided search's last step
+            for ang, length in angles:
+                q = _stepped(fm, p, ang, half, length)
+                if q is None or not free(q) or (length != size and to_go(q) > REACHED):
+                    continue  # (a last step turned back inside the cone misses the target)
+                rolled = 0.5 * (fm.window[0] + fm.window[1]) + _roll(fm, p, q, setting.mechanics.rolling,
+                                                                     setting.radius)
+                ends = [e for e in of_face[fm.name] if e.window[0] - 1e-9 <= rolled <= e.window[1] + 1e-9]
+                if not ends or not held.holds(ends[0], q):
+                    continue
+                if to_go(q) <= REACHED:
+                    return to_go(q), n, False
+                if (int(q[0] // cell), int(q[1] // cell), fm.name) in seen:
+                    continue
+                g2 = g + length
+                nodes.append((q, fm.name))
+                heapq.heappush(heap, (g2 + GREED * to_go(q), g2, len(nodes) - 1))
+    return best, n, not heap
+
+
+def _one(args: tuple[Any, int, float, float, float, int]) -> tuple[str, float, int, bool, float]:
+    """``(task_id, closest [m], expansions, closed, CPU [s])`` of :func:`probe` on one job's task."""
+    import numpy as np
+
+    from tooltransfer.planner.planning.oe.guided_rungs import MIDDLE_SHARE
+    from tooltransfer.planner.planning.setting import setting_from_task, task_skills
+    from tooltransfer.planner.planning.solve import qp_options
+
+    job, budget, step, room, span, windows = args
+    task = _task(job)
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": MIDDLE_SHARE})
+    cpu = time.process_time()
+    d, n, closed = probe(setting, options, np.array(task.start), np.array(task.target), step=step, budget=budget,
+                         room=room, span=span, windows=windows)
+    return job.task_id, d, n, closed, time.process_time() - cpu
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("results", type=Path, help="a bench_verdicts.py --json file")
+    ap.add_argument("--budget", type=int, default=60000, help="the search's expansions per task")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--step", type=float, default=0.003, help="the search's step [m]")
+    ap.add_argument("--room", type=float, default=2.5e-4,
+                    help="how far [m] the tool outline keeps from the obstacles (default: the hard check's)")
+    ap.add_argument("--span", type=float, default=5e-4, help="the contact windows' width [m]")
+    ap.add_argument("--windows", type=int, default=25, help="the most windows per face (odd)")
+    args = ap.parse_args(argv)
+    if not (0.0 < args.step < 0.05 and args.budget > 0 and args.room >= 0.0 and 0.0 < args.span < 0.05
+            and args.windows >= 1 and args.windows % 2 == 1):
+        ap.error("--step and --span must be in (0, 0.05) [m], --budget > 0, --room >= 0 [m], --windows odd")
+    try:
+        data = json.loads(args.results.read_text())
+        rows = [r for r in data["rows"] if r.get("verdict") == "unknown"]
+        names = data["meta"]["batches"]
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        print(f"{args.results}: not a bench_verdicts.py --json file that can be read: {exc}", file=sys.stderr)
+        return 2
+    batches = [Path(b) if Path(b).is_file() else ROOT / "problems" / "batch" / Path(b).name for b in names]
+    jobs = {j.task_id: j for j in make_verdict_jobs(batches, data["meta"].get("count"), 600.0, False)}
+    missing = [r["task_id"] for r in rows if r["task_id"] not in jobs]
+    if missing:
+        print(f"{args.results}: rows not in the run's batch files: {missing}", file=sys.stderr)
+        return 2
+    reached: list[str] = []
+    with ProcessPoolExecutor(args.workers) as pool:
+        todo = [(jobs[r["task_id"]], args.budget, args.step, args.room, args.span, args.windows) for r in rows]
+        for tid, d, n, closed, cpu in pool.map(_one, todo):
+            reached += [tid] if d <= REACHED else []
+            end = "reached" if d <= REACHED else ("space closed" if closed else "on its budget")
+            print(f"{tid}: closest {d * 1e3:.2f} mm after {n} expansions, {end} (CPU {cpu:.1f} s)", flush=True)
+    print(f"\n{len(rows)} unknowns; under the fit's rules with rolling ({args.step * 1e3:g} mm steps, "
+          f"{args.span * 1e3:g} mm windows, the tool {args.room * 1e3:g} mm from the obstacles) the probe reaches "
+          f"{len(reached)}: {reached}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,58 @@
+"""The unknowns' probe (``benchmarks/probe_unknowns.py``): a search under the planner's own rules with the
+contact's rolling, to tell an unknown its search left open from one its rules close."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from test_verdicts import ROOT, generated
+
+from tooltransfer.planner.planning.oe.guided_rungs import MIDDLE_SHARE
+from tooltransfer.planner.planning.setting import setting_from_task, task_skills
+from tooltransfer.planner.planning.solve import qp_options, solve
+
+
+@pytest.fixture
+def probe_module(monkeypatch):
+    monkeypatch.syspath_prepend(str(ROOT / "benchmarks"))
+    import probe_unknowns
+
+    return probe_unknowns
+
+
+def _probe(module, batch: str, task_id: str, budget: int = 2000) -> tuple[float, int, bool]:
+    task = generated(batch, task_id)
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": MIDDLE_SHARE})
+    return module.probe(setting, options, np.array(task.start), np.array(task.target), step=0.003, budget=budget,
+                        room=2.5e-4, span=5e-4, windows=25)
+
+
+def test_the_probe_reaches_a_target_the_planner_reaches(probe_module) -> None:
+    """exec60-00001 (no obstacle) is solved; the probe ends on its target (within the goal tolerance) too."""
+    task = generated("execution_60.yaml", "exec60-00001")
+    assert solve(task).status == "solved"
+    d, n, closed = _probe(probe_module, "execution_60.yaml", "exec60-00001")
+    assert d <= probe_module.REACHED and n > 0 and not closed
+
+
+def test_the_probe_closes_its_space_on_an_unknown_whose_way_needs_the_edge_of_a_cone(probe_module) -> None:
+    """verd200-00172 (unknown): its only way needs the ``inclined`` face's tool-file cone within 0.15 degrees of
+    its edge (benchmarks/README.md); the probe, at the ladder's middle share, closes its space far from it."""
+    d, n, closed = _probe(probe_module, "verdicts_200.yaml", "verd200-00172")
+    assert closed and d > 0.05 and n < 2000
+
+
+def test_the_probe_refuses_bad_input(probe_module, tmp_path, capsys) -> None:
+    """A results file that cannot be read, or settings out of range: exit code 2 with the reason."""
+    assert probe_module.main([str(tmp_path / "none.json")]) == 2
+    assert "none.json: not a bench_verdicts.py --json file" in capsys.readouterr().err
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"rows": []}))
+    assert probe_module.main([str(bad)]) == 2
+    for extra in (["--step", "0"], ["--windows", "4"], ["--room", "-1"]):
+        with pytest.raises(SystemExit) as err:
+            probe_module.main([str(bad), *extra])
+        assert err.value.code == 2
