@@ -155,6 +155,26 @@ def make_verdict_jobs(batches: Sequence[Path], count: int | None, timeout: float
     return out
 
 
+def rows_with_verdict(results: Path, verdict: str) -> tuple[list[Row], dict[str, VerdictJob]]:
+    """The rows of a ``--json`` results file with ``verdict``, and the jobs of the run by task id (its batch files,
+    else the files of that name in this checkout: a run made elsewhere). Raises ValueError with what is wrong (the
+    file unreadable, or rows not in the run's batch files)."""
+    import json
+
+    try:
+        data = json.loads(results.read_text())
+        rows = [r for r in data["rows"] if r.get("verdict") == verdict]
+        names, count = data["meta"]["batches"], data["meta"].get("count")
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+        raise ValueError(f"{results}: not a bench_verdicts.py --json file that can be read: {exc}") from exc
+    batches = [Path(b) if Path(b).is_file() else ROOT / "problems" / "batch" / Path(b).name for b in names]
+    jobs = {j.task_id: j for j in make_verdict_jobs(batches, count, 600.0, False)}
+    missing = [r["task_id"] for r in rows if r["task_id"] not in jobs]
+    if missing:
+        raise ValueError(f"{results}: rows not in the run's batch files: {missing}")
+    return rows, jobs
+
+
 def _verdict_of(r: Row) -> str:
     return r.get("verdict") or "error"
 

@@ -67,7 +67,6 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
-import json
 import sys
 import time
 from collections.abc import Sequence
@@ -79,7 +78,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "benchmarks"), str(ROOT / "tests")]
 
 from bench_execution import _task  # noqa: E402
-from bench_verdicts import make_verdict_jobs  # noqa: E402
+from bench_verdicts import rows_with_verdict  # noqa: E402
 
 #: The dense search's settings (``--dense``): nine directions in each cone, every one of 13 contact
 #: places, cells of 0.75 mm (the default search: five directions, every third of the yaws that hold the
@@ -271,20 +270,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                  f"got {args.goal_disc}")
     if not 0.0 < args.share <= 1.0 or not args.room >= 0.0:
         ap.error(f"--share must be in (0, 1] and --room >= 0 [m], got {args.share} and {args.room}")
-    try:
-        data = json.loads(args.results.read_text())
-    except (OSError, ValueError) as exc:
-        print(f"{args.results}: not a bench_verdicts.py --json file that can be read: {exc}", file=sys.stderr)
-        return 2
     verdict = "unknown" if args.unknowns else "infeasible"
-    rows = [r for r in data["rows"] if r.get("verdict") == verdict]
-    # the run's batch files, else the files of that name in this checkout (a run made elsewhere)
-    batches = [Path(b) if Path(b).is_file() else ROOT / "problems" / "batch" / Path(b).name
-               for b in data["meta"]["batches"]]
-    jobs = {j.task_id: j for j in make_verdict_jobs(batches, data["meta"].get("count"), 600.0, False)}
-    missing = [r["task_id"] for r in rows if r["task_id"] not in jobs]
-    if missing:
-        print(f"{args.results}: rows not in the run's batch files: {missing}", file=sys.stderr)
+    try:
+        rows, jobs = rows_with_verdict(args.results, verdict)
+    except ValueError as exc:
+        print(exc, file=sys.stderr)
         return 2
     kind = {r["task_id"]: r.get("evidence_kind") for r in rows}
     found: list[tuple[str, float, float]] = []

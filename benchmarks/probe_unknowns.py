@@ -38,7 +38,6 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
 import heapq
-import json
 import math
 import sys
 import time
@@ -51,7 +50,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "benchmarks")]
 
 from bench_execution import _task  # noqa: E402
-from bench_verdicts import make_verdict_jobs  # noqa: E402
+from bench_verdicts import rows_with_verdict  # noqa: E402
 
 #: Directions across each face's cone.
 DIRECTIONS = 9
@@ -93,17 +92,19 @@ def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, b
             continue
         seen.add(key)
         n += 1
-        best = min(best, to_go(p))
-        size = min(step, to_go(p))
+        left = to_go(p)
+        best = min(best, left)
+        size = min(step, left)
         way = math.atan2(float(target[1] - p[1]), float(target[0] - p[0]))
         for name, mid, half in held(p):
             fm = by_key[name]
-            angles = [(float(a), size) for a in mid + half * np.linspace(-1.0, 1.0, DIRECTIONS)]
-            if to_go(p) <= 3 * step and abs(math.remainder(way - mid, 2 * math.pi)) <= half:
-                angles.append((way, to_go(p)))  # straight onto the target, as the guided search's last step
-            for ang, length in angles:
+            angles = [(float(a), size, False) for a in mid + half * np.linspace(-1.0, 1.0, DIRECTIONS)]
+            if left <= 3 * step and abs(math.remainder(way - mid, 2 * math.pi)) <= half:
+                # straight onto the target, as the guided search's last step (nearer than a step: a step like the rest)
+                angles.append((way, left, left > step))
+            for ang, length, last in angles:
                 q = _stepped(fm, p, ang, half, length)
-                if q is None or not free(q) or (length != size and to_go(q) > REACHED):
+                if q is None or not free(q) or (last and to_go(q) > REACHED):
                     continue  # (a last step turned back inside the cone misses the target)
                 rolled = 0.5 * (fm.window[0] + fm.window[1]) + _roll(fm, p, q, setting.mechanics.rolling,
                                                                      setting.radius)
@@ -153,17 +154,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             and args.windows >= 1 and args.windows % 2 == 1):
         ap.error("--step and --span must be in (0, 0.05) [m], --budget > 0, --room >= 0 [m], --windows odd")
     try:
-        data = json.loads(args.results.read_text())
-        rows = [r for r in data["rows"] if r.get("verdict") == "unknown"]
-        names = data["meta"]["batches"]
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        print(f"{args.results}: not a bench_verdicts.py --json file that can be read: {exc}", file=sys.stderr)
-        return 2
-    batches = [Path(b) if Path(b).is_file() else ROOT / "problems" / "batch" / Path(b).name for b in names]
-    jobs = {j.task_id: j for j in make_verdict_jobs(batches, data["meta"].get("count"), 600.0, False)}
-    missing = [r["task_id"] for r in rows if r["task_id"] not in jobs]
-    if missing:
-        print(f"{args.results}: rows not in the run's batch files: {missing}", file=sys.stderr)
+        rows, jobs = rows_with_verdict(args.results, "unknown")
+    except ValueError as exc:
+        print(exc, file=sys.stderr)
         return 2
     reached: list[str] = []
     with ProcessPoolExecutor(args.workers) as pool:
