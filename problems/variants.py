@@ -11,7 +11,7 @@ from typing import Any, Literal, get_args
 #: The OE condensing variants a task may name (``variants.oe``, ``tooltransfer solve --oe``).
 OEVariant = Literal["mapping", "qp"]
 #: The switch variants a task may name (``variants.ss``, ``tooltransfer solve --ss``).
-SSVariant = Literal["arch", "dmp", "opt"]
+SSVariant = Literal["arch", "dmp", "grid", "opt"]
 #: The SS skill's virtual object motions (``ss.virtual_motion``, ``tooltransfer learn --virtual``).
 VirtualMotion = Literal["arch", "line"]
 #: Default virtual object motion of the SS skill (``ss.virtual_motion``).

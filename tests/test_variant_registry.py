@@ -23,6 +23,7 @@ NOT_VARIANTS = {
     "kind != 'arch'",  # the SS skill's virtual object motion, "arch" or "line" (learning/virtual_motion.py)
     "init == 'dmp'",  # the NLP's initial path: the recombined one (planning/ss/opt_variant.py)
     "self.init not in ('auto', 'dmp')",  # the same option's validation
+    "which == 'grid'",  # a QP's rows on its time grid or on the dense one (dmp/qp/problem.py)
 }
 #: The registry module, and modules still to move onto it (none left), by file name.
 SKIPPED = {"variant_registry.py"}
@@ -75,15 +76,18 @@ def test_an_unknown_variant_lists_the_registered_ones() -> None:
     with pytest.raises(reg.UnknownVariantError, match="registered: mapping, qp") as oe:
         reg.oe_variant("sqp")
     assert (oe.value.kind, oe.value.name, oe.value.registered) == ("oe", "sqp", ("mapping", "qp"))
-    with pytest.raises(reg.UnknownVariantError, match="registered: arch, dmp, opt"):
+    with pytest.raises(reg.UnknownVariantError, match="registered: arch, grid, dmp, opt"):
         reg.switch_planner("spline", None, None, SSOptions())  # type: ignore[arg-type]
     assert isinstance(oe.value, ValueError)
 
 
 def test_the_one_fallback_rule() -> None:
-    """``opt`` falls back to ``arch`` (as ``solve`` always did); ``dmp`` reports what recombination gives."""
-    assert {n: v.fallback for n, v in reg.SS_VARIANTS.items()} == {"arch": None, "dmp": None, "opt": "arch"}
-    assert {n: reg.needs_ss_skill(n) for n in reg.SS_VARIANTS} == {"arch": False, "dmp": True, "opt": True}
+    """``opt`` falls back to ``arch`` (as ``solve`` always did), then to ``grid``; ``dmp`` reports what
+    recombination gives."""
+    assert {n: v.fallbacks for n, v in reg.SS_VARIANTS.items()} == {"arch": (), "grid": (), "dmp": (),
+                                                                   "opt": ("arch", "grid")}
+    assert {n: reg.needs_ss_skill(n) for n in reg.SS_VARIANTS} == {"arch": False, "grid": False, "dmp": True,
+                                                                   "opt": True}
 
 
 def test_a_skill_variant_without_a_skill_is_refused() -> None:

@@ -33,6 +33,7 @@ from tooltransfer.planner.planning.oe.qp_options import QPOptions
 from tooltransfer.planner.planning.oe.qp_variant import condense_qp
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.ss import SwitchSkill, optimize, recombine
+from tooltransfer.planner.planning.ss.grid_variant import grid_planner
 from tooltransfer.planner.planning.switches import SkillSolver, arch_planner, dmp_planner, opt_planner, with_fallback
 from tooltransfer.problems.task import OEOptions, SSOptions
 
@@ -88,7 +89,7 @@ class SSVariant:
         name: the name a task gives (``variants.ss``).
         planner: its switch-planner factory (:data:`SwitchFactory`).
         needs_skill: whether it needs the SS skill (learned from the demonstrations).
-        fallback: the variant whose path is taken where this one finds none, or None.
+        fallbacks: the variants whose paths are taken, in turn, where this one finds none.
         solve: how a skill variant solves one :class:`~tooltransfer.planner.planning.ss.SwitchTask` with its
             default options (``solve(skill, task) -> SwitchPath``, as the figures draw it); None for
             a variant without a skill.
@@ -97,7 +98,7 @@ class SSVariant:
     name: str
     planner: SwitchFactory
     needs_skill: bool
-    fallback: str | None = None
+    fallbacks: tuple[str, ...] = ()
     solve: SkillSolver | None = None
 
 
@@ -114,13 +115,16 @@ OE_VARIANTS: Mapping[str, OEVariant] = MappingProxyType({
 })
 
 #: The switch-path variants by name. ``opt``'s NLP is local: where it finds no path, the geometric
-#: ``arch`` does; ``dmp`` reports what recombination gives, as the paper's method would.
+#: ``arch`` does, and where that finds none either, the ``grid`` search over all the tool's placements;
+#: ``dmp`` reports what recombination gives, as the paper's method would.
 SS_VARIANTS: Mapping[str, SSVariant] = MappingProxyType({
     "arch": SSVariant("arch", lambda setting, skill, ss: arch_planner(setting, ss.clearance), needs_skill=False),
+    "grid": SSVariant("grid", lambda setting, skill, ss: grid_planner(setting, ss.clearance), needs_skill=False),
     "dmp": SSVariant("dmp", lambda setting, skill, ss: dmp_planner(_skill("dmp", skill), setting), needs_skill=True,
                      solve=recombine),
     "opt": SSVariant("opt", lambda setting, skill, ss: opt_planner(_skill("opt", skill), setting, ss.clearance,
-                                                                   ss.n_knots), needs_skill=True, fallback="arch",
+                                                                   ss.n_knots), needs_skill=True,
+                     fallbacks=("arch", "grid"),
                      solve=lambda skill, task: optimize(skill, task)),
 })
 
@@ -143,17 +147,13 @@ def ss_variant(name: str) -> SSVariant:
 
 def needs_ss_skill(name: str) -> bool:
     """Whether the switch variant ``name`` (or a variant it falls back to) needs the SS skill."""
-    v: SSVariant | None = ss_variant(name)
-    while v is not None:
-        if v.needs_skill:
-            return True
-        v = ss_variant(v.fallback) if v.fallback else None
-    return False
+    v = ss_variant(name)
+    return v.needs_skill or any(needs_ss_skill(f) for f in v.fallbacks)
 
 
 def switch_planner(name: str, setting: Setting, skill: SwitchSkill | None, ss: SSOptions) -> SwitchPlanner:
-    """The switch planner of variant ``name`` in ``setting``, wrapped with its fallback chain
-    (:attr:`SSVariant.fallback`, :func:`tooltransfer.planner.planning.switches.with_fallback`).
+    """The switch planner of variant ``name`` in ``setting``, wrapped with its fallbacks in turn
+    (:attr:`SSVariant.fallbacks`, :func:`tooltransfer.planner.planning.switches.with_fallback`).
 
     Raises:
         UnknownVariantError: ``name`` (or a fallback) is not registered.
@@ -161,8 +161,8 @@ def switch_planner(name: str, setting: Setting, skill: SwitchSkill | None, ss: S
     """
     v = ss_variant(name)
     planner = v.planner(setting, skill, ss)
-    if v.fallback is not None:
-        planner = with_fallback(planner, switch_planner(v.fallback, setting, skill, ss), v.fallback)
+    for fallback in v.fallbacks:
+        planner = with_fallback(planner, switch_planner(fallback, setting, skill, ss), fallback)
     return planner
 
 

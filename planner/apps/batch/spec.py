@@ -105,7 +105,7 @@ class VariantGrid(_Model):
     """Variants run on every task (their product)."""
 
     oe: list[Literal["qp", "mapping"]] = Field(["qp"], min_length=1, max_length=8)
-    ss: list[Literal["arch", "dmp", "opt"]] = Field(["arch"], min_length=1, max_length=8)
+    ss: list[Literal["arch", "dmp", "grid", "opt"]] = Field(["arch"], min_length=1, max_length=8)
 
     def pairs(self) -> list[tuple[str, str]]:
         """``(oe, ss)`` pairs, in a fixed order."""
