@@ -1,6 +1,6 @@
 """Switches the planner can make, before and after the ``grid`` fallback, one command::
 
-    python benchmarks/bench_switch_grid.py [--tasks 40] [--per-task 3] [--seed 20261207]
+    python benchmarks/bench_switch_grid.py [--tasks 40] [--per-task 5] [--seed 20261207]
 
 Switches drawn at random on tasks of the verdict benchmark's batch (``problems/batch/verdicts_200.yaml``): the
 puck anywhere the Omni reaches (its waist angle and reach drawn uniformly in the joints' box, the puck clear of
@@ -146,6 +146,9 @@ def main(argv: list[str] | None = None) -> int:
     before = tally["opt"] + tally["arch (opt found none)"]
     after = before + tally["grid (opt and arch found none)"]
     print(f"\n{n} switches on {args.tasks} tasks (seed {args.seed})")
+    if n == 0:
+        print("  none drawn: nothing to measure")
+        return 0
     for label, k in (("opt -> arch (before)", before), ("opt -> arch -> grid (now)", after)):
         lo, hi = wilson(k, n)
         print(f"  {label:28s} {k:4d} / {n} = {100 * k / n:5.1f} % (Wilson 95 %: {100 * lo:.1f}-{100 * hi:.1f} %)")

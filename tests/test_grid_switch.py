@@ -21,7 +21,7 @@ from test_verdicts import contact_pose, generated
 
 import tooltransfer.planner.planning.variant_registry as reg
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
-from tooltransfer.planner.planning.ss.grid_variant import grid_planner, placement_of
+from tooltransfer.planner.planning.ss.grid_variant import LEAVE_REACH, grid_planner
 from tooltransfer.planner.planning.switches import arch_planner
 from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
 from tooltransfer.problems.task import SSOptions
@@ -54,13 +54,16 @@ def _joints(sec, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return a, u
 
 
-def _check_path(setting, centre: np.ndarray, xy: np.ndarray, pose_a: np.ndarray, pose_b: np.ndarray) -> None:
-    """The switch path ``xy`` (K, 2) [m] holds the rules, checked here: it starts and ends at the contact poses;
-    every sample is within the Omni's joints; no tool point moves more than 0.3 mm between samples; the
-    outline never enters the puck by more than 10 um (the hard check's bound; the two contacts touch it) nor
-    comes within ``TOOL_MARGIN`` of an obstacle, and away from the contacts it keeps off the puck."""
+def _check_path(setting, centre: np.ndarray, xy: np.ndarray, pose_a: np.ndarray, pose_b: np.ndarray,
+                clearance: float) -> None:
+    """The switch path ``xy`` (K, 2) [m] holds the rules, checked here at its samples: it starts and ends at the
+    contact poses; every sample is within the Omni's joints; no tool point moves more than 0.3 mm between
+    samples; the outline never enters the puck by more than 10 um (the hard check's bound; the two contacts
+    touch it) nor comes within ``TOOL_MARGIN`` of an obstacle; it keeps ``clearance`` [m] from the puck but along
+    the leaving moves next to either end (:data:`LEAVE_REACH` in the placements' metric; the tool's origin moves
+    at most sqrt(2) times that), and gets that far from it."""
     sec = reach_sector(setting.platform)
-    assert np.allclose(xy[0], pose_a[:2], atol=1e-9) and np.allclose(xy[-1], pose_b[:2], atol=1e-9)
+    assert np.allclose(xy[0], pose_a[:2], atol=1e-12) and np.allclose(xy[-1], pose_b[:2], atol=1e-12)
     a, u = _joints(sec, xy)
     q1 = np.remainder(a - sec.base_yaw + math.pi, 2 * math.pi) - math.pi
     assert np.all((q1 >= sec.q1_range[0]) & (q1 <= sec.q1_range[1]))
@@ -70,13 +73,16 @@ def _check_path(setting, centre: np.ndarray, xy: np.ndarray, pose_a: np.ndarray,
     moves = [float(np.max(np.hypot(*(q - p).T))) for p, q in itertools.pairwise(placed)]
     assert max(moves) <= 3e-4
     outlines = shapely.polygons(np.array(placed))
-    puck_in = shapely.Point(centre).buffer(setting.radius - 1e-5 - max(moves), quad_segs=128)
-    assert not shapely.intersects(outlines, puck_in).any()
-    walls = [o.polygon(256) if isinstance(o, Disc) else o for o in setting.obstacles]
-    for w in walls:
-        assert float(shapely.distance(outlines, w).min()) >= TOOL_MARGIN - max(moves)
-    middle = outlines[len(outlines) // 4: -len(outlines) // 4]
-    assert float(shapely.distance(middle, shapely.Point(centre)).min()) > setting.radius
+    gap = shapely.distance(outlines, shapely.Point(centre)) - setting.radius  # exact: 0 - r inside the outline
+    assert gap.min() >= -1e-5
+    for o in setting.obstacles:
+        near = (shapely.distance(outlines, shapely.Point(o.centre)) - o.radius if isinstance(o, Disc)
+                else shapely.distance(outlines, o))
+        assert near.min() >= TOOL_MARGIN - 1e-9
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+    from_end = np.minimum(along, along[-1] - along)
+    assert np.all(from_end[gap < clearance - 1e-6] <= math.sqrt(2) * LEAVE_REACH)
+    assert gap.max() >= clearance - 1e-6
 
 
 @pytest.mark.parametrize(("task_id", "where", "faces"), [
@@ -94,8 +100,9 @@ def test_the_grid_finds_a_switch_the_arch_gives_up_on_and_its_path_holds_the_rul
     assert arch.status == "infeasible" and "out of reach" in arch.reason
     found = grid_planner(setting, task.ss.clearance)(centre, fa.name, pa, fb.name, pb)
     assert found.status == "solved", found.reason
-    _check_path(setting, centre, found.xy, pa, pb)
+    _check_path(setting, centre, found.xy, pa, pb, task.ss.clearance)
     assert found.object_penetration <= 1e-5 and found.obstacle_clearance >= TOOL_MARGIN
+    assert found.object_clearance >= task.ss.clearance - 1e-6
 
 
 def test_the_grid_refuses_a_switch_the_brute_force_grid_separates() -> None:
@@ -112,9 +119,10 @@ def test_the_grid_refuses_a_switch_the_brute_force_grid_separates() -> None:
     assert "complete on its grids only" in found.reason
     label, qs, us = _grid_pieces(setting, centre, 6e-4)
     pieces = []
-    for p in (pa, pb):
-        q1, u = placement_of(sec, p)
+    for face, s in ((fa, 0.52), (fb, 0.0)):
+        _, u, q1 = contact_pose(sec, face, centre, setting.radius, s)
         i, j = np.searchsorted(qs, q1), np.searchsorted(us, u)
+        assert 0 < i < qs.size and 0 < j < us.size
         pieces.append({int(label[x, y]) for x in (i - 1, i) for y in (j - 1, j) if label[x, y] >= 0})
     assert pieces[0] and pieces[1] and not pieces[0] & pieces[1]
 
@@ -139,7 +147,7 @@ def test_a_contact_pose_in_an_obstacle_is_refused_before_any_search() -> None:
 
 def test_opt_falls_back_to_the_arch_then_to_the_grid() -> None:
     """The registry's chain: where the ``opt`` NLP (local) and ``arch`` find no path, the grid's is taken,
-    marked a fallback, and the reason of neither is lost."""
+    marked a fallback."""
     task, setting = _world("exec60-00012")
     skill = task_skills(task).ss
     sec = reach_sector(setting.platform)
@@ -152,7 +160,7 @@ def test_opt_falls_back_to_the_arch_then_to_the_grid() -> None:
     assert first.status != "solved"
     found = alone(centre, fa.name, pa, fb.name, pb)
     assert found.status == "solved" and found.variant == "grid" and found.fallback
-    _check_path(setting, centre, found.xy, pa, pb)
+    _check_path(setting, centre, found.xy, pa, pb, SSOptions().clearance)
 
 
 def test_the_switch_benchmark_runs_and_prints_both_chains(capsys) -> None:

@@ -76,7 +76,7 @@ def test_an_unknown_variant_lists_the_registered_ones() -> None:
     with pytest.raises(reg.UnknownVariantError, match="registered: mapping, qp") as oe:
         reg.oe_variant("sqp")
     assert (oe.value.kind, oe.value.name, oe.value.registered) == ("oe", "sqp", ("mapping", "qp"))
-    with pytest.raises(reg.UnknownVariantError, match="registered: arch, grid, dmp, opt"):
+    with pytest.raises(reg.UnknownVariantError, match="registered: arch, dmp, grid, opt"):
         reg.switch_planner("spline", None, None, SSOptions())  # type: ignore[arg-type]
     assert isinstance(oe.value, ValueError)
 
@@ -84,9 +84,9 @@ def test_an_unknown_variant_lists_the_registered_ones() -> None:
 def test_the_one_fallback_rule() -> None:
     """``opt`` falls back to ``arch`` (as ``solve`` always did), then to ``grid``; ``dmp`` reports what
     recombination gives."""
-    assert {n: v.fallbacks for n, v in reg.SS_VARIANTS.items()} == {"arch": (), "grid": (), "dmp": (),
+    assert {n: v.fallbacks for n, v in reg.SS_VARIANTS.items()} == {"arch": (), "dmp": (), "grid": (),
                                                                    "opt": ("arch", "grid")}
-    assert {n: reg.needs_ss_skill(n) for n in reg.SS_VARIANTS} == {"arch": False, "grid": False, "dmp": True,
+    assert {n: reg.needs_ss_skill(n) for n in reg.SS_VARIANTS} == {"arch": False, "dmp": True, "grid": False,
                                                                    "opt": True}
 
 

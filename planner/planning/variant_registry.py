@@ -119,9 +119,9 @@ OE_VARIANTS: Mapping[str, OEVariant] = MappingProxyType({
 #: ``dmp`` reports what recombination gives, as the paper's method would.
 SS_VARIANTS: Mapping[str, SSVariant] = MappingProxyType({
     "arch": SSVariant("arch", lambda setting, skill, ss: arch_planner(setting, ss.clearance), needs_skill=False),
-    "grid": SSVariant("grid", lambda setting, skill, ss: grid_planner(setting, ss.clearance), needs_skill=False),
     "dmp": SSVariant("dmp", lambda setting, skill, ss: dmp_planner(_skill("dmp", skill), setting), needs_skill=True,
                      solve=recombine),
+    "grid": SSVariant("grid", lambda setting, skill, ss: grid_planner(setting, ss.clearance), needs_skill=False),
     "opt": SSVariant("opt", lambda setting, skill, ss: opt_planner(_skill("opt", skill), setting, ss.clearance,
                                                                    ss.n_knots), needs_skill=True,
                      fallbacks=("arch", "grid"),

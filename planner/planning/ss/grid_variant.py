@@ -6,28 +6,32 @@ On the Omni the tool's placement in the table plane has two degrees of freedom, 
 the arm-plane reach ``u`` (:mod:`tooltransfer.planner.planning.verdicts.switch_space`; the joints allow the
 box ``q1_range x u_range``). So a switch is a path in that box, and a grid over it is searched whole:
 
-1. the grid's neighbours along an axis are at most ``move`` [m] apart at any tool point (``dq = move / r_max``,
-   ``du = move``); a point is *free* where the tool's outline, placed there, keeps ``clearance + move`` from
-   the object and ``TOOL_MARGIN + move`` from the obstacles (shapely), so that a move between two free
-   neighbours keeps ``clearance`` and ``TOOL_MARGIN``. The two contact poses touch the object, so they are
-   not free: each leaves (and the other is reached) by a straight move in ``(q1, u)`` to a free point
-   nearby, swept exactly (:func:`~tooltransfer.planner.planning.ss.verify.sweep_checks`);
+1. the grid's neighbours along an axis are at most ``step <= move`` [m] apart at any tool point
+   (``dq <= move / r_max``, ``du <= move``); a point is *free* where the tool's outline, placed there, keeps
+   ``clearance + step`` from the object and ``TOOL_MARGIN + step`` from the obstacles (shapely, on polygons
+   that hold the round shapes), so that a move between two free neighbours, each point of which is within
+   ``step`` of one of its ends, keeps ``clearance`` and ``TOOL_MARGIN``. The two contact poses touch the
+   object, so they are not free: each leaves (and the other is reached) by a straight move in ``(q1, u)`` to
+   a free point nearby, swept exactly (:func:`~tooltransfer.planner.planning.ss.verify.sweep_checks`);
 2. the shortest way through the free points (8 neighbours, lengths in metres of tool motion) joins the two
-   sets of verified leaving moves (scipy's Dijkstra), tried at the switch's ``clearance`` (the ``opt`` NLP's
-   margin) and then at :data:`CLEARANCES` where that leaves no way. Not less: a way that passes the object
-   closer is made exactly as planned but does not survive the object's drift in an open-loop run (a way
-   0.5 mm from it, tried, knocked the object of ``verd200-00143`` 12 mm off its target in MuJoCo);
+   sets of verified leaving moves (scipy's Dijkstra). ``clearance`` is the task's ``ss.clearance`` (the
+   ``opt`` NLP's margin), kept whole: a way nearer the object is made exactly as planned but does not survive
+   the object's drift in an open-loop run (a way 0.5 mm from it, tried, knocked the object of
+   ``verd200-00143`` 12 mm off its target in MuJoCo);
 3. the way is shortened where a straight move in ``(q1, u)`` between two of its points keeps free, and
    sampled at most :data:`SAMPLE` [m] apart in the box (a straight move in ``(q1, u)`` stays in the box: the
    whole path keeps within the Omni's joints, and the assembly's interpolation between samples deviates
    from the arc by under a micrometre);
 4. the whole path is measured exactly like every switch path: the swept outline against the object
-   (penetration at most ``touch_tol``, the contacts touch) and the obstacles (at least ``TOOL_MARGIN``), and
-   the reach at every sample (:func:`~tooltransfer.tools.omni.ik.joint_path`). A path that fails is never
-   returned: the result is ``infeasible`` with what failed.
+   (penetration at most :data:`TOUCH_TOL`, the contacts touch; ``clearance`` between the two leaving moves)
+   and the obstacles (at least ``TOOL_MARGIN``), and the reach at every sample
+   (:func:`~tooltransfer.tools.omni.ik.joint_path`); its ends are the contact poses themselves (a pose whose
+   heading is not the Omni's is refused). A path that fails is never returned: the result is ``infeasible``
+   with what failed.
 
-The search is complete on its grid: where it finds nothing, finer grids or other clearances may, and the
-reason says so (the planner refuses the switch; it proves nothing: certificates use
+The search is complete on its grids between the leaving moves, which are straight and at most
+:data:`LEAVE_REACH` long: where it finds nothing, finer grids or other leaving moves may, and the reason says so
+(the planner refuses the switch; it proves nothing: certificates use
 :mod:`tooltransfer.planner.planning.verdicts.switch_space`).
 """
 
@@ -55,13 +59,12 @@ from tooltransfer.tools.pose import Pose2D
 
 #: Grids tried in turn: the most [m] any tool point moves between neighbouring points.
 MOVES = (1e-3, 5e-4)
-#: Object clearances [m] tried in turn after the switch's own (a way at the full one is preferred; module
-#: docstring, step 2, why not less).
-CLEARANCES = (1e-3,)
+#: Segments per quarter circle of the buffers that make the blocked placements (grown to hold the round shapes).
+QUAD_SEGS = 32
 #: Largest distance [m] any tool point moves between two samples of the returned path.
 SAMPLE = 2.5e-4
 #: How far [m] (in tool motion) from a contact pose its leaving moves may end.
-LEAVE_REACH = 0.012
+LEAVE_REACH = 0.02
 #: Leaving moves tried per contact pose (the nearest free points first, spread over directions).
 LEAVE_TRIES = 48
 #: Penetration depth [m] accepted as touching at the two contacts (as the ``opt`` variant's ``touch_tol``).
@@ -92,7 +95,8 @@ class _Grid:
 
 
 def placement_of(sector: ReachSector, pose: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The ``(q1, u)`` (2,) of the tool pose ``(x, y, yaw)`` (heading the Omni's: ``yaw = a - pi/2``)."""
+    """The waist angle ``q1`` [rad] and reach ``u`` [m], (2,), of the tool pose ``(x [m], y [m], yaw [rad])``
+    whose heading is the Omni's (``yaw = base_yaw + q1 - pi/2``)."""
     a = float(pose[2]) + math.pi / 2
     q1 = math.remainder(a - sector.base_yaw, 2 * math.pi)
     u = (pose[0] - sector.centre[0]) * math.cos(a) + (pose[1] - sector.centre[1]) * math.sin(a)
@@ -100,6 +104,8 @@ def placement_of(sector: ReachSector, pose: NDArray[np.float64]) -> NDArray[np.f
 
 
 def _outlines(ring: NDArray[np.float64], xy: NDArray[np.float64], yaw: NDArray[np.float64]) -> NDArray:
+    """The outline ``ring`` (V, 2) [tool frame, m] placed at origins ``xy`` (K, 2) [m] and headings ``yaw`` (K,)
+    [rad]: (K,) shapely polygons."""
     c, s = np.cos(yaw), np.sin(yaw)
     rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (K, 2, 2)
     return shapely.polygons(np.einsum("kij,vj->kvi", rot, ring) + xy[:, None, :])
@@ -111,9 +117,12 @@ def _blocked(setting: Setting, grid: _Grid, obj: NDArray[np.float64], clearance:
     the step, so a move between free points keeps both."""
     ring = np.asarray(setting.tool.outline.exterior.coords)
     step = float(np.max(np.diff(grid.scaled(np.column_stack([grid.qs[:2], grid.us[:2]])), axis=0)))
-    puck = shapely.Point(obj).buffer(setting.radius + clearance + step, quad_segs=64)
-    walls = [o.polygon(128) if isinstance(o, Disc) else o for o in setting.obstacles]
-    shapes = shapely.union_all([puck, *(w.buffer(TOOL_MARGIN + step) for w in walls)])
+    grow = 1.0 / math.cos(math.pi / (4 * QUAD_SEGS))  # the buffers' polygons hold the true round shapes
+    puck = shapely.Point(obj).buffer(grow * (setting.radius + clearance + step), quad_segs=QUAD_SEGS)
+    walls = [shapely.Point(o.centre).buffer(grow * (o.radius + TOOL_MARGIN + step), quad_segs=QUAD_SEGS)
+             if isinstance(o, Disc) else o.buffer(grow * (TOOL_MARGIN + step), quad_segs=QUAD_SEGS)
+             for o in setting.obstacles]
+    shapes = shapely.union_all([puck, *walls])
     shapely.prepare(shapes)
     out = np.zeros((grid.qs.size, grid.us.size), dtype=bool)
     for i, q in enumerate(grid.qs):
@@ -133,16 +142,14 @@ def _dense(grid: _Grid, qu: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _swept(setting: Setting, grid: _Grid, obj: NDArray[np.float64], qu: NDArray[np.float64]
            ) -> tuple[NDArray[np.float64], float, float, float, float]:
-    """The move through the placements ``qu`` (K, 2), sampled (:func:`_dense`), measured exactly: its tool
-    origins (M, 2) [m], the largest penetration into the object, the least object clearance over its
-    middle (:func:`~tooltransfer.planner.planning.ss.dmp_variant.middle_steps`), the largest penetration
-    into an obstacle and the least obstacle clearance [m]."""
-    from tooltransfer.planner.planning.ss.dmp_variant import middle_steps
-
+    """The move through the placements ``qu`` (K, 2), sampled (:func:`_dense`), swept and measured exactly
+    (:func:`~tooltransfer.planner.planning.ss.verify.sweep_checks`): its tool origins (M, 2) [m], the largest
+    penetration into the object, the least clearance from it, the largest penetration into an obstacle and
+    the least clearance from the obstacles [m]."""
     xy, yaw = grid.poses(_dense(grid, qu))
     obj_check, obs = sweep_checks(setting.tool, xy, yaw, Disc(np.asarray(obj, dtype=np.float64), setting.radius),
                                   setting.obstacles)
-    return (xy, obj_check.max_penetration, obj_check.min_clearance(middle_steps(len(xy) - 1)),
+    return (xy, obj_check.max_penetration, obj_check.min_clearance(),
             max((o.max_penetration for o in obs), default=0.0), min((o.min_clearance() for o in obs), default=math.inf))
 
 
@@ -219,8 +226,8 @@ def _shortened(grid: _Grid, blocked_at: NDArray[np.bool_], qu: NDArray[np.float6
     return np.vstack(out)
 
 
-def _way(setting: Setting, grid: _Grid, obj: NDArray[np.float64], ends: list[NDArray[np.float64]],
-         leave: list[dict[int, float]], blocked: NDArray[np.bool_]) -> NDArray[np.float64] | None:
+def _way(grid: _Grid, ends: list[NDArray[np.float64]], leave: list[dict[int, float]], blocked: NDArray[np.bool_]
+         ) -> NDArray[np.float64] | None:
     """The placements (K, 2) of the shortest way from ``ends[0]`` to ``ends[1]`` through the points not
     ``blocked``, corners cut, or None where there is none."""
     free = ~blocked
@@ -249,50 +256,58 @@ def _contact_overlap(setting: Setting, obj: NDArray[np.float64], poses: tuple[ND
     return None
 
 
+def _off_the_omni(sector: ReachSector, pose: NDArray[np.float64], qu: NDArray[np.float64]) -> str | None:
+    """Why the contact ``pose`` (3,) is no placement ``qu`` (2,) of the Omni (its heading not the Omni's, or
+    its joints outside their box), or None."""
+    if float(np.max(np.abs(sector.point(qu[0], qu[1]) - pose[:2]))) > 1e-9:
+        return "a contact pose's heading is not the one the Omni imposes there"
+    if not (sector.q1_range[0] <= qu[0] <= sector.q1_range[1] and sector.u_range[0] <= qu[1] <= sector.u_range[1]):
+        return "a contact pose is outside the Omni's joints"
+    return None
+
+
 def grid_planner(setting: Setting, clearance: float) -> SwitchPlanner:
-    """The ``grid`` switch planner in ``setting`` (module docstring): ``clearance`` [m] from the object over
-    the middle where a way keeps it (else the largest of :data:`CLEARANCES` that does), on the grids of
-    :data:`MOVES` in turn."""
+    """The ``grid`` switch planner in ``setting`` (module docstring): the way between the two leaving moves keeps
+    ``clearance`` [m] (the task's ``ss.clearance``) from the object, on the grids of :data:`MOVES` in turn."""
     sector = reach_sector(setting.platform)
     reach = float(np.hypot(*np.asarray(setting.tool.outline.exterior.coords).T).max())
-    levels = sorted({clearance, *(c for c in CLEARANCES if c < clearance)}, reverse=True)
 
     def plan(obj: NDArray[np.float64], face_a: str, pose_a: NDArray[np.float64], face_b: str,
              pose_b: NDArray[np.float64]) -> SwitchPath:
         obj = np.asarray(obj, dtype=np.float64)
-        why = _contact_overlap(setting, obj, (pose_a, pose_b))
+        poses = [np.asarray(p, dtype=np.float64) for p in (pose_a, pose_b)]
+        ends = [placement_of(sector, p) for p in poses]
+        why = next((w for p, e in zip(poses, ends, strict=True) if (w := _off_the_omni(sector, p, e)) is not None),
+                   None) or _contact_overlap(setting, obj, (pose_a, pose_b))
         if why is not None:
             return SwitchPath("grid", "infeasible", f"grid switch {face_a} -> {face_b}: {why}")
-        ends = [placement_of(sector, np.asarray(p, dtype=np.float64)) for p in (pose_a, pose_b)]
         tried = []
         for move in MOVES:
             grid = _Grid(sector, reach, move)
-            loosest = _blocked(setting, grid, obj, levels[-1])
-            leave = [_leaving(setting, grid, obj, e, ~loosest) for e in ends]
+            blocked = _blocked(setting, grid, obj, clearance)
+            leave = [_leaving(setting, grid, obj, e, ~blocked) for e in ends]
             if not leave[0] or not leave[1]:
                 tried.append(f"on {1e3 * move:g} mm: no straight move leaves the "
                              f"{'first' if not leave[0] else 'second'} contact pose to a free placement")
                 continue
-            if _way(setting, grid, obj, ends, leave, loosest) is None:  # none at the least clearance: none at all
+            qu = _way(grid, ends, leave, blocked)
+            if qu is None:
                 tried.append(f"on {1e3 * move:g} mm: no way through the free placements")
                 continue
-            for level in levels:
-                qu = _way(setting, grid, obj, ends, leave,
-                          loosest if level == levels[-1] else _blocked(setting, grid, obj, level))
-                if qu is None:
-                    continue
-                xy, deep, mid, deep_obs, gap_obs = _swept(setting, grid, obj, qu)
-                jp = joint_path(setting.platform, xy)
-                if (deep <= TOUCH_TOL and deep_obs == 0.0 and gap_obs >= TOOL_MARGIN and not jp.refused.any()
-                        and float(np.max(jp.violation)) == 0.0):
-                    return SwitchPath("grid", "solved", xy=xy, object_clearance=mid, obstacle_clearance=gap_obs,
-                                      object_penetration=deep, obstacle_penetration=deep_obs,
-                                      info={"move": move, "clearance": level, "corners": len(qu)})
-                tried.append(f"on {1e3 * move:g} mm at {1e3 * level:g} mm: the way failed its exact check "
-                             f"(penetration {1e3 * deep:.4f} mm, obstacles {1e3 * gap_obs:.3f} mm away, "
-                             f"reach violation {float(np.max(jp.violation)):.3g} rad)")
+            xy, deep, _, deep_obs, gap_obs = _swept(setting, grid, obj, qu)
+            gap = _swept(setting, grid, obj, qu[1:-1])[2]  # between the two leaving moves
+            jp = joint_path(setting.platform, xy)
+            if (deep <= TOUCH_TOL and deep_obs == 0.0 and gap_obs >= TOOL_MARGIN and gap >= clearance - 1e-6
+                    and not jp.refused.any() and float(np.max(jp.violation)) == 0.0):
+                xy[0], xy[-1] = poses[0][:2], poses[1][:2]
+                return SwitchPath("grid", "solved", xy=xy, object_clearance=gap, obstacle_clearance=gap_obs,
+                                  object_penetration=deep, obstacle_penetration=deep_obs,
+                                  info={"move": move, "corners": len(qu)})
+            tried.append(f"on {1e3 * move:g} mm: the way failed its exact check (penetration {1e3 * deep:.4f} mm, "
+                         f"{1e3 * gap:.3f} mm from the object between the leaving moves, obstacles "
+                         f"{1e3 * gap_obs:.3f} mm away, reach violation {float(np.max(jp.violation)):.3g} rad)")
         return SwitchPath("grid", "infeasible", f"grid switch {face_a} -> {face_b} (object at "
-                          f"{np.round(obj, 4).tolist()} m): " + "; ".join(tried)
-                          + " (complete on its grids only: a finer one may find a way)")
+                          f"{np.round(obj, 4).tolist()} m, {1e3 * clearance:g} mm kept from it): " + "; ".join(tried)
+                          + " (complete on its grids only, its leaving moves straight: others may find a way)")
 
     return plan

@@ -21,7 +21,8 @@ class SwitchPath:
 
     Attributes:
         variant: ``"dmp"`` (recombination, eq. 18), ``"opt"`` (CasADi NLP), ``"arch"`` (the geometric
-            reference) or ``"recontact"`` (the same face touching again elsewhere).
+            reference), ``"grid"`` (the search over the tool's placements) or ``"recontact"`` (the same face
+            touching again elsewhere).
         status: ``"solved"``; ``"infeasible"`` (no such path: unreachable contact pose, a contact pose
             inside the object or an obstacle, or the NLP found no feasible point); ``"failed"`` (the
             solver or the exact check failed otherwise). ``reason`` says why when not solved.
