@@ -103,12 +103,12 @@ def placement_of(sector: ReachSector, pose: NDArray[np.float64]) -> NDArray[np.f
     return np.array([q1, u])
 
 
-def _outlines(ring: NDArray[np.float64], xy: NDArray[np.float64], yaw: NDArray[np.float64]) -> NDArray:
-    """The outline ``ring`` (V, 2) [tool frame, m] placed at origins ``xy`` (K, 2) [m] and headings ``yaw`` (K,)
-    [rad]: (K,) shapely polygons."""
-    c, s = np.cos(yaw), np.sin(yaw)
-    rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (K, 2, 2)
-    return shapely.polygons(np.einsum("kij,vj->kvi", rot, ring) + xy[:, None, :])
+def _outlines(ring: NDArray[np.float64], xy: NDArray[np.float64], yaw: float) -> NDArray:
+    """The outline ``ring`` (V, 2) [tool frame, m] placed at origins ``xy`` (K, 2) [m], all at the heading
+    ``yaw`` [rad] (a row of the grid: one waist angle): (K,) shapely polygons."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    turned = ring @ np.array([[c, s], [-s, c]])  # each vertex rotated by yaw
+    return shapely.polygons(turned[None, :, :] + xy[:, None, :])
 
 
 def _blocked(setting: Setting, grid: _Grid, obj: NDArray[np.float64], clearance: float) -> NDArray[np.bool_]:
@@ -127,7 +127,7 @@ def _blocked(setting: Setting, grid: _Grid, obj: NDArray[np.float64], clearance:
     out = np.zeros((grid.qs.size, grid.us.size), dtype=bool)
     for i, q in enumerate(grid.qs):
         xy, yaw = grid.poses(np.column_stack([np.full(grid.us.size, q), grid.us]))
-        out[i] = shapely.intersects(shapes, _outlines(ring, xy, yaw))
+        out[i] = shapely.intersects(shapes, _outlines(ring, xy, float(yaw[0])))
     return out
 
 
