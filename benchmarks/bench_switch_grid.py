@@ -38,7 +38,7 @@ import shapely
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests")]
 
-from test_switch_space import _grid_pieces  # noqa: E402
+from test_switch_space import placement_pieces  # noqa: E402
 from test_verdicts import contact_pose, generated  # noqa: E402
 
 from tooltransfer.planner.apps.batch.stats import wilson  # noqa: E402
@@ -58,14 +58,8 @@ def _cpu(fn, *args):
 
 def _separated(setting, centre: np.ndarray, poses: list[np.ndarray]) -> bool:
     """The brute-force grid puts the two contact poses in different pieces of the free placements."""
-    label, qs, us = _grid_pieces(setting, centre, 6e-4)
     sec = reach_sector(setting.platform)
-    pieces = []
-    for p in poses:
-        q1, u = placement_of(sec, p)
-        i, j = np.searchsorted(qs, q1), np.searchsorted(us, u)
-        pieces.append({int(label[x, y]) for x in (i - 1, i) for y in (j - 1, j)
-                       if 0 <= x < qs.size and 0 <= y < us.size and label[x, y] >= 0})
+    pieces = placement_pieces(setting, centre, [tuple(placement_of(sec, p)) for p in poses])
     return not (pieces[0] & pieces[1])
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
-from test_switch_space import _grid_pieces, _placed
+from test_switch_space import _placed, placement_pieces
 from test_verdicts import contact_pose, generated
 
 import tooltransfer.planner.planning.variant_registry as reg
@@ -117,13 +117,8 @@ def test_the_grid_refuses_a_switch_the_brute_force_grid_separates() -> None:
     found = grid_planner(setting, task.ss.clearance)(centre, fa.name, pa, fb.name, pb)
     assert found.status == "infeasible" and "no way through the free placements" in found.reason
     assert "complete on its grids only" in found.reason
-    label, qs, us = _grid_pieces(setting, centre, 6e-4)
-    pieces = []
-    for face, s in ((fa, 0.52), (fb, 0.0)):
-        _, u, q1 = contact_pose(sec, face, centre, setting.radius, s)
-        i, j = np.searchsorted(qs, q1), np.searchsorted(us, u)
-        assert 0 < i < qs.size and 0 < j < us.size
-        pieces.append({int(label[x, y]) for x in (i - 1, i) for y in (j - 1, j) if label[x, y] >= 0})
+    pieces = placement_pieces(setting, centre, [contact_pose(sec, face, centre, setting.radius, s)[2:0:-1]
+                                                for face, s in ((fa, 0.52), (fb, 0.0))])
     assert pieces[0] and pieces[1] and not pieces[0] & pieces[1]
 
 

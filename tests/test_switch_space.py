@@ -156,6 +156,20 @@ def grid_holds(setting, centre: np.ndarray, faces: list[str], move: float = 6e-4
     return out
 
 
+def placement_pieces(setting, centre: np.ndarray, placements: list[tuple[float, float]], move: float = 6e-4
+                     ) -> list[set[int]]:
+    """Brute force (module docstring): per placement ``(q1, u)`` [rad, m] of ``placements``, the labels of the
+    grid's free points next to it with the puck at ``centre`` (two placements with no label in common lie in
+    different pieces: no move of the tool joins them)."""
+    label, qs, us = _grid_pieces(setting, centre, move)
+    out = []
+    for q1, u in placements:
+        i, j = np.searchsorted(qs, q1), np.searchsorted(us, u)
+        out.append({int(label[a, b]) for a in (i - 1, i) for b in (j - 1, j)
+                    if 0 <= a < qs.size and 0 <= b < us.size and label[a, b] >= 0})
+    return out
+
+
 def grid_separated(setting, face_a, face_b, centre: np.ndarray, move: float = 6e-4) -> bool:
     """Brute force (module docstring): whether the grid's free points next to the contact poses of
     ``face_a`` and of ``face_b`` with the puck at ``centre`` lie in different pieces (False where either

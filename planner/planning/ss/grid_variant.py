@@ -49,13 +49,13 @@ from scipy.sparse.csgraph import dijkstra
 from tooltransfer.planner.planning.assemble import SwitchPlanner
 from tooltransfer.planner.planning.setting import Setting
 from tooltransfer.planner.planning.ss.result import SwitchPath
-from tooltransfer.planner.planning.ss.verify import pose_depth_and_gap, sweep_checks
+from tooltransfer.planner.planning.ss.verify import SweepCheck, pose_depth_and_gap, sweep_checks
 from tooltransfer.planner.planning.tool_clearance import TOOL_MARGIN
 from tooltransfer.tools.objects import Disc
 from tooltransfer.tools.omni.dh import D_TOOL
 from tooltransfer.tools.omni.ik import joint_path
 from tooltransfer.tools.omni.reach import ReachSector, reach_sector
-from tooltransfer.tools.pose import Pose2D
+from tooltransfer.tools.pose import Pose2D, rotation
 
 #: Grids tried in turn: the most [m] any tool point moves between neighbouring points.
 MOVES = (1e-3, 5e-4)
@@ -106,9 +106,7 @@ def placement_of(sector: ReachSector, pose: NDArray[np.float64]) -> NDArray[np.f
 def _outlines(ring: NDArray[np.float64], xy: NDArray[np.float64], yaw: float) -> NDArray:
     """The outline ``ring`` (V, 2) [tool frame, m] placed at origins ``xy`` (K, 2) [m], all at the heading
     ``yaw`` [rad] (a row of the grid: one waist angle): (K,) shapely polygons."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    turned = ring @ np.array([[c, s], [-s, c]])  # each vertex rotated by yaw
-    return shapely.polygons(turned[None, :, :] + xy[:, None, :])
+    return shapely.polygons((ring @ rotation(yaw).T)[None, :, :] + xy[:, None, :])
 
 
 def _blocked(setting: Setting, grid: _Grid, obj: NDArray[np.float64], clearance: float) -> NDArray[np.bool_]:
@@ -141,16 +139,16 @@ def _dense(grid: _Grid, qu: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _swept(setting: Setting, grid: _Grid, obj: NDArray[np.float64], qu: NDArray[np.float64]
-           ) -> tuple[NDArray[np.float64], float, float, float, float]:
+           ) -> tuple[NDArray[np.float64], SweepCheck, float, float]:
     """The move through the placements ``qu`` (K, 2), sampled (:func:`_dense`), swept and measured exactly
-    (:func:`~tooltransfer.planner.planning.ss.verify.sweep_checks`): its tool origins (M, 2) [m], the largest
-    penetration into the object, the least clearance from it, the largest penetration into an obstacle and
-    the least clearance from the obstacles [m]."""
+    (:func:`~tooltransfer.planner.planning.ss.verify.sweep_checks`): its tool origins (M, 2) [m], its check
+    against the object (per step), the largest penetration into an obstacle and the least clearance from the
+    obstacles [m]."""
     xy, yaw = grid.poses(_dense(grid, qu))
     obj_check, obs = sweep_checks(setting.tool, xy, yaw, Disc(np.asarray(obj, dtype=np.float64), setting.radius),
                                   setting.obstacles)
-    return (xy, obj_check.max_penetration, obj_check.min_clearance(),
-            max((o.max_penetration for o in obs), default=0.0), min((o.min_clearance() for o in obs), default=math.inf))
+    return (xy, obj_check, max((o.max_penetration for o in obs), default=0.0),
+            min((o.min_clearance() for o in obs), default=math.inf))
 
 
 def _leaving(setting: Setting, grid: _Grid, obj: NDArray[np.float64], contact: NDArray[np.float64],
@@ -169,8 +167,8 @@ def _leaving(setting: Setting, grid: _Grid, obj: NDArray[np.float64], contact: N
     out: dict[int, float] = {}
     for k in near[np.sort(first)][:LEAVE_TRIES]:
         end = np.array([qq.ravel()[k], uu.ravel()[k]])
-        _, deep, _, deep_obs, gap_obs = _swept(setting, grid, obj, np.vstack([contact, end]))
-        if deep <= TOUCH_TOL and gap_obs >= TOOL_MARGIN and deep_obs == 0.0:
+        _, obj_check, _, gap_obs = _swept(setting, grid, obj, np.vstack([contact, end]))
+        if obj_check.max_penetration <= TOUCH_TOL and gap_obs >= TOOL_MARGIN:  # (a margin kept: no penetration)
             out[int(k)] = float(dist.ravel()[k])
     return out
 
@@ -294,10 +292,14 @@ def grid_planner(setting: Setting, clearance: float) -> SwitchPlanner:
             if qu is None:
                 tried.append(f"on {1e3 * move:g} mm: no way through the free placements")
                 continue
-            xy, deep, _, deep_obs, gap_obs = _swept(setting, grid, obj, qu)
-            gap = _swept(setting, grid, obj, qu[1:-1])[2]  # between the two leaving moves
+            xy, obj_check, deep_obs, gap_obs = _swept(setting, grid, obj, qu)
+            deep = obj_check.max_penetration
+            # the steps between the two leaving moves (each move sampled on its own by _dense)
+            between = np.zeros(len(xy) - 1, dtype=bool)
+            between[len(_dense(grid, qu[:2])) - 1:len(xy) - len(_dense(grid, qu[-2:]))] = True
+            gap = obj_check.min_clearance(between)
             jp = joint_path(setting.platform, xy)
-            if (deep <= TOUCH_TOL and deep_obs == 0.0 and gap_obs >= TOOL_MARGIN and gap >= clearance - 1e-6
+            if (deep <= TOUCH_TOL and gap_obs >= TOOL_MARGIN and gap >= clearance - 1e-6
                     and not jp.refused.any() and float(np.max(jp.violation)) == 0.0):
                 xy[0], xy[-1] = poses[0][:2], poses[1][:2]
                 return SwitchPath("grid", "solved", xy=xy, object_clearance=gap, obstacle_clearance=gap_obs,
