@@ -2,24 +2,27 @@
 
 Run after the verdict benchmark (``python benchmarks/bench_verdicts.py --json RESULTS``)::
 
-    python benchmarks/probe_unknowns.py RESULTS.json [--budget 60000] [--workers 2] [--step 0.003]
+    python benchmarks/probe_unknowns.py RESULTS.json [--budget 60000] [--workers 2] [--step 0.003] [--room 0.00025]
+        [--span 0.0005] [--windows 0] [--share 0.8] [--directions 9]
 
 ``check_certificates.py --unknowns`` searches with rules looser than the planner's (no rolling, the cone checked
 where a step starts, the Omni's reach without slack, one contact place): an unknown it reaches may still have no
 plan the fit can follow. This probe searches with the fit's own rules, from the planner's code:
 
 - the holds of :func:`~tooltransfer.planner.planning.oe.guided_holds.lattice_rules` on windows of ``--span``
-  (0.5 mm) of each face, at most ``--windows`` (25) across its contact range less the contact margin: the Omni
+  (0.5 mm) of each face across its contact range less the contact margin, as many as cover it without gaps
+  (``--windows`` 0; a positive number: at most that many, spread with gaps on the longer faces): the Omni
   reaching the contact at both ends of a window (with the search's ``REACH_SLACK``), the tool outline ``--room``
   from the obstacles there, the puck's centre its radius and the safety margin from them;
-- straight steps of ``--step`` in nine directions across each face's cone at the ladder's middle share of the
-  friction cone (:data:`~tooltransfer.planner.planning.oe.guided_rungs.MIDDLE_SHARE`), turned back inside the
-  cone at the step's end (:func:`~tooltransfer.planner.planning.oe.guided_moves._stepped`), and from within three
-  steps of the target a straight push onto it where the cone holds that direction at both of its ends (the guided
-  search's last step); the target counts as reached within the hard check's goal tolerance (0.1 mm);
+- straight steps of ``--step`` in ``--directions`` (nine) directions across each face's cone at ``--share`` of the
+  friction cone (the ladder's middle share, :data:`~tooltransfer.planner.planning.oe.guided_rungs.MIDDLE_SHARE`),
+  turned back inside the cone at the step's end (:func:`~tooltransfer.planner.planning.oe.guided_moves._stepped`),
+  and from within three steps of the target a straight push onto it where the cone holds that direction at both
+  of its ends (the guided search's last step); the target counts as reached within the hard check's goal
+  tolerance (0.1 mm);
 - the contact rolls from the window's middle as the inverse push model has it
   (:func:`~tooltransfer.planner.planning.oe.guided_moves._roll`), and the step's end must be held by the window
-  of the face the rolled contact lies in.
+  of the face the rolled contact lies in (either of two where neighbouring windows overlap).
 
 Each step may be a push of its own (the contact placed anew on any window that holds the puck): looser than the
 planner there, since no re-contact or switch of face is checked. So "reached" does not mean that a plan exists,
@@ -52,26 +55,32 @@ sys.path[:0] = [str(ROOT / "benchmarks")]
 from bench_execution import _task  # noqa: E402
 from bench_verdicts import rows_with_verdict  # noqa: E402
 
+from tooltransfer.planner.planning.oe.guided_rungs import MIDDLE_SHARE  # noqa: E402
+
 #: Directions across each face's cone.
 DIRECTIONS = 9
 #: Weight of the distance to go in the search's order.
 GREED = 2.0
 #: How near [m] the target counts as reached: the hard check's goal tolerance (a plan ends on the target).
 REACHED = 1e-4
+#: ``windows`` of :func:`probe` that covers every face without gaps (:func:`contact_windows` takes as many as tile
+#: the usable range, up to this).
+TILED = 10001
 
 
 def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, budget: int, room: float,
-          span: float, windows: int) -> tuple[float, int, bool]:
+          span: float, windows: int, directions: int = DIRECTIONS) -> tuple[float, int, bool]:
     """``(closest approach [m], expansions, space closed)`` of the probe's search (module docstring) from ``start``
     to ``target`` (2,) [m] under the ``qp`` fit's ``options`` (its share of the friction cone and contact
-    margin)."""
+    margin); ``windows``: the most per face (odd; :data:`TILED` or 0: as many as cover each face); ``directions``:
+    how many across each cone."""
     import numpy as np
 
     from tooltransfer.planner.planning.oe.guided_holds import lattice_rules
     from tooltransfer.planner.planning.oe.guided_moves import _roll, _stepped
 
     held, free, by_key = lattice_rules(setting, options.model_copy(update={"contact_span": span}), True, None,
-                                       room, windows)
+                                       room, windows or TILED)
     of_face: dict[str, list[Any]] = {}
     for fm in by_key.values():
         of_face.setdefault(fm.name, []).append(fm)
@@ -98,7 +107,7 @@ def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, b
         way = math.atan2(float(target[1] - p[1]), float(target[0] - p[0]))
         for name, mid, half in held(p):
             fm = by_key[name]
-            angles = [(float(a), size, False) for a in mid + half * np.linspace(-1.0, 1.0, DIRECTIONS)]
+            angles = [(float(a), size, False) for a in mid + half * np.linspace(-1.0, 1.0, directions)]
             if left <= 3 * step and abs(math.remainder(way - mid, 2 * math.pi)) <= half:
                 # straight onto the target, as the guided search's last step (nearer than a step: a step like the rest)
                 angles.append((way, left, left > step))
@@ -109,7 +118,7 @@ def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, b
                 rolled = 0.5 * (fm.window[0] + fm.window[1]) + _roll(fm, p, q, setting.mechanics.rolling,
                                                                      setting.radius)
                 ends = [e for e in of_face[fm.name] if e.window[0] - 1e-9 <= rolled <= e.window[1] + 1e-9]
-                if not ends or not held.holds(ends[0], q):
+                if not any(held.holds(e, q) for e in ends):
                     continue
                 if to_go(q) <= REACHED:
                     return to_go(q), n, False
@@ -121,21 +130,20 @@ def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, b
     return best, n, not heap
 
 
-def _one(args: tuple[Any, int, float, float, float, int]) -> tuple[str, float, int, bool, float]:
+def _one(args: tuple[Any, int, float, float, float, int, float, int]) -> tuple[str, float, int, bool, float]:
     """``(task_id, closest [m], expansions, closed, CPU [s])`` of :func:`probe` on one job's task."""
     import numpy as np
 
-    from tooltransfer.planner.planning.oe.guided_rungs import MIDDLE_SHARE
     from tooltransfer.planner.planning.setting import setting_from_task, task_skills
     from tooltransfer.planner.planning.solve import qp_options
 
-    job, budget, step, room, span, windows = args
+    job, budget, step, room, span, windows, share, directions = args
     task = _task(job)
     setting = setting_from_task(task, task_skills(task, need_ss=False))
-    options = qp_options(task).model_copy(update={"friction_cone_fraction": MIDDLE_SHARE})
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": share})
     cpu = time.process_time()
     d, n, closed = probe(setting, options, np.array(task.start), np.array(task.target), step=step, budget=budget,
-                         room=room, span=span, windows=windows)
+                         room=room, span=span, windows=windows, directions=directions)
     return job.task_id, d, n, closed, time.process_time() - cpu
 
 
@@ -148,11 +156,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--room", type=float, default=2.5e-4,
                     help="how far [m] the tool outline keeps from the obstacles (default: the hard check's)")
     ap.add_argument("--span", type=float, default=5e-4, help="the contact windows' width [m]")
-    ap.add_argument("--windows", type=int, default=25, help="the most windows per face (odd)")
+    ap.add_argument("--windows", type=int, default=0,
+                    help="the most windows per face (odd; 0: as many as cover each face without gaps)")
+    ap.add_argument("--share", type=float, default=MIDDLE_SHARE,
+                    help="the share of the friction cone's half-angle (default: the ladder's middle share)")
+    ap.add_argument("--directions", type=int, default=DIRECTIONS, help="directions across each face's cone")
     args = ap.parse_args(argv)
     if not (0.0 < args.step < 0.05 and args.budget > 0 and args.room >= 0.0 and 0.0 < args.span < 0.05
-            and args.windows >= 1 and args.windows % 2 == 1):
-        ap.error("--step and --span must be in (0, 0.05) [m], --budget > 0, --room >= 0 [m], --windows odd")
+            and (args.windows == 0 or (args.windows >= 1 and args.windows % 2 == 1))
+            and 0.0 < args.share <= 1.0 and args.directions >= 2):
+        ap.error("--step and --span must be in (0, 0.05) [m], --budget > 0, --room >= 0 [m], --windows 0 or odd, "
+                 "--share in (0, 1], --directions >= 2")
     try:
         rows, jobs = rows_with_verdict(args.results, "unknown")
     except ValueError as exc:
@@ -160,12 +174,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     reached: list[str] = []
     with ProcessPoolExecutor(args.workers) as pool:
-        todo = [(jobs[r["task_id"]], args.budget, args.step, args.room, args.span, args.windows) for r in rows]
+        todo = [(jobs[r["task_id"]], args.budget, args.step, args.room, args.span, args.windows, args.share,
+                 args.directions) for r in rows]
         for tid, d, n, closed, cpu in pool.map(_one, todo):
             reached += [tid] if d <= REACHED else []
             end = "reached" if d <= REACHED else ("space closed" if closed else "on its budget")
             print(f"{tid}: closest {d * 1e3:.2f} mm after {n} expansions, {end} (CPU {cpu:.1f} s)", flush=True)
     print(f"\n{len(rows)} unknowns; under the fit's rules with rolling ({args.step * 1e3:g} mm steps, "
+          f"{args.directions} directions at {args.share:g} of the friction cone, "
           f"{args.span * 1e3:g} mm windows, the tool {args.room * 1e3:g} mm from the obstacles) the probe reaches "
           f"{len(reached)}: {reached}")
     return 0

@@ -3,6 +3,7 @@ contact's rolling, to tell an unknown its search left open from one its rules cl
 
 from __future__ import annotations
 
+import itertools
 import json
 
 import numpy as np
@@ -27,7 +28,7 @@ def _probe(module, batch: str, task_id: str, budget: int = 2000) -> tuple[float,
     setting = setting_from_task(task, task_skills(task, need_ss=False))
     options = qp_options(task).model_copy(update={"friction_cone_fraction": MIDDLE_SHARE})
     return module.probe(setting, options, np.array(task.start), np.array(task.target), step=0.003, budget=budget,
-                        room=2.5e-4, span=5e-4, windows=25)
+                        room=2.5e-4, span=5e-4, windows=0)
 
 
 def test_the_probe_reaches_a_target_the_planner_reaches(probe_module) -> None:
@@ -45,6 +46,30 @@ def test_the_probe_closes_its_space_on_an_unknown_whose_way_needs_the_edge_of_a_
     assert closed and d > 0.05 and n < 2000
 
 
+def test_the_probe_s_windows_cover_every_face_without_gaps(probe_module) -> None:
+    """By default the probe's windows tile each face's usable range (the contact range less the contact margin),
+    so a step whose contact rolls anywhere on the face has a window to be held by; 25 windows of 0.5 mm left gaps
+    on the faces longer than 12.5 mm (``l_shape``'s 40 mm ``left``), where such a step was dropped."""
+    from tooltransfer.planner.planning.oe.guided_moves import contact_windows
+    from tooltransfer.tools.pushing.inverse import FaceGeometry
+
+    task = generated("verdicts_200.yaml", "verd200-00049")  # the l_shape
+    options = qp_options(task).model_copy(update={"contact_span": 5e-4})
+    tool = setting_from_task(task, task_skills(task, need_ss=False)).tool
+    longest = 0.0
+    for face in tool.faces:
+        g = FaceGeometry.of(tool, face.name)
+        lo, hi = g.lo + options.contact_margin, g.hi - options.contact_margin
+        longest = max(longest, hi - lo)
+        w = sorted(contact_windows(tool, face.name, options, probe_module.TILED))
+        assert w[0][0] == pytest.approx(lo, abs=1e-12) and w[-1][1] == pytest.approx(hi, abs=1e-12)
+        assert all(b[0] <= a[1] + 1e-12 for a, b in itertools.pairwise(w)), face.name
+        gapped = sorted(contact_windows(tool, face.name, options, 25))
+        if hi - lo > 25 * 5e-4:  # what the old default did on a long face
+            assert any(b[0] > a[1] + 1e-4 for a, b in itertools.pairwise(gapped)), face.name
+    assert longest > 0.03
+
+
 def test_the_probe_refuses_bad_input(probe_module, tmp_path, capsys) -> None:
     """A results file that cannot be read, or settings out of range: exit code 2 with the reason."""
     assert probe_module.main([str(tmp_path / "none.json")]) == 2
@@ -52,7 +77,7 @@ def test_the_probe_refuses_bad_input(probe_module, tmp_path, capsys) -> None:
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps({"rows": []}))
     assert probe_module.main([str(bad)]) == 2
-    for extra in (["--step", "0"], ["--windows", "4"], ["--room", "-1"]):
+    for extra in (["--step", "0"], ["--windows", "4"], ["--room", "-1"], ["--share", "1.5"], ["--directions", "1"]):
         with pytest.raises(SystemExit) as err:
             probe_module.main([str(bad), *extra])
         assert err.value.code == 2
