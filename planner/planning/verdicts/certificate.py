@@ -78,8 +78,8 @@ class ExactBackward:
 #: Tried by ``decide.attach_verdict`` once the search has failed: it certifies ``exec60-00015``, where the
 #: growth of the stored pieces alone takes the default sets to the start, after 344,672 vertices grown
 #: (9,529 updates, some 20 s). The vertex bound stops it where exact pieces gather vertices: on
-#: ``tiny-00001`` of ``examples/tiny_batch.yaml`` one block's pieces reached 26,755 and the set ran for minutes
-#: unbounded (benchmarks/README.md, twenty-first and twenty-second sessions).
+#: ``tiny-00001`` of ``examples/tiny_batch.yaml`` at its seed 11 one block's pieces reached 26,755 and the set
+#: ran for minutes unbounded (benchmarks/README.md, twenty-first and twenty-second sessions).
 LAST_BACKWARD = ExactBackward(0.0025, 5e-5, 12000, 600_000)
 
 

@@ -24,7 +24,7 @@ If ``F`` leaves the target's goal disc out, no plan from the start reaches the t
 at most :data:`FORWARD_FIRST` updates: where it reaches the goal there, ``B`` (the costly set: some 20 s on a
 wide push space) is not built, since a set ``F`` so quickly at the goal is rarely cut off from it by the coarse
 ``B`` (every task ``B`` has helped to certify, ``verd200-00147`` of the verdict benchmark and ``small-00002``,
-``-00004`` and ``tiny-00003`` of the test batches, takes more than 3000 updates without it); where
+``-00004`` and ``tiny-00003`` (seed 11) of the test batches, takes more than 3000 updates without it); where
 it closes without reaching it, it is the certificate, with ``B`` the whole push space. Over-approximation
 only: the obstacles' zone and the tool-body zone are drawn with inscribed polygons and their images shrunk by
 :data:`IMAGE_ROOM`, the regions and the goal disc are taken larger, so each set holds what its exact
