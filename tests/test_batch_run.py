@@ -43,14 +43,15 @@ def _rows(db: Path) -> list[tuple]:
 
 
 def test_pool_and_dask_give_the_same_rows_once_each(tmp_path) -> None:
-    batch = _batch(tmp_path, count=3, oe=("mapping", "qp"))
+    # seed 22: three quick tasks whose six rows hold all three verdicts (the batch file's seed 7: 28 s a run)
+    batch = _batch(tmp_path, count=3, oe=("mapping", "qp"), seed=22)
     pool = run_batch(batch, tmp_path / "pool.sqlite", workers=2, progress=False)
     dask = run_batch(batch, tmp_path / "dask.sqlite", dask_local=2, progress=False)
     assert (pool.kind, dask.kind, pool.slots, dask.slots) == ("process pool", "dask", 2, 2)
     a, b = _rows(tmp_path / "pool.sqlite"), _rows(tmp_path / "dask.sqlite")
     assert len(a) == len(b) == 6 == pool.stored == dask.stored
     assert [r[:3] for r in a] == [r[:3] for r in b]  # same keys and statuses: the planner is deterministic
-    assert {r[2] for r in a} <= {"solved", "infeasible", "unknown"}
+    assert {r[2] for r in a} == {"solved", "infeasible", "unknown"}
     with ResultStore(tmp_path / "pool.sqlite") as s:
         rows = s.rows()
     assert {r["tool"] for r in rows} == {"slope", "finger"} and all(r["time_total"] > 0 for r in rows)
