@@ -72,8 +72,8 @@ def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, b
           span: float, windows: int, directions: int = DIRECTIONS) -> tuple[float, int, bool]:
     """``(closest approach [m], expansions, space closed)`` of the probe's search (module docstring) from ``start``
     to ``target`` (2,) [m] under the ``qp`` fit's ``options`` (its share of the friction cone and contact
-    margin); ``windows``: the most per face (odd; :data:`TILED` or 0: as many as cover each face); ``directions``:
-    how many across each cone."""
+    margin); ``windows``: the most per face (odd; 0: as many as cover each face); ``directions``: how many across
+    each cone."""
     import numpy as np
 
     from tooltransfer.planner.planning.oe.guided_holds import lattice_rules
@@ -130,20 +130,20 @@ def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, b
     return best, n, not heap
 
 
-def _one(args: tuple[Any, int, float, float, float, int, float, int]) -> tuple[str, float, int, bool, float]:
-    """``(task_id, closest [m], expansions, closed, CPU [s])`` of :func:`probe` on one job's task."""
+def _one(args: tuple[Any, float, dict[str, Any]]) -> tuple[str, float, int, bool, float]:
+    """``(task_id, closest [m], expansions, closed, CPU [s])`` of :func:`probe` on one job's task (``args``: the
+    job, the share of the friction cone, the search's settings as :func:`probe` takes them)."""
     import numpy as np
 
     from tooltransfer.planner.planning.setting import setting_from_task, task_skills
     from tooltransfer.planner.planning.solve import qp_options
 
-    job, budget, step, room, span, windows, share, directions = args
+    job, share, settings = args
     task = _task(job)
     setting = setting_from_task(task, task_skills(task, need_ss=False))
     options = qp_options(task).model_copy(update={"friction_cone_fraction": share})
     cpu = time.process_time()
-    d, n, closed = probe(setting, options, np.array(task.start), np.array(task.target), step=step, budget=budget,
-                         room=room, span=span, windows=windows, directions=directions)
+    d, n, closed = probe(setting, options, np.array(task.start), np.array(task.target), **settings)
     return job.task_id, d, n, closed, time.process_time() - cpu
 
 
@@ -174,8 +174,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     reached: list[str] = []
     with ProcessPoolExecutor(args.workers) as pool:
-        todo = [(jobs[r["task_id"]], args.budget, args.step, args.room, args.span, args.windows, args.share,
-                 args.directions) for r in rows]
+        settings = {"step": args.step, "budget": args.budget, "room": args.room, "span": args.span,
+                    "windows": args.windows, "directions": args.directions}
+        todo = [(jobs[r["task_id"]], args.share, settings) for r in rows]
         for tid, d, n, closed, cpu in pool.map(_one, todo):
             reached += [tid] if d <= REACHED else []
             end = "reached" if d <= REACHED else ("space closed" if closed else "on its budget")

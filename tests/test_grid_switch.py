@@ -117,8 +117,11 @@ def test_the_grid_refuses_a_switch_the_brute_force_grid_separates() -> None:
     found = grid_planner(setting, task.ss.clearance)(centre, fa.name, pa, fb.name, pb)
     assert found.status == "infeasible" and "no way through the free placements" in found.reason
     assert "complete on its grids only" in found.reason
-    pieces = placement_pieces(setting, centre, [contact_pose(sec, face, centre, setting.radius, s)[2:0:-1]
-                                                for face, s in ((fa, 0.52), (fb, 0.0))])
+    placements = []
+    for face, s in ((fa, 0.52), (fb, 0.0)):
+        _, u, q1 = contact_pose(sec, face, centre, setting.radius, s)
+        placements.append((q1, u))
+    pieces = placement_pieces(setting, centre, placements)
     assert pieces[0] and pieces[1] and not pieces[0] & pieces[1]
 
 
