@@ -46,7 +46,7 @@ def test_simulated_batch_through_the_cli_stores_both_executions_and_reports_them
         assert store.meta()["simulate"] == "on"
     assert len(rows) == 6
     solved = [r for r in rows if r["status"] == "solved"]
-    assert len(solved) >= 2 and len(solved) < len(rows)  # at seed 22 four solve with qp/opt, two are infeasible
+    assert 2 <= len(solved) < len(rows)  # at seed 22 four solve with qp/opt, two are infeasible
     for r in solved:
         assert r["open_loop_status"] == "done" and 0 <= r["open_loop_error"] < 0.05
         assert r["open_loop_error"] == r["sim_final_error"] and r["open_loop_wall_time"] > 0
