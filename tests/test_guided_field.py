@@ -23,7 +23,7 @@ from tooltransfer.planner.planning.oe.guided import (
     guided_path,
 )
 from tooltransfer.planner.planning.oe.guided_field import UNREACHED, distance_field
-from tooltransfer.planner.planning.oe.guided_rungs import GREED, LAST_ROOM
+from tooltransfer.planner.planning.oe.guided_rungs import GREED, LAST_ROOM, _ladder
 from tooltransfer.planner.planning.setting import setting_from_task, task_skills
 from tooltransfer.planner.planning.solve import qp_options
 
@@ -110,20 +110,25 @@ def test_a_task_only_the_field_s_order_solves_gets_a_plan_that_executes() -> Non
 def test_the_field_s_attempts_come_last_and_not_after_a_plan_is_kept() -> None:
     """exec60-00054 (l_shape, one obstacle; the push plans of its attempts on windows fit, the switches
     between their faces do not, and after the search it is certified ``switch_separated``): the ladder
-    ends with the attempt in the field's order, on every face's windows, then the narrow windows' attempt
-    (tests/test_guided_narrow.py) and the closest attempt (tests/test_guided_close.py); where the caller keeps a plan
-    of an attempt before (one with little room), it makes none of them: they are there for tasks with no plan at
-    all."""
+    ends with the two attempts in the field's order, first on whole faces and their windows where the whole is not
+    held, then on every face's windows, then the narrow windows' attempt (tests/test_guided_narrow.py) and the
+    closest attempt (tests/test_guided_close.py); where the caller keeps a plan of an attempt before (one with little
+    room), it makes none of them: they are there for tasks with no plan at all."""
     task = generated("execution_60.yaml", "exec60-00054")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task)
+    guides = [r for r in _ladder(setting, options) if r.guide]
+    assert [(r.windows, r.mixed) for r in guides] == [(False, options.guided_contact_span), (True, None)]
     every = ladder_plans(task, keep_after_first=False)
     field = [k for k, p in enumerate(every) if p.metrics.get("guided_field")
              or "over a grid of where the faces push" in p.reason]
-    assert field == [len(every) - 3]
-    assert every[-3].status == "solved" and every[-3].metrics["guided_field"] == 1.0  # its switches then fail
+    assert field == [len(every) - 4, len(every) - 3]
+    for p in every[-4:-2]:  # both fit; their switches then fail
+        assert p.status == "solved" and p.metrics["guided_field"] == 1.0
     assert every[-2].metrics.get("guided_narrow") == 1.0 or "on its 2 mm windows" in every[-2].reason
     assert every[-1].metrics.get("guided_close") == 1.0 or "each step ending where its face holds" in every[-1].reason
     kept = ladder_plans(task, keep_after_first=True)
-    assert [(p.status, p.reason) for p in kept] == [(p.status, p.reason) for p in every[:-3]]
+    assert [(p.status, p.reason) for p in kept] == [(p.status, p.reason) for p in every[:-4]]
 
 
 def test_a_miss_says_where_the_field_found_no_way_either() -> None:

@@ -280,25 +280,24 @@ def guided_plans(t: NDArray[np.float64], universal: NDArray[np.float64], setting
     widens some face's admissible cone: :func:`_widens`), that share on whole and on fine steps, then as
     the attempt before (plans at the edge of the cone, where nothing narrower was found: a task the
     certificate's whole cone cannot rule out); last of all (where ``guided_contact_span`` is narrower),
-    the middle share on fine steps on every face's windows, weighted, roomy and searched again as the
-    ``mixed`` attempts are, but in the order of the distance to go over a grid of the faces' pushes
+    the middle share's ``mixed`` attempt in the order of the distance to go over a grid of the faces' pushes
     (:mod:`~.guided_field`, ``guide``: a way round an obstacle that the straight line's order left
-    unexpanded), whether or not the attempts before could push from the start (the caller does not make
-    it after a plan with little room); after it, where an attempt on whole steps and whole faces ended on
-    its budget rather than with its space closed, the middle share's whole steps with half steps and new
-    runs again, weighted toward the target (:data:`~.guided_rungs.GREED`) and searched again
-    :data:`~.guided_rungs.LAST_REFUSALS` times (metric ``guided_spent``; not made after a plan with little room
-    either); last (where ``guided_contact_span`` is narrower), the middle share's ``mixed`` attempt again on
-    windows of a :data:`~.guided_rungs.NARROW` share of that span, :data:`~.guided_rungs.NARROW_WINDOWS` per face
-    and :data:`~.guided_rungs.NARROW_BUDGET` times the expansions (a contact held only within a millimetre or two
-    of one place on a face, where no window of the span is held at both of its ends; metric ``guided_narrow``);
-    last of all, that attempt on windows of a :data:`~.guided_rungs.CLOSE` share, the tool
-    :data:`~.guided_close.CLOSE_ROOM` from the obstacles, each step ending where its face still holds the puck
-    (:mod:`~.guided_close`; metric ``guided_close``); neither is made after a plan with little room. The ``mixed``
-    attempts run also where the attempts before them could not push from the start (their windows may;
-    the widest share's whole-face attempts do not), and after a plan with little room (the caller's
-    ``GUIDED_ROOM``), which a roomier one may replace (the caller takes none at the widest share after a
-    plan at a narrower one).
+    unexpanded; whole faces hold the puck over longer runs, so its plans have fewer pushes and re-contacts),
+    then that attempt on every face's windows (a way only the windows hold), both whether or not the attempts
+    before could push from the start (the caller makes neither after a plan with little room); after them, where an
+    attempt on whole steps and whole faces ended on its budget rather than with its space closed, the middle share's
+    whole steps with half steps and new runs again, weighted toward the target (:data:`~.guided_rungs.GREED`) and
+    searched again :data:`~.guided_rungs.LAST_REFUSALS` times (metric ``guided_spent``; not made after a plan with
+    little room either); last (where ``guided_contact_span`` is narrower), the middle share's ``mixed`` attempt again
+    on windows of a :data:`~.guided_rungs.NARROW` share of that span, :data:`~.guided_rungs.NARROW_WINDOWS` per face
+    and :data:`~.guided_rungs.NARROW_BUDGET` times the expansions (a contact held only within a millimetre or two of
+    one place on a face, where no window of the span is held at both of its ends; metric ``guided_narrow``); last of
+    all, that attempt on windows of a :data:`~.guided_rungs.CLOSE` share, the tool :data:`~.guided_close.CLOSE_ROOM`
+    from the obstacles, each step ending where its face still holds the puck (:mod:`~.guided_close`; metric
+    ``guided_close``); neither is made after a plan with little room. The ``mixed`` attempts run also where the
+    attempts before them could not push from the start (their windows may; the widest share's whole-face attempts do
+    not), and after a plan with little room (the caller's ``GUIDED_ROOM``), which a roomier one may replace (the
+    caller takes none at the widest share after a plan at a narrower one).
     Each attempt's sequence (found within ``options.guided_budget`` expansions, on fine
     steps ``1 / FINE`` times that: a path takes that many more steps) is fitted by
     :func:`condense_sequence` over the universal path's duration (``t`` (T,) [s], ``universal`` (T, 2)

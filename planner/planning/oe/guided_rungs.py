@@ -117,9 +117,11 @@ def _ladder(setting: Setting, options: QPOptions) -> list[_Rung]:
         at_wide = {"friction_cone_fraction": wide}
         tries += [_Rung(at_wide, more=True, fine=fine, widest=True) for fine in (False, True)]
         tries += [mixed_rung(at_wide, widest=True)] if windowed else []
-    # last of all, where every attempt failed: the middle share's fine steps on every face's windows in the order
-    # of the distance field (a path the straight line's order left unexpanded)
-    tries += [_Rung({**at_middle, "contact_span": span}, windows=True, more=True, fine=True, greed=GREED,
+    # last of all, where every attempt failed: the middle share's fine steps in the order of the distance field (a
+    # path the straight line's order left unexpanded), first on whole faces and windows where needed (fewer pushes,
+    # fewer re-contacts), then on every face's windows (a way only windows hold)
+    tries += [mixed_rung(at_middle)._replace(guide=True),
+              _Rung({**at_middle, "contact_span": span}, windows=True, more=True, fine=True, greed=GREED,
                     room=LAST_ROOM, refusals=LAST_REFUSALS, guide=True)] if windowed else []
     # last, where a search on whole steps spent its budget: that search weighted toward the target (weighted A*
     # reaches a lattice's far side in fewer expansions; where every space closed, a new order has little to find)
