@@ -107,6 +107,16 @@ def test_a_task_only_the_field_s_order_solves_gets_a_plan_that_executes() -> Non
     executed_plan_of(generated("verdicts_200.yaml", "verd200-00002"), "guided_field")
 
 
+def test_the_field_s_order_on_whole_faces_gives_a_plan_that_executes() -> None:
+    """exec60-00033 (t_shape, one obstacle): every attempt before the field's fails; the field's first form, on whole
+    faces and their windows only where the whole is not held, gives a plan that passes every hard check and ends
+    within 5 mm of the target open loop on the MuJoCo platform. Before that form, the field's attempt on every face's
+    windows found none, and the plan came after it, from the weighted search made again (``guided_spent``, 34
+    pushes), and ended 27.5 mm from the target open loop (benchmarks/README.md, "The guide attempt in both forms")."""
+    plan = executed_plan_of(generated("execution_60.yaml", "exec60-00033"), "guided_field")
+    assert "guided_narrow" not in plan.metrics and "guided_close" not in plan.metrics
+
+
 def test_the_field_s_attempts_come_last_and_not_after_a_plan_is_kept() -> None:
     """exec60-00054 (l_shape, one obstacle; the push plans of its attempts on windows fit, the switches
     between their faces do not, and after the search it is certified ``switch_separated``): the ladder
