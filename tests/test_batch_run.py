@@ -267,7 +267,7 @@ def test_retry_unknown_with_a_larger_budget_runs_those_rows_again(tmp_path, caps
     certificate's budgets multiplied by K (recorded in each row's evidence)."""
     import json
 
-    # seed 22: two tasks the mapping variant leaves unknown, as the batch file's seed 7 (9.5 s a run; 26 s there)
+    # seed 22: two quick tasks the mapping variant leaves unknown, as the batch file's seed 7 does
     batch = _batch(tmp_path, count=2, seed=22)
     db = tmp_path / "r.sqlite"
     assert main(["batch", "run", str(batch), "--db", str(db), "-q", "--workers", "1"]) == 0

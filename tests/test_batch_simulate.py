@@ -37,7 +37,7 @@ def _batch(tmp_path: Path, name: str = "sim", count: int = 6, **extra) -> Path:
 
 
 def test_simulated_batch_through_the_cli_stores_both_executions_and_reports_them(tmp_path, capsys) -> None:
-    # seed 22: four tasks solved, two certified infeasible, all quick (the batch file's seed 7: one unknown of 28 s)
+    # seed 22: four tasks solved, two certified infeasible, all quick (the batch file's seed 7 has a slow unknown)
     batch = _batch(tmp_path, seed=22)
     db = tmp_path / "sim.sqlite"
     assert main(["batch", "run", str(batch), "--db", str(db), "--workers", "2", "-q", "--simulate"]) == 0

@@ -120,9 +120,9 @@ def _ladder(setting: Setting, options: QPOptions) -> list[_Rung]:
     # last of all, where every attempt failed: the middle share's fine steps in the order of the distance field (a
     # path the straight line's order left unexpanded), first on whole faces and windows where needed (fewer pushes,
     # fewer re-contacts), then on every face's windows (a way only windows hold)
-    tries += [mixed_rung(at_middle)._replace(guide=True),
-              _Rung({**at_middle, "contact_span": span}, windows=True, more=True, fine=True, greed=GREED,
-                    room=LAST_ROOM, refusals=LAST_REFUSALS, guide=True)] if windowed else []
+    guided = mixed_rung(at_middle)._replace(guide=True)
+    tries += [guided, guided._replace(change={**at_middle, "contact_span": span}, mixed=None, windows=True)
+              ] if windowed else []
     # last, where a search on whole steps spent its budget: that search weighted toward the target (weighted A*
     # reaches a lattice's far side in fewer expansions; where every space closed, a new order has little to find)
     tries.append(_Rung(at_middle, more=True, greed=GREED, refusals=LAST_REFUSALS, spent=True))
