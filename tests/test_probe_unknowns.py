@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 
 import numpy as np
 import pytest
@@ -81,3 +82,32 @@ def test_the_probe_refuses_bad_input(probe_module, tmp_path, capsys) -> None:
         with pytest.raises(SystemExit) as err:
             probe_module.main([str(bad), *extra])
         assert err.value.code == 2
+
+
+
+def test_every_step_of_the_funnel_is_a_forward_step_of_the_probe_s_rules(probe_module) -> None:
+    """The backward search (``funnel``) from exec60-00001's target: every edge it adds, from a node ``x`` back to
+    the node ``q`` it came from, is a step the forward probe takes: some window of the face holds the puck at ``x``
+    with the step's direction inside its cone there, the forward probe's own step (``_stepped``) from ``x`` in that
+    direction ends on ``q`` (the direction inside the cone at ``q``), and the contact rolls onto a window that holds
+    the puck at ``q``. The funnel grows away from the target toward the start."""
+    from tooltransfer.planner.planning.oe.guided_moves import _stepped
+
+    task = generated("execution_60.yaml", "exec60-00001")
+    setting = setting_from_task(task, task_skills(task, need_ss=False))
+    options = qp_options(task).model_copy(update={"friction_cone_fraction": MIDDLE_SHARE})
+    start, target = np.array(task.start), np.array(task.target)
+    edges: list[tuple[np.ndarray, np.ndarray, str, float]] = []
+    extent, near, n, closed = probe_module.funnel(setting, options, start, target, step=0.003, budget=40,
+                                                  room=2.5e-4, span=5e-4, windows=0, trace=edges)
+    assert n == 40 and not closed and extent > 0.01 and near < np.hypot(*(start - target)) - 0.01
+    held, free, by_key, lands = probe_module._probe_rules(setting, options, 2.5e-4, 5e-4, 0)
+    assert len(edges) > 40
+    for x, q, face, ang in edges:
+        assert free(x) and np.hypot(*(q - x)) == pytest.approx(0.003, abs=1e-12)
+        assert abs(math.remainder(float(np.arctan2(*(q - x)[::-1])) - ang, 2 * math.pi)) < 1e-9
+        steps = [key for key, mid, half in held(x) if by_key[key].name == face
+                 and abs(math.remainder(ang - mid, 2 * math.pi)) <= half
+                 and (end := _stepped(by_key[key], x, ang, half, 0.003)) is not None
+                 and np.hypot(*(end - q)) < 1e-15 and lands(by_key[key], x, q)]
+        assert steps, (x, q, face)
