@@ -71,10 +71,12 @@ REACHED = 1e-4
 TILED = 10001
 
 
-def _probe_rules(setting: Any, options: Any, room: float, span: float, windows: int) -> tuple[Any, Any, Any, Any]:
-    """The probe's rules (module docstring): ``(held, free, by_key, lands)``, the first three as
+def _probe_rules(setting: Any, options: Any, room: float, span: float, windows: int
+                 ) -> tuple[Any, Any, Any, dict[str, list[Any]], Any]:
+    """The probe's rules (module docstring): ``(held, free, by_key, of_face, lands)``, the first three as
     :func:`~tooltransfer.planner.planning.oe.guided_holds.lattice_rules` gives them on windows of ``span`` [m]
-    (``windows``: the most per face, 0: as many as cover it), and ``lands(fm, p, q)``: whether the contact of
+    (``windows``: the most per face, 0: as many as cover it), ``of_face``: the windows by face name, and
+    ``lands(fm, p, q)``: whether the contact of
     window ``fm`` at ``p``, rolled over the step to ``q`` (2,) [m], lies in a window of its face that holds the
     puck at ``q``."""
     from tooltransfer.planner.planning.oe.guided_holds import lattice_rules
@@ -91,7 +93,21 @@ def _probe_rules(setting: Any, options: Any, room: float, span: float, windows: 
         ends = [e for e in of_face[fm.name] if e.window[0] - 1e-9 <= rolled <= e.window[1] + 1e-9]
         return any(held.holds(e, q) for e in ends)
 
-    return held, free, by_key, lands
+    return held, free, by_key, of_face, lands
+
+
+def _next_node(heap: list[tuple[float, float, int]], nodes: list[tuple[Any, str | None]],
+               seen: set[tuple[int, int, str | None]], cell: float) -> tuple[float, int] | None:
+    """The next node of a weighted A* on cells of side ``cell`` [m], once per face (``(cost so far, index into
+    nodes)``, marked seen), or None once ``heap`` holds none not seen."""
+    while heap:
+        _, g, k = heapq.heappop(heap)
+        p, came = nodes[k]
+        key = (int(p[0] // cell), int(p[1] // cell), came)
+        if key not in seen:
+            seen.add(key)
+            return g, k
+    return None
 
 
 def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, budget: int, room: float,
@@ -104,7 +120,7 @@ def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, b
 
     from tooltransfer.planner.planning.oe.guided_moves import _stepped
 
-    held, free, by_key, lands = _probe_rules(setting, options, room, span, windows)
+    held, free, by_key, _, lands = _probe_rules(setting, options, room, span, windows)
     cell = 0.5 * step
 
     def to_go(q: Any) -> float:
@@ -114,13 +130,9 @@ def probe(setting: Any, options: Any, start: Any, target: Any, *, step: float, b
     heap = [(GREED * to_go(start), 0.0, 0)]
     seen: set[tuple[int, int, str | None]] = set()
     n, best = 0, to_go(start)
-    while heap and n < budget:
-        _, g, k = heapq.heappop(heap)
-        p, came = nodes[k]
-        key = (int(p[0] // cell), int(p[1] // cell), came)
-        if key in seen:
-            continue
-        seen.add(key)
+    while n < budget and (top := _next_node(heap, nodes, seen, cell)) is not None:
+        g, k = top
+        p = nodes[k][0]
         n += 1
         left = to_go(p)
         best = min(best, left)
@@ -167,10 +179,7 @@ def funnel(setting: Any, options: Any, start: Any, target: Any, *, step: float, 
     from tooltransfer.planner.planning.oe.guided_holds import CONE
     from tooltransfer.planner.planning.oe.guided_moves import _pointing
 
-    held, free, by_key, lands = _probe_rules(setting, options, room, span, windows)
-    windows_of: dict[str, list[Any]] = {}
-    for fm in by_key.values():
-        windows_of.setdefault(fm.name, []).append(fm)
+    held, free, by_key, windows_of, lands = _probe_rules(setting, options, room, span, windows)
     cell = 0.5 * step
 
     def inside(ang: float, mid: float, half: float) -> bool:
@@ -183,13 +192,9 @@ def funnel(setting: Any, options: Any, start: Any, target: Any, *, step: float, 
     heap = [(GREED * to_start(target), 0.0, 0)]
     seen: set[tuple[int, int, str | None]] = set()
     n, best, extent = 0, to_start(target), 0.0
-    while heap and n < budget:
-        _, g, k = heapq.heappop(heap)
-        q, came = nodes[k]
-        key = (int(q[0] // cell), int(q[1] // cell), came)
-        if key in seen:
-            continue
-        seen.add(key)
+    while n < budget and (top := _next_node(heap, nodes, seen, cell)) is not None:
+        g, k = top
+        q = nodes[k][0]
         n += 1
         best, extent = min(best, to_start(q)), max(extent, float(np.hypot(*(q - target))))
         arcs: dict[str, tuple[float, float]] = {}  # per face, the arc its windows' cones at q span

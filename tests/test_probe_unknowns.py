@@ -84,7 +84,6 @@ def test_the_probe_refuses_bad_input(probe_module, tmp_path, capsys) -> None:
         assert err.value.code == 2
 
 
-
 def test_every_step_of_the_funnel_is_a_forward_step_of_the_probe_s_rules(probe_module) -> None:
     """The backward search (``funnel``) from exec60-00001's target: every edge it adds, from a node ``x`` back to
     the node ``q`` it came from, is a step the forward probe takes: some window of the face holds the puck at ``x``
@@ -101,7 +100,7 @@ def test_every_step_of_the_funnel_is_a_forward_step_of_the_probe_s_rules(probe_m
     extent, near, n, closed = probe_module.funnel(setting, options, start, target, step=0.003, budget=40,
                                                   room=2.5e-4, span=5e-4, windows=0, trace=edges)
     assert n == 40 and not closed and extent > 0.01 and near < np.hypot(*(start - target)) - 0.01
-    held, free, by_key, lands = probe_module._probe_rules(setting, options, 2.5e-4, 5e-4, 0)
+    held, free, by_key, _, lands = probe_module._probe_rules(setting, options, 2.5e-4, 5e-4, 0)
     assert len(edges) > 40
     for x, q, face, ang in edges:
         assert free(x) and np.hypot(*(q - x)) == pytest.approx(0.003, abs=1e-12)
